@@ -1,0 +1,69 @@
+// morse: the command-line driver. Thin: parses the command word and hands over to
+// morse::app::run_command. Errors are printed once (rank 0) and give a non-zero exit status.
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "morse/app/commands.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/session.hpp"
+
+static const char kHelp[] =
+    "morse: Model Order Reduction for Structural Elastodynamics\n"
+    "usage: mpirun -n N morse <command> [options]   (or -options_file case.opts)\n"
+    "  modes     lowest eigenpairs of the clamped full model\n"
+    "  reduce    Craig-Bampton superelement\n"
+    "  mesh box  write a generated box/beam mesh\n";
+
+// After an exception: if every rank failed (a collective error), rank 0 prints and all return
+// normally; if the other ranks do not join within a few seconds (an error on this rank only,
+// the others are blocked in a collective call), print here and abort the whole job.
+static int handle_error(MPI_Comm err_comm, const char* what) {
+  MPI_Request req;
+  MPI_Ibarrier(err_comm, &req);
+  int done = 0;
+  auto t0 = std::chrono::steady_clock::now();
+  while (!done && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5)) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  int rank = morse::world_rank();
+  if (done) {
+    if (rank == 0) std::fprintf(stderr, "morse: error: %s\n", what);
+    return 1;
+  }
+  std::fprintf(stderr, "morse: error (rank %d): %s\n", rank, what);
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  return 1;
+}
+
+int main(int argc, char** argv) {
+  // The command words come before the first option.
+  std::vector<std::string> words;
+  for (int i = 1; i < argc && argv[i][0] != '-'; ++i) words.emplace_back(argv[i]);
+  int status = 0;
+  try {
+    morse::Session session(&argc, &argv, kHelp);
+    MPI_Comm err_comm;
+    MPI_Comm_dup(PETSC_COMM_WORLD, &err_comm);
+    try {
+      if (words.empty()) {
+        PetscBool help = PETSC_FALSE;
+        PetscOptionsHasHelp(nullptr, &help);
+        if (!help) throw morse::Error("no command given (commands: modes, reduce, mesh); see -help");
+      } else {
+        morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
+      }
+    } catch (const std::exception& e) {
+      status = handle_error(err_comm, e.what());
+    }
+    MPI_Comm_free(&err_comm);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "morse: error: %s\n", e.what());
+    return 1;
+  }
+  return status;
+}

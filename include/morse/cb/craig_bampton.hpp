@@ -1,0 +1,59 @@
+// morse/cb/craig_bampton.hpp: the Craig–Bampton superelement (seed 000 §2.1, eq. 1–6; seed 003
+// §3.2.2, eq. 17–19).
+//
+// The boundary (master) DOFs are the three translations of every node of a node set. With the
+// interior (slave) DOFs i and boundary DOFs b of the clamped model:
+//   constraint modes   Psi = -K_ii^{-1} K_ib       (eq. 3)  one MUMPS Cholesky factorization of
+//                                                   K_ii and one block solve (MatMatSolve)
+//   fixed-interface    K_ii Phi = M_ii Phi Omega    (eq. 4)  SLEPc shift-invert, M_ii-normalized
+//   basis              T = [I 0; Psi Phi]           (eq. 5)
+//   reduced operators  M_CB = T^T M T, K_CB = T^T K T (eq. 6)
+// Reduced DOFs: boundary first (nodes by ascending node id, then x, y, z), then the modal
+// coordinates in ascending frequency. When modes are selected by count, the factorization done
+// by the eigen solver (shift 0) is reused for the constraint modes, so K_ii is factored once.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "morse/cb/eigen.hpp"
+#include "morse/fe/model.hpp"
+
+namespace morse::cb {
+
+struct CBSettings {
+  std::string boundary_set;   ///< node set of the interface
+  PetscInt n_fixed = -1;      ///< number of fixed-interface modes (-cb_num_fixed_modes), or
+  double fmax_hz = -1;        ///< all fixed-interface modes below this frequency (-cb_fmax)
+  double damping = 0.0;       ///< modal damping ratio xi of the fixed-interface modes
+  bool keep_basis = false;    ///< keep T (Psi and Phi) in the result
+  std::string prefix = "cb_"; ///< options prefix of the eigen solver
+};
+
+struct CBResult {
+  PetscInt n_b = 0;    ///< boundary DOFs
+  PetscInt n_phi = 0;  ///< fixed-interface modes
+  std::vector<std::int64_t> boundary_node_ids;     ///< ascending
+  std::vector<std::int64_t> boundary_global_nodes; ///< global node index, same order
+  std::vector<double> fixed_omega2;                ///< eigenvalues of eq. 4, ascending
+  /// Reduced operators, dense row-major (n_b + n_phi)^2, identical on every rank.
+  std::vector<double> M, K, C;
+  /// T on the free DOFs of the model (MPIDENSE, n_free x (n_b + n_phi)); only if keep_basis.
+  UMat T;
+  bool factor_reused = false;
+  double factor_seconds = 0;
+  PetscInt n() const { return n_b + n_phi; }
+};
+
+/// Builds the superelement. K and M are the assembled operators of the model whose clamped DOFs
+/// are already eliminated (dofs). Throws (collectively) for a missing or empty boundary set, a
+/// boundary node whose DOFs are clamped, a singular K_ii, or more modes than interior DOFs.
+/// Collective.
+CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
+                       const CBSettings& s);
+
+/// Reference vector for eigenvector signs: w(node, d) depends only on the global node index and
+/// direction, so mode signs do not depend on the partition. Collective.
+UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs);
+
+}  // namespace morse::cb

@@ -1,0 +1,55 @@
+// morse/cb/eigen.hpp: generalized symmetric eigenproblems K x = omega^2 M x with SLEPc.
+//
+// Shift-invert with a MUMPS Cholesky factorization. By count (nev lowest pairs about the shift)
+// or by cutoff (every pair below omega2_max, by spectrum slicing with MUMPS inertia). The
+// eigenvectors are M-normalized and their sign is fixed so that w^T x > 0 for a reference
+// vector w that depends only on the mesh (global node index and direction), so results do not
+// depend on the number of ranks.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "morse/core/handle.hpp"
+
+namespace morse::cb {
+
+struct EigenSettings {
+  PetscInt nev = 0;         ///< number of pairs wanted (count mode), or
+  double omega2_max = -1;   ///< cutoff in (rad/s)^2: all pairs with omega^2 <= cutoff (slicing)
+  double shift = 0.0;       ///< shift-invert target in (rad/s)^2 (count mode)
+  double tol = 1e-10;       ///< relative residual tolerance (overridable with -<prefix>eps_tol)
+  std::string prefix;       ///< options prefix of the EPS (its ST/KSP/PC inherit it)
+  std::string what = "eigenproblem";  ///< name used in messages
+};
+
+struct Eigenpairs {
+  std::vector<double> omega2;  ///< ascending
+  UMat V;                      ///< MPIDENSE, one M-normalized eigenvector per column
+  UEPS eps;                    ///< the solver, kept alive so its factorization can be reused
+  PetscInt iterations = 0;
+  double factor_seconds = 0;   ///< numeric factorization time (count mode)
+  /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
+  Mat factor() const;
+};
+
+/// Solves K x = omega^2 M x. sign_ref (same layout as K) fixes the eigenvector signs; may be
+/// null. Throws morse::Error (collectively) if nev exceeds the problem size, if K - shift*M is
+/// singular (MUMPS null pivots: the model is not restrained), or if fewer pairs converge than
+/// requested. Collective.
+Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
+
+/// Sets an option in the database unless the user already gave it.
+void set_default_option(const std::string& name, const std::string& value);
+
+/// Number of null pivots MUMPS found in the factor F (needs ICNTL(24)=1).
+PetscInt mumps_null_pivots(Mat F);
+
+/// Dense generalized symmetric eigenvalues of (K, M), row-major n x n, ascending (LAPACK sygv).
+/// If vectors is not null it receives the M-normalized eigenvectors (column k = mode k,
+/// row-major n x n).
+std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
+                                      const std::vector<double>& M,
+                                      std::vector<double>* vectors = nullptr);
+
+}  // namespace morse::cb

@@ -1,0 +1,78 @@
+// morse/io/h5.hpp: the output file of a run, written by rank 0 with serial HDF5, atomically.
+//
+// The file is created as "<path>.tmp" and renamed to <path> by commit(); a run that fails
+// before commit() leaves no output file (the destructor removes the temporary). Distributed data
+// is gathered to rank 0 before writing (gather_nodal), one mode at a time.
+#pragma once
+
+#include <hdf5.h>
+#include <mpi.h>
+#include <petscvec.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "morse/fe/model.hpp"
+
+namespace morse::io {
+
+class H5Output {
+ public:
+  /// Creates the temporary file on rank 0. Collective; throws on every rank if it cannot.
+  H5Output(MPI_Comm comm, const std::string& path);
+  ~H5Output();
+  H5Output(const H5Output&) = delete;
+  H5Output& operator=(const H5Output&) = delete;
+
+  /// Dataset writers; data significant on rank 0 only. dims empty = 1-D of data.size().
+  /// Intermediate groups are created. Not collective.
+  void write(const std::string& name, const std::vector<double>& data,
+             std::vector<hsize_t> dims = {});
+  void write(const std::string& name, const std::vector<std::int64_t>& data,
+             std::vector<hsize_t> dims = {});
+  void write_string(const std::string& name, const std::string& value);
+  /// Attribute on a group or dataset (created if missing as a group). Not collective.
+  void attribute(const std::string& object, const std::string& name, const std::string& value);
+  void attribute(const std::string& object, const std::string& name, double value);
+
+  /// Closes and renames the file into place. Collective; throws on every rank if rank 0 met an
+  /// HDF5 error in any write.
+  void commit();
+
+  const std::string& path() const { return path_; }
+
+ private:
+  hid_t ensure_group(const std::string& name);
+  void note_error(const std::string& what);
+  MPI_Comm comm_;
+  int rank_ = 0;
+  std::string path_, tmp_;
+  hid_t file_ = -1;
+  std::string error_;
+  bool committed_ = false;
+};
+
+/// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
+/// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.
+std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x);
+
+/// Writes the standard provenance of every morse file: /meta (version, command line, options,
+/// units, date) and a units attribute at the root. Rank 0 data. Not collective.
+void write_provenance(H5Output& out, const std::string& command, const std::string& units);
+
+/// Writes /mesh/coordinates, /mesh/node_ids, /mesh/topology (XDMF mixed), /mesh/element_ids
+/// from a mesh gathered on rank 0 (gather_to_rank0). Not collective.
+void write_mesh(H5Output& out, const mesh::Mesh& m);
+
+/// Writes an XDMF file next to the HDF5 file that shows the mesh and, for each listed dataset
+/// (shape [n_fields][n_nodes][3]), one vector field per entry, named label_k. Rank 0 only.
+struct XdmfField {
+  std::string dataset;
+  std::string label;
+  int count = 0;
+};
+void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const mesh::Mesh& m,
+                const std::vector<XdmfField>& fields);
+
+}  // namespace morse::io

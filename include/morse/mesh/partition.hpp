@@ -1,0 +1,59 @@
+// morse/mesh/partition.hpp: METIS partition of a serial mesh and its scatter over the ranks.
+//
+// How a mesh is read and scattered: rank 0 reads the file (or runs a generator) into a serial
+// Mesh, drops nodes that no solid element uses, partitions the element dual graph with METIS
+// (corner nodes only, deterministic seed), decides node ownership (the lowest rank among the
+// elements touching the node) and sends each rank its piece: its elements, the nodes they use
+// (owned + ghost), the restriction of every set to those, and the materials. Rank 0 builds and
+// sends one piece at a time and releases the serial mesh afterwards, so after distribute() no
+// rank holds the whole mesh. (Rank 0 does hold it while reading; a ParMETIS-based parallel
+// reader can replace this stage without changing LocalMesh.)
+#pragma once
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "morse/mesh/mesh.hpp"
+
+namespace morse::mesh {
+
+/// The piece of a distributed mesh held by one rank.
+struct LocalMesh {
+  MPI_Comm comm = MPI_COMM_NULL;
+  /// Local elements and local nodes (owned and ghost), sorted by global node index. Sets are
+  /// restricted to local nodes/elements; every rank knows every set name (possibly empty).
+  Mesh mesh;
+  std::vector<std::int64_t> global_node;  ///< global node index (0..n_global_nodes-1) per local node
+  std::vector<int> node_owner;            ///< owning rank per local node
+  std::vector<std::int64_t> global_elem;  ///< global element index per local element
+  std::int64_t n_global_nodes = 0;
+  std::int64_t n_global_elements = 0;
+  /// Global number of nodes/elements in each set (after dropping unused nodes).
+  std::map<std::string, std::int64_t> node_set_sizes;
+  std::map<std::string, std::int64_t> elem_set_sizes;
+  /// Number of elements per rank (for the summary).
+  std::vector<std::int64_t> elements_per_rank;
+
+  bool owns(std::int64_t local_node) const;
+  /// Local index of a global node index, or -1 if the node is not local.
+  std::int64_t local_of_global(std::int64_t global) const;
+};
+
+/// Partitions *serial (significant on rank 0 only; emptied on return) and scatters it over comm.
+/// Collective. Throws morse::Error (on every rank) if the mesh has no solid element.
+LocalMesh distribute(MPI_Comm comm, Mesh* serial);
+
+/// Reads a mesh file on rank 0 by extension (.msh: Gmsh, .inp: Abaqus/CalculiX) and
+/// distributes it. Errors (missing/truncated file, ...) are thrown on every rank. Collective.
+LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path);
+
+/// Gathers the local pieces back into one serial mesh on rank 0 (owned elements only, nodes in
+/// global order); other ranks get an empty Mesh. For output of small and medium meshes only:
+/// O(mesh) memory on rank 0. Collective.
+Mesh gather_to_rank0(const LocalMesh& lm);
+
+}  // namespace morse::mesh

@@ -1,0 +1,156 @@
+#include "morse/cb/eigen.hpp"
+
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+
+namespace morse::cb {
+
+void set_default_option(const std::string& name, const std::string& value) {
+  PetscBool has = PETSC_FALSE;
+  MORSE_CALL(PetscOptionsHasName(nullptr, nullptr, name.c_str(), &has));
+  if (!has) MORSE_CALL(PetscOptionsSetValue(nullptr, name.c_str(), value.c_str()));
+}
+
+PetscInt mumps_null_pivots(Mat F) {
+  PetscInt n = 0;
+  MORSE_CALL(MatMumpsGetInfog(F, 28, &n));
+  return n;
+}
+
+Mat Eigenpairs::factor() const {
+  if (!eps) return nullptr;
+  ST st;
+  KSP ksp;
+  PC pc;
+  MORSE_CALL(EPSGetST(eps.get(), &st));
+  MORSE_CALL(STGetKSP(st, &ksp));
+  MORSE_CALL(KSPGetPC(ksp, &pc));
+  PetscBool is_chol = PETSC_FALSE;
+  MORSE_CALL(PetscObjectTypeCompare((PetscObject)pc, PCCHOLESKY, &is_chol));
+  if (!is_chol) return nullptr;
+  Mat F = nullptr;
+  MORSE_CALL(PCFactorGetMatrix(pc, &F));
+  return F;
+}
+
+Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(K, &n, nullptr));
+  const bool slicing = s.omega2_max > 0;
+  MORSE_CHECK(slicing || s.nev > 0, s.what, ": the number of modes must be positive (got ",
+              s.nev, ")");
+  MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ",
+              n, " DOFs");
+  const std::string p = "-" + s.prefix;
+  set_default_option(p + "st_ksp_type", "preonly");
+  set_default_option(p + "st_pc_type", "cholesky");
+  set_default_option(p + "st_pc_factor_mat_solver_type", "mumps");
+  set_default_option(p + "st_mat_mumps_icntl_24", "1");  // detect null pivots (singular K)
+  if (slicing) set_default_option(p + "st_mat_mumps_icntl_13", "1");  // inertia in parallel
+
+  Eigenpairs out;
+  MORSE_CALL(EPSCreate(comm, out.eps.ptr()));
+  EPS eps = out.eps.get();
+  MORSE_CALL(EPSSetOptionsPrefix(eps, s.prefix.c_str()));
+  MORSE_CALL(EPSSetOperators(eps, K, M));
+  MORSE_CALL(EPSSetProblemType(eps, EPS_GHEP));
+  MORSE_CALL(EPSSetType(eps, EPSKRYLOVSCHUR));
+  ST st;
+  MORSE_CALL(EPSGetST(eps, &st));
+  MORSE_CALL(STSetType(st, STSINVERT));
+  MORSE_CALL(EPSSetTolerances(eps, s.tol, 500));
+  if (slicing) {
+    MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_ALL));
+    MORSE_CALL(EPSSetInterval(eps, -1e-6 * s.omega2_max, s.omega2_max));
+  } else {
+    MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
+    MORSE_CALL(EPSSetTarget(eps, s.shift));
+    MORSE_CALL(EPSSetDimensions(eps, s.nev, PETSC_DEFAULT, PETSC_DEFAULT));
+  }
+  MORSE_CALL(EPSSetFromOptions(eps));
+  {
+    auto t0 = std::chrono::steady_clock::now();
+    StageTimer timer(comm, "Factor");
+    MORSE_CALL(EPSSetUp(eps));
+    out.factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  if (Mat F = out.factor()) {
+    PetscInt nulls = mumps_null_pivots(F);
+    collective_check(comm, nulls > 0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
+                                           " null pivots): the model is not restrained against "
+                                           "rigid-body motion; check -clamp and the boundary set")
+                                     : std::string());
+  }
+  {
+    StageTimer timer(comm, "EigenSolve");
+    MORSE_CALL(EPSSolve(eps));
+  }
+  PetscInt nconv = 0;
+  MORSE_CALL(EPSGetConverged(eps, &nconv));
+  MORSE_CALL(EPSGetIterationNumber(eps, &out.iterations));
+  if (!slicing)
+    MORSE_CHECK(nconv >= s.nev, s.what, ": only ", nconv, " of ", s.nev,
+                " eigenpairs converged; increase -", s.prefix, "eps_max_it or -", s.prefix,
+                "eps_ncv");
+  const PetscInt n_out = slicing ? nconv : s.nev;
+  MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", s.omega2_max, ")");
+
+  std::vector<std::pair<double, PetscInt>> order;
+  for (PetscInt i = 0; i < nconv; ++i) {
+    PetscScalar kr, ki;
+    MORSE_CALL(EPSGetEigenvalue(eps, i, &kr, &ki));
+    order.emplace_back(PetscRealPart(kr), i);
+  }
+  std::sort(order.begin(), order.end());
+  PetscInt m_local = 0;
+  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, n_out, nullptr, out.V.ptr()));
+  UVec Mx;
+  MORSE_CALL(MatCreateVecs(K, nullptr, Mx.ptr()));
+  for (PetscInt j = 0; j < n_out; ++j) {
+    out.omega2.push_back(order[j].first);
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &x));
+    MORSE_CALL(EPSGetEigenvector(eps, order[j].second, x, nullptr));
+    PetscScalar xMx = 0, wx = 0;
+    MORSE_CALL(MatMult(M, x, Mx.get()));
+    MORSE_CALL(VecDot(x, Mx.get(), &xMx));
+    double scale = 1.0 / std::sqrt(PetscRealPart(xMx));
+    if (sign_ref) {
+      MORSE_CALL(VecDot(x, sign_ref, &wx));
+      if (PetscRealPart(wx) < 0) scale = -scale;
+    }
+    MORSE_CALL(VecScale(x, scale));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &x));
+  }
+  return out;
+}
+
+std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
+                                      const std::vector<double>& M, std::vector<double>* vectors) {
+  // Row-major symmetric = column-major symmetric, so the arrays can go to LAPACK as they are.
+  std::vector<double> A(K), B(M), w(n);
+  PetscBLASInt itype = 1, nn = n, lwork = std::max(1, 8 * n), info = 0;
+  std::vector<double> work(lwork);
+  const char* jobz = vectors ? "V" : "N";
+  LAPACKsygv_(&itype, jobz, "U", &nn, A.data(), &nn, B.data(), &nn, w.data(), work.data(), &lwork,
+              &info);
+  MORSE_CHECK(info == 0, "dense generalized eigen solve failed (LAPACK sygv info = ", info,
+              "): the reduced mass matrix is not positive definite");
+  if (vectors) {
+    vectors->assign(static_cast<std::size_t>(n) * n, 0.0);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < n; ++k) (*vectors)[static_cast<std::size_t>(i) * n + k] = A[static_cast<std::size_t>(k) * n + i];
+  }
+  return w;
+}
+
+}  // namespace morse::cb

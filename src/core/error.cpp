@@ -1,0 +1,42 @@
+#include "morse/core/error.hpp"
+
+#include <vector>
+
+namespace morse {
+namespace detail {
+
+void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file, int line) {
+  const char* text = nullptr;
+  char* specific = nullptr;
+  PetscErrorMessage(ierr, &text, &specific);
+  std::string msg = cat("PETSc error ", ierr, " (", text ? text : "unknown", ")");
+  if (specific && *specific) msg += cat(": ", specific);
+  msg += cat("\n  in ", expr, " at ", file, ":", line);
+  throw Error(msg);
+}
+
+}  // namespace detail
+
+void collective_check(MPI_Comm comm, const std::string& local_error) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  int mine = local_error.empty() ? size : rank;
+  int first = size;
+  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == size) return;
+  int len = rank == first ? static_cast<int>(local_error.size()) : 0;
+  MPI_Bcast(&len, 1, MPI_INT, first, comm);
+  std::vector<char> buf(local_error.begin(), local_error.end());
+  buf.resize(len);
+  MPI_Bcast(buf.data(), len, MPI_CHAR, first, comm);
+  throw Error(std::string(buf.begin(), buf.end()));
+}
+
+bool any_rank(MPI_Comm comm, bool flag) {
+  int in = flag ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out != 0;
+}
+
+}  // namespace morse

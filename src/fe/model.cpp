@@ -1,0 +1,237 @@
+#include "morse/fe/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/fe/element.hpp"
+
+namespace morse::fe {
+
+namespace {
+
+// Asks each ghost node's owner for the node's global DOFs.
+void fetch_ghost_dofs(const mesh::LocalMesh& lm, std::vector<PetscInt>& node_dof) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(lm.comm, &rank);
+  MPI_Comm_size(lm.comm, &size);
+  const std::int64_t n = lm.mesh.num_nodes();
+  std::vector<std::vector<std::int64_t>> ask(size), ask_local(size);
+  for (std::int64_t k = 0; k < n; ++k)
+    if (lm.node_owner[k] != rank) {
+      ask[lm.node_owner[k]].push_back(lm.global_node[k]);
+      ask_local[lm.node_owner[k]].push_back(k);
+    }
+  std::vector<int> send_n(size), recv_n(size), sdisp(size + 1, 0), rdisp(size + 1, 0);
+  for (int r = 0; r < size; ++r) send_n[r] = static_cast<int>(ask[r].size());
+  MPI_Alltoall(send_n.data(), 1, MPI_INT, recv_n.data(), 1, MPI_INT, lm.comm);
+  for (int r = 0; r < size; ++r) {
+    sdisp[r + 1] = sdisp[r] + send_n[r];
+    rdisp[r + 1] = rdisp[r] + recv_n[r];
+  }
+  std::vector<std::int64_t> sbuf(sdisp[size]), rbuf(rdisp[size]);
+  for (int r = 0; r < size; ++r) std::copy(ask[r].begin(), ask[r].end(), sbuf.begin() + sdisp[r]);
+  MPI_Alltoallv(sbuf.data(), send_n.data(), sdisp.data(), MPI_INT64_T, rbuf.data(), recv_n.data(),
+                rdisp.data(), MPI_INT64_T, lm.comm);
+  // Answer: three DOFs per asked node.
+  std::vector<std::int64_t> answer(3 * rbuf.size());
+  for (std::size_t i = 0; i < rbuf.size(); ++i) {
+    auto k = lm.local_of_global(rbuf[i]);
+    for (int d = 0; d < 3; ++d) answer[3 * i + d] = node_dof[3 * k + d];
+  }
+  std::vector<int> s3(size), r3(size), sd3(size), rd3(size);
+  for (int r = 0; r < size; ++r) {
+    s3[r] = 3 * recv_n[r];
+    sd3[r] = 3 * rdisp[r];
+    r3[r] = 3 * send_n[r];
+    rd3[r] = 3 * sdisp[r];
+  }
+  std::vector<std::int64_t> got(3 * sbuf.size());
+  MPI_Alltoallv(answer.data(), s3.data(), sd3.data(), MPI_INT64_T, got.data(), r3.data(),
+                rd3.data(), MPI_INT64_T, lm.comm);
+  for (int r = 0; r < size; ++r)
+    for (std::size_t i = 0; i < ask_local[r].size(); ++i)
+      for (int d = 0; d < 3; ++d)
+        node_dof[3 * ask_local[r][i] + d] = static_cast<PetscInt>(got[3 * (sdisp[r] + i) + d]);
+}
+
+}  // namespace
+
+DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets) {
+  int rank = 0;
+  MPI_Comm_rank(lm.comm, &rank);
+  const auto& m = lm.mesh;
+  const std::int64_t n = m.num_nodes();
+  std::vector<std::uint8_t> clamped(n, 0);
+  std::string err;
+  for (const auto& name : clamp_sets) {
+    if (name == mesh::kDeckBoundarySet) {
+      if (m.fixed_dofs.empty()) {
+        err = cat("-clamp ", name, ": the mesh ", m.source, " fixes no DOF with *BOUNDARY");
+        break;
+      }
+      for (std::int64_t k = 0; k < n; ++k) clamped[k] |= m.fixed_dofs[k] & 7;
+      continue;
+    }
+    auto it = m.node_sets.find(name);
+    if (it == m.node_sets.end()) {
+      std::string known;
+      for (const auto& [s, v] : m.node_sets) known += (known.empty() ? "" : ", ") + s;
+      err = cat("node set '", name, "' not found in ", m.source,
+                " (node sets: ", known.empty() ? "none" : known, ")");
+      break;
+    }
+    if (lm.node_set_sizes.at(name) == 0) {
+      err = cat("node set '", name, "' of ", m.source, " is empty");
+      break;
+    }
+    for (auto k : it->second) clamped[k] = 7;
+  }
+  collective_check(lm.comm, err);
+
+  DofMap dm;
+  dm.comm = lm.comm;
+  dm.node_dof.assign(3 * n, -1);
+  PetscInt count = 0;
+  std::int64_t n_clamped = 0;
+  for (std::int64_t k = 0; k < n; ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    for (int d = 0; d < 3; ++d) {
+      if (clamped[k] & (1u << d))
+        ++n_clamped;
+      else
+        dm.node_dof[3 * k + d] = count++;
+    }
+  }
+  dm.n_owned = count;
+  MPI_Exscan(&count, &dm.first, 1, MPIU_INT, MPI_SUM, lm.comm);
+  if (rank == 0) dm.first = 0;
+  MPI_Allreduce(&count, &dm.n_global, 1, MPIU_INT, MPI_SUM, lm.comm);
+  MPI_Allreduce(&n_clamped, &dm.n_clamped_global, 1, MPI_INT64_T, MPI_SUM, lm.comm);
+  for (std::int64_t k = 0; k < n; ++k)
+    if (lm.node_owner[k] == rank)
+      for (int d = 0; d < 3; ++d)
+        if (dm.node_dof[3 * k + d] >= 0) dm.node_dof[3 * k + d] += dm.first;
+  fetch_ghost_dofs(lm, dm.node_dof);
+  return dm;
+}
+
+namespace {
+
+std::string check_material(const mesh::Material& m) {
+  if (!(m.E > 0) || !std::isfinite(m.E)) return cat("Young's modulus E = ", m.E, " must be > 0");
+  if (!(m.nu > -1.0 && m.nu < 0.5)) return cat("Poisson's ratio nu = ", m.nu, " must be in (-1, 0.5)");
+  if (!(m.rho > 0) || !std::isfinite(m.rho)) return cat("density rho = ", m.rho, " must be > 0");
+  return {};
+}
+
+}  // namespace
+
+Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback) {
+  const auto& m = lm.mesh;
+  const std::int64_t ne = m.num_elements();
+  // Validate materials before any collective matrix work.
+  std::string err;
+  bool need_fallback = false;
+  for (std::int64_t e = 0; e < ne && err.empty(); ++e) {
+    int mi = m.elem_material[e];
+    if (mi < 0) {
+      need_fallback = true;
+    } else {
+      auto why = check_material(m.materials[mi]);
+      if (!why.empty()) err = cat("material '", m.materials[mi].name, "' of ", m.source, ": ", why);
+    }
+  }
+  if (err.empty() && need_fallback) {
+    auto why = check_material(fallback);
+    if (!why.empty())
+      err = cat("elements of ", m.source, " (e.g. element ", m.elem_ids[0],
+                ") have no material in the mesh; give -material_E, -material_nu and "
+                "-material_rho (",
+                why, ")");
+  }
+  collective_check(lm.comm, err);
+
+  auto create = [&](Mat* A, MatType type) {
+    MORSE_CALL(MatCreate(lm.comm, A));
+    MORSE_CALL(MatSetSizes(*A, dofs.n_owned, dofs.n_owned, dofs.n_global, dofs.n_global));
+    MORSE_CALL(MatSetType(*A, type));
+  };
+
+  auto element_dofs = [&](std::int64_t e, PetscInt* idx, double* xyz) {
+    const auto off = m.elem_offsets[e];
+    const int nn = static_cast<int>(m.elem_offsets[e + 1] - off);
+    for (int a = 0; a < nn; ++a) {
+      const auto k = m.elem_nodes[off + a];
+      for (int d = 0; d < 3; ++d) {
+        idx[3 * a + d] = dofs.node_dof[3 * k + d];
+        if (xyz) xyz[3 * a + d] = m.coords[3 * k + d];
+      }
+    }
+    return 3 * nn;
+  };
+
+  UMat pre;
+  {
+    StageTimer t(lm.comm, "Preallocate");
+    create(pre.ptr(), MATPREALLOCATOR);
+    MORSE_CALL(MatSetUp(pre.get()));
+    std::vector<double> zeros(kMaxDofs * kMaxDofs, 0.0);
+    PetscInt idx[kMaxDofs];
+    for (std::int64_t e = 0; e < ne; ++e) {
+      int nd = element_dofs(e, idx, nullptr);
+      MORSE_CALL(MatSetValues(pre.get(), nd, idx, nd, idx, zeros.data(), ADD_VALUES));
+    }
+    MORSE_CALL(MatAssemblyBegin(pre.get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatAssemblyEnd(pre.get(), MAT_FINAL_ASSEMBLY));
+  }
+
+  Operators ops;
+  StageTimer t(lm.comm, "Assemble");
+  create(ops.K.ptr(), MATAIJ);
+  MORSE_CALL(MatPreallocatorPreallocate(pre.get(), PETSC_TRUE, ops.K.get()));
+  pre.reset();
+  MORSE_CALL(MatDuplicate(ops.K.get(), MAT_DO_NOT_COPY_VALUES, ops.M.ptr()));
+  for (Mat A : {ops.K.get(), ops.M.get()}) {
+    MORSE_CALL(MatSetOption(A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
+    MORSE_CALL(MatSetOption(A, MAT_SYMMETRIC, PETSC_TRUE));
+    MORSE_CALL(MatSetOption(A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+  }
+
+  std::vector<double> Ke(kMaxDofs * kMaxDofs), Me(kMaxDofs * kMaxDofs);
+  double xyz[3 * kMaxNodes];
+  PetscInt idx[kMaxDofs];
+  double volume = 0.0, mass = 0.0;
+  Progress progress(lm.comm, "assembly", static_cast<double>(ne));
+  for (std::int64_t e = 0; e < ne && err.empty(); ++e) {
+    const int nd = element_dofs(e, idx, xyz);
+    const auto type = m.elem_types[e];
+    const auto& mat = m.elem_material[e] >= 0 ? m.materials[m.elem_material[e]] : fallback;
+    double detk = element_stiffness(type, xyz, mat.E, mat.nu, Ke.data());
+    double detm = element_mass(type, xyz, mat.rho, Me.data());
+    double detj = std::min({detk, detm, min_jacobian(type, xyz)});
+    if (!(detj > 0)) {
+      err = cat("element ", m.elem_ids[e], " (", mesh::element_name(type), ") of ", m.source,
+                " is inverted or degenerate (min det J = ", detj, ")");
+      break;
+    }
+    double v = element_volume(type, xyz);
+    volume += v;
+    mass += mat.rho * v;
+    MORSE_CALL(MatSetValues(ops.K.get(), nd, idx, nd, idx, Ke.data(), ADD_VALUES));
+    MORSE_CALL(MatSetValues(ops.M.get(), nd, idx, nd, idx, Me.data(), ADD_VALUES));
+    if ((e & 1023) == 0) progress.update(static_cast<double>(e));
+  }
+  collective_check(lm.comm, err);
+  for (Mat A : {ops.K.get(), ops.M.get()}) {
+    MORSE_CALL(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));
+  }
+  MPI_Allreduce(&volume, &ops.volume, 1, MPI_DOUBLE, MPI_SUM, lm.comm);
+  MPI_Allreduce(&mass, &ops.mass, 1, MPI_DOUBLE, MPI_SUM, lm.comm);
+  return ops;
+}
+
+}  // namespace morse::fe

@@ -1,0 +1,299 @@
+#include "morse/io/h5.hpp"
+
+#include <petscsys.h>
+
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+
+#include "morse/core/error.hpp"
+#include "morse/fe/element.hpp"
+
+namespace morse::io {
+
+H5Output::H5Output(MPI_Comm comm, const std::string& path) : comm_(comm), path_(path) {
+  MPI_Comm_rank(comm, &rank_);
+  tmp_ = path + ".tmp";
+  std::string err;
+  if (rank_ == 0) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file_ < 0) err = cat("cannot create output file ", tmp_, " (check -out and the directory)");
+  }
+  collective_check(comm, err);
+}
+
+H5Output::~H5Output() {
+  if (rank_ == 0 && file_ >= 0) H5Fclose(file_);
+  if (rank_ == 0 && !committed_) std::remove(tmp_.c_str());
+}
+
+void H5Output::note_error(const std::string& what) {
+  if (error_.empty()) error_ = cat("HDF5 error writing ", what, " to ", tmp_);
+}
+
+hid_t H5Output::ensure_group(const std::string& name) {
+  // Creates every group on the path; returns the innermost one (caller closes).
+  hid_t g = H5Gopen2(file_, "/", H5P_DEFAULT);
+  std::size_t start = 1;
+  while (start < name.size()) {
+    auto end = name.find('/', start);
+    if (end == std::string::npos) end = name.size();
+    std::string part = name.substr(start, end - start);
+    hid_t next = H5Lexists(g, part.c_str(), H5P_DEFAULT) > 0
+                     ? H5Gopen2(g, part.c_str(), H5P_DEFAULT)
+                     : H5Gcreate2(g, part.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    H5Gclose(g);
+    g = next;
+    if (g < 0) return g;
+    start = end + 1;
+  }
+  return g;
+}
+
+namespace {
+std::pair<std::string, std::string> split(const std::string& name) {
+  auto p = name.rfind('/');
+  return {p == 0 ? "/" : name.substr(0, p), name.substr(p + 1)};
+}
+
+template <class T>
+void write_any(hid_t file_group, const std::string& leaf, hid_t type, const std::vector<T>& data,
+               std::vector<hsize_t> dims, bool* ok) {
+  if (dims.empty()) dims.push_back(data.size());
+  hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+  hid_t ds = H5Dcreate2(file_group, leaf.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  *ok = ds >= 0 && H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) >= 0;
+  if (ds >= 0) H5Dclose(ds);
+  H5Sclose(space);
+}
+}  // namespace
+
+void H5Output::write(const std::string& name, const std::vector<double>& data,
+                     std::vector<hsize_t> dims) {
+  if (rank_ != 0 || !error_.empty()) return;
+  auto [grp, leaf] = split(name);
+  hid_t g = ensure_group(grp);
+  bool ok = g >= 0;
+  if (ok) write_any(g, leaf, H5T_NATIVE_DOUBLE, data, dims, &ok);
+  if (g >= 0) H5Gclose(g);
+  if (!ok) note_error(name);
+}
+
+void H5Output::write(const std::string& name, const std::vector<std::int64_t>& data,
+                     std::vector<hsize_t> dims) {
+  if (rank_ != 0 || !error_.empty()) return;
+  auto [grp, leaf] = split(name);
+  hid_t g = ensure_group(grp);
+  bool ok = g >= 0;
+  if (ok) write_any(g, leaf, H5T_NATIVE_INT64, data, dims, &ok);
+  if (g >= 0) H5Gclose(g);
+  if (!ok) note_error(name);
+}
+
+void H5Output::write_string(const std::string& name, const std::string& value) {
+  if (rank_ != 0 || !error_.empty()) return;
+  auto [grp, leaf] = split(name);
+  hid_t g = ensure_group(grp);
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t ds = H5Dcreate2(g, leaf.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  bool ok = ds >= 0 && H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, value.c_str()) >= 0;
+  if (ds >= 0) H5Dclose(ds);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Gclose(g);
+  if (!ok) note_error(name);
+}
+
+void H5Output::attribute(const std::string& object, const std::string& name,
+                         const std::string& value) {
+  if (rank_ != 0 || !error_.empty()) return;
+  hid_t obj = H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/"
+                  ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
+                  : ensure_group(object);
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(obj, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
+  bool ok = a >= 0 && H5Awrite(a, type, value.c_str()) >= 0;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Oclose(obj);
+  if (!ok) note_error(object + "@" + name);
+}
+
+void H5Output::attribute(const std::string& object, const std::string& name, double value) {
+  if (rank_ != 0 || !error_.empty()) return;
+  hid_t obj = H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/"
+                  ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
+                  : ensure_group(object);
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = H5Acreate2(obj, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
+  bool ok = a >= 0 && H5Awrite(a, H5T_NATIVE_DOUBLE, &value) >= 0;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Oclose(obj);
+  if (!ok) note_error(object + "@" + name);
+}
+
+void H5Output::commit() {
+  if (rank_ == 0) {
+    if (file_ >= 0 && H5Fclose(file_) < 0) note_error("(close)");
+    file_ = -1;
+    if (error_.empty() && std::rename(tmp_.c_str(), path_.c_str()) != 0)
+      error_ = cat("cannot rename ", tmp_, " to ", path_);
+  }
+  collective_check(comm_, error_);
+  committed_ = true;
+}
+
+std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(lm.comm, &rank);
+  MPI_Comm_size(lm.comm, &size);
+  const PetscScalar* a;
+  MORSE_CALL(VecGetArrayRead(x, &a));
+  std::vector<double> mine;  // (global node, ux, uy, uz)
+  for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    mine.push_back(static_cast<double>(lm.global_node[k]));
+    for (int d = 0; d < 3; ++d) {
+      PetscInt g = dofs.node_dof[3 * k + d];
+      mine.push_back(g >= 0 ? PetscRealPart(a[g - dofs.first]) : 0.0);
+    }
+  }
+  MORSE_CALL(VecRestoreArrayRead(x, &a));
+  int n = static_cast<int>(mine.size());
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, lm.comm);
+  std::vector<double> all;
+  if (rank == 0) {
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    all.resize(displs[size - 1] + counts[size - 1]);
+  }
+  MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0,
+              lm.comm);
+  std::vector<double> out;
+  if (rank != 0) return out;
+  out.assign(3 * lm.n_global_nodes, 0.0);
+  for (std::size_t i = 0; i + 4 <= all.size(); i += 4) {
+    auto g = static_cast<std::int64_t>(all[i]);
+    for (int d = 0; d < 3; ++d) out[3 * g + d] = all[i + 1 + d];
+  }
+  return out;
+}
+
+void write_provenance(H5Output& out, const std::string& command, const std::string& units) {
+  char* opts = nullptr;
+  PetscOptionsGetAll(nullptr, &opts);
+  std::time_t now = std::time(nullptr);
+  char date[64];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  out.write_string("/meta/version", MORSE_VERSION);
+  out.write_string("/meta/command", command);
+  out.write_string("/meta/options", opts ? opts : "");
+  out.write_string("/meta/units", units);
+  out.write_string("/meta/date", date);
+  out.attribute("/", "units", units);
+  out.attribute("/", "morse_version", MORSE_VERSION);
+  PetscFree(opts);
+}
+
+namespace {
+
+// XDMF (VTK) type codes and node orderings, expressed by the vertex pairs of the mid-edge nodes.
+struct XdmfType {
+  int code;
+  const char* name;
+  std::vector<std::pair<int, int>> edges;
+};
+
+const XdmfType& xdmf_type(mesh::ElementType t) {
+  using ET = mesh::ElementType;
+  static const XdmfType tet4{6, "Tetrahedron", {}}, wedge6{8, "Wedge", {}}, hex8{9, "Hexahedron", {}};
+  static const XdmfType tet10{38, "Tetrahedron_10", {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}}};
+  static const XdmfType wedge15{40, "Wedge_15", {{0, 1}, {1, 2}, {0, 2}, {3, 4}, {4, 5}, {3, 5}, {0, 3}, {1, 4}, {2, 5}}};
+  static const XdmfType hex20{48, "Hexahedron_20",
+                              {{0, 1}, {1, 2}, {2, 3}, {0, 3}, {4, 5}, {5, 6}, {6, 7}, {4, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}}};
+  switch (t) {
+    case ET::Tet4: return tet4;
+    case ET::Tet10: return tet10;
+    case ET::Wedge6: return wedge6;
+    case ET::Wedge15: return wedge15;
+    case ET::Hex8: return hex8;
+    default: return hex20;
+  }
+}
+
+// perm[i] = morse node index of the i-th XDMF node.
+std::vector<int> xdmf_permutation(mesh::ElementType t) {
+  const int nv = mesh::vertices_per_element(t), n = mesh::nodes_per_element(t);
+  std::vector<int> perm(n);
+  for (int i = 0; i < nv; ++i) perm[i] = i;
+  const auto& ours = fe::mid_edges(t);
+  const auto& theirs = xdmf_type(t).edges;
+  for (std::size_t i = 0; i < theirs.size(); ++i) {
+    auto [a, b] = theirs[i];
+    for (std::size_t j = 0; j < ours.size(); ++j)
+      if ((ours[j].first == a && ours[j].second == b) || (ours[j].first == b && ours[j].second == a))
+        perm[nv + i] = nv + static_cast<int>(j);
+  }
+  return perm;
+}
+
+}  // namespace
+
+void write_mesh(H5Output& out, const mesh::Mesh& m) {
+  out.write("/mesh/coordinates", m.coords, {static_cast<hsize_t>(m.num_nodes()), 3});
+  out.write("/mesh/node_ids", m.node_ids);
+  out.write("/mesh/element_ids", m.elem_ids);
+  std::vector<std::int64_t> topo;
+  topo.reserve(m.elem_nodes.size() + m.elem_types.size());
+  for (std::int64_t e = 0; e < m.num_elements(); ++e) {
+    auto t = m.elem_types[e];
+    topo.push_back(xdmf_type(t).code);
+    auto perm = xdmf_permutation(t);
+    for (int p : perm) topo.push_back(m.elem_nodes[m.elem_offsets[e] + p]);
+  }
+  out.write("/mesh/topology", topo);
+  out.attribute("/mesh/topology", "description",
+                "XDMF mixed topology: per element its XDMF type code then its nodes (VTK order)");
+}
+
+void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const mesh::Mesh& m,
+                const std::vector<XdmfField>& fields) {
+  std::size_t topo_len = 0;
+  for (std::int64_t e = 0; e < m.num_elements(); ++e) topo_len += 1 + mesh::nodes_per_element(m.elem_types[e]);
+  std::string tmp = xdmf_path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    MORSE_CHECK(f, "cannot write ", tmp);
+    f << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n";
+    f << "<Grid Name=\"morse\" GridType=\"Uniform\">\n";
+    f << "<Topology TopologyType=\"Mixed\" NumberOfElements=\"" << m.num_elements() << "\">\n"
+      << "<DataItem Dimensions=\"" << topo_len << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">"
+      << h5_name << ":/mesh/topology</DataItem>\n</Topology>\n";
+    f << "<Geometry GeometryType=\"XYZ\">\n<DataItem Dimensions=\"" << m.num_nodes()
+      << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
+      << ":/mesh/coordinates</DataItem>\n</Geometry>\n";
+    for (const auto& fld : fields)
+      for (int k = 0; k < fld.count; ++k) {
+        f << "<Attribute Name=\"" << fld.label << "_" << k + 1
+          << "\" AttributeType=\"Vector\" Center=\"Node\">\n"
+          << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << m.num_nodes() << " 3\">\n"
+          << "<DataItem Dimensions=\"3 3\" Format=\"XML\">" << k << " 0 0 1 1 1 1 " << m.num_nodes()
+          << " 3</DataItem>\n"
+          << "<DataItem Dimensions=\"" << fld.count << " " << m.num_nodes()
+          << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":"
+          << fld.dataset << "</DataItem>\n</DataItem>\n</Attribute>\n";
+      }
+    f << "</Grid>\n</Domain>\n</Xdmf>\n";
+    MORSE_CHECK(f.good(), "error writing ", tmp);
+  }
+  MORSE_CHECK(std::rename(tmp.c_str(), xdmf_path.c_str()) == 0, "cannot rename ", tmp, " to ", xdmf_path);
+}
+
+}  // namespace morse::io

@@ -1,0 +1,339 @@
+#include "morse/mesh/partition.hpp"
+
+#include <metis.h>
+
+#include <algorithm>
+#include <numeric>
+
+#include "core/detail/pack.hpp"
+#include "morse/core/error.hpp"
+
+namespace morse::mesh {
+
+bool LocalMesh::owns(std::int64_t k) const {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  return node_owner[k] == rank;
+}
+
+std::int64_t LocalMesh::local_of_global(std::int64_t g) const {
+  auto it = std::lower_bound(global_node.begin(), global_node.end(), g);
+  if (it == global_node.end() || *it != g) return -1;
+  return it - global_node.begin();
+}
+
+namespace {
+
+// Removes nodes that no element uses (Gmsh files carry geometry points, decks carry spare
+// nodes); they would have no stiffness and make K singular.
+void drop_unused_nodes(Mesh* m) {
+  const std::int64_t n = m->num_nodes();
+  std::vector<std::int64_t> map(n, -1);
+  for (auto k : m->elem_nodes) map[k] = 0;
+  std::int64_t next = 0;
+  for (std::int64_t k = 0; k < n; ++k)
+    if (map[k] == 0) map[k] = next++;
+  if (next == n) return;
+  std::vector<std::int64_t> ids(next);
+  std::vector<double> xyz(3 * next);
+  std::vector<std::uint8_t> fixed(m->fixed_dofs.empty() ? 0 : next);
+  for (std::int64_t k = 0; k < n; ++k) {
+    if (map[k] < 0) continue;
+    ids[map[k]] = m->node_ids[k];
+    std::copy_n(&m->coords[3 * k], 3, &xyz[3 * map[k]]);
+    if (!fixed.empty()) fixed[map[k]] = m->fixed_dofs[k];
+  }
+  for (auto& k : m->elem_nodes) k = map[k];
+  for (auto& [name, v] : m->node_sets) {
+    std::vector<std::int64_t> w;
+    for (auto k : v)
+      if (map[k] >= 0) w.push_back(map[k]);
+    v.swap(w);
+  }
+  m->node_ids.swap(ids);
+  m->coords.swap(xyz);
+  m->fixed_dofs.swap(fixed);
+}
+
+std::vector<int> partition_elements(const Mesh& m, int n_parts) {
+  const std::int64_t ne = m.num_elements();
+  std::vector<int> part(ne, 0);
+  if (n_parts == 1 || ne == 0) return part;
+  if (ne < n_parts) {
+    std::iota(part.begin(), part.end(), 0);
+    return part;
+  }
+  // Dual graph on corner nodes: neighbours share a face (>= 3 corners).
+  std::vector<idx_t> eptr(ne + 1, 0), eind;
+  eind.reserve(ne * 8);
+  for (std::int64_t e = 0; e < ne; ++e) {
+    const int nv = vertices_per_element(m.elem_types[e]);
+    for (int a = 0; a < nv; ++a) eind.push_back(static_cast<idx_t>(m.elem_nodes[m.elem_offsets[e] + a]));
+    eptr[e + 1] = static_cast<idx_t>(eind.size());
+  }
+  idx_t n_el = static_cast<idx_t>(ne), n_nodes = static_cast<idx_t>(m.num_nodes());
+  idx_t ncommon = 3, nparts = n_parts, objval = 0;
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_SEED] = 7;
+  options[METIS_OPTION_NUMBERING] = 0;
+  std::vector<idx_t> epart(ne), npart(n_nodes);
+  int status = METIS_PartMeshDual(&n_el, &n_nodes, eptr.data(), eind.data(), nullptr, nullptr,
+                                  &ncommon, &nparts, nullptr, options, &objval, epart.data(),
+                                  npart.data());
+  MORSE_CHECK(status == METIS_OK, "METIS_PartMeshDual failed (status ", status, ") on ",
+              m.source);
+  for (std::int64_t e = 0; e < ne; ++e) part[e] = static_cast<int>(epart[e]);
+  return part;
+}
+
+void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<int>& owner, int r,
+                std::vector<std::int64_t>& g2l, std::vector<std::int64_t>& e2l,
+                detail::Packer& p) {
+  std::vector<std::int64_t> elems, nodes;
+  for (std::int64_t e = 0; e < m.num_elements(); ++e)
+    if (part[e] == r) elems.push_back(e);
+  for (auto e : elems)
+    for (auto k = m.elem_offsets[e]; k < m.elem_offsets[e + 1]; ++k) nodes.push_back(m.elem_nodes[k]);
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  for (std::size_t i = 0; i < nodes.size(); ++i) g2l[nodes[i]] = static_cast<std::int64_t>(i);
+  for (std::size_t i = 0; i < elems.size(); ++i) e2l[elems[i]] = static_cast<std::int64_t>(i);
+
+  std::vector<std::int64_t> ids(nodes.size());
+  std::vector<double> xyz(3 * nodes.size());
+  std::vector<int> own(nodes.size());
+  std::vector<std::uint8_t> fixed(m.fixed_dofs.empty() ? 0 : nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    ids[i] = m.node_ids[nodes[i]];
+    std::copy_n(&m.coords[3 * nodes[i]], 3, &xyz[3 * i]);
+    own[i] = owner[nodes[i]];
+    if (!fixed.empty()) fixed[i] = m.fixed_dofs[nodes[i]];
+  }
+  std::vector<int> types(elems.size()), mats(elems.size());
+  std::vector<std::int64_t> offs(1, 0), conn, eids(elems.size());
+  for (std::size_t i = 0; i < elems.size(); ++i) {
+    auto e = elems[i];
+    types[i] = static_cast<int>(m.elem_types[e]);
+    mats[i] = m.elem_material[e];
+    eids[i] = m.elem_ids[e];
+    for (auto k = m.elem_offsets[e]; k < m.elem_offsets[e + 1]; ++k) conn.push_back(g2l[m.elem_nodes[k]]);
+    offs.push_back(static_cast<std::int64_t>(conn.size()));
+  }
+  p.put_vec(nodes);
+  p.put_vec(ids);
+  p.put_vec(xyz);
+  p.put_vec(own);
+  p.put_vec(fixed);
+  p.put_vec(elems);
+  p.put_vec(types);
+  p.put_vec(mats);
+  p.put_vec(offs);
+  p.put_vec(conn);
+  p.put_vec(eids);
+  for (const auto* sets : {&m.node_sets, &m.elem_sets}) {
+    const auto& map = sets == &m.node_sets ? g2l : e2l;
+    p.put<std::uint64_t>(sets->size());
+    for (const auto& [name, v] : *sets) {
+      std::vector<std::int64_t> loc;
+      for (auto k : v)
+        if (map[k] >= 0) loc.push_back(map[k]);
+      p.put_str(name);
+      p.put<std::int64_t>(static_cast<std::int64_t>(v.size()));
+      p.put_vec(loc);
+    }
+  }
+  for (auto k : nodes) g2l[k] = -1;
+  for (auto e : elems) e2l[e] = -1;
+}
+
+LocalMesh unpack_piece(MPI_Comm comm, const std::vector<char>& buf) {
+  detail::Unpacker u(buf);
+  LocalMesh lm;
+  lm.comm = comm;
+  Mesh& m = lm.mesh;
+  lm.n_global_nodes = u.get<std::int64_t>();
+  lm.n_global_elements = u.get<std::int64_t>();
+  m.units = u.get_str();
+  m.source = u.get_str();
+  auto n_mat = u.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < n_mat; ++i) {
+    Material mat;
+    mat.name = u.get_str();
+    mat.E = u.get<double>();
+    mat.nu = u.get<double>();
+    mat.rho = u.get<double>();
+    m.materials.push_back(mat);
+  }
+  lm.elements_per_rank = u.get_vec<std::int64_t>();
+  lm.global_node = u.get_vec<std::int64_t>();
+  m.node_ids = u.get_vec<std::int64_t>();
+  m.coords = u.get_vec<double>();
+  lm.node_owner = u.get_vec<int>();
+  m.fixed_dofs = u.get_vec<std::uint8_t>();
+  lm.global_elem = u.get_vec<std::int64_t>();
+  auto types = u.get_vec<int>();
+  m.elem_types.resize(types.size());
+  for (std::size_t i = 0; i < types.size(); ++i) m.elem_types[i] = static_cast<ElementType>(types[i]);
+  m.elem_material = u.get_vec<int>();
+  m.elem_offsets = u.get_vec<std::int64_t>();
+  m.elem_nodes = u.get_vec<std::int64_t>();
+  m.elem_ids = u.get_vec<std::int64_t>();
+  for (int s = 0; s < 2; ++s) {
+    auto& sets = s == 0 ? m.node_sets : m.elem_sets;
+    auto& sizes = s == 0 ? lm.node_set_sizes : lm.elem_set_sizes;
+    auto n = u.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+      auto name = u.get_str();
+      sizes[name] = u.get<std::int64_t>();
+      sets[name] = u.get_vec<std::int64_t>();
+    }
+  }
+  return lm;
+}
+
+}  // namespace
+
+LocalMesh distribute(MPI_Comm comm, Mesh* serial) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  std::string err;
+  if (rank == 0 && serial->num_elements() == 0)
+    err = cat("mesh ", serial->source, " has no solid element (tet4/10, wedge6/15, hex8/20)");
+  collective_check(comm, err);
+
+  std::vector<char> mine;
+  if (rank == 0) {
+    Mesh& m = *serial;
+    m.normalize_sets();
+    drop_unused_nodes(&m);
+    std::vector<int> part;
+    try {
+      part = partition_elements(m, size);
+    } catch (const Error& e) {
+      err = e.what();
+    }
+    collective_check(comm, err);
+    std::vector<int> owner(m.num_nodes(), size);
+    std::vector<std::int64_t> per_rank(size, 0);
+    for (std::int64_t e = 0; e < m.num_elements(); ++e) {
+      ++per_rank[part[e]];
+      for (auto k = m.elem_offsets[e]; k < m.elem_offsets[e + 1]; ++k)
+        owner[m.elem_nodes[k]] = std::min(owner[m.elem_nodes[k]], part[e]);
+    }
+    std::vector<std::int64_t> g2l(m.num_nodes(), -1), e2l(m.num_elements(), -1);
+    for (int r = size - 1; r >= 0; --r) {
+      detail::Packer p;
+      p.put<std::int64_t>(m.num_nodes());
+      p.put<std::int64_t>(m.num_elements());
+      p.put_str(m.units);
+      p.put_str(m.source);
+      p.put<std::uint64_t>(m.materials.size());
+      for (const auto& mat : m.materials) {
+        p.put_str(mat.name);
+        p.put(mat.E);
+        p.put(mat.nu);
+        p.put(mat.rho);
+      }
+      p.put_vec(per_rank);
+      pack_piece(m, part, owner, r, g2l, e2l, p);
+      if (r == 0) {
+        mine.swap(p.buffer());
+      } else {
+        std::uint64_t n = p.buffer().size();
+        MPI_Send(&n, 1, MPI_UINT64_T, r, 11, comm);
+        MPI_Send(p.buffer().data(), static_cast<int>(n), MPI_CHAR, r, 12, comm);
+      }
+    }
+    *serial = Mesh();
+  } else {
+    collective_check(comm, err);
+    std::uint64_t n = 0;
+    MPI_Recv(&n, 1, MPI_UINT64_T, 0, 11, comm, MPI_STATUS_IGNORE);
+    mine.resize(n);
+    MPI_Recv(mine.data(), static_cast<int>(n), MPI_CHAR, 0, 12, comm, MPI_STATUS_IGNORE);
+  }
+  return unpack_piece(comm, mine);
+}
+
+Mesh gather_to_rank0(const LocalMesh& lm) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(lm.comm, &rank);
+  MPI_Comm_size(lm.comm, &size);
+  const Mesh& m = lm.mesh;
+  detail::Packer p;
+  {
+    std::vector<std::int64_t> gn, ids;
+    std::vector<double> xyz;
+    for (std::int64_t k = 0; k < m.num_nodes(); ++k)
+      if (lm.node_owner[k] == rank) {
+        gn.push_back(lm.global_node[k]);
+        ids.push_back(m.node_ids[k]);
+        xyz.insert(xyz.end(), &m.coords[3 * k], &m.coords[3 * k] + 3);
+      }
+    std::vector<int> types(m.elem_types.size());
+    for (std::size_t e = 0; e < types.size(); ++e) types[e] = static_cast<int>(m.elem_types[e]);
+    std::vector<std::int64_t> conn(m.elem_nodes.size());
+    for (std::size_t i = 0; i < conn.size(); ++i) conn[i] = lm.global_node[m.elem_nodes[i]];
+    p.put_vec(gn);
+    p.put_vec(ids);
+    p.put_vec(xyz);
+    p.put_vec(lm.global_elem);
+    p.put_vec(m.elem_ids);
+    p.put_vec(types);
+    p.put_vec(m.elem_material);
+    p.put_vec(m.elem_offsets);
+    p.put_vec(conn);
+  }
+  int n = static_cast<int>(p.buffer().size());
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, lm.comm);
+  std::vector<char> all;
+  if (rank == 0) {
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    all.resize(displs[size - 1] + counts[size - 1]);
+  }
+  MPI_Gatherv(p.buffer().data(), n, MPI_CHAR, all.data(), counts.data(), displs.data(), MPI_CHAR,
+              0, lm.comm);
+  Mesh out;
+  if (rank != 0) return out;
+  out.units = m.units;
+  out.source = m.source;
+  out.materials = m.materials;
+  out.node_ids.resize(lm.n_global_nodes);
+  out.coords.resize(3 * lm.n_global_nodes);
+  std::vector<std::int64_t> eorder(lm.n_global_elements);
+  std::vector<ElementType> etype(lm.n_global_elements);
+  std::vector<int> emat(lm.n_global_elements);
+  std::vector<std::int64_t> eid(lm.n_global_elements);
+  std::vector<std::vector<std::int64_t>> econn(lm.n_global_elements);
+  for (int r = 0; r < size; ++r) {
+    std::vector<char> piece(all.begin() + displs[r], all.begin() + displs[r] + counts[r]);
+    detail::Unpacker u(piece);
+    auto gn = u.get_vec<std::int64_t>();
+    auto ids = u.get_vec<std::int64_t>();
+    auto xyz = u.get_vec<double>();
+    for (std::size_t i = 0; i < gn.size(); ++i) {
+      out.node_ids[gn[i]] = ids[i];
+      std::copy_n(&xyz[3 * i], 3, &out.coords[3 * gn[i]]);
+    }
+    auto ge = u.get_vec<std::int64_t>();
+    auto eids = u.get_vec<std::int64_t>();
+    auto types = u.get_vec<int>();
+    auto mats = u.get_vec<int>();
+    auto offs = u.get_vec<std::int64_t>();
+    auto conn = u.get_vec<std::int64_t>();
+    for (std::size_t e = 0; e < ge.size(); ++e) {
+      etype[ge[e]] = static_cast<ElementType>(types[e]);
+      emat[ge[e]] = mats[e];
+      eid[ge[e]] = eids[e];
+      econn[ge[e]].assign(conn.begin() + offs[e], conn.begin() + offs[e + 1]);
+    }
+  }
+  for (std::int64_t e = 0; e < lm.n_global_elements; ++e)
+    out.add_element(eid[e], etype[e], econn[e].data(), emat[e]);
+  return out;
+}
+
+}  // namespace morse::mesh
