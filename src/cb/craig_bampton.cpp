@@ -173,7 +173,6 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
   if (want_modes) {
     MORSE_CHECK(s.fmax_hz > 0 || s.n_fixed <= n_i, s.n_fixed, " fixed-interface modes requested but the model has only ",
                 n_i, " interior DOFs");
-    StageTimer t(comm, "FixedInterfaceModes");
     UVec w = sign_reference(lm, dofs);
     Vec wi;
     MORSE_CALL(VecGetSubVector(w.get(), is_i.get(), &wi));

@@ -24,7 +24,7 @@ PetscInt mumps_null_pivots(Mat F) {
 }
 
 Mat Eigenpairs::factor() const {
-  if (!eps) return nullptr;
+  if (!eps || slicing) return nullptr;
   ST st;
   KSP ksp;
   PC pc;
@@ -57,6 +57,7 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   if (slicing) set_default_option(p + "st_mat_mumps_icntl_13", "1");  // inertia in parallel
 
   Eigenpairs out;
+  out.slicing = slicing;
   MORSE_CALL(EPSCreate(comm, out.eps.ptr()));
   EPS eps = out.eps.get();
   MORSE_CALL(EPSSetOptionsPrefix(eps, s.prefix.c_str()));

@@ -17,6 +17,9 @@ namespace {
 
 using Point = std::array<double, 3>;
 
+// Largest stiffness rule (Hex20, 3x3x3); sizes the stack buffers of element_stiffness().
+constexpr int kMaxStiffnessPoints = 27;
+
 int type_index(ElementType t) {
   const int i = static_cast<int>(t);
   MORSE_CHECK(i >= 0 && i < mesh::kNumElementTypes, "fe: invalid element type code ", i);
@@ -138,7 +141,7 @@ QuadratureRule tet_degree2() {
   return r;
 }
 
-// 14-point rule of degree 5 (Walkington / Keast family), positive weights. The constants solve
+// Classical symmetric 14-point rule of degree 5, positive weights. The constants solve
 // the moment equations to double precision.
 QuadratureRule tet_degree5() {
   QuadratureRule r;
@@ -277,12 +280,18 @@ void shape_hex20(const double* x, double* N, double* dN) {
 
 void eval_shape(ElementType t, const double* xi, double* N, double* dN) {
   switch (t) {
-    case ElementType::Tet4: return shape_tet4(xi, N, dN);
-    case ElementType::Tet10: return shape_tet10(xi, N, dN);
-    case ElementType::Wedge6: return shape_wedge6(xi, N, dN);
-    case ElementType::Wedge15: return shape_wedge15(xi, N, dN);
-    case ElementType::Hex8: return shape_hex8(xi, N, dN);
-    case ElementType::Hex20: return shape_hex20(xi, N, dN);
+    case ElementType::Tet4:
+      return shape_tet4(xi, N, dN);
+    case ElementType::Tet10:
+      return shape_tet10(xi, N, dN);
+    case ElementType::Wedge6:
+      return shape_wedge6(xi, N, dN);
+    case ElementType::Wedge15:
+      return shape_wedge15(xi, N, dN);
+    case ElementType::Hex8:
+      return shape_hex8(xi, N, dN);
+    case ElementType::Hex20:
+      return shape_hex20(xi, N, dN);
   }
   type_index(t);  // throws
 }
@@ -321,6 +330,8 @@ const TypeData& type_data(ElementType t) {
       const QuadratureRule& ks = stiffness_rule(et);
       const QuadratureRule& ms = mass_rule(et);
       d[i].n = mesh::nodes_per_element(et);
+      MORSE_CHECK(static_cast<int>(ks.points.size()) <= kMaxStiffnessPoints,
+                  "fe: stiffness rule larger than kMaxStiffnessPoints");
       d[i].stiff = tabulate(et, ks.points, ks.weights.data());
       d[i].mass = tabulate(et, ms.points, ms.weights.data());
       d[i].nodes = tabulate(et, reference_nodes(et), nullptr);
@@ -393,12 +404,12 @@ void check_material(double E, double nu) {
 
 const QuadratureRule& stiffness_rule(ElementType t) {
   static const std::array<QuadratureRule, mesh::kNumElementTypes> rules = {
-      tet_degree1(),                              // Tet4: B constant
-      tet_degree2(),                              // Tet10: B linear
-      wedge_rule(triangle_degree2(), 2),          // Wedge6
-      wedge_rule(triangle_degree4(), 3),          // Wedge15
-      hex_gauss(2),                               // Hex8
-      hex_gauss(3),                               // Hex20: full integration
+      tet_degree1(),                      // Tet4: B constant
+      tet_degree2(),                      // Tet10: B linear
+      wedge_rule(triangle_degree2(), 2),  // Wedge6
+      wedge_rule(triangle_degree4(), 3),  // Wedge15
+      hex_gauss(2),                       // Hex8
+      hex_gauss(3),                       // Hex20: full integration
   };
   return rules[type_index(t)];
 }
@@ -518,38 +529,45 @@ double element_stiffness(ElementType t, const double* xyz, double E, double nu, 
   const double mu = E / (2.0 * (1.0 + nu));
   const TypeData& d = type_data(t);
   const int n = d.n, nd = 3 * n;
-  std::fill(Ke, Ke + nd * nd, 0.0);
 
-  double g[3 * kMaxNodes], gl[3 * kMaxNodes], gm[3 * kMaxNodes];
+  // Physical gradients at the valid quadrature points, plain (G) and weighted by w det J (Gw).
+  double G[kMaxStiffnessPoints * 3 * kMaxNodes], Gw[kMaxStiffnessPoints * 3 * kMaxNodes];
   double min_det = std::numeric_limits<double>::infinity();
+  int nq = 0;
   for (int q = 0; q < d.stiff.nq; ++q) {
+    double* g = G + nq * nd;
     const double det = physical_gradients(n, &d.stiff.dN[3 * n * q], xyz, g);
     min_det = std::min(min_det, det);
-    if (!(det > 0.0)) continue;  // inverted: result is meaningless anyway, keep it finite
+    if (!(det > 0.0)) continue;  // inverted: Ke is meaningless anyway, just keep it finite
     const double f = d.stiff.w[q] * det;
-    for (int k = 0; k < nd; ++k) {
-      gl[k] = f * lam * g[k];
-      gm[k] = f * mu * g[k];
-    }
-    // Isotropic B^T D B in index form, block (a, b):
-    //   K_ij += lam g_ai g_bj + mu g_aj g_bi + mu delta_ij (g_a . g_b)
-    // Only blocks b >= a are accumulated; the lower triangle is mirrored at the end.
-    for (int a = 0; a < n; ++a) {
-      const double* la = gl + 3 * a;
-      const double* ma = gm + 3 * a;
-      for (int b = a; b < n; ++b) {
-        const double* gb = g + 3 * b;
-        const double dot = ma[0] * gb[0] + ma[1] * gb[1] + ma[2] * gb[2];
-        double* row = Ke + 3 * a * nd + 3 * b;
-        for (int i = 0; i < 3; ++i, row += nd) {
-          row[0] += la[i] * gb[0] + ma[0] * gb[i];
-          row[1] += la[i] * gb[1] + ma[1] * gb[i];
-          row[2] += la[i] * gb[2] + ma[2] * gb[i];
-          row[i] += dot;
-        }
-      }
+    for (int k = 0; k < nd; ++k) Gw[nq * nd + k] = f * g[k];
+    ++nq;
+  }
+
+  // For isotropic D, block (a, b) of B^T D B only needs S_ab = int g_a g_b^T dV:
+  //   K_ab = lam S_ab + mu (S_ab^T + tr(S_ab) I).
+  // S is accumulated into Ke for the blocks b >= a with axpy inner loops (they vectorize).
+  std::fill(Ke, Ke + nd * nd, 0.0);
+  for (int r = 0; r < nd; ++r) {
+    const int c0 = r - r % 3;
+    double* row = Ke + r * nd;
+    for (int q = 0; q < nq; ++q) {
+      const double s = Gw[q * nd + r];
+      const double* gq = G + q * nd;
+      for (int c = c0; c < nd; ++c) row[c] += s * gq[c];
     }
   }
+  for (int a = 0; a < n; ++a)
+    for (int b = a; b < n; ++b) {
+      double* blk = Ke + 3 * a * nd + 3 * b;
+      double S[9];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) S[3 * i + j] = blk[i * nd + j];
+      const double tr = S[0] + S[4] + S[8];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          blk[i * nd + j] = lam * S[3 * i + j] + mu * (S[3 * j + i] + (i == j ? tr : 0.0));
+    }
   for (int r = 0; r < nd; ++r)
     for (int c = r + 1; c < nd; ++c) Ke[c * nd + r] = Ke[r * nd + c];
   return min_det;

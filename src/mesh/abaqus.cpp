@@ -249,27 +249,33 @@ class Reader {
   }
 
   // --- files
-  static std::string read_whole_file(const std::string& path, bool* ok) {
-    std::string buf;
-    *ok = false;
+  /// Reads a whole file; on failure returns false and a reason in *error.
+  static bool read_whole_file(const std::string& path, std::string* text, std::string* error) {
     std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) return buf;
+    if (!f) {
+      *error = std::strerror(errno);
+      return false;
+    }
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    text->clear();
+    if (!ec) text->reserve(static_cast<std::size_t>(size));
     char chunk[1 << 16];
     std::size_t n;
-    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) buf.append(chunk, n);
-    *ok = !std::ferror(f);
+    while ((n = std::fread(chunk, 1, sizeof chunk, f)) > 0) text->append(chunk, n);
+    const bool ok = !std::ferror(f);
+    if (!ok) *error = std::strerror(errno);
     std::fclose(f);
-    return buf;
+    return ok;
   }
 
   void parse_file(const std::string& path, const Loc* from, int depth) {
-    bool ok = false;
     if (from && depth > 32)
       fail(*from, "*INCLUDE nested more than 32 deep (does '", path, "' include itself?)");
-    const std::string text = read_whole_file(path, &ok);
-    if (!ok) {
-      if (from) fail(*from, "cannot read included file '", path, "'");
-      throw Error(cat("cannot read Abaqus input file '", path, "'"));
+    std::string text, why;
+    if (!read_whole_file(path, &text, &why)) {
+      if (from) fail(*from, "cannot read included file '", path, "' (", why, ")");
+      throw Error(cat("cannot read Abaqus input file '", path, "' (", why, ")"));
     }
     const int fid = static_cast<int>(files_.size());
     files_.push_back(path);
@@ -367,38 +373,17 @@ class Reader {
     return *v;
   }
 
-  /// Keywords that morse knowingly ignores (analysis steps, output requests, loads, ...).
-  inline static const std::set<std::string> kIgnored = {"HEADING",
-                                                        "STEP",
-                                                        "ENDSTEP",
-                                                        "FREQUENCY",
-                                                        "STATIC",
-                                                        "DYNAMIC",
-                                                        "MODALDYNAMIC",
-                                                        "STEADYSTATEDYNAMICS",
-                                                        "BUCKLE",
-                                                        "NODEPRINT",
-                                                        "ELPRINT",
-                                                        "NODEFILE",
-                                                        "ELFILE",
-                                                        "OUTPUT",
-                                                        "NODEOUTPUT",
-                                                        "ELEMENTOUTPUT",
-                                                        "CONTACTPRINT",
-                                                        "CONTACTFILE",
-                                                        "ENERGYPRINT",
-                                                        "SECTIONPRINT",
-                                                        "CLOAD",
-                                                        "DLOAD",
-                                                        "SELECTCYCLICSYMMETRYMODES",
-                                                        "PREPRINT",
-                                                        "RESTART",
-                                                        "AMPLITUDE",
-                                                        "INITIALCONDITIONS",
-                                                        "MONITOR",
-                                                        "CONTROLS",
-                                                        "TIMEPOINTS",
-                                                        "MODALDAMPING"};
+  /// Keywords that morse knowingly ignores (analysis steps, output requests, loads, ...), in
+  /// compact upper-case form, each surrounded by blanks.
+  static constexpr const char* kIgnored =
+      " HEADING PREPRINT RESTART AMPLITUDE INITIALCONDITIONS STEP ENDSTEP FREQUENCY STATIC"
+      " DYNAMIC MODALDYNAMIC STEADYSTATEDYNAMICS BUCKLE SELECTCYCLICSYMMETRYMODES MODALDAMPING"
+      " CLOAD DLOAD CONTROLS TIMEPOINTS MONITOR OUTPUT NODEOUTPUT ELEMENTOUTPUT NODEPRINT ELPRINT"
+      " NODEFILE ELFILE CONTACTPRINT CONTACTFILE ENERGYPRINT SECTIONPRINT ";
+
+  static bool ignored(const std::string& kw) {
+    return std::strstr(kIgnored, (" " + kw + " ").c_str()) != nullptr;
+  }
 
   void keyword_line(const char* b, const char* e, const Loc& loc) {
     if (pending_)
@@ -413,7 +398,7 @@ class Reader {
     // *DAMPING, ...) may be material options and keep it open.
     static const std::set<std::string> kEndsMaterial = {
         "NODE", "ELEMENT", "NSET", "ELSET", "BOUNDARY", "MATERIAL", "SOLIDSECTION", "STEP"};
-    if (kEndsMaterial.count(kw) || kIgnored.count(kw)) material_ = -1;
+    if (kEndsMaterial.count(kw) || ignored(kw)) material_ = -1;
     const std::string* input = nullptr;
     if (kw == "NODE") {
       block_ = Block::kNode;
@@ -488,7 +473,7 @@ class Reader {
     } else {
       if (kw == "STEP") in_step_ = true;
       if (kw == "ENDSTEP") in_step_ = false;
-      if (kIgnored.count(kw))
+      if (ignored(kw))
         notice(kw, loc, "ignoring ", display, " and its data lines (not used by morse)");
       else
         notice(kw, loc, "ignoring unsupported keyword ", display, " and its data lines");
@@ -503,9 +488,9 @@ class Reader {
     }
   }
 
-  int get_set(std::vector<SetData>* sets, std::unordered_map<std::string, int>* lookup,
+  int get_set(std::vector<SetData>* sets, std::unordered_map<std::string, int>* names,
               const std::string& name) {
-    auto [it, inserted] = lookup->emplace(to_upper(name), static_cast<int>(sets->size()));
+    auto [it, inserted] = names->emplace(to_upper(name), static_cast<int>(sets->size()));
     if (inserted) {
       sets->emplace_back();
       sets->back().name = name;
@@ -564,6 +549,7 @@ class Reader {
       fail(loc, "*NODE data line needs 'label, x, y, z' (", fields_.size(), " fields found)");
     if (fields_.size() > 4) fail(loc, "*NODE data line has more than 'label, x, y, z'");
     const std::int64_t label = int_field(fields_[0], loc, "node label");
+    if (label <= 0) fail(loc, "node label ", label, " is not positive");
     double x[3];
     for (int d = 0; d < 3; ++d)
       x[d] = fields_[1 + d].empty() ? 0.0 : real_field(fields_[1 + d], loc, "coordinate");
@@ -579,6 +565,7 @@ class Reader {
     std::size_t i = 0;
     if (!pending_) {
       pending_label_ = int_field(fields_[0], loc, "element label");
+      if (pending_label_ <= 0) fail(loc, "element label ", pending_label_, " is not positive");
       pending_loc_ = loc;
       pending_nodes_.clear();
       pending_ = true;
@@ -628,9 +615,9 @@ class Reader {
         add_labels(set, &label, 1, loc);
         continue;
       }
-      auto& lookup = nodes ? nset_lookup_ : eset_lookup_;
-      auto it = lookup.find(to_upper(f.str()));
-      if (it == lookup.end())
+      auto& names = nodes ? nset_lookup_ : eset_lookup_;
+      auto it = names.find(to_upper(f.str()));
+      if (it == names.end())
         fail(loc, "undefined ", nodes ? "node" : "element", " set '", f.str(), "' in ",
              block_keyword_);
       std::vector<SetData>& sets = nodes ? nsets_ : esets_;
@@ -714,8 +701,8 @@ class Reader {
   }
 
   // --- resolution
-  std::int64_t find(const std::unordered_map<std::int64_t, std::int64_t>& index,
-                    std::int64_t label) const {
+  std::int64_t lookup(const std::unordered_map<std::int64_t, std::int64_t>& index,
+                      std::int64_t label) const {
     auto it = index.find(label);
     return it == index.end() ? -1 : it->second;
   }
@@ -724,7 +711,7 @@ class Reader {
     const auto& index = nodes ? node_index_ : elem_index_;
     std::vector<std::int64_t> out(s.labels.size());
     for (std::size_t i = 0; i < s.labels.size(); ++i) {
-      out[i] = find(index, s.labels[i]);
+      out[i] = lookup(index, s.labels[i]);
       if (out[i] < 0) {
         auto it = std::upper_bound(
             s.marks.begin(), s.marks.end(), i,
@@ -758,7 +745,7 @@ class Reader {
       const int n = nodes_per_element(t);
       const Perm& perm = abaqus_to_morse(t);
       for (int k = 0; k < n; ++k) {
-        idx[k] = find(node_index_, elem_labels_[off + k]);
+        idx[k] = lookup(node_index_, elem_labels_[off + k]);
         if (idx[k] < 0)
           fail(elem_locs_[el], "element ", elem_ids_[el], " references undefined node ",
                elem_labels_[off + k]);
@@ -776,7 +763,7 @@ class Reader {
       mesh.fixed_dofs.assign(static_cast<std::size_t>(mesh.num_nodes()), 0);
       for (const BoundaryEntry& be : boundaries_) {
         if (be.set.empty()) {
-          const std::int64_t k = find(node_index_, be.label);
+          const std::int64_t k = lookup(node_index_, be.label);
           if (k < 0) fail(be.loc, "*BOUNDARY references undefined node ", be.label);
           mesh.fixed_dofs[k] |= be.mask;
         } else {

@@ -298,6 +298,11 @@ class Reader {
   void add_element(std::int64_t tag, const GmshType& t, const std::int64_t* phys, std::size_t nphys,
                    std::int64_t elem_line);
   void build_sets();
+  /// True if element e has type t and the nodes in nodes_.
+  bool same_element(std::int64_t e, ElementType t) const {
+    return mesh_.elem_types[e] == t &&
+           std::equal(nodes_.begin(), nodes_.end(), mesh_.elem_nodes.data() + mesh_.elem_offsets[e]);
+  }
 
   const std::string& path_;
   const char* begin_;
@@ -315,6 +320,7 @@ class Reader {
   bool morse_sets_ = false;  // file written by write_gmsh(): 3D groups are element sets only
   TagMap node_map_;
   TagMap elem_map_;  // solid elements only
+  std::unordered_multimap<std::uint64_t, std::int64_t> elem_hash_;  // connectivity -> element
   std::vector<std::int64_t> nodes_;  // scratch: node indices of the current element
 
   std::map<Key, std::string> names_;                       // physical names
@@ -481,18 +487,26 @@ void Reader::add_element(std::int64_t tag, const GmshType& t, const std::int64_t
     fail(cat("invalid element tag ", tag, " (must be >= 1)"));
   }
   const auto type = static_cast<ElementType>(t.morse);
-  std::int64_t e = mesh_.num_elements();
-  if (!elem_map_.insert(tag, e)) {
-    // Allowed only as a repetition of the same element (MSH 2 writes an element once per
-    // physical group it belongs to).
-    e = elem_map_.find(tag);
-    const std::int64_t* old = mesh_.elem_nodes.data() + mesh_.elem_offsets[e];
-    if (mesh_.elem_types[e] != type || !std::equal(nodes_.begin(), nodes_.end(), old)) {
+  std::int64_t e = elem_map_.find(tag);
+  if (e >= 0) {
+    // A tag may repeat only for the very same element.
+    if (!same_element(e, type)) {
       line_ = elem_line;
       fail(cat("element tag ", tag, " defined twice with different nodes"));
     }
   } else {
-    mesh_.add_element(tag, type, nodes_.data());
+    // MSH 2 writes an element once per physical group it belongs to, under a new tag: merge
+    // repeated connectivity into the first element.
+    std::uint64_t h = 1469598103934665603ull ^ static_cast<std::uint64_t>(t.morse);
+    for (std::int64_t v : nodes_) h = (h ^ static_cast<std::uint64_t>(v)) * 1099511628211ull;
+    auto range = elem_hash_.equal_range(h);
+    for (auto it = range.first; it != range.second && e < 0; ++it)
+      if (same_element(it->second, type)) e = it->second;
+    if (e < 0) {
+      e = mesh_.add_element(tag, type, nodes_.data());
+      elem_hash_.emplace(h, e);
+    }
+    elem_map_.insert(tag, e);
   }
   for (std::size_t k = 0; k < nphys; ++k) group_elems_[phys[k]].push_back(e);
 }
@@ -506,6 +520,7 @@ void Reader::read_elements4() {
   read_int("the minimum element tag");
   read_int("the maximum element tag");
   elem_map_.init(nelems);
+  elem_hash_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(nelems, 1 << 26)));
   std::int64_t total = 0;
   static const std::vector<std::int64_t> kNoPhys;
   for (std::int64_t b = 0; b < nblocks; ++b) {
@@ -544,6 +559,7 @@ void Reader::read_elements2() {
   have_elements_ = true;
   const std::int64_t n = read_count("the number of elements");
   elem_map_.init(n);
+  elem_hash_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(n, 1 << 26)));
   for (std::int64_t k = 0; k < n; ++k) {
     const std::int64_t tag = read_int("an element tag");
     const std::int64_t elem_line = line_;

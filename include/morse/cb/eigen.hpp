@@ -29,6 +29,7 @@ struct Eigenpairs {
   UEPS eps;                    ///< the solver, kept alive so its factorization can be reused
   PetscInt iterations = 0;
   double factor_seconds = 0;   ///< numeric factorization time (count mode)
+  bool slicing = false;        ///< solved by spectrum slicing
   /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
   Mat factor() const;
 };

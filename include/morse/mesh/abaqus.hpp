@@ -4,7 +4,8 @@
 // names are case-insensitive, spaces in keyword lines are ignored):
 //
 //   *NODE [, NSET=name]                     label, x, y, z
-//   *ELEMENT, TYPE=t [, ELSET=name]         label, n1, n2, ...  (may continue on further lines)
+//   *ELEMENT, TYPE=t [, ELSET=name]         label, n1, n2, ...  (continues on the following lines
+//                                           until all nodes are read; a trailing comma is optional)
 //        t = C3D4, C3D10, C3D6, C3D15, C3D8, C3D20, C3D20R (read as C3D20)
 //   *NSET, NSET=name [, GENERATE]           node labels or names of node sets (GENERATE:
 //                                           start, end[, step])
@@ -15,7 +16,8 @@
 //   *BOUNDARY                               node label or node set, first DOF[, last DOF[, value]]
 //                                           or node/set, ENCASTRE|PINNED|XSYMM|...: DOFs 1..3 set
 //                                           bits of Mesh::fixed_dofs; rotational DOFs (4..6) are
-//                                           ignored; a nonzero prescribed value is an error.
+//                                           ignored; a nonzero prescribed value is an error. A
+//                                           *BOUNDARY inside a *STEP is applied like the others.
 //   *MATERIAL, NAME=name
 //   *ELASTIC [, TYPE=ISO]                   E, nu[, temperature]: first line used
 //   *DENSITY                                rho[, temperature]: first line used
@@ -23,14 +25,17 @@
 //
 // Every other keyword (*HEADING, *STEP, *FREQUENCY, *NODE PRINT, *EL FILE, ...) is skipped with
 // its data lines; one notice per distinct keyword is printed to stderr when verbose. Lines starting
-// with "**" are comments; blank lines are ignored.
+// with "**" are comments; blank lines are ignored. Keyword lines do not continue onto the next
+// line (CalculiX convention: "*FREQUENCY, ...," is followed by a data line).
 //
 // Node and element labels may be arbitrary (non-contiguous) positive integers; the Mesh keeps
 // them in node_ids / elem_ids and stores indices elsewhere. Element connectivity is converted from
 // Abaqus to morse (Gmsh) node ordering. Set names are stored as first written; references to sets
 // and materials inside the deck are case-insensitive. Sets, *BOUNDARY and *SOLID SECTION are
 // resolved once the whole deck is read, so they may refer to nodes, elements and materials
-// defined further down. Elements not covered by a *SOLID SECTION get elem_material = -1.
+// defined further down; a set name listed inside *NSET / *ELSET must be defined above (its members
+// at that point are copied). *INCLUDE is textual: data lines of the keyword in force may continue
+// in the included file. Elements not covered by a *SOLID SECTION get elem_material = -1.
 // Mesh::units is "unknown" (decks carry no unit system); Mesh::source is the path.
 //
 // Errors (morse::Error, message "file:line: what") are raised for: missing deck or included file,

@@ -13,6 +13,9 @@
 // share a name are merged. Every group declared in the file yields a set, possibly empty.
 //
 // Node and element tags become Mesh::node_ids / Mesh::elem_ids; they need not be contiguous.
+// A solid element that repeats the type and nodes of an earlier one (MSH 2 writes an element
+// once per physical group it belongs to, under a new tag) is merged into the earlier one, which
+// keeps its tag and gains the groups.
 // All nodes of the file are kept, in file order, including nodes no solid element uses.
 //
 // Writing produces MSH 4.1 ASCII: the nodes, the solid elements (in Mesh order, with their ids),

@@ -1,0 +1,86 @@
+// Shared helpers of the morse unit tests.
+#pragma once
+
+#include <mpi.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "morse/cb/eigen.hpp"
+#include "morse/core/error.hpp"
+#include "morse/fe/model.hpp"
+#include "morse/mesh/generator.hpp"
+#include "morse/mesh/partition.hpp"
+
+namespace morse::test {
+
+inline mesh::Material steel() {
+  mesh::Material m;
+  m.name = "steel";
+  m.E = 2.1e11;
+  m.nu = 0.3;
+  m.rho = 7800;
+  return m;
+}
+
+/// Generates a box on rank 0 of comm and distributes it. Collective.
+inline mesh::LocalMesh box_mesh(MPI_Comm comm, const mesh::BoxSpec& b) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  mesh::Mesh m;
+  if (rank == 0) m = mesh::generate_box(b);
+  return mesh::distribute(comm, &m);
+}
+
+/// A DOF vector from a nodal field f(x, y, z, d) on the free DOFs.
+template <class F>
+UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofMap& dofs, F f) {
+  UVec v;
+  MORSE_CALL(VecCreateMPI(lm.comm, dofs.n_owned, dofs.n_global, v.ptr()));
+  PetscScalar* a;
+  MORSE_CALL(VecGetArray(v.get(), &a));
+  int rank = 0;
+  MPI_Comm_rank(lm.comm, &rank);
+  for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    const double* x = &lm.mesh.coords[3 * k];
+    for (int d = 0; d < 3; ++d) {
+      PetscInt g = dofs.node_dof[3 * k + d];
+      if (g >= 0) a[g - dofs.first] = f(x[0], x[1], x[2], d);
+    }
+  }
+  MORSE_CALL(VecRestoreArray(v.get(), &a));
+  return v;
+}
+
+/// Mass-weighted MAC between a vector a and a vector b: (a^T M b)^2 / (a^T M a b^T M b).
+inline double mac(Mat M, Vec a, Vec b) {
+  UVec Ma, Mb;
+  MORSE_CALL(VecDuplicate(a, Ma.ptr()));
+  MORSE_CALL(VecDuplicate(b, Mb.ptr()));
+  MORSE_CALL(MatMult(M, a, Ma.get()));
+  MORSE_CALL(MatMult(M, b, Mb.get()));
+  PetscScalar ab, aa, bb;
+  MORSE_CALL(VecDot(Ma.get(), b, &ab));
+  MORSE_CALL(VecDot(Ma.get(), a, &aa));
+  MORSE_CALL(VecDot(Mb.get(), b, &bb));
+  return ab * ab / (aa * bb);
+}
+
+/// Solves A x = b with a MUMPS LU/Cholesky (KSPPREONLY). Collective.
+inline void direct_solve(Mat A, Vec b, Vec x) {
+  UKSP ksp;
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)A, &comm));
+  MORSE_CALL(KSPCreate(comm, ksp.ptr()));
+  MORSE_CALL(KSPSetOperators(ksp.get(), A, A));
+  MORSE_CALL(KSPSetType(ksp.get(), KSPPREONLY));
+  PC pc;
+  MORSE_CALL(KSPGetPC(ksp.get(), &pc));
+  MORSE_CALL(PCSetType(pc, PCCHOLESKY));
+  MORSE_CALL(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  MORSE_CALL(KSPSolve(ksp.get(), b, x));
+}
+
+}  // namespace morse::test
