@@ -62,8 +62,8 @@ Mesh generate_box(const BoxSpec& spec) {
   const std::int64_t n1[3] = {n[0] + 1, n[1] + 1, n[2] + 1};
   const std::int64_t nv = n1[0] * n1[1] * n1[2];
   // Upper bound of nodes: vertices + edges + face diagonals + cell diagonals < 8 * nv.
-  MORSE_CHECK(nv < (std::int64_t{1} << 28), "generate_box: ", spec.nx, "x", spec.ny, "x",
-              spec.nz, " cells are too many");
+  MORSE_CHECK(nv < (std::int64_t{1} << 28), "generate_box: ", spec.nx, "x", spec.ny, "x", spec.nz,
+              " cells are too many");
 
   const ElementType type = spec.type;
   const bool quadratic = is_quadratic(type);
@@ -73,8 +73,7 @@ Mesh generate_box(const BoxSpec& spec) {
   Mesh m;
   m.source = cat("box ", element_name(type), " ", spec.nx, "x", spec.ny, "x", spec.nz, " size ",
                  spec.lx, "x", spec.ly, "x", spec.lz);
-  if (spec.distortion > 0)
-    m.source += cat(" distortion ", spec.distortion, " seed ", spec.seed);
+  if (spec.distortion > 0) m.source += cat(" distortion ", spec.distortion, " seed ", spec.seed);
 
   // --- vertices
   std::mt19937 rng(spec.seed);
@@ -134,10 +133,17 @@ Mesh generate_box(const BoxSpec& spec) {
   }
   const int(*edges)[2] = nullptr;
   switch (type) {
-    case ElementType::Tet10: edges = kTet10Edges; break;
-    case ElementType::Wedge15: edges = kWedge15Edges; break;
-    case ElementType::Hex20: edges = kHex20Edges; break;
-    default: break;
+    case ElementType::Tet10:
+      edges = kTet10Edges;
+      break;
+    case ElementType::Wedge15:
+      edges = kWedge15Edges;
+      break;
+    case ElementType::Hex20:
+      edges = kHex20Edges;
+      break;
+    default:
+      break;
   }
 
   const std::size_t ne_total = static_cast<std::size_t>(ncells) * local.size();
@@ -152,7 +158,8 @@ Mesh generate_box(const BoxSpec& spec) {
       for (g[0] = 0; g[0] < n[0]; ++g[0]) {
         std::int64_t corner[8];
         for (int c = 0; c < 8; ++c)
-          corner[c] = (g[0] + (c & 1)) + n1[0] * ((g[1] + ((c >> 1) & 1)) + n1[1] * (g[2] + (c >> 2)));
+          corner[c] =
+              (g[0] + (c & 1)) + n1[0] * ((g[1] + ((c >> 1) & 1)) + n1[1] * (g[2] + (c >> 2)));
         for (const auto& lv : local) {
           for (int v = 0; v < nvert; ++v) conn[v] = corner[lv[v]];
           for (int k = 0; quadratic && k < npe - nvert; ++k)

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <map>
 #include <set>
+#include <system_error>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -28,56 +29,56 @@ using Key = std::pair<int, std::int64_t>;  // (dimension, tag) of an entity or p
 constexpr int kNone = -1;
 
 struct GmshType {
-  int dim;          // -1: unknown type
+  int dim;  // -1: unknown type
   int n_nodes;
   const char* name;
-  int morse;        // static_cast<int>(ElementType) or kNone
+  int morse;  // static_cast<int>(ElementType) or kNone
 };
 
 // Indexed by the gmsh type number (GmshDefines.h).
 constexpr GmshType kGmshTypes[] = {
-    {-1, 0, nullptr, kNone},                                             // 0
-    {1, 2, "2-node line", kNone},                                        // 1
-    {2, 3, "3-node triangle", kNone},                                    // 2
-    {2, 4, "4-node quadrangle", kNone},                                  // 3
-    {3, 4, "4-node tetrahedron", static_cast<int>(ElementType::Tet4)},   // 4
-    {3, 8, "8-node hexahedron", static_cast<int>(ElementType::Hex8)},    // 5
-    {3, 6, "6-node prism", static_cast<int>(ElementType::Wedge6)},       // 6
-    {3, 5, "5-node pyramid", kNone},                                     // 7
-    {1, 3, "3-node line", kNone},                                        // 8
-    {2, 6, "6-node triangle", kNone},                                    // 9
-    {2, 9, "9-node quadrangle", kNone},                                  // 10
+    {-1, 0, nullptr, kNone},                                               // 0
+    {1, 2, "2-node line", kNone},                                          // 1
+    {2, 3, "3-node triangle", kNone},                                      // 2
+    {2, 4, "4-node quadrangle", kNone},                                    // 3
+    {3, 4, "4-node tetrahedron", static_cast<int>(ElementType::Tet4)},     // 4
+    {3, 8, "8-node hexahedron", static_cast<int>(ElementType::Hex8)},      // 5
+    {3, 6, "6-node prism", static_cast<int>(ElementType::Wedge6)},         // 6
+    {3, 5, "5-node pyramid", kNone},                                       // 7
+    {1, 3, "3-node line", kNone},                                          // 8
+    {2, 6, "6-node triangle", kNone},                                      // 9
+    {2, 9, "9-node quadrangle", kNone},                                    // 10
     {3, 10, "10-node tetrahedron", static_cast<int>(ElementType::Tet10)},  // 11
-    {3, 27, "27-node hexahedron", kNone},                                // 12
-    {3, 18, "18-node prism", kNone},                                     // 13
-    {3, 14, "14-node pyramid", kNone},                                   // 14
-    {0, 1, "point", kNone},                                              // 15
-    {2, 8, "8-node quadrangle", kNone},                                  // 16
+    {3, 27, "27-node hexahedron", kNone},                                  // 12
+    {3, 18, "18-node prism", kNone},                                       // 13
+    {3, 14, "14-node pyramid", kNone},                                     // 14
+    {0, 1, "point", kNone},                                                // 15
+    {2, 8, "8-node quadrangle", kNone},                                    // 16
     {3, 20, "20-node hexahedron", static_cast<int>(ElementType::Hex20)},   // 17
     {3, 15, "15-node prism", static_cast<int>(ElementType::Wedge15)},      // 18
-    {3, 13, "13-node pyramid", kNone},                                   // 19
-    {2, 9, "9-node triangle", kNone},                                    // 20
-    {2, 10, "10-node triangle", kNone},                                  // 21
-    {2, 12, "12-node triangle", kNone},                                  // 22
-    {2, 15, "15-node triangle", kNone},                                  // 23
-    {2, 15, "15-node incomplete triangle", kNone},                       // 24
-    {2, 21, "21-node triangle", kNone},                                  // 25
-    {1, 4, "4-node line", kNone},                                        // 26
-    {1, 5, "5-node line", kNone},                                        // 27
-    {1, 6, "6-node line", kNone},                                        // 28
-    {3, 20, "20-node tetrahedron", kNone},                               // 29
-    {3, 35, "35-node tetrahedron", kNone},                               // 30
-    {3, 56, "56-node tetrahedron", kNone},                               // 31
-    {3, 0, "high-order tetrahedron", kNone},                             // 32
-    {3, 0, "high-order tetrahedron", kNone},                             // 33
-    {-1, 0, nullptr, kNone},                                             // 34 polygon
-    {-1, 0, nullptr, kNone},                                             // 35 polyhedron
-    {2, 16, "16-node quadrangle", kNone},                                // 36
-    {2, 25, "25-node quadrangle", kNone},                                // 37
-    {2, 36, "36-node quadrangle", kNone},                                // 38
-    {2, 12, "12-node quadrangle", kNone},                                // 39
-    {2, 16, "16-node incomplete quadrangle", kNone},                     // 40
-    {2, 20, "20-node incomplete quadrangle", kNone},                     // 41
+    {3, 13, "13-node pyramid", kNone},                                     // 19
+    {2, 9, "9-node triangle", kNone},                                      // 20
+    {2, 10, "10-node triangle", kNone},                                    // 21
+    {2, 12, "12-node triangle", kNone},                                    // 22
+    {2, 15, "15-node triangle", kNone},                                    // 23
+    {2, 15, "15-node incomplete triangle", kNone},                         // 24
+    {2, 21, "21-node triangle", kNone},                                    // 25
+    {1, 4, "4-node line", kNone},                                          // 26
+    {1, 5, "5-node line", kNone},                                          // 27
+    {1, 6, "6-node line", kNone},                                          // 28
+    {3, 20, "20-node tetrahedron", kNone},                                 // 29
+    {3, 35, "35-node tetrahedron", kNone},                                 // 30
+    {3, 56, "56-node tetrahedron", kNone},                                 // 31
+    {3, 0, "high-order tetrahedron", kNone},                               // 32
+    {3, 0, "high-order tetrahedron", kNone},                               // 33
+    {-1, 0, nullptr, kNone},                                               // 34 polygon
+    {-1, 0, nullptr, kNone},                                               // 35 polyhedron
+    {2, 16, "16-node quadrangle", kNone},                                  // 36
+    {2, 25, "25-node quadrangle", kNone},                                  // 37
+    {2, 36, "36-node quadrangle", kNone},                                  // 38
+    {2, 12, "12-node quadrangle", kNone},                                  // 39
+    {2, 16, "16-node incomplete quadrangle", kNone},                       // 40
+    {2, 20, "20-node incomplete quadrangle", kNone},                       // 41
 };
 constexpr int kNumGmshTypes = static_cast<int>(sizeof(kGmshTypes) / sizeof(kGmshTypes[0]));
 
@@ -86,12 +87,18 @@ constexpr int kGmshPoint = 15;
 /// Gmsh type number of a morse element type.
 int gmsh_type(ElementType t) {
   switch (t) {
-    case ElementType::Tet4: return 4;
-    case ElementType::Tet10: return 11;
-    case ElementType::Wedge6: return 6;
-    case ElementType::Wedge15: return 18;
-    case ElementType::Hex8: return 5;
-    case ElementType::Hex20: return 17;
+    case ElementType::Tet4:
+      return 4;
+    case ElementType::Tet10:
+      return 11;
+    case ElementType::Wedge6:
+      return 6;
+    case ElementType::Wedge15:
+      return 18;
+    case ElementType::Hex8:
+      return 5;
+    case ElementType::Hex20:
+      return 17;
   }
   return 0;
 }
@@ -184,7 +191,7 @@ class Reader {
   [[noreturn]] void premature(const char* what) const {
     if (p_ >= end_)
       fail_eof(cat("unexpected end of file in section $", section_, " (started at line ",
-               section_line_, ") while reading ", what, ": truncated file?"));
+                   section_line_, ") while reading ", what, ": truncated file?"));
     fail(cat("unexpected '", peek_token(), "' in section $", section_, " (started at line ",
              section_line_, ") while reading ", what,
              ": the section is shorter than its counts say (truncated file?)"));
@@ -222,11 +229,14 @@ class Reader {
   double read_double(const char* what) {
     skip_ws();
     if (p_ >= end_ || *p_ == '$') premature(what);
-    char* e = nullptr;
-    const double v = std::strtod(p_, &e);
-    if (e == p_ || (e < end_ && !is_space(*e)))
+    // from_chars: locale-independent and exact; it takes no leading '+'.
+    const char* q = *p_ == '+' && p_ + 1 < end_ && *(p_ + 1) != '-' ? p_ + 1 : p_;
+    double v = 0;
+    const auto [e, ec] = std::from_chars(q, end_, v);
+    if (ec == std::errc::invalid_argument || (e < end_ && !is_space(*e)))
       fail(cat("malformed ", what, " '", peek_token(), "' (expected a number)"));
-    if (!std::isfinite(v)) fail(cat(what, " '", peek_token(), "' is not a finite number"));
+    if (ec != std::errc() || !std::isfinite(v))
+      fail(cat(what, " '", peek_token(), "' is out of range or not finite"));
     p_ = e;
     return v;
   }
@@ -255,7 +265,7 @@ class Reader {
     skip_ws();
     if (p_ >= end_)
       fail_eof(cat("unexpected end of file: missing $End", name, " for section $", name,
-               " started at line ", section_line_, " (truncated file?)"));
+                   " started at line ", section_line_, " (truncated file?)"));
     const std::string tok = peek_token();
     if (tok != "$End" + name)
       fail(cat("expected $End", name, " (section $", name, " started at line ", section_line_,
@@ -275,7 +285,7 @@ class Reader {
         return;
     }
     fail_eof(cat("unexpected end of file: missing ", end_tag, " for section $", name,
-             " started at line ", section_line_, " (truncated file?)"));
+                 " started at line ", section_line_, " (truncated file?)"));
   }
 
   // --- sections
@@ -300,8 +310,8 @@ class Reader {
   void build_sets();
   /// True if element e has type t and the nodes in nodes_.
   bool same_element(std::int64_t e, ElementType t) const {
-    return mesh_.elem_types[e] == t &&
-           std::equal(nodes_.begin(), nodes_.end(), mesh_.elem_nodes.data() + mesh_.elem_offsets[e]);
+    return mesh_.elem_types[e] == t && std::equal(nodes_.begin(), nodes_.end(),
+                                                  mesh_.elem_nodes.data() + mesh_.elem_offsets[e]);
   }
 
   const std::string& path_;
@@ -319,21 +329,21 @@ class Reader {
   bool have_entities_ = false;
   bool morse_sets_ = false;  // file written by write_gmsh(): 3D groups are element sets only
   TagMap node_map_;
-  TagMap elem_map_;  // solid elements only
+  TagMap elem_map_;                                                 // solid elements only
   std::unordered_multimap<std::uint64_t, std::int64_t> elem_hash_;  // connectivity -> element
   std::vector<std::int64_t> nodes_;  // scratch: node indices of the current element
 
-  std::map<Key, std::string> names_;                       // physical names
-  std::set<Key> declared_;                                 // every physical group met
-  std::map<Key, std::vector<std::int64_t>> entity_phys_;   // 4.1: entity -> physical tags
-  std::map<Key, std::vector<std::int64_t>> group_nodes_;   // dim < 3 groups: node indices
+  std::map<Key, std::string> names_;                               // physical names
+  std::set<Key> declared_;                                         // every physical group met
+  std::map<Key, std::vector<std::int64_t>> entity_phys_;           // 4.1: entity -> physical tags
+  std::map<Key, std::vector<std::int64_t>> group_nodes_;           // dim < 3 groups: node indices
   std::map<std::int64_t, std::vector<std::int64_t>> group_elems_;  // 3D groups: element indices
 };
 
 void Reader::read_format() {
   const std::string version = read_token("the format version");
-  if (version.rfind("4.1", 0) == 0 && (version.size() == 3 || version.find_first_not_of('0', 3) ==
-                                                                  std::string::npos)) {
+  if (version.rfind("4.1", 0) == 0 &&
+      (version.size() == 3 || version.find_first_not_of('0', 3) == std::string::npos)) {
     major_ = 4;
   } else if (version.size() >= 2 && version[0] == '2' && version[1] == '.') {
     major_ = 2;
@@ -587,8 +597,7 @@ void Reader::read_morse_sets() {
 void Reader::build_sets() {
   for (const auto& [dim, tag] : declared_) {
     auto nit = names_.find(Key{dim, tag});
-    const std::string name =
-        nit != names_.end() ? nit->second : cat("physical_", dim, "_", tag);
+    const std::string name = nit != names_.end() ? nit->second : cat("physical_", dim, "_", tag);
     if (dim < 3) {
       auto& set = mesh_.node_sets[name];
       auto git = group_nodes_.find(Key{dim, tag});
@@ -653,8 +662,9 @@ Mesh Reader::read() {
   if (!have_nodes_) fail_eof("no $Nodes section (truncated file?)");
   if (!have_elements_) fail_eof("no $Elements section (truncated file?)");
   if (mesh_.num_elements() == 0)
-    fail_eof("the mesh contains no supported 3D element (tet4, tet10, wedge6, wedge15, hex8, hex20); "
-         "was it meshed in 3D?");
+    fail_eof(
+        "the mesh contains no supported 3D element (tet4, tet10, wedge6, wedge15, hex8, hex20); "
+        "was it meshed in 3D?");
   build_sets();
   return std::move(mesh_);
 }
@@ -672,10 +682,10 @@ class Out {
     auto r = std::to_chars(tmp, tmp + sizeof(tmp), v);
     buf_.append(tmp, r.ptr);
   }
-  void dbl(double v) {
+  void dbl(double v) {  // as %.17g, but locale-independent
     char tmp[40];
-    const int n = std::snprintf(tmp, sizeof(tmp), "%.17g", v);
-    buf_.append(tmp, static_cast<std::size_t>(n));
+    auto r = std::to_chars(tmp, tmp + sizeof(tmp), v, std::chars_format::general, 17);
+    buf_.append(tmp, r.ptr);
   }
   const std::string& data() const { return buf_; }
   void reserve(std::size_t n) { buf_.reserve(n); }
