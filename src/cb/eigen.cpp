@@ -39,6 +39,23 @@ Mat Eigenpairs::factor() const {
   return F;
 }
 
+namespace {
+
+// Progress of the eigen solve on rank 0: converged pairs out of those wanted.
+struct MonitorContext {
+  Progress* progress;
+  PetscInt wanted;
+};
+
+PetscErrorCode progress_monitor(EPS, PetscInt, PetscInt nconv, PetscScalar*, PetscScalar*, PetscReal*, PetscInt,
+                                void* ctx) {
+  auto* c = static_cast<MonitorContext*>(ctx);
+  if (c->wanted > 0) c->progress->update(static_cast<double>(std::min(nconv, c->wanted)));
+  return PETSC_SUCCESS;
+}
+
+}  // namespace
+
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
@@ -92,7 +109,11 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   }
   {
     StageTimer timer(comm, "EigenSolve");
+    Progress progress(comm, s.what, static_cast<double>(slicing ? 1 : s.nev));
+    MonitorContext ctx{&progress, slicing ? 0 : s.nev};
+    MORSE_CALL(EPSMonitorSet(eps, progress_monitor, &ctx, nullptr));
     MORSE_CALL(EPSSolve(eps));
+    MORSE_CALL(EPSMonitorCancel(eps));
   }
   PetscInt nconv = 0;
   MORSE_CALL(EPSGetConverged(eps, &nconv));

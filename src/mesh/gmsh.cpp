@@ -205,7 +205,7 @@ class Reader {
     const char* d0 = q;
     std::int64_t v = 0;
     while (q < end_ && is_digit(*q) && q - d0 < 18) v = 10 * v + (*q++ - '0');
-    if (q == d0) fail(cat("malformed ", what, " '", peek_token(), "' (expected an integer)"));
+    if (q == d0) fail(cat("expected ", what, " (an integer), found '", peek_token(), "'"));
     if (q < end_ && is_digit(*q)) {  // long number: let strtoll check the range
       char* e = nullptr;
       errno = 0;
@@ -216,14 +216,14 @@ class Reader {
       neg = false;
     }
     if (q < end_ && !is_space(*q))
-      fail(cat("malformed ", what, " '", peek_token(), "' (expected an integer)"));
+      fail(cat("expected ", what, " (an integer), found '", peek_token(), "'"));
     p_ = q;
     return neg ? -v : v;
   }
   /// Reads a non-negative count.
   std::int64_t read_count(const char* what) {
     const std::int64_t n = read_int(what);
-    if (n < 0) fail(cat("negative ", what, " ", n));
+    if (n < 0) fail(cat("expected ", what, " (a count >= 0), found ", n));
     return n;
   }
   double read_double(const char* what) {
@@ -234,7 +234,7 @@ class Reader {
     double v = 0;
     const auto [e, ec] = std::from_chars(q, end_, v);
     if (ec == std::errc::invalid_argument || (e < end_ && !is_space(*e)))
-      fail(cat("malformed ", what, " '", peek_token(), "' (expected a number)"));
+      fail(cat("expected ", what, " (a number), found '", peek_token(), "'"));
     if (ec != std::errc() || !std::isfinite(v))
       fail(cat(what, " '", peek_token(), "' is out of range or not finite"));
     p_ = e;
