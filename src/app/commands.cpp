@@ -11,7 +11,9 @@
 #include "morse/core/log.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/mesh/blade.hpp"
 #include "morse/mesh/generator.hpp"
+#include "morse/mesh/stator.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/partition.hpp"
 
@@ -79,7 +81,7 @@ void check_options(MPI_Comm comm, bool early) {
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
   std::string bad;
   static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out",
-                                         "select_", "nlrom_", "step_", "sim_", "sweep_"};
+                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "sweep_"};
   for (PetscInt i = 0; i < n; ++i) {
     std::string name = names[i];
     if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
@@ -357,28 +359,51 @@ PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_
   PetscCall(PetscOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
   PetscCall(PetscOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
                              &b->distortion, nullptr));
-  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh)", "", out, out, len, nullptr));
+  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
   PetscOptionsEnd();
   PetscCheck(mesh::parse_element_name(type, &b->type), comm, PETSC_ERR_ARG_WRONG,
              "-box_type %s: unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)", type);
   return PETSC_SUCCESS;
 }
 
+PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
+  PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
+  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
 void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
-  MORSE_CHECK(args.size() == 1 && args[0] == "box", "usage: morse mesh box [-box_* options] -out FILE.msh");
-  mesh::BoxSpec b;
-  char out[PETSC_MAX_PATH_LEN] = "box.msh";
-  MORSE_CALL(get_box_options(comm, &b, out, sizeof out));
+  const std::string what = args.size() == 1 ? args[0] : "";
+  MORSE_CHECK(what == "box" || what == "blade" || what == "stator",
+              "usage: morse mesh (box|blade|stator) [-box_*|-blade_*|-stator_* options] -out FILE.msh");
+  char out[PETSC_MAX_PATH_LEN] = "";
+  mesh::BoxSpec box;
+  mesh::BladeSpec blade;
+  mesh::StatorSpec stator;
+  if (what == "box") {
+    std::strcpy(out, "box.msh");
+    MORSE_CALL(get_box_options(comm, &box, out, sizeof out));
+  } else {
+    std::strcpy(out, (what + ".msh").c_str());
+    MORSE_CALL(get_mesh_out(comm, out, sizeof out));
+    if (what == "blade")
+      MORSE_CALL(mesh::blade_spec_from_options(comm, &blade));
+    else
+      MORSE_CALL(mesh::stator_spec_from_options(comm, &stator));
+  }
   if (help_requested()) return;
   check_options(comm, false);
-  MORSE_CHECK(b.nx > 0 && b.ny > 0 && b.nz > 0 && b.lx > 0 && b.ly > 0 && b.lz > 0,
-              "-box_n* and -box_l* must be positive");
+  if (what == "box")
+    MORSE_CHECK(box.nx > 0 && box.ny > 0 && box.nz > 0 && box.lx > 0 && box.ly > 0 && box.lz > 0,
+                "-box_n* and -box_l* must be positive");
   std::string err;
   if (rank_of(comm) == 0) try {
-      auto m = mesh::generate_box(b);
+      auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
+                                                                          : mesh::generate_stator(stator);
       mesh::write_gmsh(m, out);
-      print0(comm, "morse: wrote %s: %lld nodes, %lld %s elements\n", out, (long long)m.num_nodes(),
-             (long long)m.num_elements(), mesh::element_name(b.type));
+      print0(comm, "morse: wrote %s: %lld nodes, %lld elements (%s)\n", out, (long long)m.num_nodes(),
+             (long long)m.num_elements(), m.source.c_str());
     } catch (const Error& e) {
       err = e.what();
     }
