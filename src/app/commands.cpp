@@ -25,6 +25,7 @@ constexpr double kTwoPi = 6.283185307179586;
 
 struct CommonOptions {
   std::string mesh;
+  std::string units;
   std::vector<std::string> clamp;
   mesh::Material material;
   std::string out;
@@ -41,6 +42,12 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
   PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII) or .inp (Abaqus/CalculiX)", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->mesh = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-mesh_units",
+                               "Unit system of the mesh, recorded in the output (e.g. SI, mm-t-s); "
+                               "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->units = buf;
   PetscCall(PetscOptionsStringArray("-clamp",
                                     "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
                                     "the DOFs fixed by *BOUNDARY in the deck",
@@ -129,6 +136,7 @@ Model build_model(MPI_Comm comm, const CommonOptions& o) {
   {
     StageTimer t(comm, "ReadDistribute");
     md.lm = mesh::read_and_distribute(comm, o.mesh);
+    if (!o.units.empty()) md.lm.mesh.units = o.units;
   }
   {
     StageTimer t(comm, "NumberDofs");
