@@ -354,7 +354,7 @@ void run_reduce(MPI_Comm comm) {
 }
 
 // ---------------------------------------------------------------- mesh box
-PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len) {
+PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len, std::string* type_out) {
   char type[64] = "hex20";
   PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
   PetscCall(PetscOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
@@ -369,8 +369,7 @@ PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_
                              &b->distortion, nullptr));
   PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
   PetscOptionsEnd();
-  PetscCheck(mesh::parse_element_name(type, &b->type), comm, PETSC_ERR_ARG_WRONG,
-             "-box_type %s: unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)", type);
+  *type_out = type;
   return PETSC_SUCCESS;
 }
 
@@ -391,7 +390,10 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   mesh::StatorSpec stator;
   if (what == "box") {
     std::strcpy(out, "box.msh");
-    MORSE_CALL(get_box_options(comm, &box, out, sizeof out));
+    std::string type;
+    MORSE_CALL(get_box_options(comm, &box, out, sizeof out, &type));
+    MORSE_CHECK(mesh::parse_element_name(type, &box.type), "-box_type ", type,
+                ": unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
   } else {
     std::strcpy(out, (what + ".msh").c_str());
     MORSE_CALL(get_mesh_out(comm, out, sizeof out));

@@ -25,15 +25,10 @@ struct BoundaryNode {
 std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs,
                                           const std::string& set) {
   const auto& m = lm.mesh;
-  std::string err;
-  auto it = m.node_sets.find(set);
-  if (set.empty())
-    err = "no boundary set given (-boundary SET)";
-  else if (it == m.node_sets.end())
-    err = cat("boundary node set '", set, "' not found in ", m.source);
-  else if (lm.node_set_sizes.at(set) == 0)
-    err = cat("boundary node set '", set, "' of ", m.source, " is empty");
+  std::string err = set.empty() ? "no boundary set given (-boundary SET)"
+                                 : mesh::check_node_set(lm, set, "boundary node set");
   collective_check(lm.comm, err);
+  auto it = m.node_sets.find(set);
   int rank = 0, size = 1;
   MPI_Comm_rank(lm.comm, &rank);
   MPI_Comm_size(lm.comm, &size);

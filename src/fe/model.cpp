@@ -75,19 +75,10 @@ DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& cl
       for (std::int64_t k = 0; k < n; ++k) clamped[k] |= m.fixed_dofs[k] & 7;
       continue;
     }
-    auto it = m.node_sets.find(name);
-    if (it == m.node_sets.end()) {
-      std::string known;
-      for (const auto& [s, v] : m.node_sets) known += (known.empty() ? "" : ", ") + s;
-      err = cat("node set '", name, "' not found in ", m.source,
-                " (node sets: ", known.empty() ? "none" : known, ")");
-      break;
-    }
-    if (lm.node_set_sizes.at(name) == 0) {
-      err = cat("node set '", name, "' of ", m.source, " is empty");
-      break;
-    }
-    for (auto k : it->second) clamped[k] = 7;
+    err = mesh::check_node_set(lm, name, "node set");
+    if (!err.empty()) break;
+    const auto& members = m.node_sets.at(name);
+    for (auto k : members) clamped[k] = 7;
   }
   collective_check(lm.comm, err);
 

@@ -22,6 +22,18 @@ std::int64_t LocalMesh::local_of_global(std::int64_t g) const {
   return it - global_node.begin();
 }
 
+std::string check_node_set(const LocalMesh& lm, const std::string& name, const std::string& role) {
+  auto it = lm.node_set_sizes.find(name);
+  if (it == lm.node_set_sizes.end()) {
+    std::string known;
+    for (const auto& [s, n] : lm.node_set_sizes) known += (known.empty() ? "" : ", ") + s;
+    return cat(role, " '", name, "' not found in ", lm.mesh.source, " (node sets: ", known.empty() ? "none" : known,
+               ")");
+  }
+  if (it->second == 0) return cat(role, " '", name, "' of ", lm.mesh.source, " is empty");
+  return {};
+}
+
 namespace {
 
 // Removes nodes that no element uses (Gmsh files carry geometry points, decks carry spare

@@ -43,6 +43,11 @@ struct LocalMesh {
   std::int64_t local_of_global(std::int64_t global) const;
 };
 
+/// Checks that node set `name` exists and is not empty. Returns "" if so, else a message that
+/// starts with `role` (e.g. "boundary node set") and lists the sets of the mesh. Not collective
+/// (every rank knows every set name and global size, so every rank gets the same answer).
+std::string check_node_set(const LocalMesh& lm, const std::string& name, const std::string& role);
+
 /// Partitions *serial (significant on rank 0 only; emptied on return) and scatters it over comm.
 /// Collective. Throws morse::Error (on every rank) if the mesh has no solid element.
 LocalMesh distribute(MPI_Comm comm, Mesh* serial);
