@@ -84,12 +84,18 @@ Counts box_counts(ElementType t, std::int64_t nx, std::int64_t ny, std::int64_t 
   const std::int64_t xy_faces = nx * ny * (nz + 1);
   const std::int64_t all_faces = xy_faces + nx * (ny + 1) * nz + (nx + 1) * ny * nz;
   switch (t) {
-    case ElementType::Tet4: return {nv, 6 * cells};
-    case ElementType::Tet10: return {nv + edges + all_faces + cells, 6 * cells};
-    case ElementType::Wedge6: return {nv, 2 * cells};
-    case ElementType::Wedge15: return {nv + edges + xy_faces, 2 * cells};
-    case ElementType::Hex8: return {nv, cells};
-    case ElementType::Hex20: return {nv + edges, cells};
+    case ElementType::Tet4:
+      return {nv, 6 * cells};
+    case ElementType::Tet10:
+      return {nv + edges + all_faces + cells, 6 * cells};
+    case ElementType::Wedge6:
+      return {nv, 2 * cells};
+    case ElementType::Wedge15:
+      return {nv + edges + xy_faces, 2 * cells};
+    case ElementType::Hex8:
+      return {nv, cells};
+    case ElementType::Hex20:
+      return {nv + edges, cells};
   }
   return {0, 0};
 }
@@ -98,8 +104,8 @@ std::int64_t face_count(ElementType t, int d, const std::int64_t n[3]) {
   const std::int64_t a = n[(d + 1) % 3], b = n[(d + 2) % 3];
   std::int64_t count = (a + 1) * (b + 1);
   if (!morse::mesh::is_quadratic(t)) return count;
-  count += a * (b + 1) + (a + 1) * b;                // grid edges in the face
-  if (t == ElementType::Tet10) count += a * b;       // one diagonal per face quad
+  count += a * (b + 1) + (a + 1) * b;                       // grid edges in the face
+  if (t == ElementType::Tet10) count += a * b;              // one diagonal per face quad
   if (t == ElementType::Wedge15 && d == 2) count += a * b;  // diagonals of x-y quads
   return count;
 }
@@ -133,8 +139,7 @@ void check_box(const BoxSpec& s) {
     EXPECT_EQ(m.elem_ids[e], e + 1);
     EXPECT_EQ(m.elem_types[e], s.type);
     EXPECT_EQ(m.elem_material[e], -1);
-    EXPECT_EQ(m.elem_offsets[e + 1] - m.elem_offsets[e],
-              morse::mesh::nodes_per_element(s.type));
+    EXPECT_EQ(m.elem_offsets[e + 1] - m.elem_offsets[e], morse::mesh::nodes_per_element(s.type));
   }
   EXPECT_TRUE(m.materials.empty());
 
@@ -162,8 +167,7 @@ void check_box(const BoxSpec& s) {
       ASSERT_TRUE(m.node_sets.count(names[d][side])) << names[d][side];
       const auto& set = m.node_sets.at(names[d][side]);
       const double plane = s.origin[d] + (side ? len[d] : 0.0);
-      EXPECT_EQ(static_cast<std::int64_t>(set.size()), face_count(s.type, d, n))
-          << names[d][side];
+      EXPECT_EQ(static_cast<std::int64_t>(set.size()), face_count(s.type, d, n)) << names[d][side];
       for (auto v : set) EXPECT_EQ(m.coords[3 * v + d], plane) << names[d][side];
       std::int64_t on_plane = 0;
       for (std::int64_t k = 0; k < m.num_nodes(); ++k) on_plane += m.coords[3 * k + d] == plane;
@@ -200,8 +204,8 @@ TEST_P(GeneratorTest, DefaultBeam) {
   s.type = GetParam();
   check_box(s);
   const Mesh m = morse::mesh::generate_box(s);
-  EXPECT_EQ(m.source, morse::cat("box ", morse::mesh::element_name(s.type),
-                                 " 10x1x1 size 1x0.1x0.1"));
+  EXPECT_EQ(m.source,
+            morse::cat("box ", morse::mesh::element_name(s.type), " 10x1x1 size 1x0.1x0.1"));
 }
 
 TEST_P(GeneratorTest, DistortedBoxWithOrigin) {
@@ -439,9 +443,8 @@ TEST(GmshRead, QuadraticTypes22AndUnnamedGroups) {
   text += "\n4 9 2 2 1 1 2 3 4 5 6\n$EndElements\n";
   TempFile f("quadratic22.msh", text);
   const Mesh m = morse::mesh::read_gmsh(f.path);
-  EXPECT_EQ(m.elem_types,
-            (std::vector<ElementType>{ElementType::Tet10, ElementType::Wedge15,
-                                      ElementType::Hex20}));
+  EXPECT_EQ(m.elem_types, (std::vector<ElementType>{ElementType::Tet10, ElementType::Wedge15,
+                                                    ElementType::Hex20}));
   EXPECT_EQ(m.elem_offsets, (std::vector<std::int64_t>{0, 10, 25, 45}));
   EXPECT_EQ(m.elem_sets.at("physical_3_4"), (std::vector<std::int64_t>{0, 1}));
   EXPECT_EQ(m.node_sets.at("physical_3_4").size(), 25u);
@@ -484,7 +487,8 @@ TEST_P(GeneratorTest, GmshRoundTrip) {
   TempFile g(morse::cat("roundtrip2_", morse::mesh::element_name(s.type), ".msh"));
   morse::mesh::write_gmsh(r, g.path);
   std::ifstream a(f.path), b(g.path);
-  std::string ta((std::istreambuf_iterator<char>(a)), {}), tb((std::istreambuf_iterator<char>(b)), {});
+  std::string ta((std::istreambuf_iterator<char>(a)), {}),
+      tb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(ta, tb);
 }
 
@@ -517,8 +521,8 @@ TEST(GmshRead, LargeMeshIsFast) {
   auto t2 = clock::now();
   const double tw = std::chrono::duration<double>(t1 - t0).count();
   const double tr = std::chrono::duration<double>(t2 - t1).count();
-  std::cout << "[ timing ] " << m.num_nodes() << " nodes, " << m.num_elements()
-            << " tet10: write " << tw << " s, read " << tr << " s\n";
+  std::cout << "[ timing ] " << m.num_nodes() << " nodes, " << m.num_elements() << " tet10: write "
+            << tw << " s, read " << tr << " s\n";
   expect_same_mesh(m, r);
   EXPECT_LT(tr, 10.0);  // loose bound: shared CI machines; typically well under 1 s
 }
@@ -529,8 +533,8 @@ TEST(GmshRead, LargeMeshIsFast) {
 void expect_error(const std::string& msg, const std::string& path, int line,
                   const std::string& what) {
   SCOPED_TRACE(msg);
-  EXPECT_NE(msg.find(morse::cat(path, ":", line, ":")), std::string::npos) << "expected line "
-                                                                           << line;
+  EXPECT_NE(msg.find(morse::cat(path, ":", line, ":")), std::string::npos)
+      << "expected line " << line;
   EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "'";
 }
 
@@ -610,12 +614,12 @@ TEST(GmshErrors, UndefinedNode) {
 }
 
 TEST(GmshErrors, BinaryAndVersion) {
-  const std::string bin = std::string("$MeshFormat\n4.1 1 8\n") + '\x01' + '\0' + '\0' + '\0' +
-                          "\n$EndMeshFormat\n";
+  const std::string bin =
+      std::string("$MeshFormat\n4.1 1 8\n") + '\x01' + '\0' + '\0' + '\0' + "\n$EndMeshFormat\n";
   expect_error(read_error("binary.msh", bin), temp_path("binary.msh"), 2,
                "binary .msh not supported, re-save as ASCII");
-  expect_error(read_error("v40.msh", "$MeshFormat\n4 0 8\n$EndMeshFormat\n"),
-               temp_path("v40.msh"), 2, "version 4");
+  expect_error(read_error("v40.msh", "$MeshFormat\n4 0 8\n$EndMeshFormat\n"), temp_path("v40.msh"),
+               2, "version 4");
   expect_error(read_error("notmsh.msh", "hello\n"), temp_path("notmsh.msh"), 1, "hello");
 }
 
@@ -630,15 +634,15 @@ TEST(GmshErrors, MalformedNumbers) {
                line_of(text2, "1.0.0"), "1.0.0");
   std::string text3 = kMsh22;
   text3.replace(text3.find("5 5 2 1 1 10"), 12, "5 5 2 1 1 1e1");
-  expect_error(read_error("badint22.msh", text3), temp_path("badint22.msh"),
-               line_of(text3, "1e1"), "1e1");
+  expect_error(read_error("badint22.msh", text3), temp_path("badint22.msh"), line_of(text3, "1e1"),
+               "1e1");
 }
 
 TEST(GmshErrors, DuplicatesAndNoSolids) {
   std::string text = kMsh22;
   text.replace(text.find("40 0 1 0"), 8, "10 0 1 0");
-  expect_error(read_error("dupnode.msh", text), temp_path("dupnode.msh"),
-               line_of(text, "10 0 1 0"), "node tag 10");
+  expect_error(read_error("dupnode.msh", text), temp_path("dupnode.msh"), line_of(text, "10 0 1 0"),
+               "node tag 10");
 
   std::string dup_elem = kMsh22;
   dup_elem.replace(dup_elem.find("12 5 2 7 2 20 30"), 16, "9 5 2 7 2 20 60");
@@ -653,3 +657,27 @@ TEST(GmshErrors, DuplicatesAndNoSolids) {
 }
 
 }  // namespace
+
+// Materials survive a write/read round trip ($MorseMaterials section), including elements
+// without material (-1).
+TEST(GmshRoundTrip, Materials) {
+  BoxSpec spec;
+  spec.type = ElementType::Wedge15;
+  spec.nx = 3;
+  Mesh m = generate_box(spec);
+  m.materials.push_back({"steel A", 2.1e11, 0.3, 7800.0});
+  m.materials.push_back({"titanium", 1.1e11, 0.34, 4430.0});
+  for (std::int64_t e = 0; e < m.num_elements(); ++e) m.elem_material[e] = static_cast<int>(e % 3) - 1;
+  const std::string path = temp_path("materials.msh");
+  morse::mesh::write_gmsh(m, path);
+  Mesh r = morse::mesh::read_gmsh(path);
+  std::remove(path.c_str());
+  ASSERT_EQ(r.materials.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(r.materials[i].name, m.materials[i].name);
+    EXPECT_EQ(r.materials[i].E, m.materials[i].E);
+    EXPECT_EQ(r.materials[i].nu, m.materials[i].nu);
+    EXPECT_EQ(r.materials[i].rho, m.materials[i].rho);
+  }
+  EXPECT_EQ(r.elem_material, m.elem_material);
+}

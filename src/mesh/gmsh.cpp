@@ -296,6 +296,7 @@ class Reader {
   void read_elements4();
   void read_nodes2();
   void read_elements2();
+  void read_morse_materials();
   void read_morse_sets();
 
   // --- helpers
@@ -594,6 +595,32 @@ void Reader::read_morse_sets() {
   expect_end("MorseSets");
 }
 
+// Materials of a file written by write_gmsh(): the material table and one index per element
+// (-1 = none), in element order. Gmsh ignores the section.
+void Reader::read_morse_materials() {
+  const std::int64_t version = read_int("the $MorseMaterials version");
+  if (version != 1) fail(cat("unsupported $MorseMaterials version ", version));
+  if (!have_elements_) fail("$MorseMaterials before $Elements");
+  const std::int64_t nm = read_count("the number of materials");
+  for (std::int64_t i = 0; i < nm; ++i) {
+    Material mat;
+    mat.name = read_name();
+    mat.E = read_double("Young's modulus");
+    mat.nu = read_double("Poisson's ratio");
+    mat.rho = read_double("density");
+    mesh_.materials.push_back(mat);
+  }
+  const std::int64_t ne = read_count("the number of elements");
+  if (ne != mesh_.num_elements())
+    fail(cat("$MorseMaterials lists ", ne, " elements but the mesh has ", mesh_.num_elements()));
+  for (std::int64_t e = 0; e < ne; ++e) {
+    const std::int64_t m = read_int("a material index");
+    if (m < -1 || m >= nm) fail(cat("material index ", m, " out of range [-1, ", nm, ")"));
+    mesh_.elem_material[e] = static_cast<int>(m);
+  }
+  expect_end("MorseMaterials");
+}
+
 void Reader::build_sets() {
   for (const auto& [dim, tag] : declared_) {
     auto nit = names_.find(Key{dim, tag});
@@ -651,6 +678,8 @@ Mesh Reader::read() {
       major_ == 4 ? read_elements4() : read_elements2();
     } else if (section_ == "MorseSets") {
       read_morse_sets();
+    } else if (section_ == "MorseMaterials") {
+      read_morse_materials();
     } else if (section_.rfind("End", 0) == 0) {
       fail(cat("unexpected $", section_, " outside of its section"));
     } else {
@@ -949,6 +978,30 @@ void write_gmsh(const Mesh& m, const std::string& path) {
     }
   }
   out.str("$EndElements\n");
+  if (!m.materials.empty()) {
+    for (const auto& mat : m.materials) check_set_name(mat.name);
+    out.str("$MorseMaterials\n1\n");
+    out.num(static_cast<std::int64_t>(m.materials.size()));
+    out.chr('\n');
+    for (const auto& mat : m.materials) {
+      out.chr('"');
+      out.str(mat.name);
+      out.str("\" ");
+      out.dbl(mat.E);
+      out.chr(' ');
+      out.dbl(mat.nu);
+      out.chr(' ');
+      out.dbl(mat.rho);
+      out.chr('\n');
+    }
+    out.num(ne);
+    out.chr('\n');
+    for (std::int64_t e = 0; e < ne; ++e) {
+      out.num(m.elem_material[e]);
+      out.chr('\n');
+    }
+    out.str("$EndMorseMaterials\n");
+  }
 
   // Atomic write: temporary file, then rename.
   const std::string tmp = path + ".tmp";

@@ -109,8 +109,8 @@ std::string check_spec(const StatorSpec& s, StatorLayout* out) {
   l.n_thick = s.n_thick > 0 ? s.n_thick : 1;
   if (s.n_vanes < 0 || l.n_vanes < 3)
     return cat("-stator_n_vanes ", s.n_vanes, ": need at least 3 vanes (0 = size default)");
-  if (!(std::isfinite(s.h) && s.h >= 0) || l.h > 0.1)
-    return cat("-stator_h ", s.h, ": must be in (0, 0.1] m (0 = size default)");
+  if (!(std::isfinite(s.h) && s.h >= 0) || l.h < 1e-4 || l.h > 0.1)
+    return cat("-stator_h ", s.h, ": must be in [0.0001, 0.1] m (0 = size default)");
   if (s.n_thick < 0 || l.n_thick > 8)
     return cat("-stator_n_thick ", s.n_thick, ": must be in [1, 8] (0 = size default)");
   const double lengths[] = {s.hub_bore_radius,
