@@ -32,7 +32,7 @@ constexpr double kHubRadius = 0.178;
 constexpr double kTipRadius = 0.252;
 
 /// Edge roundness rho in (0, 1]: the half thickness is (T/2) sqrt(w ((1 - rho) w^2 + rho)),
-/// w = 4u(1-u); the edges are round with radius rho T^2 / (2 c).
+/// w = 4u(1-u); the edges are round with radius rho T^2 / (2 L) (L: camber-line length).
 constexpr double kEdgeRoundness = 0.1;
 
 /// Chord-wise grid stretching: u(phi) = (phi + ((1 - 2 phi)^5 - 1) / 10) / 0.8.

@@ -19,7 +19,7 @@
 // about mid-chord: at the arc-length fraction u from the leading edge, the half thickness normal
 // to the camber line is (T/2) F(w), w = 4u(1-u), F = sqrt(w (0.9 w^2 + 0.1)), with the maximum
 // T = thickness_scale * (t/c)(r) * c(r) at mid-chord. F is a biconvex profile (like the
-// circular-arc w) thinned towards the edges, which are round with radius 0.05 T^2 / c. Sections
+// circular-arc w) thinned towards the edges, which are round with radius ~0.05 T^2 / c. Sections
 // are stacked on their area centroids (every section's centroid lies on the x axis).
 //
 // Mesh. A structured grid on the profile: n_chord cells along the camber line (uniform in phi,
