@@ -111,6 +111,98 @@ DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& cl
 
 namespace {
 
+// Rows of the owned DOFs in CSR form: offsets (n_owned + 1) and sorted global columns.
+struct Pattern {
+  std::vector<PetscInt> offsets, columns;
+};
+
+// The exact sparsity of K on the owned rows: DOFs (r, c) couple when their nodes share an
+// element. Ghost nodes' couplings found on other ranks are sent to the owners, with the
+// neighbours' DOF numbers (an owner need not know a remote neighbour).
+Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofMap& dofs) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(lm.comm, &rank);
+  MPI_Comm_size(lm.comm, &size);
+  const auto& m = lm.mesh;
+  const std::int64_t nn = m.num_nodes(), ne = m.num_elements();
+  // node -> elements (CSR)
+  std::vector<std::int64_t> ne_off(nn + 1, 0), ne_idx(m.elem_nodes.size());
+  for (auto k : m.elem_nodes) ++ne_off[k + 1];
+  for (std::int64_t k = 0; k < nn; ++k) ne_off[k + 1] += ne_off[k];
+  {
+    std::vector<std::int64_t> pos(ne_off.begin(), ne_off.end() - 1);
+    for (std::int64_t e = 0; e < ne; ++e)
+      for (auto j = m.elem_offsets[e]; j < m.elem_offsets[e + 1]; ++j) ne_idx[pos[m.elem_nodes[j]]++] = e;
+  }
+  // Neighbours of each local node as global node indices, with their DOFs.
+  struct Nb {
+    std::int64_t g;
+    PetscInt dof[3];
+  };
+  std::vector<std::vector<Nb>> nbrs(nn);
+  std::vector<std::int64_t> scratch;
+  for (std::int64_t k = 0; k < nn; ++k) {
+    scratch.clear();
+    for (auto j = ne_off[k]; j < ne_off[k + 1]; ++j) {
+      const auto e = ne_idx[j];
+      scratch.insert(scratch.end(), m.elem_nodes.begin() + m.elem_offsets[e], m.elem_nodes.begin() + m.elem_offsets[e + 1]);
+    }
+    std::sort(scratch.begin(), scratch.end());
+    scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+    for (auto q : scratch)
+      nbrs[k].push_back({lm.global_node[q], {dofs.node_dof[3 * q], dofs.node_dof[3 * q + 1], dofs.node_dof[3 * q + 2]}});
+  }
+  // Ghost nodes: send (global node, count, neighbours...) to the owner, as int64 words.
+  std::vector<std::vector<std::int64_t>> send(size);
+  for (std::int64_t k = 0; k < nn; ++k) {
+    const int o = lm.node_owner[k];
+    if (o == rank) continue;
+    auto& b = send[o];
+    b.push_back(lm.global_node[k]);
+    b.push_back(static_cast<std::int64_t>(nbrs[k].size()));
+    for (const auto& x : nbrs[k]) b.insert(b.end(), {x.g, x.dof[0], x.dof[1], x.dof[2]});
+  }
+  std::vector<int> sn(size), rn(size), sd(size + 1, 0), rd(size + 1, 0);
+  for (int r = 0; r < size; ++r) sn[r] = static_cast<int>(send[r].size());
+  MPI_Alltoall(sn.data(), 1, MPI_INT, rn.data(), 1, MPI_INT, lm.comm);
+  for (int r = 0; r < size; ++r) {
+    sd[r + 1] = sd[r] + sn[r];
+    rd[r + 1] = rd[r] + rn[r];
+  }
+  std::vector<std::int64_t> sbuf(sd[size]), rbuf(rd[size]);
+  for (int r = 0; r < size; ++r) std::copy(send[r].begin(), send[r].end(), sbuf.begin() + sd[r]);
+  MPI_Alltoallv(sbuf.data(), sn.data(), sd.data(), MPI_INT64_T, rbuf.data(), rn.data(), rd.data(), MPI_INT64_T,
+                lm.comm);
+  for (std::size_t i = 0; i < rbuf.size();) {
+    const auto k = lm.local_of_global(rbuf[i]);
+    const auto cnt = rbuf[i + 1];
+    i += 2;
+    for (std::int64_t c = 0; c < cnt; ++c, i += 4)
+      nbrs[k].push_back({rbuf[i], {static_cast<PetscInt>(rbuf[i + 1]), static_cast<PetscInt>(rbuf[i + 2]),
+                                   static_cast<PetscInt>(rbuf[i + 3])}});
+  }
+  // Owned rows, in DOF order (owned nodes are numbered in local order).
+  Pattern p;
+  p.offsets.assign(1, 0);
+  p.offsets.reserve(dofs.n_owned + 1);
+  std::vector<PetscInt> cols;
+  for (std::int64_t k = 0; k < nn; ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    cols.clear();
+    for (const auto& x : nbrs[k])
+      for (int d = 0; d < 3; ++d)
+        if (x.dof[d] >= 0) cols.push_back(x.dof[d]);
+    std::sort(cols.begin(), cols.end());
+    cols.erase(std::unique(cols.begin(), cols.end()), cols.end());
+    for (int d = 0; d < 3; ++d) {
+      if (dofs.node_dof[3 * k + d] < 0) continue;
+      p.columns.insert(p.columns.end(), cols.begin(), cols.end());
+      p.offsets.push_back(static_cast<PetscInt>(p.columns.size()));
+    }
+  }
+  return p;
+}
+
 std::string check_material(const mesh::Material& m) {
   if (!(m.E > 0) || !std::isfinite(m.E)) return cat("Young's modulus E = ", m.E, " must be > 0");
   if (!(m.nu > -1.0 && m.nu < 0.5)) return cat("Poisson's ratio nu = ", m.nu, " must be in (-1, 0.5)");
@@ -164,26 +256,16 @@ Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Ma
     return 3 * nn;
   };
 
-  UMat pre;
-  {
-    StageTimer t(lm.comm, "Preallocate");
-    create(pre.ptr(), MATPREALLOCATOR);
-    MORSE_CALL(MatSetUp(pre.get()));
-    std::vector<double> zeros(kMaxDofs * kMaxDofs, 0.0);
-    PetscInt idx[kMaxDofs];
-    for (std::int64_t e = 0; e < ne; ++e) {
-      int nd = element_dofs(e, idx, nullptr);
-      MORSE_CALL(MatSetValues(pre.get(), nd, idx, nd, idx, zeros.data(), ADD_VALUES));
-    }
-    MORSE_CALL(MatAssemblyBegin(pre.get(), MAT_FINAL_ASSEMBLY));
-    MORSE_CALL(MatAssemblyEnd(pre.get(), MAT_FINAL_ASSEMBLY));
-  }
-
   Operators ops;
+  {
+    // Exact non-zero structure, set once with zeros so element insertion never shifts entries.
+    StageTimer t(lm.comm, "Preallocate");
+    auto rows = sparsity_pattern(lm, dofs);
+    create(ops.K.ptr(), MATAIJ);
+    MORSE_CALL(MatSeqAIJSetPreallocationCSR(ops.K.get(), rows.offsets.data(), rows.columns.data(), nullptr));
+    MORSE_CALL(MatMPIAIJSetPreallocationCSR(ops.K.get(), rows.offsets.data(), rows.columns.data(), nullptr));
+  }
   StageTimer t(lm.comm, "Assemble");
-  create(ops.K.ptr(), MATAIJ);
-  MORSE_CALL(MatPreallocatorPreallocate(pre.get(), PETSC_TRUE, ops.K.get()));
-  pre.reset();
   MORSE_CALL(MatDuplicate(ops.K.get(), MAT_DO_NOT_COPY_VALUES, ops.M.ptr()));
   for (Mat A : {ops.K.get(), ops.M.get()}) {
     MORSE_CALL(MatSetOption(A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE));
