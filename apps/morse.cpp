@@ -15,7 +15,7 @@ static const char kHelp[] =
     "usage: mpirun -n N morse <command> [options]   (or -options_file case.opts)\n"
     "  modes     lowest eigenpairs of the clamped full model\n"
     "  reduce    Craig-Bampton superelement\n"
-    "  mesh box  write a generated box/beam mesh\n";
+    "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n";
 
 // After an exception: if every rank failed (a collective error), rank 0 prints and all return
 // normally; if the other ranks do not join within a few seconds (an error on this rank only,
