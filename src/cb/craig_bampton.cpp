@@ -56,8 +56,8 @@ std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::D
   return all;
 }
 
-// C = A^T B for the local rows of two MPIDENSE matrices with the same row layout, summed over
-// the ranks. Returns row-major n_a x n_b on every rank.
+}  // namespace
+
 std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B) {
   PetscInt m = 0, na = 0, nb = 0, lda = 0, ldb = 0;
   MORSE_CALL(MatGetLocalSize(A, &m, nullptr));
@@ -84,6 +84,8 @@ std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B) {
     for (PetscInt j = 0; j < nb; ++j) r[i * nb + j] = c[j * na + i];
   return r;
 }
+
+namespace {
 
 void symmetrize(std::vector<double>& A, PetscInt n) {
   for (PetscInt i = 0; i < n; ++i)
@@ -126,7 +128,10 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
   for (std::size_t i = 0; i < boundary.size(); ++i) {
     out.boundary_node_ids.push_back(boundary[i].id);
     out.boundary_global_nodes.push_back(boundary[i].global);
-    for (int d = 0; d < 3; ++d) pos[boundary[i].dof[d]] = static_cast<PetscInt>(3 * i + d);
+    for (int d = 0; d < 3; ++d) {
+      pos[boundary[i].dof[d]] = static_cast<PetscInt>(3 * i + d);
+      out.boundary_dofs.push_back(boundary[i].dof[d]);
+    }
   }
 
   // Interior / boundary index sets of the owned rows, ascending.

@@ -35,6 +35,7 @@ struct CBResult {
   PetscInt n_phi = 0;  ///< fixed-interface modes
   std::vector<std::int64_t> boundary_node_ids;     ///< ascending
   std::vector<std::int64_t> boundary_global_nodes; ///< global node index, same order
+  std::vector<PetscInt> boundary_dofs;  ///< free-DOF number of each boundary DOF (reduced order)
   std::vector<double> fixed_omega2;                ///< eigenvalues of eq. 4, ascending
   /// Reduced operators, dense row-major (n_b + n_phi)^2, identical on every rank.
   std::vector<double> M, K, C;
@@ -51,6 +52,10 @@ struct CBResult {
 /// Collective.
 CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
                        const CBSettings& s);
+
+/// A^T B for two MPIDENSE matrices with the same row layout: local products summed over the
+/// ranks. Returns a row-major (cols of A) x (cols of B) matrix on every rank. Collective.
+std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B);
 
 /// Reference vector for eigenvector signs: w(node, d) depends only on the global node index and
 /// direction, so mode signs do not depend on the partition. Collective.

@@ -1,0 +1,103 @@
+// morse/select/select.hpp: ranking and selection of fixed-interface modes (seed 000 §2.2–2.3).
+//
+// Notation (seed 000): boundary (master) DOFs m = b, interior (slave) DOFs s = i, fixed-interface
+// modes phi_i with eigenvalue lambda_i = omega_i^2, constraint modes Psi. Per mode i, three
+// interface vectors (length n_b) carry everything the a-priori methods need:
+//   a_i = M_sm^T phi_i   (interior-boundary mass coupling)
+//   c_i = K_sm^T phi_i   (interior-boundary stiffness coupling)
+//   g_i = Psi^T M_ss phi_i (LPF participation factor L_mi, eq. 9)
+// and P_i = -(a_i + g_i) is row i of Kammer's participation matrix P (eq. 10).
+// They are computed from the distributed basis (a sparse x dense product with n_b columns and
+// one local product per rank, summed), so no rank holds Phi whole.
+//
+// Scalar scores (docs/select/*.md gives the derivations):
+//   LPF    tr(L_mi L_mi^T) = |g_i|^2                       (a mass; comparable with EIM)
+//   EIM    tr(P_i^T P_i)  = |P_i|^2                         (eq. 11–12)
+//   VEIM   |P_i|^2 / lambda_i,  DEIM |P_i|^2 / lambda_i^2   (eq. 13–14)
+//   OMR    tr(lambda_i a a^T - a c^T - c a^T + c c^T / lambda_i)   (eq. 15, "omega_i" = lambda_i)
+//   CMSchi tr((M_sm + M_ss Psi)^T phi phi^T (M_sm + M_ss Psi)) / lambda_i  (eq. 16, sign
+//          consistent with eq. 10 and 17)
+//   EBR    mean energy of mode i under a periodic boundary force (eq. 18–20)
+//   IMR    contribution of mode i to chosen modes of the full system (eq. 21–22)
+// Unnormalized, these satisfy eq. 17 exactly: EIM = lambda VEIM = lambda^2 DEIM = lambda CMSchi
+// = OMR / lambda. Fractions are scores divided by their sum over the candidate modes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "morse/cb/craig_bampton.hpp"
+
+namespace morse::select {
+
+enum class Method { Frequency, LPF, EIM, VEIM, DEIM, OMR, CMSChi, EBR, IMR };
+
+const char* method_name(Method m);
+/// Parses frequency lpf eim veim deim omr cmschi ebr imr; false if unknown.
+bool parse_method(const std::string& name, Method* m);
+
+/// Per-mode interface vectors, each n_phi x n_b row-major, identical on every rank.
+struct InterfaceCoupling {
+  PetscInt n_b = 0, n_phi = 0;
+  std::vector<double> lambda;  ///< omega_i^2 of the fixed-interface modes
+  std::vector<double> a, c, g;
+  /// Kammer's P (eq. 10), n_phi x n_b.
+  std::vector<double> P() const;
+};
+
+/// Computes a, c, g from the Craig–Bampton result (which must keep its basis T) and the
+/// model's K and M. Collective.
+InterfaceCoupling interface_coupling(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& cb);
+
+/// Periodic boundary excitation for EBR (eq. 18): harmonic k has angular frequency omega_k and
+/// a complex force amplitude on the boundary DOFs. With all_components, each boundary DOF is
+/// loaded alone (unit amplitude) at each frequency: the seed's "force containing all possible
+/// components" when nothing is known.
+struct Excitation {
+  std::vector<double> freq_hz;
+  std::vector<double> amplitude;  ///< per harmonic, applied to every boundary DOF
+  std::vector<double> phase_deg;  ///< per harmonic
+  bool all_components = true;
+};
+
+/// Full-system modes for IMR: their eigenvalues and the projections on the fixed-interface
+/// modes. X1 = Phi^T M_sb v_b, X2 = Phi^T M_ss v_s (n_phi x n_zeta), vb = boundary part of each
+/// mode (n_zeta x n_b), all on every rank.
+struct ImrData {
+  std::vector<double> lambda;
+  std::vector<double> X1, X2, vb;
+  bool clamped = false;  ///< the system modes are the fixed-interface modes themselves
+  std::vector<PetscInt> clamped_modes;  ///< with clamped: the chosen fixed-interface modes
+  double shift = 0.01;   ///< omega_f = (1 + shift) omega_zeta
+};
+
+/// Score of every candidate mode (length n_phi, >= 0). cb.M / cb.K are the full Craig–Bampton
+/// operators (for EBR, whose harmonics are spread over the ranks of comm). Frequency returns
+/// the EIM scores (the cumulative curve of frequency order is drawn with them, as in seed 000
+/// Fig. 3). Collective (identical result on every rank). Throws for EBR without excitation or
+/// an excitation frequency at a resonance of the superelement, and for IMR without data.
+std::vector<double> scores(MPI_Comm comm, Method m, const InterfaceCoupling& ic, const cb::CBResult& cb,
+                           const Excitation& ex, const ImrData* imr);
+
+/// Ranking and truncation.
+struct Selection {
+  std::vector<PetscInt> ranking;     ///< candidate indices, best first
+  std::vector<double> cumulative;    ///< cumulative fraction of the total score along ranking
+  std::vector<PetscInt> selected;    ///< kept candidates, ascending (i.e. by frequency)
+  double retained = 0;               ///< fraction of the total score kept
+};
+
+/// Ranks by decreasing score (Frequency: by ascending frequency) and keeps the first `count`
+/// (if count >= 0) or the shortest prefix reaching `fraction` of the total score.
+Selection truncate(Method m, const std::vector<double>& score, PetscInt count, double fraction);
+
+/// Modal effective-mass fractions of each mode for a rigid translation of the whole interface in
+/// direction d: (P_i r_d)^2 / total_mass, n_phi x 3 row-major.
+std::vector<double> directional_mass_fractions(const InterfaceCoupling& ic, double total_mass);
+
+/// The superelement restricted to the boundary DOFs and the selected modes (rows/columns of
+/// the full Craig–Bampton operators), row-major. Not collective.
+std::vector<double> restrict_operator(const std::vector<double>& A, PetscInt n_b, PetscInt n,
+                                      const std::vector<PetscInt>& selected);
+
+}  // namespace morse::select
