@@ -15,6 +15,7 @@ static const char kHelp[] =
     "usage: mpirun -n N morse <command> [options]   (or -options_file case.opts)\n"
     "  modes     lowest eigenpairs of the clamped full model\n"
     "  reduce    Craig-Bampton superelement\n"
+    "  select    rank and select fixed-interface modes (LPF EIM VEIM DEIM OMR CMSchi EBR IMR)\n"
     "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n";
 
 // After an exception: if every rank failed (a collective error), rank 0 prints and all return
@@ -53,7 +54,7 @@ int main(int argc, char** argv) {
       if (words.empty()) {
         PetscBool help = PETSC_FALSE;
         PetscOptionsHasHelp(nullptr, &help);
-        if (!help) throw morse::Error("no command given (commands: modes, reduce, mesh); see -help");
+        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, mesh); see -help");
       } else {
         morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
       }

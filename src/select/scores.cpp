@@ -255,6 +255,126 @@ std::vector<double> directional_mass_fractions(const InterfaceCoupling& ic, doub
   return f;
 }
 
+namespace {
+
+// Local rows of an MPIDENSE matrix as a column-major array (copy) with its row range.
+struct LocalDense {
+  PetscInt rstart = 0, m = 0, n = 0;
+  std::vector<double> a;  // column-major m x n
+};
+
+LocalDense local_copy(Mat A) {
+  LocalDense d;
+  PetscInt rend, lda;
+  MORSE_CALL(MatGetOwnershipRange(A, &d.rstart, &rend));
+  MORSE_CALL(MatGetSize(A, nullptr, &d.n));
+  MORSE_CALL(MatDenseGetLDA(A, &lda));
+  d.m = rend - d.rstart;
+  d.a.resize(static_cast<std::size_t>(d.m) * d.n);
+  const PetscScalar* x;
+  MORSE_CALL(MatDenseGetArrayRead(A, &x));
+  for (PetscInt j = 0; j < d.n; ++j)
+    for (PetscInt r = 0; r < d.m; ++r) d.a[r + d.m * j] = x[r + lda * j];
+  MORSE_CALL(MatDenseRestoreArrayRead(A, &x));
+  return d;
+}
+
+UMat dense_from_local(MPI_Comm comm, const LocalDense& d) {
+  UMat A;
+  MORSE_CALL(MatCreateDense(comm, d.m, PETSC_DECIDE, PETSC_DETERMINE, d.n, nullptr, A.ptr()));
+  PetscScalar* x;
+  PetscInt lda;
+  MORSE_CALL(MatDenseGetLDA(A.get(), &lda));
+  MORSE_CALL(MatDenseGetArrayWrite(A.get(), &x));
+  for (PetscInt j = 0; j < d.n; ++j)
+    for (PetscInt r = 0; r < d.m; ++r) x[r + lda * j] = d.a[r + d.m * j];
+  MORSE_CALL(MatDenseRestoreArrayWrite(A.get(), &x));
+  return A;
+}
+
+}  // namespace
+
+ImrData imr_data(MPI_Comm comm, Mat M, const cb::CBResult& cb, Mat V, const std::vector<double>& lambda,
+                 const std::vector<PetscInt>& modes, double shift) {
+  ImrData d;
+  d.shift = shift;
+  const PetscInt nb = cb.n_b, nz = static_cast<PetscInt>(modes.size());
+  auto full = local_copy(V);
+  LocalDense vb{full.rstart, full.m, nz, {}}, vs{full.rstart, full.m, nz, {}};
+  vb.a.assign(static_cast<std::size_t>(full.m) * nz, 0.0);
+  vs.a.assign(static_cast<std::size_t>(full.m) * nz, 0.0);
+  std::vector<char> is_b(full.m, 0);
+  std::vector<PetscInt> bpos(full.m, -1);
+  for (PetscInt j = 0; j < nb; ++j) {
+    PetscInt g = cb.boundary_dofs[j] - full.rstart;
+    if (g >= 0 && g < full.m) is_b[g] = 1, bpos[g] = j;
+  }
+  d.vb.assign(static_cast<std::size_t>(nz) * nb, 0.0);
+  for (PetscInt z = 0; z < nz; ++z) {
+    d.lambda.push_back(lambda[modes[z]]);
+    for (PetscInt r = 0; r < full.m; ++r) {
+      const double v = full.a[r + full.m * modes[z]];
+      (is_b[r] ? vb : vs).a[r + full.m * z] = v;
+      if (is_b[r]) d.vb[z * nb + bpos[r]] = v;
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, d.vb.data(), static_cast<int>(d.vb.size()), MPI_DOUBLE, MPI_SUM, comm);
+  auto Vb = dense_from_local(comm, vb), Vs = dense_from_local(comm, vs);
+  UMat MVb, MVs;
+  MORSE_CALL(MatMatMult(M, Vb.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MVb.ptr()));
+  MORSE_CALL(MatMatMult(M, Vs.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MVs.ptr()));
+  Mat Phi;
+  MORSE_CALL(MatDenseGetSubMatrix(cb.T.get(), PETSC_DECIDE, PETSC_DECIDE, cb.n_b, cb.n(), &Phi));
+  d.X1 = cb::transpose_product(comm, Phi, MVb.get());
+  d.X2 = cb::transpose_product(comm, Phi, MVs.get());
+  MORSE_CALL(MatDenseRestoreSubMatrix(cb.T.get(), &Phi));
+  return d;
+}
+
+namespace {
+
+// MAC core: numerators (W^T U)^2 over norms; W = V (plain) or M V (mass-weighted).
+std::vector<double> mac_core(MPI_Comm comm, Mat V, Mat W, Mat T, const std::vector<double>& Q, PetscInt n_q,
+                             bool unit_u) {
+  auto v = local_copy(V), w = local_copy(W), t = local_copy(T);
+  const PetscInt m = t.m, nr = t.n, nv = v.n;
+  // U = T Q on the local rows (column-major m x n_q).
+  std::vector<double> U(static_cast<std::size_t>(m) * n_q, 0.0);
+  for (PetscInt k = 0; k < n_q; ++k)
+    for (PetscInt j = 0; j < nr; ++j) {
+      const double q = Q[static_cast<std::size_t>(j) * n_q + k];
+      if (q == 0.0) continue;
+      for (PetscInt r = 0; r < m; ++r) U[r + m * k] += t.a[r + m * j] * q;
+    }
+  std::vector<double> wu(static_cast<std::size_t>(nv) * n_q, 0.0), vv(nv, 0.0), uu(n_q, 0.0);
+  for (PetscInt i = 0; i < nv; ++i) {
+    const double* wi = &w.a[static_cast<std::size_t>(m) * i];
+    vv[i] = dot(wi, &v.a[static_cast<std::size_t>(m) * i], m);
+    for (PetscInt k = 0; k < n_q; ++k) wu[i * n_q + k] = dot(wi, &U[static_cast<std::size_t>(m) * k], m);
+  }
+  for (PetscInt k = 0; k < n_q; ++k) uu[k] = dot(&U[static_cast<std::size_t>(m) * k], &U[static_cast<std::size_t>(m) * k], m);
+  MPI_Allreduce(MPI_IN_PLACE, wu.data(), static_cast<int>(wu.size()), MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, vv.data(), static_cast<int>(vv.size()), MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, uu.data(), static_cast<int>(uu.size()), MPI_DOUBLE, MPI_SUM, comm);
+  if (unit_u) std::fill(uu.begin(), uu.end(), 1.0);
+  for (PetscInt i = 0; i < nv; ++i)
+    for (PetscInt k = 0; k < n_q; ++k) {
+      double& x = wu[i * n_q + k];
+      x = (vv[i] > 0 && uu[k] > 0) ? x * x / (vv[i] * uu[k]) : 0.0;
+    }
+  return wu;
+}
+
+}  // namespace
+
+std::vector<double> mac_matrix(MPI_Comm comm, Mat V, Mat T, const std::vector<double>& Q, PetscInt n_q) {
+  return mac_core(comm, V, V, T, Q, n_q, false);
+}
+
+std::vector<double> mass_mac_matrix(MPI_Comm comm, Mat V, Mat MV, Mat T, const std::vector<double>& Q, PetscInt n_q) {
+  return mac_core(comm, V, MV, T, Q, n_q, true);
+}
+
 std::vector<double> restrict_operator(const std::vector<double>& A, PetscInt n_b, PetscInt n,
                                       const std::vector<PetscInt>& selected) {
   std::vector<PetscInt> idx(n_b);

@@ -95,6 +95,23 @@ Selection truncate(Method m, const std::vector<double>& score, PetscInt count, d
 /// direction d: (P_i r_d)^2 / total_mass, n_phi x 3 row-major.
 std::vector<double> directional_mass_fractions(const InterfaceCoupling& ic, double total_mass);
 
+/// IMR data from system modes V (MPIDENSE over the free DOFs, columns `modes` used, with
+/// eigenvalues lambda). Collective.
+ImrData imr_data(MPI_Comm comm, Mat M, const cb::CBResult& cb, Mat V, const std::vector<double>& lambda,
+                 const std::vector<PetscInt>& modes, double shift);
+
+/// MAC (seed 000 eq. 23, in its standard form |v^T u|^2 / (v^T v u^T u)) between the columns of
+/// V (full-model modes, n_v columns) and the expanded superelement modes u_k = T q_k, where Q is
+/// n(T) x n_q row-major (rows of unselected modes are zero). Returns n_v x n_q row-major on every
+/// rank. Collective.
+std::vector<double> mac_matrix(MPI_Comm comm, Mat V, Mat T, const std::vector<double>& Q, PetscInt n_q);
+
+/// Mass-weighted MAC (v^T M u)^2 / (v^T M v u^T M u) with MV = M V given, for superelement modes
+/// whose coefficients Q are M_CB-normalized (u^T M u = 1). Unlike the plain MAC, it sums to the
+/// squared projection over a set of modes, so it measures how well a cluster of near-repeated
+/// modes is represented. Collective.
+std::vector<double> mass_mac_matrix(MPI_Comm comm, Mat V, Mat MV, Mat T, const std::vector<double>& Q, PetscInt n_q);
+
 /// The superelement restricted to the boundary DOFs and the selected modes (rows/columns of
 /// the full Craig–Bampton operators), row-major. Not collective.
 std::vector<double> restrict_operator(const std::vector<double>& A, PetscInt n_b, PetscInt n,
