@@ -360,6 +360,7 @@ void run_reduce(MPI_Comm comm) {
 
 // ---------------------------------------------------------------- select
 struct SelectOptions {
+  std::string from;
   std::vector<std::string> methods;
   PetscInt num_modes = -1;
   PetscReal fraction = -1;
@@ -383,6 +384,12 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
   PetscReal vals[256];
   PetscInt ivals[256];
   PetscOptionsBegin(comm, nullptr, "morse select options", "");
+  PetscCall(PetscOptionsString("-select_from",
+                               "Start from a `morse reduce -cb_write_basis` file of the same mesh and boundary instead "
+                               "of computing the modes",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->from = buf;
+  buf[0] = 0;
   PetscCall(PetscOptionsStringArray("-select_method",
                                     "Ranking methods, comma separated: frequency lpf eim veim deim omr cmschi ebr imr",
                                     "", names, &n, &set));
@@ -455,7 +462,10 @@ void run_select(MPI_Comm comm) {
   if (help_requested()) return;
   check_options(comm, true);
   MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
-  MORSE_CHECK(r.n_fixed >= 0 || r.fmax > 0, "give the candidate modes: -cb_num_fixed_modes N or -cb_fmax HZ");
+  MORSE_CHECK(!so.from.empty() || r.n_fixed >= 0 || r.fmax > 0,
+              "give the candidate modes: -cb_num_fixed_modes N or -cb_fmax HZ (or -select_from FILE.h5)");
+  MORSE_CHECK(so.from.empty() || (r.n_fixed < 0 && r.fmax < 0),
+              "-select_from reads the candidate modes from its file: drop -cb_num_fixed_modes / -cb_fmax");
   MORSE_CHECK(!(r.n_fixed >= 0 && r.fmax > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
   std::vector<select::Method> methods;
   for (const auto& name : so.methods) {
@@ -483,7 +493,9 @@ void run_select(MPI_Comm comm) {
   cs.fmax_hz = r.fmax;
   cs.damping = r.damping;
   cs.keep_basis = true;
-  auto res = cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), cs);
+  auto res = so.from.empty() ? cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), cs)
+                             : cb::load_basis(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), so.from, r.boundary,
+                                              r.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
   const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
   double f_an = so.fmax_analysis > 0 ? so.fmax_analysis

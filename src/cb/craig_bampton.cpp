@@ -118,22 +118,41 @@ UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs) {
   return w;
 }
 
+void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out) {
+  auto boundary = gather_boundary(lm, dofs, set);
+  out->n_b = static_cast<PetscInt>(3 * boundary.size());
+  out->boundary_node_ids.clear();
+  out->boundary_global_nodes.clear();
+  out->boundary_dofs.clear();
+  for (const auto& b : boundary) {
+    out->boundary_node_ids.push_back(b.id);
+    out->boundary_global_nodes.push_back(b.global);
+    out->boundary_dofs.insert(out->boundary_dofs.end(), b.dof, b.dof + 3);
+  }
+}
+
+void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out) {
+  const PetscInt nr = out->n();
+  for (auto [A, R] : {std::pair{K, &out->K}, std::pair{M, &out->M}}) {
+    UMat AT;
+    MORSE_CALL(MatMatMult(A, out->T.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, AT.ptr()));
+    *R = transpose_product(comm, out->T.get(), AT.get());
+    symmetrize(*R, nr);
+  }
+  out->C.assign(static_cast<std::size_t>(nr) * nr, 0.0);
+  for (PetscInt j = 0; j < out->n_phi; ++j) {
+    PetscInt q = out->n_b + j;
+    out->C[q * nr + q] = 2.0 * damping * std::sqrt(std::max(0.0, out->fixed_omega2[j]));
+  }
+}
+
 CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
                        const CBSettings& s) {
   MPI_Comm comm = lm.comm;
   CBResult out;
-  auto boundary = gather_boundary(lm, dofs, s.boundary_set);
-  out.n_b = static_cast<PetscInt>(3 * boundary.size());
+  set_boundary(lm, dofs, s.boundary_set, &out);
   std::unordered_map<PetscInt, PetscInt> pos;  // global DOF -> boundary position
-  for (std::size_t i = 0; i < boundary.size(); ++i) {
-    out.boundary_node_ids.push_back(boundary[i].id);
-    out.boundary_global_nodes.push_back(boundary[i].global);
-    for (int d = 0; d < 3; ++d) {
-      pos[boundary[i].dof[d]] = static_cast<PetscInt>(3 * i + d);
-      out.boundary_dofs.push_back(boundary[i].dof[d]);
-    }
-  }
-
+  for (PetscInt j = 0; j < out.n_b; ++j) pos[out.boundary_dofs[j]] = j;
   // Interior / boundary index sets of the owned rows, ascending.
   std::vector<PetscInt> ib, ii;
   for (PetscInt g = dofs.first; g < dofs.first + dofs.n_owned; ++g)
@@ -248,17 +267,7 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
     if (out.n_phi) MORSE_CALL(MatDenseRestoreArrayRead(eig.V.get(), &phi));
     MORSE_CALL(MatDenseRestoreArrayWrite(out.T.get(), &tt));
   }
-  for (auto [A, R] : {std::pair{K, &out.K}, std::pair{M, &out.M}}) {
-    UMat AT;
-    MORSE_CALL(MatMatMult(A, out.T.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, AT.ptr()));
-    *R = transpose_product(comm, out.T.get(), AT.get());
-    symmetrize(*R, nr);
-  }
-  out.C.assign(static_cast<std::size_t>(nr) * nr, 0.0);
-  for (PetscInt j = 0; j < out.n_phi; ++j) {
-    PetscInt q = out.n_b + j;
-    out.C[q * nr + q] = 2.0 * s.damping * std::sqrt(std::max(0.0, out.fixed_omega2[j]));
-  }
+  project(comm, K, M, s.damping, &out);
   if (!s.keep_basis) out.T.reset();
   return out;
 }

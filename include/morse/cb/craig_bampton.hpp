@@ -53,6 +53,23 @@ struct CBResult {
 CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
                        const CBSettings& s);
 
+/// Fills the boundary layout of out (n_b, boundary_node_ids, boundary_global_nodes,
+/// boundary_dofs) from a node set. Throws (collectively) for a missing or empty set or a clamped
+/// boundary node. Collective.
+void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out);
+
+/// Reduced operators from out->T (eq. 6): out->M = T^T M T, out->K = T^T K T (symmetrized) and
+/// the modal damping out->C. Collective.
+void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out);
+
+/// Rebuilds a superelement's basis from a `morse reduce -cb_write_basis` file (its constraint
+/// and fixed-interface modes as nodal fields) for the same mesh, and projects K and M on it.
+/// The file's mesh (node ids) and boundary nodes must match. Reads on rank 0 and scatters one
+/// mode at a time. Throws (collectively) naming the file on any mismatch or missing dataset.
+/// Collective.
+CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
+                    const std::string& boundary_set, double damping);
+
 /// A^T B for two MPIDENSE matrices with the same row layout: local products summed over the
 /// ranks. Returns a row-major (cols of A) x (cols of B) matrix on every rank. Collective.
 std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B);

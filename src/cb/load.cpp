@@ -1,0 +1,162 @@
+#include <hdf5.h>
+
+#include <cmath>
+#include <memory>
+
+#include "morse/cb/craig_bampton.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+
+namespace morse::cb {
+
+namespace {
+
+// Rank-0 reader of a morse HDF5 file; every failure becomes a message naming the file.
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    MORSE_CHECK(file_ >= 0, "cannot open superelement file ", path);
+  }
+  ~Reader() {
+    if (file_ >= 0) H5Fclose(file_);
+  }
+  bool has(const std::string& name) const {
+    // Checks each path component so intermediate groups may be missing.
+    std::size_t p = 1;
+    while (true) {
+      auto q = name.find('/', p);
+      std::string part = name.substr(0, q);
+      if (H5Lexists(file_, part.c_str(), H5P_DEFAULT) <= 0) return false;
+      if (q == std::string::npos) return true;
+      p = q + 1;
+    }
+  }
+  std::vector<hsize_t> dims(const std::string& name) const {
+    MORSE_CHECK(has(name), path_, " has no dataset ", name);
+    hid_t ds = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+    hid_t sp = H5Dget_space(ds);
+    std::vector<hsize_t> d(H5Sget_simple_extent_ndims(sp));
+    H5Sget_simple_extent_dims(sp, d.data(), nullptr);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    return d;
+  }
+  template <class T>
+  std::vector<T> read(const std::string& name, hid_t type) const {
+    auto d = dims(name);
+    hsize_t n = 1;
+    for (auto x : d) n *= x;
+    std::vector<T> v(n);
+    hid_t ds = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+    herr_t st = H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+    H5Dclose(ds);
+    MORSE_CHECK(st >= 0, "cannot read ", name, " from ", path_);
+    return v;
+  }
+  /// Row j of a [n][rows][cols] dataset.
+  std::vector<double> slab(const std::string& name, hsize_t j) const {
+    auto d = dims(name);
+    hid_t ds = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+    hid_t sp = H5Dget_space(ds);
+    hsize_t start[3] = {j, 0, 0}, count[3] = {1, d[1], d[2]};
+    H5Sselect_hyperslab(sp, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    hsize_t mcount = d[1] * d[2];
+    hid_t ms = H5Screate_simple(1, &mcount, nullptr);
+    std::vector<double> v(mcount);
+    herr_t st = H5Dread(ds, H5T_NATIVE_DOUBLE, ms, sp, H5P_DEFAULT, v.data());
+    H5Sclose(ms);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    MORSE_CHECK(st >= 0, "cannot read ", name, " from ", path_);
+    return v;
+  }
+
+ private:
+  std::string path_;
+  hid_t file_ = -1;
+};
+
+template <class T>
+void bcast(MPI_Comm comm, std::vector<T>& v, MPI_Datatype type) {
+  std::uint64_t n = v.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, comm);
+  v.resize(n);
+  MPI_Bcast(v.data(), static_cast<int>(n), type, 0, comm);
+}
+
+}  // namespace
+
+CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
+                    const std::string& boundary_set, double damping) {
+  MPI_Comm comm = lm.comm;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  CBResult out;
+  set_boundary(lm, dofs, boundary_set, &out);
+  StageTimer t(comm, "LoadBasis");
+  std::unique_ptr<Reader> rd;
+  std::vector<std::int64_t> ids, bnodes;
+  std::vector<double> lambda;
+  std::string err;
+  if (rank == 0) try {
+      rd = std::make_unique<Reader>(path);
+      for (const char* d : {"/cb/constraint_modes", "/cb/fixed_interface/mode_shapes"})
+        MORSE_CHECK(rd->has(d), path, " has no ", d, ": write it with `morse reduce -cb_write_basis`");
+      ids = rd->read<std::int64_t>("/mesh/node_ids", H5T_NATIVE_INT64);
+      bnodes = rd->read<std::int64_t>("/rom/boundary_nodes", H5T_NATIVE_INT64);
+      lambda = rd->read<double>("/cb/fixed_interface/eigenvalues", H5T_NATIVE_DOUBLE);
+      auto dc = rd->dims("/cb/constraint_modes"), dp = rd->dims("/cb/fixed_interface/mode_shapes");
+      MORSE_CHECK(dc.size() == 3 && dp.size() == 3 && dc[1] == ids.size() && dp[1] == ids.size() &&
+                      dp[0] == lambda.size() && dc[0] == 3 * bnodes.size(),
+                  path, ": inconsistent basis dataset shapes");
+    } catch (const Error& e) {
+      err = e.what();
+    }
+  collective_check(comm, err);
+  bcast(comm, ids, MPI_INT64_T);
+  bcast(comm, bnodes, MPI_INT64_T);
+  bcast(comm, lambda, MPI_DOUBLE);
+  // Same mesh (node ids in global order) and same boundary.
+  if (static_cast<std::int64_t>(ids.size()) != lm.n_global_nodes)
+    err = cat(path, " was made on a mesh with ", ids.size(), " nodes; this mesh has ", lm.n_global_nodes);
+  else
+    for (std::int64_t k = 0; k < lm.mesh.num_nodes() && err.empty(); ++k)
+      if (ids[lm.global_node[k]] != lm.mesh.node_ids[k])
+        err = cat(path, " was made on another mesh (node ", lm.mesh.node_ids[k], " differs)");
+  if (err.empty() && bnodes != out.boundary_node_ids)
+    err = cat(path, ": its boundary nodes differ from node set '", boundary_set, "'");
+  collective_check(comm, err);
+
+  out.fixed_omega2 = lambda;
+  out.n_phi = static_cast<PetscInt>(lambda.size());
+  const PetscInt nr = out.n();
+  MORSE_CALL(MatCreateDense(comm, dofs.n_owned, PETSC_DECIDE, dofs.n_global, nr, nullptr, out.T.ptr()));
+  PetscScalar* tt;
+  PetscInt ldt;
+  MORSE_CALL(MatDenseGetLDA(out.T.get(), &ldt));
+  MORSE_CALL(MatDenseGetArrayWrite(out.T.get(), &tt));
+  Progress progress(comm, "loading the basis", static_cast<double>(nr));
+  for (PetscInt j = 0; j < nr; ++j) {
+    std::vector<double> field;
+    if (rank == 0)
+      field = j < out.n_b ? rd->slab("/cb/constraint_modes", j) : rd->slab("/cb/fixed_interface/mode_shapes", j - out.n_b);
+    bcast(comm, field, MPI_DOUBLE);
+    for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
+      if (lm.node_owner[k] != rank) continue;
+      for (int d = 0; d < 3; ++d) {
+        PetscInt g = dofs.node_dof[3 * k + d];
+        if (g >= 0) tt[(g - dofs.first) + static_cast<std::size_t>(ldt) * j] = field[3 * lm.global_node[k] + d];
+      }
+    }
+    progress.update(static_cast<double>(j + 1));
+  }
+  MORSE_CALL(MatDenseRestoreArrayWrite(out.T.get(), &tt));
+  MORSE_CALL(MatAssemblyBegin(out.T.get(), MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(out.T.get(), MAT_FINAL_ASSEMBLY));
+  project(comm, K, M, damping, &out);
+  return out;
+}
+
+}  // namespace morse::cb

@@ -1,0 +1,76 @@
+// `morse select -select_from`: the superelement basis written by `morse reduce -cb_write_basis`
+// and read back gives the same reduced operators as the one computed directly.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "morse/app/commands.hpp"
+#include "morse/cb/craig_bampton.hpp"
+#include "morse/core/session.hpp"
+#include "morse/mesh/gmsh.hpp"
+#include "util.hpp"
+
+using namespace morse;
+
+TEST(SelectFrom, BasisFileRoundTrip) {
+  MPI_Comm comm = PETSC_COMM_WORLD;
+  int rank = world_rank();
+  int pid = rank == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, comm);
+  const std::string base = "/tmp/morse_test_select_from_" + std::to_string(pid);
+  mesh::BoxSpec b;
+  b.type = mesh::ElementType::Hex20;
+  b.lx = 1.0;
+  b.ly = 0.08;
+  b.lz = 0.05;
+  b.nx = 8;
+  b.ny = 2;
+  b.nz = 1;
+  if (rank == 0) {
+    auto m = mesh::generate_box(b);
+    m.materials.push_back(test::steel());
+    std::fill(m.elem_material.begin(), m.elem_material.end(), 0);
+    mesh::write_gmsh(m, base + ".msh");
+  }
+  MPI_Barrier(comm);
+  const std::vector<std::pair<std::string, std::string>> opts = {
+      {"-mesh", base + ".msh"}, {"-clamp", "x0"}, {"-boundary", "x1"}, {"-cb_num_fixed_modes", "6"},
+      {"-cb_write_basis", "true"}, {"-cb_xdmf", "false"}, {"-out", base + ".h5"}};
+  for (const auto& [k, v] : opts) MORSE_CALL(PetscOptionsSetValue(nullptr, k.c_str(), v.c_str()));
+  app::run_command(comm, "reduce", {});
+  for (const auto& [k, v] : opts) MORSE_CALL(PetscOptionsClearValue(nullptr, k.c_str()));
+
+  auto lm = mesh::read_and_distribute(comm, base + ".msh");
+  auto dofs = fe::number_dofs(lm, {"x0"});
+  auto ops = fe::assemble(lm, dofs, mesh::Material{});
+  cb::CBSettings s;
+  s.boundary_set = "x1";
+  s.n_fixed = 6;
+  auto direct = cb::craig_bampton(lm, dofs, ops.K.get(), ops.M.get(), s);
+  auto loaded = cb::load_basis(lm, dofs, ops.K.get(), ops.M.get(), base + ".h5", "x1", 0.0);
+  ASSERT_EQ(direct.n(), loaded.n());
+  double kref = 0, mref = 0, kerr = 0, merr = 0;
+  for (std::size_t i = 0; i < direct.K.size(); ++i) {
+    kref = std::max(kref, std::abs(direct.K[i]));
+    mref = std::max(mref, std::abs(direct.M[i]));
+    kerr = std::max(kerr, std::abs(direct.K[i] - loaded.K[i]));
+    merr = std::max(merr, std::abs(direct.M[i] - loaded.M[i]));
+  }
+  EXPECT_LT(kerr, 1e-12 * kref);
+  EXPECT_LT(merr, 1e-12 * mref);
+  EXPECT_EQ(direct.fixed_omega2, loaded.fixed_omega2);
+  // A missing file is refused, naming it.
+  try {
+    cb::load_basis(lm, dofs, ops.K.get(), ops.M.get(), base + "_missing.h5", "x1", 0.0);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(base + "_missing.h5"), std::string::npos) << e.what();
+  }
+  MPI_Barrier(comm);
+  if (rank == 0) {
+    std::remove((base + ".msh").c_str());
+    std::remove((base + ".h5").c_str());
+  }
+}
