@@ -197,6 +197,24 @@ void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mes
   collective_check(comm, err);
 }
 
+// /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
+void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
+               const std::vector<double>* C, const std::vector<std::int64_t>& boundary_nodes,
+               const std::vector<double>& freq_hz, PetscInt n_b, double damping) {
+  const auto n = static_cast<hsize_t>(freq_hz.size());
+  out.write("/rom/M", M, {n, n});
+  out.write("/rom/K", K, {n, n});
+  if (C) out.write("/rom/C", *C, {n, n});
+  out.write("/rom/boundary_nodes", boundary_nodes);
+  out.write("/rom/frequencies_hz", freq_hz);
+  out.attribute_int("/rom", "n_boundary_dofs", n_b);
+  out.attribute_int("/rom", "n_modes", static_cast<std::int64_t>(n) - n_b);
+  out.attribute("/rom", "damping_ratio", damping);
+  out.attribute("/rom", "dof_order",
+                "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then the "
+                "fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
+}
+
 // ---------------------------------------------------------------- modes
 PetscErrorCode get_modes_options(MPI_Comm comm, PetscInt* nev, PetscReal* shift, PetscBool* xdmf) {
   PetscOptionsBegin(comm, nullptr, "morse modes options", "");
@@ -330,20 +348,9 @@ void run_reduce(MPI_Comm comm) {
   io::write_provenance(out, "reduce", md.lm.mesh.units);
   auto gm = mesh::gather_to_rank0(md.lm);
   io::write_mesh(out, gm);
-  const hsize_t hn = static_cast<hsize_t>(n);
   out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
   out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
-  out.write("/rom/M", res.M, {hn, hn});
-  out.write("/rom/K", res.K, {hn, hn});
-  if (r.damping > 0) out.write("/rom/C", res.C, {hn, hn});
-  out.write("/rom/boundary_nodes", res.boundary_node_ids);
-  out.write("/rom/frequencies_hz", rom_f);
-  out.attribute("/rom", "n_boundary_dofs", static_cast<double>(res.n_b));
-  out.attribute("/rom", "n_modes", static_cast<double>(res.n_phi));
-  out.attribute("/rom", "damping_ratio", r.damping);
-  out.attribute("/rom", "dof_order",
-                "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then "
-                "fixed-interface modal coordinates by ascending frequency");
+  write_rom(out, res.M, res.K, r.damping > 0 ? &res.C : nullptr, res.boundary_node_ids, rom_f, res.n_b, r.damping);
   out.attribute("/cb", "boundary_set", r.boundary);
   std::vector<io::XdmfField> fields;
   if (r.write_basis) {
@@ -595,6 +602,11 @@ void run_select(MPI_Comm comm) {
   std::vector<MethodResult> results;
   UMat MV;
   MORSE_CALL(MatMatMult(md.ops.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+  select::MacBasis mac_basis;
+  {
+    StageTimer t(comm, "MacProjections");
+    mac_basis = select::mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
+  }
   auto f_fom = [&](PetscInt j) { return std::sqrt(std::max(0.0, fom.omega2[j])) / kTwoPi; };
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
     StageTimer t(comm, cat("Select_", so.methods[mi]));
@@ -617,8 +629,8 @@ void run_select(MPI_Comm comm) {
     for (auto sidx : mr.sel.selected) idx.push_back(nb + sidx);
     for (PetscInt k = 0; k < mr.in_band; ++k)
       for (int row = 0; row < n; ++row) Q[idx[row] * nq + k] = vec[static_cast<std::size_t>(row) * n + k];
-    mr.mac = select::mac_matrix(comm, fom.V.get(), res.T.get(), Q, nq);
-    auto wmac = select::mass_mac_matrix(comm, fom.V.get(), MV.get(), res.T.get(), Q, nq);
+    mr.mac = select::mac_matrix(mac_basis, Q, nq);
+    auto wmac = select::mac_matrix(mac_basis, Q, nq, &res.M);
     mr.best_mac.assign(n_fom, 0.0);
     mr.subspace_mac.assign(n_fom, 0.0);
     for (PetscInt j = 0; j < n_fom; ++j) {
@@ -670,7 +682,7 @@ void run_select(MPI_Comm comm) {
   out.write("/select/fom/frequencies_hz", fom_hz);
   out.attribute("/select", "fmax_analysis_hz", f_an);
   out.attribute("/select", "mac_threshold", so.mac_threshold);
-  out.attribute("/select", "cb_modes_in_band", static_cast<double>(cb_in_band));
+  out.attribute_int("/select", "cb_modes_in_band", static_cast<std::int64_t>(cb_in_band));
   out.write("/select/effective_mass/directional_fractions", select::directional_mass_fractions(ic, md.ops.mass),
             {static_cast<hsize_t>(nphi), 3});
   out.attribute("/select/effective_mass/directional_fractions", "description",
@@ -698,26 +710,16 @@ void run_select(MPI_Comm comm) {
     out.write(g + "/best_mac", mr.best_mac);
     out.write(g + "/subspace_mac", mr.subspace_mac);
     out.attribute(g, "retained_fraction", mr.sel.retained);
-    out.attribute(g, "n_selected", static_cast<double>(mr.sel.selected.size()));
-    out.attribute(g, "n_rom_modes_in_band", static_cast<double>(mr.in_band));
-    out.attribute(g, "n_mac_matches", static_cast<double>(mr.matches));
-    out.attribute(g, "n_subspace_mac_matches", static_cast<double>(mr.subspace_matches));
+    out.attribute_int(g, "n_selected", static_cast<std::int64_t>(mr.sel.selected.size()));
+    out.attribute_int(g, "n_rom_modes_in_band", static_cast<std::int64_t>(mr.in_band));
+    out.attribute_int(g, "n_mac_matches", static_cast<std::int64_t>(mr.matches));
+    out.attribute_int(g, "n_subspace_mac_matches", static_cast<std::int64_t>(mr.subspace_matches));
     out.attribute(g, "worst_frequency_error", mr.worst_err);
     if (mr.name == rom_name) {
-      const hsize_t hn = static_cast<hsize_t>(nb + mr.sel.selected.size());
-      out.write("/rom/M", mr.M, {hn, hn});
-      out.write("/rom/K", mr.K, {hn, hn});
-      if (r.damping > 0) out.write("/rom/C", select::restrict_operator(res.C, nb, nr, mr.sel.selected), {hn, hn});
-      out.write("/rom/boundary_nodes", res.boundary_node_ids);
-      out.write("/rom/frequencies_hz", mr.rom_f);
+      auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
+      write_rom(out, mr.M, mr.K, r.damping > 0 ? &C : nullptr, res.boundary_node_ids, mr.rom_f, nb, r.damping);
       out.write("/rom/selected_modes", sel);
-      out.attribute("/rom", "n_boundary_dofs", static_cast<double>(nb));
-      out.attribute("/rom", "n_modes", static_cast<double>(mr.sel.selected.size()));
-      out.attribute("/rom", "damping_ratio", r.damping);
       out.attribute("/rom", "selection_method", mr.name);
-      out.attribute("/rom", "dof_order",
-                    "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then "
-                    "the selected fixed-interface modal coordinates by ascending frequency (/rom/selected_modes)");
     }
   }
   out.attribute("/cb", "boundary_set", r.boundary);

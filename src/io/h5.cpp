@@ -110,9 +110,7 @@ void H5Output::write_string(const std::string& name, const std::string& value) {
 void H5Output::attribute(const std::string& object, const std::string& name,
                          const std::string& value) {
   if (rank_ != 0 || !error_.empty()) return;
-  hid_t obj = H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/"
-                  ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
-                  : ensure_group(object);
+  hid_t obj = open_object(object);
   hid_t type = H5Tcopy(H5T_C_S1);
   H5Tset_size(type, value.empty() ? 1 : value.size());
   hid_t space = H5Screate(H5S_SCALAR);
@@ -125,17 +123,36 @@ void H5Output::attribute(const std::string& object, const std::string& name,
   if (!ok) note_error(object + "@" + name);
 }
 
-void H5Output::attribute(const std::string& object, const std::string& name, double value) {
-  if (rank_ != 0 || !error_.empty()) return;
-  hid_t obj = H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/"
-                  ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
-                  : ensure_group(object);
+namespace {
+template <class T>
+bool write_scalar_attribute(hid_t obj, const std::string& name, hid_t type, const T& value) {
   hid_t space = H5Screate(H5S_SCALAR);
-  hid_t a = H5Acreate2(obj, name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT);
-  bool ok = a >= 0 && H5Awrite(a, H5T_NATIVE_DOUBLE, &value) >= 0;
+  hid_t a = H5Acreate2(obj, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
+  bool ok = a >= 0 && H5Awrite(a, type, &value) >= 0;
   if (a >= 0) H5Aclose(a);
   H5Sclose(space);
-  H5Oclose(obj);
+  return ok;
+}
+}  // namespace
+
+hid_t H5Output::open_object(const std::string& object) {
+  return H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/" ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
+                                                                            : ensure_group(object);
+}
+
+void H5Output::attribute(const std::string& object, const std::string& name, double value) {
+  if (rank_ != 0 || !error_.empty()) return;
+  hid_t obj = open_object(object);
+  bool ok = obj >= 0 && write_scalar_attribute(obj, name, H5T_NATIVE_DOUBLE, value);
+  if (obj >= 0) H5Oclose(obj);
+  if (!ok) note_error(object + "@" + name);
+}
+
+void H5Output::attribute_int(const std::string& object, const std::string& name, std::int64_t value) {
+  if (rank_ != 0 || !error_.empty()) return;
+  hid_t obj = open_object(object);
+  bool ok = obj >= 0 && write_scalar_attribute(obj, name, H5T_NATIVE_INT64, value);
+  if (obj >= 0) H5Oclose(obj);
   if (!ok) note_error(object + "@" + name);
 }
 

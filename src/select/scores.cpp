@@ -331,48 +331,55 @@ ImrData imr_data(MPI_Comm comm, Mat M, const cb::CBResult& cb, Mat V, const std:
   return d;
 }
 
-namespace {
-
-// MAC core: numerators (W^T U)^2 over norms; W = V (plain) or M V (mass-weighted).
-std::vector<double> mac_core(MPI_Comm comm, Mat V, Mat W, Mat T, const std::vector<double>& Q, PetscInt n_q,
-                             bool unit_u) {
-  auto v = local_copy(V), w = local_copy(W), t = local_copy(T);
-  const PetscInt m = t.m, nr = t.n, nv = v.n;
-  // U = T Q on the local rows (column-major m x n_q).
-  std::vector<double> U(static_cast<std::size_t>(m) * n_q, 0.0);
-  for (PetscInt k = 0; k < n_q; ++k)
-    for (PetscInt j = 0; j < nr; ++j) {
-      const double q = Q[static_cast<std::size_t>(j) * n_q + k];
-      if (q == 0.0) continue;
-      for (PetscInt r = 0; r < m; ++r) U[r + m * k] += t.a[r + m * j] * q;
-    }
-  std::vector<double> wu(static_cast<std::size_t>(nv) * n_q, 0.0), vv(nv, 0.0), uu(n_q, 0.0);
-  for (PetscInt i = 0; i < nv; ++i) {
-    const double* wi = &w.a[static_cast<std::size_t>(m) * i];
-    vv[i] = dot(wi, &v.a[static_cast<std::size_t>(m) * i], m);
-    for (PetscInt k = 0; k < n_q; ++k) wu[i * n_q + k] = dot(wi, &U[static_cast<std::size_t>(m) * k], m);
+MacBasis mac_basis(MPI_Comm comm, Mat V, Mat MV, Mat T) {
+  MacBasis b;
+  MORSE_CALL(MatGetSize(V, nullptr, &b.n_v));
+  MORSE_CALL(MatGetSize(T, nullptr, &b.n_r));
+  b.VT = cb::transpose_product(comm, V, T);
+  b.WT = cb::transpose_product(comm, MV, T);
+  b.TT = cb::transpose_product(comm, T, T);
+  auto v = local_copy(V), w = local_copy(MV);
+  b.vv.assign(b.n_v, 0.0);
+  b.vmv.assign(b.n_v, 0.0);
+  for (PetscInt i = 0; i < b.n_v; ++i) {
+    const double* vi = &v.a[static_cast<std::size_t>(v.m) * i];
+    b.vv[i] = dot(vi, vi, v.m);
+    b.vmv[i] = dot(&w.a[static_cast<std::size_t>(w.m) * i], vi, v.m);
   }
-  for (PetscInt k = 0; k < n_q; ++k) uu[k] = dot(&U[static_cast<std::size_t>(m) * k], &U[static_cast<std::size_t>(m) * k], m);
-  MPI_Allreduce(MPI_IN_PLACE, wu.data(), static_cast<int>(wu.size()), MPI_DOUBLE, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, vv.data(), static_cast<int>(vv.size()), MPI_DOUBLE, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, uu.data(), static_cast<int>(uu.size()), MPI_DOUBLE, MPI_SUM, comm);
-  if (unit_u) std::fill(uu.begin(), uu.end(), 1.0);
+  MPI_Allreduce(MPI_IN_PLACE, b.vv.data(), static_cast<int>(b.n_v), MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, b.vmv.data(), static_cast<int>(b.n_v), MPI_DOUBLE, MPI_SUM, comm);
+  return b;
+}
+
+std::vector<double> mac_matrix(const MacBasis& b, const std::vector<double>& Q, PetscInt n_q,
+                               const std::vector<double>* M_cb) {
+  const PetscInt nv = b.n_v, nr = b.n_r;
+  const std::vector<double>& A = M_cb ? b.WT : b.VT;
+  const std::vector<double>& G = M_cb ? *M_cb : b.TT;  // Gram matrix of the basis
+  // num = A Q (nv x nq); uu_k = q_k^T G q_k.
+  std::vector<double> num(static_cast<std::size_t>(nv) * n_q, 0.0), GQ(static_cast<std::size_t>(nr) * n_q, 0.0),
+      uu(n_q, 0.0);
+  for (PetscInt i = 0; i < nv; ++i)
+    for (PetscInt j = 0; j < nr; ++j) {
+      const double a = A[i * nr + j];
+      if (a == 0.0) continue;
+      for (PetscInt k = 0; k < n_q; ++k) num[i * n_q + k] += a * Q[j * n_q + k];
+    }
+  for (PetscInt r = 0; r < nr; ++r)
+    for (PetscInt j = 0; j < nr; ++j) {
+      const double g = G[r * nr + j];
+      if (g == 0.0) continue;
+      for (PetscInt k = 0; k < n_q; ++k) GQ[r * n_q + k] += g * Q[j * n_q + k];
+    }
+  for (PetscInt r = 0; r < nr; ++r)
+    for (PetscInt k = 0; k < n_q; ++k) uu[k] += Q[r * n_q + k] * GQ[r * n_q + k];
+  const std::vector<double>& vn = M_cb ? b.vmv : b.vv;
   for (PetscInt i = 0; i < nv; ++i)
     for (PetscInt k = 0; k < n_q; ++k) {
-      double& x = wu[i * n_q + k];
-      x = (vv[i] > 0 && uu[k] > 0) ? x * x / (vv[i] * uu[k]) : 0.0;
+      double& x = num[i * n_q + k];
+      x = (vn[i] > 0 && uu[k] > 0) ? x * x / (vn[i] * uu[k]) : 0.0;
     }
-  return wu;
-}
-
-}  // namespace
-
-std::vector<double> mac_matrix(MPI_Comm comm, Mat V, Mat T, const std::vector<double>& Q, PetscInt n_q) {
-  return mac_core(comm, V, V, T, Q, n_q, false);
-}
-
-std::vector<double> mass_mac_matrix(MPI_Comm comm, Mat V, Mat MV, Mat T, const std::vector<double>& Q, PetscInt n_q) {
-  return mac_core(comm, V, MV, T, Q, n_q, true);
+  return num;
 }
 
 std::vector<double> restrict_operator(const std::vector<double>& A, PetscInt n_b, PetscInt n,

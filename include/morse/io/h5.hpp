@@ -35,6 +35,7 @@ class H5Output {
   /// Attribute on a group or dataset (created if missing as a group). Not collective.
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   void attribute(const std::string& object, const std::string& name, double value);
+  void attribute_int(const std::string& object, const std::string& name, std::int64_t value);
 
   /// Closes and renames the file into place. Collective; throws on every rank if rank 0 met an
   /// HDF5 error in any write.
@@ -44,6 +45,7 @@ class H5Output {
 
  private:
   hid_t ensure_group(const std::string& name);
+  hid_t open_object(const std::string& object);
   void note_error(const std::string& what);
   MPI_Comm comm_;
   int rank_ = 0;

@@ -100,17 +100,24 @@ std::vector<double> directional_mass_fractions(const InterfaceCoupling& ic, doub
 ImrData imr_data(MPI_Comm comm, Mat M, const cb::CBResult& cb, Mat V, const std::vector<double>& lambda,
                  const std::vector<PetscInt>& modes, double shift);
 
-/// MAC (seed 000 eq. 23, in its standard form |v^T u|^2 / (v^T v u^T u)) between the columns of
-/// V (full-model modes, n_v columns) and the expanded superelement modes u_k = T q_k, where Q is
-/// n(T) x n_q row-major (rows of unselected modes are zero). Returns n_v x n_q row-major on every
-/// rank. Collective.
-std::vector<double> mac_matrix(MPI_Comm comm, Mat V, Mat T, const std::vector<double>& Q, PetscInt n_q);
+/// Projections needed by the MAC of superelement modes against full-model modes V, computed
+/// once per run with BLAS-3 products on the local rows: V^T T, (M V)^T T, T^T T, v^T v and
+/// v^T M v, all on every rank. Collective.
+struct MacBasis {
+  PetscInt n_v = 0, n_r = 0;
+  std::vector<double> VT, WT, TT;  ///< n_v x n_r, n_v x n_r, n_r x n_r, row-major
+  std::vector<double> vv, vmv;     ///< n_v
+};
+MacBasis mac_basis(MPI_Comm comm, Mat V, Mat MV, Mat T);
 
-/// Mass-weighted MAC (v^T M u)^2 / (v^T M v u^T M u) with MV = M V given, for superelement modes
-/// whose coefficients Q are M_CB-normalized (u^T M u = 1). Unlike the plain MAC, it sums to the
-/// squared projection over a set of modes, so it measures how well a cluster of near-repeated
-/// modes is represented. Collective.
-std::vector<double> mass_mac_matrix(MPI_Comm comm, Mat V, Mat MV, Mat T, const std::vector<double>& Q, PetscInt n_q);
+/// MAC between the full-model modes and the expanded superelement modes u_k = T q_k, where Q is
+/// n_r x n_q row-major (rows of unselected modes are zero). Plain: seed 000 eq. 23 in its
+/// standard form |v^T u|^2 / (v^T v u^T u). Mass-weighted: (v^T M u)^2 / (v^T M v u^T M u) with
+/// u^T M u = q^T M_CB q; it sums to the squared projection over a set of M-orthonormal modes,
+/// so it measures how well a cluster of near-repeated modes is represented. Returns n_v x n_q
+/// row-major. Not collective.
+std::vector<double> mac_matrix(const MacBasis& b, const std::vector<double>& Q, PetscInt n_q,
+                               const std::vector<double>* M_cb = nullptr);
 
 /// The superelement restricted to the boundary DOFs and the selected modes (rows/columns of
 /// the full Craig–Bampton operators), row-major. Not collective.
