@@ -7,6 +7,7 @@
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/fe/element.hpp"
+#include "morse/core/session.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -251,3 +252,26 @@ TEST_P(Cantilever, FrequenciesMatchClosedForms) {
 INSTANTIATE_TEST_SUITE_P(Quadratic, Cantilever,
                          ::testing::Values(ElementType::Tet10, ElementType::Wedge15, ElementType::Hex20),
                          [](const auto& info) { return std::string(mesh::element_name(info.param)); });
+
+// Material per element set (-material_sets): the total mass follows the densities of the sets.
+TEST(Model, MaterialPerElementSet) {
+  mesh::BoxSpec b;
+  b.type = ElementType::Hex8;
+  b.lx = 1.0;
+  b.ly = 0.2;
+  b.lz = 0.1;
+  b.nx = 4;
+  mesh::Mesh serial;
+  if (world_rank() == 0) {
+    serial = mesh::generate_box(b);
+    serial.elem_sets["left"] = {0, 1};  // two of the four cells
+  }
+  auto lm = mesh::distribute(PETSC_COMM_WORLD, &serial);
+  mesh::Material alu{"left", 7e10, 0.33, 2700.0};
+  mesh::assign_set_material(&lm.mesh, alu);
+  EXPECT_THROW(mesh::assign_set_material(&lm.mesh, mesh::Material{"nope", 1, 0.3, 1}), Error);
+  auto dofs = fe::number_dofs(lm, {});
+  auto ops = fe::assemble(lm, dofs, test::steel());
+  const double V = b.lx * b.ly * b.lz;
+  EXPECT_NEAR(ops.mass, 0.5 * V * 2700.0 + 0.5 * V * 7800.0, 1e-10 * ops.mass);
+}

@@ -31,6 +31,7 @@ struct CommonOptions {
   std::string units;
   std::vector<std::string> clamp;
   mesh::Material material;
+  std::vector<mesh::Material> set_materials;  ///< name = element set
   std::string out;
 };
 
@@ -66,6 +67,23 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
                              "", o->material.nu, &o->material.nu, nullptr));
   PetscCall(PetscOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
                              o->material.rho, &o->material.rho, nullptr));
+  n_sets = 16;
+  PetscCall(PetscOptionsStringArray("-material_sets",
+                                    "Element sets given their own material by -material_<set>_E, _nu, _rho "
+                                    "(overrides the mesh's material for those elements)",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      mesh::Material m;
+      m.name = sets[i];
+      m.E = m.nu = m.rho = -1;
+      PetscCall(PetscFree(sets[i]));
+      const std::string p = "-material_" + m.name + "_";
+      PetscCall(PetscOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
+      PetscCall(PetscOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
+      PetscCall(PetscOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
+      o->set_materials.push_back(m);
+    }
   PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
   PetscCall(PetscOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
   o->out = buf;
@@ -142,6 +160,7 @@ Model build_model(MPI_Comm comm, const CommonOptions& o) {
     StageTimer t(comm, "ReadDistribute");
     md.lm = mesh::read_and_distribute(comm, o.mesh);
     if (!o.units.empty()) md.lm.mesh.units = o.units;
+    for (const auto& sm : o.set_materials) mesh::assign_set_material(&md.lm.mesh, sm);
   }
   {
     StageTimer t(comm, "NumberDofs");

@@ -49,6 +49,18 @@ std::int64_t Mesh::add_element(std::int64_t id, ElementType t, const std::int64_
   return num_elements() - 1;
 }
 
+void assign_set_material(Mesh* m, const Material& mat) {
+  auto it = m->elem_sets.find(mat.name);
+  if (it == m->elem_sets.end()) {
+    std::string known;
+    for (const auto& [name, v] : m->elem_sets) known += (known.empty() ? "" : ", ") + name;
+    throw Error(cat("-material_sets: element set '", mat.name, "' not found in ", m->source,
+                    " (element sets: ", known.empty() ? "none" : known, ")"));
+  }
+  m->materials.push_back(mat);
+  for (auto e : it->second) m->elem_material[e] = static_cast<int>(m->materials.size()) - 1;
+}
+
 void Mesh::normalize_sets() {
   for (auto* sets : {&node_sets, &elem_sets})
     for (auto& [name, v] : *sets) {

@@ -81,6 +81,11 @@ struct Mesh {
   void normalize_sets();
 };
 
+/// Gives every element of the element set named mat.name the material mat (appended to
+/// m->materials). Throws morse::Error naming the set and listing the element sets if it does not
+/// exist. Not collective (every rank of a distributed mesh knows every set name).
+void assign_set_material(Mesh* m, const Material& mat);
+
 /// Name of the pseudo node set that stands for "the DOFs fixed by *BOUNDARY in the deck".
 inline constexpr const char* kDeckBoundarySet = "*BOUNDARY";
 
