@@ -390,6 +390,7 @@ struct SelectOptions {
   std::vector<std::string> methods;
   PetscInt num_modes = -1;
   PetscReal fraction = -1;
+  PetscBool num_modes_set = PETSC_FALSE, fraction_set = PETSC_FALSE;
   PetscReal fmax_analysis = -1;
   PetscInt fom_modes = -1;
   PetscReal mac_threshold = 0.98;
@@ -427,11 +428,11 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
   else
     o->methods = {"eim"};
   PetscCall(PetscOptionsInt("-select_num_modes", "Keep this many fixed-interface modes (best first)", "",
-                            o->num_modes, &o->num_modes, nullptr));
+                            o->num_modes, &o->num_modes, &o->num_modes_set));
   PetscCall(PetscOptionsReal("-select_fraction",
                              "Keep the best modes up to this cumulative fraction of the method's total score "
                              "(default 0.95 when -select_num_modes is not given)",
-                             "", o->fraction, &o->fraction, nullptr));
+                             "", o->fraction, &o->fraction, &o->fraction_set));
   PetscCall(PetscOptionsReal("-select_fmax_analysis",
                              "Analysis cutoff [Hz] for superelement modes in band and the MAC check "
                              "(default: -cb_fmax / 2, seed 000's 2.5x vs 5x; or half the top candidate frequency)",
@@ -500,10 +501,15 @@ void run_select(MPI_Comm comm) {
                 ": unknown method (frequency lpf eim veim deim omr cmschi ebr imr)");
     methods.push_back(m);
   }
-  MORSE_CHECK(!(so.num_modes >= 0 && so.fraction > 0), "give only one of -select_num_modes and -select_fraction");
-  if (so.num_modes < 0 && so.fraction < 0) so.fraction = 0.95;
-  MORSE_CHECK(so.num_modes >= 0 || (so.fraction > 0 && so.fraction <= 1), "-select_fraction ", so.fraction,
+  for (std::size_t i = 0; i < methods.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      MORSE_CHECK(methods[i] != methods[j], "-select_method lists ", so.methods[i], " twice");
+  MORSE_CHECK(!(so.num_modes_set && so.fraction_set), "give only one of -select_num_modes and -select_fraction");
+  MORSE_CHECK(!so.num_modes_set || so.num_modes >= 0, "-select_num_modes ", so.num_modes, " must be >= 0");
+  if (!so.num_modes_set && !so.fraction_set) so.fraction = 0.95;
+  MORSE_CHECK(so.num_modes_set || (so.fraction > 0 && so.fraction <= 1), "-select_fraction ", so.fraction,
               " must be in (0, 1]");
+  MORSE_CHECK(!r.write_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
   MORSE_CHECK(so.imr_support == "free" || so.imr_support == "spring" || so.imr_support == "clamped",
               "-select_imr_support ", so.imr_support, ": expected free, spring or clamped");
   MORSE_CHECK(so.imr_support != "spring" || so.imr_stiffness > 0,
@@ -601,7 +607,8 @@ void run_select(MPI_Comm comm) {
         for (PetscInt i = 0; i < n_sys; ++i) modes.push_back(i);
       for (auto m : modes)
         MORSE_CHECK(m >= 0 && m < n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys,
-                    " system modes below ", f_an, " Hz)");
+                    " system modes", so.fom_modes > 0 && so.imr_support == "free" ? "" : cat(" below ", f_an, " Hz"),
+                    ")");
       imr = std::make_unique<select::ImrData>(
           select::imr_data(comm, md.ops.M.get(), res, use->V.get(), use->omega2, modes, so.imr_shift));
     }
@@ -832,7 +839,7 @@ void run_command(MPI_Comm comm, const std::string& command, const std::vector<st
   else if (command == "mesh")
     run_mesh(comm, args);
   else
-    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, mesh)"));
+    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, mesh)"));
   if (command != "mesh" && !help_requested()) print_stage_table(comm);
 }
 

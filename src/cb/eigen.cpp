@@ -91,7 +91,10 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   } else {
     MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
     MORSE_CALL(EPSSetTarget(eps, s.shift));
-    MORSE_CALL(EPSSetDimensions(eps, s.nev, PETSC_DEFAULT, PETSC_DEFAULT));
+    // A Krylov method finds a second copy of a repeated eigenvalue only after the first has
+    // converged; asking for a few more pairs than needed keeps such copies from being missed.
+    MORSE_CALL(EPSSetDimensions(eps, std::min(n, s.nev + std::max<PetscInt>(4, s.nev / 10)), PETSC_DEFAULT,
+                                PETSC_DEFAULT));
   }
   MORSE_CALL(EPSSetFromOptions(eps));
   {
