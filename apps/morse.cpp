@@ -16,7 +16,8 @@ static const char kHelp[] =
     "  modes     lowest eigenpairs of the clamped full model\n"
     "  reduce    Craig-Bampton superelement\n"
     "  select    rank and select fixed-interface modes (LPF EIM VEIM DEIM OMR CMSchi EBR IMR)\n"
-    "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n";
+    "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n"
+    "  mesh info -mesh FILE   read a mesh and report its content and quality\n";
 
 // After an exception: if every rank failed (a collective error), rank 0 prints and all return
 // normally; if the other ranks do not join within a few seconds (an error on this rank only,
