@@ -85,6 +85,9 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MORSE_CALL(EPSGetST(eps, &st));
   MORSE_CALL(STSetType(st, STSINVERT));
   MORSE_CALL(EPSSetTolerances(eps, s.tol, 500));
+  // Purification (one extra solve per eigenvector) only helps a singular M; the consistent mass
+  // is positive definite. -<prefix>eps_purify turns it back on.
+  MORSE_CALL(EPSSetPurify(eps, PETSC_FALSE));
   if (slicing) {
     MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_ALL));
     MORSE_CALL(EPSSetInterval(eps, -1e-6 * s.omega2_max, s.omega2_max));
@@ -128,6 +131,7 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   const PetscInt n_out = slicing ? nconv : s.nev;
   MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", s.omega2_max, ")");
 
+  StageTimer extract(comm, "EigenVectors");
   std::vector<std::pair<double, PetscInt>> order;
   for (PetscInt i = 0; i < nconv; ++i) {
     PetscScalar kr, ki;
