@@ -65,7 +65,9 @@ TEST(Rotor37, LoadsAndGivesClampedFrequencies) {
   ASSERT_EQ((int)r.omega2.size(), nev);
   for (int k = 0; k < nev; ++k) {
     EXPECT_GT(r.omega2[k], 0.0);
-    if (k) EXPECT_GE(r.omega2[k], r.omega2[k - 1]);
+    if (k) {
+      EXPECT_GE(r.omega2[k], r.omega2[k - 1]);
+    }
   }
   if (rank == 0) {
     std::printf("  rotor 37 deck, clamped frequencies [Hz]:");

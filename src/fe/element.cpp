@@ -623,4 +623,25 @@ double strain_displacement(ElementType t, const double* xyz, const double xi[3],
   return det;
 }
 
+std::vector<int> foreign_to_morse(ElementType t, const std::vector<std::pair<int, int>>& foreign) {
+  const int nv = mesh::vertices_per_element(t), n = mesh::nodes_per_element(t);
+  const auto& ours = mid_edges(t);
+  MORSE_CHECK(static_cast<int>(ours.size()) == n - nv && static_cast<int>(foreign.size()) == n - nv,
+              "node ordering: mid-edge table size mismatch for ", mesh::element_name(t));
+  std::vector<int> perm(n, -1);
+  for (int i = 0; i < nv; ++i) perm[i] = i;  // vertex orderings coincide
+  std::vector<bool> used(n - nv, false);
+  for (int i = 0; i < n - nv; ++i) {
+    auto [a, b] = foreign[i];
+    for (int j = 0; j < n - nv; ++j)
+      if (!used[j] && ((ours[j].first == a && ours[j].second == b) || (ours[j].first == b && ours[j].second == a))) {
+        perm[nv + i] = nv + j;
+        used[j] = true;
+        break;
+      }
+    MORSE_CHECK(perm[nv + i] >= 0, "node ordering: no ", mesh::element_name(t), " node on edge (", a, ",", b, ")");
+  }
+  return perm;
+}
+
 }  // namespace morse::fe

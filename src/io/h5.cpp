@@ -246,20 +246,7 @@ const XdmfType& xdmf_type(mesh::ElementType t) {
 }
 
 // perm[i] = morse node index of the i-th XDMF node.
-std::vector<int> xdmf_permutation(mesh::ElementType t) {
-  const int nv = mesh::vertices_per_element(t), n = mesh::nodes_per_element(t);
-  std::vector<int> perm(n);
-  for (int i = 0; i < nv; ++i) perm[i] = i;
-  const auto& ours = fe::mid_edges(t);
-  const auto& theirs = xdmf_type(t).edges;
-  for (std::size_t i = 0; i < theirs.size(); ++i) {
-    auto [a, b] = theirs[i];
-    for (std::size_t j = 0; j < ours.size(); ++j)
-      if ((ours[j].first == a && ours[j].second == b) || (ours[j].first == b && ours[j].second == a))
-        perm[nv + i] = nv + static_cast<int>(j);
-  }
-  return perm;
-}
+std::vector<int> xdmf_permutation(mesh::ElementType t) { return fe::foreign_to_morse(t, xdmf_type(t).edges); }
 
 }  // namespace
 
@@ -269,11 +256,12 @@ void write_mesh(H5Output& out, const mesh::Mesh& m) {
   out.write("/mesh/element_ids", m.elem_ids);
   std::vector<std::int64_t> topo;
   topo.reserve(m.elem_nodes.size() + m.elem_types.size());
+  std::vector<std::vector<int>> perms(mesh::kNumElementTypes);
+  for (int k = 0; k < mesh::kNumElementTypes; ++k) perms[k] = xdmf_permutation(static_cast<mesh::ElementType>(k));
   for (std::int64_t e = 0; e < m.num_elements(); ++e) {
     auto t = m.elem_types[e];
     topo.push_back(xdmf_type(t).code);
-    auto perm = xdmf_permutation(t);
-    for (int p : perm) topo.push_back(m.elem_nodes[m.elem_offsets[e] + p]);
+    for (int p : perms[static_cast<int>(t)]) topo.push_back(m.elem_nodes[m.elem_offsets[e] + p]);
   }
   out.write("/mesh/topology", topo);
   out.attribute("/mesh/topology", "description",

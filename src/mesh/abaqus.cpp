@@ -71,25 +71,8 @@ using Perm = std::array<int, fe::kMaxNodes>;
 
 Perm build_perm(ElementType t) {
   Perm p{};
-  const int nv = vertices_per_element(t), n = nodes_per_element(t);
-  for (int k = 0; k < nv; ++k) p[k] = k;  // vertex orderings coincide
-  const EdgeList& ours = fe::mid_edges(t);
-  const EdgeList& theirs = abaqus_mid_edges(t);
-  MORSE_CHECK(static_cast<int>(ours.size()) == n - nv && static_cast<int>(theirs.size()) == n - nv,
-              "Abaqus reader: mid-edge table size mismatch for ", element_name(t));
-  std::vector<bool> used(theirs.size(), false);
-  for (int j = 0; j < n - nv; ++j) {
-    auto [a, b] = ours[j];
-    int found = -1;
-    for (int k = 0; k < n - nv; ++k) {
-      auto [c, d] = theirs[k];
-      if ((a == c && b == d) || (a == d && b == c)) found = k;
-    }
-    MORSE_CHECK(found >= 0 && !used[found], "Abaqus reader: no Abaqus node on edge (", a, ",", b,
-                ") of ", element_name(t));
-    used[found] = true;
-    p[nv + j] = nv + found;
-  }
+  const auto f2m = fe::foreign_to_morse(t, abaqus_mid_edges(t));
+  for (std::size_t i = 0; i < f2m.size(); ++i) p[f2m[i]] = static_cast<int>(i);
   return p;
 }
 

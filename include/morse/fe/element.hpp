@@ -46,6 +46,12 @@ const std::vector<std::array<double, 3>>& reference_nodes(ElementType t);
 /// vertices_per_element(t) + k.
 const std::vector<std::pair<int, int>>& mid_edges(ElementType t);
 
+/// Node permutation from another node ordering of type t (vertices in the same order, mid-edge
+/// nodes given by their vertex pairs, entry k belonging to node vertices + k): returns, for each
+/// node position i of the other ordering, the morse node index. Throws morse::Error if the two
+/// tables do not name the same edges.
+std::vector<int> foreign_to_morse(ElementType t, const std::vector<std::pair<int, int>>& foreign_mid_edges);
+
 /// Shape functions N (n) and derivatives dN (n x 3, row-major, d/dxi, d/deta, d/dzeta) at xi.
 /// dN may be null.
 void shape_functions(ElementType t, const double xi[3], double* N, double* dN);
