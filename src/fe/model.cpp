@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/detail/exchange.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/fe/element.hpp"
@@ -24,37 +25,19 @@ void fetch_ghost_dofs(const mesh::LocalMesh& lm, std::vector<PetscInt>& node_dof
       ask[lm.node_owner[k]].push_back(lm.global_node[k]);
       ask_local[lm.node_owner[k]].push_back(k);
     }
-  std::vector<int> send_n(size), recv_n(size), sdisp(size + 1, 0), rdisp(size + 1, 0);
-  for (int r = 0; r < size; ++r) send_n[r] = static_cast<int>(ask[r].size());
-  MPI_Alltoall(send_n.data(), 1, MPI_INT, recv_n.data(), 1, MPI_INT, lm.comm);
-  for (int r = 0; r < size; ++r) {
-    sdisp[r + 1] = sdisp[r] + send_n[r];
-    rdisp[r + 1] = rdisp[r] + recv_n[r];
-  }
-  std::vector<std::int64_t> sbuf(sdisp[size]), rbuf(rdisp[size]);
-  for (int r = 0; r < size; ++r) std::copy(ask[r].begin(), ask[r].end(), sbuf.begin() + sdisp[r]);
-  MPI_Alltoallv(sbuf.data(), send_n.data(), sdisp.data(), MPI_INT64_T, rbuf.data(), recv_n.data(),
-                rdisp.data(), MPI_INT64_T, lm.comm);
-  // Answer: three DOFs per asked node.
-  std::vector<std::int64_t> answer(3 * rbuf.size());
-  for (std::size_t i = 0; i < rbuf.size(); ++i) {
-    auto k = lm.local_of_global(rbuf[i]);
-    for (int d = 0; d < 3; ++d) answer[3 * i + d] = node_dof[3 * k + d];
-  }
-  std::vector<int> s3(size), r3(size), sd3(size), rd3(size);
-  for (int r = 0; r < size; ++r) {
-    s3[r] = 3 * recv_n[r];
-    sd3[r] = 3 * rdisp[r];
-    r3[r] = 3 * send_n[r];
-    rd3[r] = 3 * sdisp[r];
-  }
-  std::vector<std::int64_t> got(3 * sbuf.size());
-  MPI_Alltoallv(answer.data(), s3.data(), sd3.data(), MPI_INT64_T, got.data(), r3.data(),
-                rd3.data(), MPI_INT64_T, lm.comm);
+  const auto asked = detail::exchange(lm.comm, ask);
+  // Answer: three DOFs per asked node, to the rank that asked.
+  std::vector<std::vector<std::int64_t>> answer(size);
+  for (int q = 0; q < size; ++q)
+    for (int i = asked.offset[q]; i < asked.offset[q + 1]; ++i) {
+      auto k = lm.local_of_global(asked.words[i]);
+      for (int d = 0; d < 3; ++d) answer[q].push_back(node_dof[3 * k + d]);
+    }
+  const auto got = detail::exchange(lm.comm, answer);
   for (int r = 0; r < size; ++r)
     for (std::size_t i = 0; i < ask_local[r].size(); ++i)
       for (int d = 0; d < 3; ++d)
-        node_dof[3 * ask_local[r][i] + d] = static_cast<PetscInt>(got[3 * (sdisp[r] + i) + d]);
+        node_dof[3 * ask_local[r][i] + d] = static_cast<PetscInt>(got.words[got.offset[r] + 3 * i + d]);
 }
 
 }  // namespace
@@ -162,17 +145,8 @@ Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofMap& dofs) {
     b.push_back(static_cast<std::int64_t>(nbrs[k].size()));
     for (const auto& x : nbrs[k]) b.insert(b.end(), {x.g, x.dof[0], x.dof[1], x.dof[2]});
   }
-  std::vector<int> sn(size), rn(size), sd(size + 1, 0), rd(size + 1, 0);
-  for (int r = 0; r < size; ++r) sn[r] = static_cast<int>(send[r].size());
-  MPI_Alltoall(sn.data(), 1, MPI_INT, rn.data(), 1, MPI_INT, lm.comm);
-  for (int r = 0; r < size; ++r) {
-    sd[r + 1] = sd[r] + sn[r];
-    rd[r + 1] = rd[r] + rn[r];
-  }
-  std::vector<std::int64_t> sbuf(sd[size]), rbuf(rd[size]);
-  for (int r = 0; r < size; ++r) std::copy(send[r].begin(), send[r].end(), sbuf.begin() + sd[r]);
-  MPI_Alltoallv(sbuf.data(), sn.data(), sd.data(), MPI_INT64_T, rbuf.data(), rn.data(), rd.data(), MPI_INT64_T,
-                lm.comm);
+  const auto recv = detail::exchange(lm.comm, send);
+  const auto& rbuf = recv.words;
   for (std::size_t i = 0; i < rbuf.size();) {
     const auto k = lm.local_of_global(rbuf[i]);
     const auto cnt = rbuf[i + 1];
