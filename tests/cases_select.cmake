@@ -37,6 +37,17 @@ morse_add_error_case(select_ebr_no_excitation
   select_ebr_no_excitation.h5 BOX
   ARGS select ${MORSE_SELECT_CASE_MODEL} -select_method ebr -select_ebr_freq 100,200 -select_ebr_amp 0,0)
 
+morse_add_error_case(select_ebr_load_bad_node
+  "morse: error: .*ebr_load_bad_node\\.txt:3: node 1 is not in the boundary set"
+  select_ebr_load_bad_node.h5 BOX
+  ARGS select ${MORSE_SELECT_CASE_MODEL} -select_method ebr -select_ebr_load ${MORSE_CASE_DATA}/ebr_load_bad_node.txt)
+
+morse_add_error_case(select_ebr_load_and_freq
+  "morse: error: give the EBR excitation either as -select_ebr_load FILE or as -select_ebr_freq"
+  select_ebr_load_and_freq.h5 BOX
+  ARGS select ${MORSE_SELECT_CASE_MODEL} -select_method ebr -select_ebr_load ${MORSE_CASE_DATA}/ebr_load_bad_node.txt
+       -select_ebr_freq 100)
+
 # IMR with the interface free: the system modes are the full model's modes below the analysis band.
 morse_add_error_case(select_imr_modes_range
   "morse: error: -select_imr_modes 999 is out of range \\(1\\.\\.[0-9]+ system modes below [0-9.e+]+ Hz\\)"

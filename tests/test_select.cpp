@@ -3,7 +3,13 @@
 // reproduction of plain Craig–Bampton, truncation rules and bad input.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <complex>
+#include <cstdio>
+#include <fstream>
 
 #include "morse/core/session.hpp"
 #include "morse/mesh/partition.hpp"
@@ -208,6 +214,120 @@ TEST(Select, EbrExcitation) {
   EXPECT_GT(total, 0.0);
   ex.amplitude = {0, 0, 0};
   EXPECT_THROW(select::scores(PETSC_COMM_WORLD, select::Method::EBR, s.ic, s.cb, ex, nullptr), Error);
+}
+
+// EBR with per-DOF amplitudes and phases. Below sqrt(3) omega_1 every mode's signed period-mean
+// energy is >= 0 for any boundary load (eta_i = w^2 c_i / (lambda_i - w^2) gives
+// e_i = eta_i^2 (3 lambda_i - w^2) / 2), so the scores obey the superposition rules of a
+// time-averaged quadratic form exactly: loads in quadrature add their energies
+// (s(A + iB) = s(A) + s(B)), in-phase and anti-phase loads obey the parallelogram law
+// (s(A + B) + s(A - B) = 2 s(A) + 2 s(B)), and a common phase changes nothing.
+TEST(Select, EbrPhasesFollowTimeAveragedEnergy) {
+  mesh::BoxSpec b;
+  b.type = ElementType::Hex20;
+  b.lx = 1.0;
+  b.ly = 0.08;
+  b.lz = 0.05;
+  b.nx = 10;
+  b.ny = 2;
+  b.nz = 1;
+  auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 10);
+  const PetscInt nb = s.cb.n_b;
+  const double f1 = std::sqrt(s.cb.fixed_omega2[0]) / (2 * M_PI);
+  using C = std::complex<double>;
+  const PetscInt dof_a = 1, dof_b = 3 * (s.cb.boundary_node_ids.size() - 1) + 1;  // y of first and last node
+  auto score = [&](C fa, C fb) {
+    select::Excitation ex;
+    ex.all_components = false;
+    ex.freq_hz = {0.5 * f1, 0.9 * f1};
+    std::vector<C> f(nb, 0.0);
+    f[dof_a] = fa;
+    f[dof_b] = fb;
+    ex.load = {f, f};
+    return select::scores(PETSC_COMM_WORLD, select::Method::EBR, s.ic, s.cb, ex, nullptr);
+  };
+  const C i(0.0, 1.0);
+  auto sa = score(1.0, 0.0), sb = score(0.0, 2.0), s90 = score(1.0, 2.0 * i), s0 = score(1.0, 2.0),
+       s180 = score(1.0, -2.0), srot = score(std::polar(1.0, 0.7), std::polar(2.0, 0.7));
+  double smax = 0, cross = 0;
+  for (PetscInt k = 0; k < s.cb.n_phi; ++k) smax = std::max(smax, sa[k] + sb[k]);
+  for (PetscInt k = 0; k < s.cb.n_phi; ++k) {
+    EXPECT_NEAR(s90[k], sa[k] + sb[k], 1e-10 * smax) << "mode " << k;
+    EXPECT_NEAR(s0[k] + s180[k], 2 * (sa[k] + sb[k]), 1e-10 * smax) << "mode " << k;
+    EXPECT_NEAR(srot[k], s0[k], 1e-10 * smax) << "mode " << k;
+    cross = std::max(cross, std::abs(s0[k] - sa[k] - sb[k]) / smax);
+  }
+  EXPECT_GT(cross, 1e-2);  // the phase does matter: in phase, the two loads interfere
+}
+
+// The EBR load table: per-DOF lines grouped by frequency into harmonics, phases in degrees;
+// every bad line is an error naming the file and the line.
+TEST(Select, EbrLoadTable) {
+  mesh::BoxSpec b;
+  b.type = ElementType::Hex20;
+  b.lx = 1.0;
+  b.ly = 0.08;
+  b.lz = 0.05;
+  b.nx = 4;
+  b.ny = 1;
+  b.nz = 1;
+  auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 4);
+  const auto& ids = s.cb.boundary_node_ids;
+  long pid = static_cast<long>(getpid());
+  MPI_Bcast(&pid, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
+  const std::string path = "/tmp/morse_test_ebr_" + std::to_string(pid) + ".txt";
+  auto write = [&](const std::string& text) {
+    if (world_rank() == 0) {
+      std::ofstream f(path);
+      f << text;
+    }
+    MPI_Barrier(PETSC_COMM_WORLD);
+  };
+  // A rotating load on the first node (x cos, y sin) at 120 Hz, and z on the last node at 300 Hz.
+  write(cat("# rotating bearing load\n", "120 ", ids[0], " x 2.0 0\n", "120, ", ids[0], ", 2, 2.0, -90  # y\n",
+            "\n300 ", ids.back(), " Z 0.5\n"));
+  auto ex = select::read_ebr_load(PETSC_COMM_WORLD, path, s.cb);
+  ASSERT_EQ(ex.freq_hz.size(), 2u);
+  EXPECT_EQ(ex.freq_hz[0], 120.0);
+  EXPECT_EQ(ex.freq_hz[1], 300.0);
+  ASSERT_EQ((PetscInt)ex.load[0].size(), s.cb.n_b);
+  EXPECT_NEAR(std::abs(ex.load[0][0] - std::complex<double>(2.0, 0.0)), 0.0, 1e-15);
+  EXPECT_NEAR(std::abs(ex.load[0][1] - std::complex<double>(0.0, -2.0)), 0.0, 1e-15);
+  const std::size_t last_z = 3 * (ids.size() - 1) + 2;
+  EXPECT_EQ(ex.load[1][last_z], std::complex<double>(0.5, 0.0));
+  double others = 0;
+  for (std::size_t k = 0; k < ex.load[0].size(); ++k)
+    if (k > 1) others += std::abs(ex.load[0][k]);
+  for (std::size_t k = 0; k < ex.load[1].size(); ++k)
+    if (k != last_z) others += std::abs(ex.load[1][k]);
+  EXPECT_EQ(others, 0.0);
+  auto e = select::scores(PETSC_COMM_WORLD, select::Method::EBR, s.ic, s.cb, ex, nullptr);
+  EXPECT_GT(*std::max_element(e.begin(), e.end()), 0.0);
+
+  std::int64_t outside = 0;  // a node id not on the interface
+  while (std::find(ids.begin(), ids.end(), outside) != ids.end()) ++outside;
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {cat("100 ", ids[0], " x\n"), ":1: expected"},
+      {cat("# c\n100 ", outside, " x 1\n"), ":2: node " + std::to_string(outside) + " is not in the boundary set"},
+      {cat("100 ", ids[0], " w 1\n"), ":1: component 'w'"},
+      {cat("-5 ", ids[0], " x 1\n"), ":1: frequency -5 Hz must be > 0"},
+      {cat("100 ", ids[0], " x one\n"), ":1: amplitude 'one' is not a number"},
+      {cat("100 ", ids[0], " x 1\n100 ", ids[0], " 1 2\n"), ":2: node " + std::to_string(ids[0]) +
+                                                               " component 1 at 100 Hz is already loaded on line 1"},
+      {"# nothing\n", "no load line"},
+  };
+  for (const auto& [text, expect] : bad) {
+    write(text);
+    try {
+      select::read_ebr_load(PETSC_COMM_WORLD, path, s.cb);
+      ADD_FAILURE() << "no error for: " << text;
+    } catch (const Error& err) {
+      EXPECT_NE(std::string(err.what()).find(path), std::string::npos) << err.what();
+      EXPECT_NE(std::string(err.what()).find(expect), std::string::npos) << err.what();
+    }
+  }
+  if (world_rank() == 0) std::remove(path.c_str());
+  EXPECT_THROW(select::read_ebr_load(PETSC_COMM_WORLD, path, s.cb), Error);  // missing file
 }
 
 // Seed 000's situation on morse's stator (thin vanes with many local modes): at 95 % of the

@@ -398,6 +398,7 @@ struct SelectOptions {
   std::string rom_method;
   std::vector<double> ebr_freq, ebr_amp, ebr_phase;
   bool ebr_given = false;
+  std::string ebr_load;
   std::string imr_support = "free";
   PetscReal imr_stiffness = -1;
   std::vector<PetscInt> imr_modes;
@@ -457,8 +458,16 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
                                   vals, &nv, &set));
   if (set) o->ebr_amp.assign(vals, vals + nv), o->ebr_given = true;
   nv = 256;
-  PetscCall(PetscOptionsRealArray("-select_ebr_phase", "EBR phase per harmonic [deg]", "", vals, &nv, &set));
+  PetscCall(PetscOptionsRealArray("-select_ebr_phase", "EBR phase per harmonic [deg] (uniform: no effect on the scores)",
+                                  "", vals, &nv, &set));
   if (set) o->ebr_phase.assign(vals, vals + nv), o->ebr_given = true;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-select_ebr_load",
+                               "EBR load table: lines 'freq_hz node component amplitude [phase_deg]' on boundary "
+                               "nodes, one harmonic per frequency (instead of -select_ebr_freq/amp/phase)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->ebr_load = buf;
+  buf[0] = 0;
   PetscCall(PetscStrncpy(buf, o->imr_support.c_str(), sizeof buf));
   PetscCall(PetscOptionsString("-select_imr_support",
                                "IMR: full-system modes with the interface free, spring (-select_imr_support_stiffness) or "
@@ -510,6 +519,9 @@ void run_select(MPI_Comm comm) {
   if (!so.num_modes_set && !so.fraction_set) so.fraction = 0.95;
   MORSE_CHECK(so.num_modes_set || (so.fraction > 0 && so.fraction <= 1), "-select_fraction ", so.fraction,
               " must be in (0, 1]");
+  MORSE_CHECK(so.ebr_load.empty() || !so.ebr_given,
+              "give the EBR excitation either as -select_ebr_load FILE or as -select_ebr_freq/-select_ebr_amp/"
+              "-select_ebr_phase, not both");
   MORSE_CHECK(!r.write_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
   MORSE_CHECK(so.imr_support == "free" || so.imr_support == "spring" || so.imr_support == "clamped",
               "-select_imr_support ", so.imr_support, ": expected free, spring or clamped");
@@ -557,7 +569,9 @@ void run_select(MPI_Comm comm) {
   const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
 
   select::Excitation ex;
-  if (so.ebr_given) {
+  if (!so.ebr_load.empty()) {
+    ex = select::read_ebr_load(comm, so.ebr_load, res);
+  } else if (so.ebr_given) {
     ex.freq_hz = so.ebr_freq;
     ex.amplitude = so.ebr_amp.empty() ? std::vector<double>(ex.freq_hz.size(), 1.0) : so.ebr_amp;
     ex.phase_deg = so.ebr_phase.empty() ? std::vector<double>(ex.freq_hz.size(), 0.0) : so.ebr_phase;

@@ -113,11 +113,23 @@ std::vector<double> ebr_scores(MPI_Comm comm, const InterfaceCoupling& ic, const
                                const Excitation& ex) {
   const PetscInt nb = cb.n_b, nr = cb.n(), nphi = cb.n_phi;
   MORSE_CHECK(!ex.freq_hz.empty(), "EBR needs an excitation: give -select_ebr_freq (Hz) or use the default");
-  MORSE_CHECK(ex.amplitude.size() == ex.freq_hz.size() && ex.phase_deg.size() == ex.freq_hz.size(),
-              "EBR excitation: -select_ebr_freq, -select_ebr_amp and -select_ebr_phase must have the same length");
-  bool any = false;
-  for (double a : ex.amplitude) any = any || a != 0.0;
-  MORSE_CHECK(any, "EBR without excitation: every amplitude of -select_ebr_amp is zero");
+  const bool table = !ex.load.empty();
+  if (table) {
+    MORSE_CHECK(ex.load.size() == ex.freq_hz.size(), "EBR excitation: one load vector per harmonic expected");
+    bool any = false;
+    for (const auto& f : ex.load) {
+      MORSE_CHECK(static_cast<PetscInt>(f.size()) == nb, "EBR excitation: a load vector has ", f.size(),
+                  " entries for ", nb, " boundary DOFs");
+      for (auto v : f) any = any || v != 0.0;
+    }
+    MORSE_CHECK(any, "EBR without excitation: every amplitude of the load table is zero");
+  } else {
+    MORSE_CHECK(ex.amplitude.size() == ex.freq_hz.size() && ex.phase_deg.size() == ex.freq_hz.size(),
+                "EBR excitation: -select_ebr_freq, -select_ebr_amp and -select_ebr_phase must have the same length");
+    bool any = false;
+    for (double a : ex.amplitude) any = any || a != 0.0;
+    MORSE_CHECK(any, "EBR without excitation: every amplitude of -select_ebr_amp is zero");
+  }
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -127,12 +139,21 @@ std::vector<double> ebr_scores(MPI_Comm comm, const InterfaceCoupling& ic, const
     const double w2 = std::pow(2 * M_PI * ex.freq_hz[k], 2);
     std::vector<double> A(static_cast<std::size_t>(nr) * nr);
     for (PetscInt i = 0; i < nr * nr; ++i) A[i] = cb.K[i] - w2 * cb.M[i];
-    const PetscInt nrhs = ex.all_components ? nb : 1;
+    // All components: one real unit load per boundary DOF, each scored on its own. Otherwise
+    // one complex load f, solved as [Re f, Im f]: the response Re(x e^{i w t}) has the period
+    // means of both parts added, so the mode's energy is the sum over the two columns.
+    const PetscInt nrhs = ex.all_components ? nb : 2;
     std::vector<double> X(static_cast<std::size_t>(nr) * nrhs, 0.0);  // column-major
-    // A uniform phase on every DOF only rotates the complex response: |.| is unchanged.
-    for (PetscInt j = 0; j < nrhs; ++j)
-      for (PetscInt r = 0; r < nb; ++r)
-        if (!ex.all_components || r == j) X[r + nr * j] = ex.amplitude[k];
+    for (PetscInt r = 0; r < nb; ++r) {
+      if (ex.all_components) {
+        X[r + nr * r] = ex.amplitude[k];
+        continue;
+      }
+      const std::complex<double> f =
+          table ? ex.load[k][r] : std::polar(ex.amplitude[k], ex.phase_deg[k] * M_PI / 180.0);
+      X[r] = f.real();
+      X[r + nr] = f.imag();
+    }
     PetscBLASInt n = nr, nrhs_ = nrhs, info = 0;
     std::vector<PetscBLASInt> piv(nr);
     LAPACKgesv_(&n, &nrhs_, A.data(), &n, piv.data(), X.data(), &n, &info);
@@ -140,14 +161,20 @@ std::vector<double> ebr_scores(MPI_Comm comm, const InterfaceCoupling& ic, const
       err = cat("EBR: excitation frequency ", ex.freq_hz[k], " Hz is at a resonance of the superelement");
       break;
     }
-    for (PetscInt j = 0; j < nrhs; ++j) {
-      const double* x = &X[static_cast<std::size_t>(nr) * j];
-      for (PetscInt i = 0; i < nphi; ++i) {
+    for (PetscInt i = 0; i < nphi; ++i) {
+      double e_sum = 0;
+      for (PetscInt j = 0; j < nrhs; ++j) {
+        const double* x = &X[static_cast<std::size_t>(nr) * j];
         const double eta = x[nb + i];
         double coupling = 0;
         for (PetscInt r = 0; r < nb; ++r) coupling += cb.M[(nb + i) * nr + r] * x[r];
-        s[i] += std::abs(0.5 * (ic.lambda[i] + w2) * eta * eta + w2 * eta * coupling);
+        const double e = 0.5 * (ic.lambda[i] + w2) * eta * eta + w2 * eta * coupling;
+        if (ex.all_components)
+          s[i] += std::abs(e);
+        else
+          e_sum += e;
       }
+      if (!ex.all_components) s[i] += std::abs(e_sum);
     }
   }
   collective_check(comm, err);

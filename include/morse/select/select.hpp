@@ -23,6 +23,7 @@
 // = OMR / lambda. Fractions are scores divided by their sum over the candidate modes.
 #pragma once
 
+#include <complex>
 #include <string>
 #include <vector>
 
@@ -52,13 +53,23 @@ InterfaceCoupling interface_coupling(MPI_Comm comm, Mat K, Mat M, const cb::CBRe
 /// Periodic boundary excitation for EBR (eq. 18): harmonic k has angular frequency omega_k and
 /// a complex force amplitude on the boundary DOFs. With all_components, each boundary DOF is
 /// loaded alone (unit amplitude) at each frequency: the seed's "force containing all possible
-/// components" when nothing is known.
+/// components" when nothing is known. Otherwise harmonic k is load[k] (n_b complex amplitudes,
+/// f(t) = Re(f e^{i omega t}), per DOF amplitude and phase), or, when load is empty, amplitude[k]
+/// with phase_deg[k] on every boundary DOF.
 struct Excitation {
   std::vector<double> freq_hz;
-  std::vector<double> amplitude;  ///< per harmonic, applied to every boundary DOF
-  std::vector<double> phase_deg;  ///< per harmonic
+  std::vector<double> amplitude;  ///< per harmonic, applied to every boundary DOF (load empty)
+  std::vector<double> phase_deg;  ///< per harmonic (load empty)
+  std::vector<std::vector<std::complex<double>>> load;  ///< per harmonic, n_b values, or empty
   bool all_components = true;
 };
+
+/// Reads a per-DOF EBR load table (-select_ebr_load): one line per loaded DOF,
+///   freq_hz  node_id  component  amplitude  [phase_deg]
+/// with component x|y|z or 1|2|3; lines with the same frequency form one harmonic; '#' starts a
+/// comment. The node must belong to the boundary set. Rank 0 reads; errors name the file and
+/// line. Collective (identical result on every rank).
+Excitation read_ebr_load(MPI_Comm comm, const std::string& path, const cb::CBResult& cb);
 
 /// Full-system modes for IMR: their eigenvalues and the projections on the fixed-interface
 /// modes. X1 = Phi^T M_sb v_b, X2 = Phi^T M_ss v_s (n_phi x n_zeta), vb = boundary part of each
