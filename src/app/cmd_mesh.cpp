@@ -1,0 +1,162 @@
+// app/cmd_mesh.cpp: `morse mesh box|blade|stator`, which generates a mesh and writes it as Gmsh
+// 4.1, and `morse mesh info`, which reads and distributes a mesh and reports its content and
+// quality.
+#include <petscsys.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/fe/element.hpp"
+#include "morse/mesh/blade.hpp"
+#include "morse/mesh/generator.hpp"
+#include "morse/mesh/gmsh.hpp"
+#include "morse/mesh/mesh.hpp"
+#include "morse/mesh/partition.hpp"
+#include "morse/mesh/stator.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len, std::string* type_out) {
+  char type[64] = "hex20";
+  PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
+  PetscCall(PetscOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
+                               sizeof type, nullptr));
+  PetscCall(PetscOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
+  PetscCall(PetscOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
+  PetscCall(PetscOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
+  PetscCall(PetscOptionsInt("-box_nx", "Cells in x", "", b->nx, &b->nx, nullptr));
+  PetscCall(PetscOptionsInt("-box_ny", "Cells in y", "", b->ny, &b->ny, nullptr));
+  PetscCall(PetscOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
+  PetscCall(PetscOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
+                             &b->distortion, nullptr));
+  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
+  PetscOptionsEnd();
+  *type_out = type;
+  return PETSC_SUCCESS;
+}
+
+PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
+  PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
+  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+PetscErrorCode get_mesh_in(MPI_Comm comm, std::string* path) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse mesh info options", "");
+  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII) or .inp (Abaqus/CalculiX)", "", buf,
+                               buf, sizeof buf, &set));
+  PetscOptionsEnd();
+  if (set) *path = buf;
+  return PETSC_SUCCESS;
+}
+
+// `morse mesh info -mesh FILE`: reads and distributes a mesh and reports its content and
+// quality (a check before a long run, and the read benchmark).
+void run_mesh_info(MPI_Comm comm) {
+  std::string path;
+  MORSE_CALL(get_mesh_in(comm, &path));
+  if (help_requested()) return;
+  check_options(comm, false);
+  MORSE_CHECK(!path.empty(), "no mesh given: use -mesh FILE (.msh or .inp)");
+  mesh::LocalMesh lm;
+  {
+    StageTimer t(comm, "ReadDistribute");
+    lm = mesh::read_and_distribute(comm, path);
+  }
+  StageTimer t(comm, "Check");
+  const auto& m = lm.mesh;
+  std::vector<std::int64_t> per_type(mesh::kNumElementTypes, 0);
+  double volume = 0, min_jac = 1e300, xyz[3 * fe::kMaxNodes];
+  std::int64_t worst = -1, n_bad = 0;
+  for (std::int64_t e = 0; e < m.num_elements(); ++e) {
+    const auto type = m.elem_types[e];
+    ++per_type[static_cast<int>(type)];
+    const auto off = m.elem_offsets[e];
+    for (int a = 0; a < mesh::nodes_per_element(type); ++a)
+      for (int d = 0; d < 3; ++d) xyz[3 * a + d] = m.coords[3 * m.elem_nodes[off + a] + d];
+    const double j = fe::min_jacobian(type, xyz);
+    if (j <= 0) ++n_bad;
+    if (j < min_jac) min_jac = j, worst = m.elem_ids[e];
+    volume += fe::element_volume(type, xyz);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, per_type.data(), mesh::kNumElementTypes, MPI_INT64_T, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &volume, 1, MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &n_bad, 1, MPI_INT64_T, MPI_SUM, comm);
+  struct {
+    double v;
+    int r;
+  } in{min_jac, rank_of(comm)}, outv;
+  MPI_Allreduce(&in, &outv, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm);
+  MPI_Bcast(&worst, 1, MPI_INT64_T, outv.r, comm);
+  print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements\n", path.c_str(), m.units.c_str(),
+         (long long)lm.n_global_nodes, (long long)lm.n_global_elements);
+  for (int k = 0; k < mesh::kNumElementTypes; ++k)
+    if (per_type[k]) print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)per_type[k]);
+  print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", volume,
+         outv.v, (long long)worst, (long long)n_bad);
+  for (const auto& [name, n] : lm.node_set_sizes) print0(comm, "  node set    %-20s %lld nodes\n", name.c_str(), (long long)n);
+  for (const auto& [name, n] : lm.elem_set_sizes) print0(comm, "  element set %-20s %lld elements\n", name.c_str(), (long long)n);
+  for (const auto& mat : m.materials)
+    print0(comm, "  material %-20s E %.6g nu %.6g rho %.6g\n", mat.name.c_str(), mat.E, mat.nu, mat.rho);
+  std::int64_t fixed = 0;
+  for (std::int64_t k = 0; k < m.num_nodes(); ++k)
+    if (lm.node_owner[k] == rank_of(comm) && !m.fixed_dofs.empty() && m.fixed_dofs[k]) ++fixed;
+  MPI_Allreduce(MPI_IN_PLACE, &fixed, 1, MPI_INT64_T, MPI_SUM, comm);
+  if (fixed) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)fixed);
+}
+
+}  // namespace
+
+void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
+  const std::string what = args.size() == 1 ? args[0] : "";
+  if (what == "info") return run_mesh_info(comm);
+  MORSE_CHECK(what == "box" || what == "blade" || what == "stator",
+              "usage: morse mesh (box|blade|stator) [-box_*|-blade_*|-stator_* options] -out FILE.msh, "
+              "or morse mesh info -mesh FILE");
+  char out[PETSC_MAX_PATH_LEN] = "";
+  mesh::BoxSpec box;
+  mesh::BladeSpec blade;
+  mesh::StatorSpec stator;
+  if (what == "box") {
+    std::strcpy(out, "box.msh");
+    std::string type;
+    MORSE_CALL(get_box_options(comm, &box, out, sizeof out, &type));
+    MORSE_CHECK(mesh::parse_element_name(type, &box.type), "-box_type ", type,
+                ": unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
+  } else {
+    std::strcpy(out, (what + ".msh").c_str());
+    MORSE_CALL(get_mesh_out(comm, out, sizeof out));
+    if (what == "blade")
+      MORSE_CALL(mesh::blade_spec_from_options(comm, &blade));
+    else
+      MORSE_CALL(mesh::stator_spec_from_options(comm, &stator));
+  }
+  if (help_requested()) return;
+  check_options(comm, false);
+  if (what == "box")
+    MORSE_CHECK(box.nx > 0 && box.ny > 0 && box.nz > 0 && box.lx > 0 && box.ly > 0 && box.lz > 0,
+                "-box_n* and -box_l* must be positive");
+  std::string err;
+  if (rank_of(comm) == 0) try {
+      auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
+                                                                          : mesh::generate_stator(stator);
+      mesh::write_gmsh(m, out);
+      print0(comm, "morse: wrote %s: %lld nodes, %lld elements (%s)\n", out, (long long)m.num_nodes(),
+             (long long)m.num_elements(), m.source.c_str());
+    } catch (const Error& e) {
+      err = e.what();
+    }
+  collective_check(comm, err);
+}
+
+}  // namespace morse::app::detail

@@ -1,0 +1,81 @@
+// app/cmd_reduce.cpp: `morse reduce`, the Craig-Bampton superelement of a model (/rom), with
+// its fixed-interface frequencies and optionally the basis (Psi, Phi).
+#include <petscsys.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/cb/craig_bampton.hpp"
+#include "morse/cb/eigen.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/mesh/partition.hpp"
+
+namespace morse::app::detail {
+
+void run_reduce(MPI_Comm comm) {
+  CommonOptions o;
+  MORSE_CALL(get_common(comm, "superelement.h5", &o));
+  ReduceOptions r;
+  MORSE_CALL(get_reduce_options(comm, &r));
+  if (help_requested()) return;
+  check_options(comm, true);
+  MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
+  MORSE_CHECK(r.n_fixed >= 0 || r.fmax > 0, "give -cb_num_fixed_modes N or -cb_fmax HZ");
+  MORSE_CHECK(!(r.n_fixed >= 0 && r.fmax > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
+  MORSE_CHECK(r.damping >= 0 && r.damping < 1, "-cb_damping must be in [0, 1) (got ", r.damping, ")");
+  Model md = build_model(comm, o);
+  cb::CBSettings s;
+  s.boundary_set = r.boundary;
+  s.n_fixed = r.n_fixed;
+  s.fmax_hz = r.fmax;
+  s.damping = r.damping;
+  s.keep_basis = r.write_basis;
+  auto res = cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), s);
+  check_options(comm, false);
+
+  const int n = static_cast<int>(res.n());
+  std::vector<double> rom_f;
+  {
+    StageTimer t(comm, "ReducedEigen");
+    for (double l : cb::dense_eigenvalues(n, res.K, res.M)) rom_f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  }
+  std::vector<double> fi_hz;
+  for (double l : res.fixed_omega2) fi_hz.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  print0(comm, "morse: Craig-Bampton superelement: %d boundary DOFs (%zu nodes) + %d fixed-interface modes = %d\n",
+         (int)res.n_b, res.boundary_node_ids.size(), (int)res.n_phi, n);
+  print0(comm, "morse: K_ii factored once%s (%.3f s)\n", res.factor_reused ? ", shared by the eigen solver and the constraint modes" : "",
+         res.factor_seconds);
+  print0(comm, "\n  %-6s %20s %20s\n", "mode", "fixed-interface [Hz]", "superelement [Hz]");
+  const std::size_t rows = std::min<std::size_t>(std::max(fi_hz.size(), rom_f.size()), 20);
+  for (std::size_t i = 0; i < rows; ++i)
+    print0(comm, "  %-6zu %20s %20s\n", i + 1, i < fi_hz.size() ? cat(fi_hz[i]).c_str() : "",
+           i < rom_f.size() ? cat(rom_f[i]).c_str() : "");
+
+  StageTimer t(comm, "Write");
+  io::H5Output out(comm, o.out);
+  io::write_provenance(out, "reduce", md.lm.mesh.units);
+  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_mesh(out, gm);
+  out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
+  out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
+  write_rom(out, res.M, res.K, r.damping > 0 ? &res.C : nullptr, res.boundary_node_ids, rom_f, res.n_b, r.damping);
+  out.attribute("/cb", "boundary_set", r.boundary);
+  std::vector<io::XdmfField> fields;
+  if (r.write_basis) {
+    write_modes_dataset(out, "/cb/constraint_modes", md, res.T.get(), 0, res.n_b);
+    write_modes_dataset(out, "/cb/fixed_interface/mode_shapes", md, res.T.get(), res.n_b, res.n_phi);
+    out.attribute("/cb/constraint_modes", "description", "Psi: [boundary DOF][node][x,y,z]");
+    out.attribute("/cb/fixed_interface/mode_shapes", "description", "Phi: [mode][node][x,y,z], M_ii-normalized");
+    fields = {{"/cb/constraint_modes", "psi", (int)res.n_b}, {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};
+  }
+  out.commit();
+  if (r.xdmf && r.write_basis) write_xdmf_collective(comm, o.out, gm, fields);
+  print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
+}
+
+}  // namespace morse::app::detail

@@ -1,0 +1,224 @@
+// app/common.cpp: the parts of the morse commands that several of them share (declared in
+// common.hpp): option getters, the unknown-option check, model building and the output writers.
+#include "app/common.hpp"
+
+#include <petscmat.h>
+#include <petscsys.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/fe/model.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/mesh/mesh.hpp"
+#include "morse/mesh/partition.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+// Options owned by inner PETSc/SLEPc objects of a command: accepted by the early check.
+bool inner_option(const std::string& name) {
+  static const char* inner[] = {"cb_eps_",         "cb_st_",         "cb_bv_",         "cb_ds_",       "cb_rg_",
+                                "modes_eps_",      "modes_st_",      "modes_bv_",      "modes_ds_",    "modes_rg_",
+                                "select_fom_eps_", "select_fom_st_", "select_fom_bv_", "select_fom_ds_", "select_imr_eps_",
+                                "select_imr_st_",  "select_imr_bv_", "select_imr_ds_"};
+  for (const char* p : inner)
+    if (name.rfind(p, 0) == 0) return true;
+  return false;
+}
+
+std::string xdmf_path_of(const std::string& h5) {
+  auto dot = h5.rfind('.');
+  return (dot == std::string::npos ? h5 : h5.substr(0, dot)) + ".xdmf";
+}
+
+std::string base_name(const std::string& p) {
+  auto s = p.rfind('/');
+  return s == std::string::npos ? p : p.substr(s + 1);
+}
+
+}  // namespace
+
+PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  char* sets[16];
+  PetscInt n_sets = 16;
+  PetscBool set = PETSC_FALSE;
+  o->material.name = "options";
+  o->material.E = o->material.nu = o->material.rho = -1;
+  PetscOptionsBegin(comm, nullptr, "morse model options", "");
+  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII) or .inp (Abaqus/CalculiX)", "",
+                               buf, buf, sizeof buf, &set));
+  if (set) o->mesh = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-mesh_units",
+                               "Unit system of the mesh, recorded in the output (e.g. SI, mm-t-s); "
+                               "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->units = buf;
+  PetscCall(PetscOptionsStringArray("-clamp",
+                                    "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
+                                    "the DOFs fixed by *BOUNDARY in the deck",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      o->clamp.emplace_back(sets[i]);
+      PetscCall(PetscFree(sets[i]));
+    }
+  PetscCall(PetscOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "",
+                             o->material.E, &o->material.E, nullptr));
+  PetscCall(PetscOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh",
+                             "", o->material.nu, &o->material.nu, nullptr));
+  PetscCall(PetscOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
+                             o->material.rho, &o->material.rho, nullptr));
+  n_sets = 16;
+  PetscCall(PetscOptionsStringArray("-material_sets",
+                                    "Element sets given their own material by -material_<set>_E, _nu, _rho "
+                                    "(overrides the mesh's material for those elements)",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      mesh::Material m;
+      m.name = sets[i];
+      m.E = m.nu = m.rho = -1;
+      PetscCall(PetscFree(sets[i]));
+      const std::string p = "-material_" + m.name + "_";
+      PetscCall(PetscOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
+      PetscCall(PetscOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
+      PetscCall(PetscOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
+      o->set_materials.push_back(m);
+    }
+  PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
+  PetscCall(PetscOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
+  o->out = buf;
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+// Unknown-option check. early: only options with a morse prefix that no command option matched
+// (a typo of a morse option); final: every option nobody used.
+void check_options(MPI_Comm comm, bool early) {
+  PetscInt n = 0;
+  char** names = nullptr;
+  char** values = nullptr;
+  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
+  std::string bad;
+  static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out",
+                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "sweep_"};
+  for (PetscInt i = 0; i < n; ++i) {
+    std::string name = names[i];
+    if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
+    bool flag = !early;
+    if (early)
+      for (const char* p : morse_prefixes)
+        if (name.rfind(p, 0) == 0 && !inner_option(name)) flag = true;
+    if (flag) bad += " -" + name;
+  }
+  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &names, &values));
+  collective_check(comm, bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)"));
+}
+
+bool help_requested() {
+  PetscBool h = PETSC_FALSE;
+  PetscOptionsHasHelp(nullptr, &h);
+  return h;
+}
+
+Model build_model(MPI_Comm comm, const CommonOptions& o) {
+  MORSE_CHECK(!o.mesh.empty(), "no mesh given: use -mesh FILE (.msh or .inp)");
+  Model md;
+  {
+    StageTimer t(comm, "ReadDistribute");
+    md.lm = mesh::read_and_distribute(comm, o.mesh);
+    if (!o.units.empty()) md.lm.mesh.units = o.units;
+    for (const auto& sm : o.set_materials) mesh::assign_set_material(&md.lm.mesh, sm);
+  }
+  {
+    StageTimer t(comm, "NumberDofs");
+    md.dofs = fe::number_dofs(md.lm, o.clamp);
+  }
+  md.ops = fe::assemble(md.lm, md.dofs, o.material);
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements on %d rank(s)\n", o.mesh.c_str(),
+         md.lm.mesh.units.c_str(), (long long)md.lm.n_global_nodes, (long long)md.lm.n_global_elements, size);
+  print0(comm, "morse: %lld free DOFs, %lld clamped; volume %.6g, mass %.6g\n", (long long)md.dofs.n_global,
+         (long long)md.dofs.n_clamped_global, md.ops.volume, md.ops.mass);
+  return md;
+}
+
+void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
+                         PetscInt count) {
+  std::vector<double> all;
+  for (PetscInt j = 0; j < count; ++j) {
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
+    auto nodal = io::gather_nodal(md.lm, md.dofs, x);
+    MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
+    all.insert(all.end(), nodal.begin(), nodal.end());
+  }
+  out.write(name, all, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+}
+
+int rank_of(MPI_Comm comm) {
+  int r = 0;
+  MPI_Comm_rank(comm, &r);
+  return r;
+}
+
+void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mesh& gm,
+                           const std::vector<io::XdmfField>& fields) {
+  std::string err;
+  if (rank_of(comm) == 0) try {
+      io::write_xdmf(xdmf_path_of(h5), base_name(h5), gm, fields);
+    } catch (const Error& e) {
+      err = e.what();
+    }
+  collective_check(comm, err);
+}
+
+// /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
+void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
+               const std::vector<double>* C, const std::vector<std::int64_t>& boundary_nodes,
+               const std::vector<double>& freq_hz, PetscInt n_b, double damping) {
+  const auto n = static_cast<hsize_t>(freq_hz.size());
+  out.write("/rom/M", M, {n, n});
+  out.write("/rom/K", K, {n, n});
+  if (C) out.write("/rom/C", *C, {n, n});
+  out.write("/rom/boundary_nodes", boundary_nodes);
+  out.write("/rom/frequencies_hz", freq_hz);
+  out.attribute_int("/rom", "n_boundary_dofs", n_b);
+  out.attribute_int("/rom", "n_modes", static_cast<std::int64_t>(n) - n_b);
+  out.attribute("/rom", "damping_ratio", damping);
+  out.attribute("/rom", "dof_order",
+                "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then the "
+                "fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
+}
+
+PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse reduce (Craig-Bampton) options", "");
+  PetscCall(PetscOptionsString("-boundary", "Node set of the interface (boundary DOFs: its x,y,z)", "", buf, buf,
+                               sizeof buf, &set));
+  if (set) r->boundary = buf;
+  PetscCall(PetscOptionsInt("-cb_num_fixed_modes", "Number of fixed-interface modes (0 = Guyan)", "", r->n_fixed,
+                            &r->n_fixed, nullptr));
+  PetscCall(PetscOptionsReal("-cb_fmax", "Keep every fixed-interface mode below this frequency [Hz] "
+                             "(spectrum slicing; seed 000 uses 5x the top frequency of interest)",
+                             "", r->fmax, &r->fmax, nullptr));
+  PetscCall(PetscOptionsReal("-cb_damping", "Modal damping ratio xi of the fixed-interface modes", "", r->damping,
+                             &r->damping, nullptr));
+  PetscCall(PetscOptionsBool("-cb_write_basis", "Write the constraint and fixed-interface modes (Psi, Phi)", "",
+                             r->write_basis, &r->write_basis, nullptr));
+  PetscCall(PetscOptionsBool("-cb_xdmf", "Write an XDMF file for ParaView (with -cb_write_basis)", "", r->xdmf,
+                             &r->xdmf, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+}  // namespace morse::app::detail

@@ -1,0 +1,79 @@
+// app/common.hpp (private): what several commands of the morse executable share: the model
+// options (-mesh, -clamp, -material_*, -out) and the Craig-Bampton options, the unknown-option
+// check, building the model, and the writers of mode shapes, XDMF and /rom. Each command is in
+// cmd_<name>.cpp; run_command (commands.cpp) dispatches to them.
+#pragma once
+
+#include <mpi.h>
+#include <petscmat.h>
+#include <petscsys.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "morse/fe/model.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/mesh/mesh.hpp"
+#include "morse/mesh/partition.hpp"
+
+namespace morse::app::detail {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+struct CommonOptions {
+  std::string mesh;
+  std::string units;
+  std::vector<std::string> clamp;
+  mesh::Material material;
+  std::vector<mesh::Material> set_materials;  ///< name = element set
+  std::string out;
+};
+
+PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o);
+
+// Unknown-option check. early: only options with a morse prefix that no command option matched
+// (a typo of a morse option); final: every option nobody used.
+void check_options(MPI_Comm comm, bool early);
+
+bool help_requested();
+
+struct Model {
+  mesh::LocalMesh lm;
+  fe::DofMap dofs;
+  fe::Operators ops;
+};
+
+Model build_model(MPI_Comm comm, const CommonOptions& o);
+
+void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
+                         PetscInt count);
+
+int rank_of(MPI_Comm comm);
+
+void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mesh& gm,
+                           const std::vector<io::XdmfField>& fields);
+
+// /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
+void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
+               const std::vector<double>* C, const std::vector<std::int64_t>& boundary_nodes,
+               const std::vector<double>& freq_hz, PetscInt n_b, double damping);
+
+struct ReduceOptions {
+  std::string boundary;
+  PetscInt n_fixed = -1;
+  PetscReal fmax = -1;
+  PetscReal damping = 0;
+  PetscBool write_basis = PETSC_FALSE;
+  PetscBool xdmf = PETSC_TRUE;
+};
+
+PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
+
+// The commands, one file each (cmd_<name>.cpp).
+void run_modes(MPI_Comm comm);
+void run_reduce(MPI_Comm comm);
+void run_select(MPI_Comm comm);
+void run_mesh(MPI_Comm comm, const std::vector<std::string>& args);
+
+}  // namespace morse::app::detail
