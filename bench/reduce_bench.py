@@ -34,15 +34,15 @@ import platform
 import re
 import shutil
 import signal
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-RESULTS = os.path.join(HERE, "results")
+from benchlib import (EXTRA_ENV, RESULTS, ROOT, blas_info, cpu_busy, fmt, git_info, med, mpi_env,
+                      parse_log_view,
+                      parse_stage_table, run_mpi, wait_idle)
+
 
 STAGES = ["ReadDistribute", "NumberDofs", "Preallocate", "Assemble", "Factor", "EigenSolve",
           "ConstraintModes", "Project", "ReducedEigen", "Write"]
@@ -158,40 +158,11 @@ def make_mesh(morse, kind, nx, path):
 
 
 # ------------------------------------------------------------------------------------- runs
-EXTRA_ENV = {}
-
-
-def mpi_env(omp_threads):
-    env = dict(os.environ)
-    env.update(EXTRA_ENV)
-    env.update({"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-                "OMPI_MCA_rmaps_base_oversubscribe": "1",
-                "OMPI_MCA_btl_vader_single_copy_mechanism": "none",
-                "OMP_NUM_THREADS": str(omp_threads), "OPENBLAS_NUM_THREADS": str(omp_threads)})
-    return env
-
-
-def parse_log_view(text):
-    """Max time over ranks [s] and call count of selected -log_view events."""
-    out = {}
-    for line in text.splitlines():
-        f = line.split()
-        if len(f) > 4 and (f[0] in LOG_EVENTS or f[0].startswith("morse:")):
-            try:
-                out[f[0]] = {"count": int(f[1]), "seconds": float(f[3])}
-            except ValueError:
-                pass
-    return out
-
-
-def parse_run(stdout, timing):
-    r = {"stages": {}, "stage_peak_mb": {}}
-    for line in stdout.splitlines():
-        m = re.match(r"^\s+(\w+|total \(wall\))\s+([0-9.]+)\s+([0-9.]+)\s*$", line)
-        if m and (m.group(1) in STAGES or m.group(1) == "total (wall)"):
-            key = "total" if m.group(1).startswith("total") else m.group(1)
-            r["stages"][key] = float(m.group(2))
-            r["stage_peak_mb"][key] = float(m.group(3))
+def parse_run(stdout):
+    sec, peak = parse_stage_table(stdout)
+    keep = STAGES + ["total"]
+    r = {"stages": {k: v for k, v in sec.items() if k in keep},
+         "stage_peak_mb": {k: v for k, v in peak.items() if k in keep}}
     m = re.search(r"K_ii factored once.*\(([0-9.]+) s\)", stdout)
     r["factor_seconds"] = float(m.group(1)) if m else None
     r["factor_shared"] = bool(m and "shared" in m.group(0))
@@ -207,114 +178,31 @@ def parse_run(stdout, timing):
         r["boundary_dofs"], r["boundary_nodes"], r["modes"], r["reduced_size"] = map(int, m.groups())
     freqs = re.findall(r"^\s+(\d+)\s+([0-9.eE+-]+)\s+([0-9.eE+-]+)\s*$", stdout, re.M)
     r["first_frequencies_hz"] = [[float(a), float(b)] for _, a, b in freqs[:6]]
-    rss = [int(x) for x in re.findall(r"^BENCH_MAXRSS_KB (\d+)", timing, re.M)]
-    r["rank_max_rss_mb"] = [k / 1024.0 for k in rss]
-    r["sum_max_rss_mb"] = sum(rss) / 1024.0 if rss else None
-    cpu = [float(u) + float(s) for u, s in re.findall(r"BENCH_CPU_S ([0-9.]+) ([0-9.]+)", timing)]
-    r["rank_cpu_seconds"] = cpu
-    r["log_view"] = parse_log_view(stdout)
+    r["log_view"] = parse_log_view(stdout, LOG_EVENTS)
     return r
 
 
-def proc_stat():
-    """(busy, total) CPU seconds of the whole machine so far, from /proc/stat."""
-    try:
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:]]
-    except OSError:
-        return None
-    hz = os.sysconf("SC_CLK_TCK")
-    return (sum(v) - v[3] - v[4]) / hz, sum(v) / hz
-
-
-def cpu_busy(seconds=1.0):
-    """Fraction of all CPUs busy (any process) over `seconds`, from /proc/stat."""
-    def snap():
-        with open("/proc/stat") as f:
-            v = [int(x) for x in f.readline().split()[1:]]
-        return sum(v), v[3] + v[4]  # total, idle + iowait
-    try:
-        t0, i0 = snap()
-        time.sleep(seconds)
-        t1, i1 = snap()
-    except OSError:
-        return None
-    return 1.0 - (i1 - i0) / max(1, t1 - t0)
-
-
-def wait_idle(limit, timeout):
-    """Waits until the machine is (nearly) idle; returns the last busy fraction measured."""
-    t0 = time.monotonic()
-    busy = cpu_busy()
-    warned = False
-    while busy is not None and busy > limit and time.monotonic() - t0 < timeout:
-        if not warned:
-            print("  waiting for an idle machine (%.0f%% of the CPUs busy)..." % (100 * busy), flush=True)
-            warned = True
-        busy = cpu_busy(2.0)
-    return busy
-
-
 def run_reduce(morse, mesh, ranks, modes, out_h5, log_view, omp_threads, extra):
-    cmd = ["mpirun", "-n", str(ranks)]
-    # Each rank's /usr/bin/time appends one line to its own file (on a shared stderr the lines of
-    # the ranks can interleave and be lost).
-    time_file = os.path.join(os.path.dirname(out_h5), "time.txt")
-    if os.path.exists(time_file):
-        os.remove(time_file)
-    if os.path.exists("/usr/bin/time"):
-        cmd += ["/usr/bin/time", "-a", "-o", time_file, "-f", "BENCH_MAXRSS_KB %M BENCH_CPU_S %U %S"]
-    cmd += [morse, "reduce", "-mesh", mesh, "-clamp", "x0", "-boundary", "iface",
+    args = [morse, "reduce", "-mesh", mesh, "-clamp", "x0", "-boundary", "iface",
             "-cb_num_fixed_modes", str(modes), "-material_E", repr(STEEL["E"]),
             "-material_nu", repr(STEEL["nu"]), "-material_rho", repr(STEEL["rho"]), "-out", out_h5]
     if log_view:
-        cmd.append("-log_view")
-    cmd += extra
-    st0 = proc_stat()
-    t0 = time.monotonic()
-    p = subprocess.run(cmd, capture_output=True, text=True, env=mpi_env(omp_threads))
-    wall = time.monotonic() - t0
-    st1 = proc_stat()
-    if p.returncode != 0:
-        sys.stderr.write("reduce_bench: FAILED (exit %d): %s\n--- stdout\n%s\n--- stderr\n%s\n"
-                         % (p.returncode, " ".join(cmd), p.stdout[-4000:], p.stderr[-4000:]))
+        args.append("-log_view")
+    args += extra
+    run, cmd = run_mpi("reduce_bench", args, ranks, os.path.dirname(out_h5), omp_threads)
+    if run is None:
         return None, cmd
-    timing = ""
-    if os.path.exists(time_file):
-        with open(time_file) as f:
-            timing = f.read()
-    r = parse_run(p.stdout, timing)
-    r["ranks"] = ranks
-    r["process_wall"] = wall
-    # CPU time other processes used while morse ran, as a fraction of all CPUs over the run
-    # (mpirun itself is counted as foreign; it is small). > ~0.1: the timing is disturbed.
-    if len(r["rank_cpu_seconds"]) != ranks:
-        sys.stderr.write("reduce_bench: /usr/bin/time reported %d of %d ranks; no load or all-rank "
-                         "memory figure for this run\n" % (len(r["rank_cpu_seconds"]), ranks))
-        r["sum_max_rss_mb"] = None
-    if st0 and st1 and len(r["rank_cpu_seconds"]) == ranks:
-        busy = st1[0] - st0[0]
-        ncpu = os.cpu_count() or 1
-        r["foreign_cpu_fraction"] = max(0.0, busy - sum(r["rank_cpu_seconds"])) / (wall * ncpu)
-        # Cores' worth of foreign work beyond the cores morse left idle, per rank: what really
-        # competes with the ranks for a core.
-        r["contention"] = max(0.0, r["foreign_cpu_fraction"] * ncpu - max(0, ncpu - ranks)) / ranks
-    else:
-        r["foreign_cpu_fraction"] = r["contention"] = None
+    r = parse_run(run.pop("stdout"))
+    r.update(run)
     missing = [s for s in STAGES + ["total"] if s not in r["stages"]]
     if missing:
-        sys.stderr.write("reduce_bench: stage(s) %s missing from the output of %s\n%s\n"
-                         % (missing, " ".join(cmd), p.stdout[-4000:]))
+        sys.stderr.write("reduce_bench: stage(s) %s missing from the output of %s\n"
+                         % (missing, " ".join(cmd)))
         return None, cmd
     return r, cmd
 
 
 # ------------------------------------------------------------------------------------- stats
-def med(xs):
-    xs = [x for x in xs if x is not None]
-    return statistics.median(xs) if xs else None
-
-
 def summarize(samples):
     s = {"runs": len(samples)}
     keys = STAGES + ["total"]
@@ -386,34 +274,6 @@ def ratios_against(ref, per_ranks):
 
 
 # ------------------------------------------------------------------------------------- main
-def blas_info(morse):
-    """The BLAS/LAPACK libraries morse loads (ldd, with the benchmark's environment)."""
-    try:
-        p = subprocess.run(["ldd", morse], capture_output=True, text=True, env=mpi_env(1))
-    except OSError:
-        return None
-    libs = {}
-    for line in p.stdout.splitlines():
-        f = line.split()
-        if f and re.match(r"lib(blas|lapack|openblas|blis|mkl)", f[0]):
-            target = f[2] if len(f) > 2 else f[0]
-            libs[f[0]] = os.path.realpath(target) if os.path.exists(target) else target
-    return libs
-
-
-def git_info():
-    def g(*a):
-        try:
-            return subprocess.run(["git", "-C", ROOT] + list(a), capture_output=True, text=True).stdout.strip()
-        except OSError:
-            return None
-    return {"commit": g("rev-parse", "HEAD"), "dirty_files": g("status", "--porcelain").splitlines()}
-
-
-def fmt(x, w=9, p=3):
-    return ("%*.*f" % (w, p, x)) if x is not None else " " * (w - 1) + "-"
-
-
 def print_summary(res):
     pr = res["per_ranks"]
     ranks = sorted(pr, key=int)

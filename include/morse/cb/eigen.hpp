@@ -21,6 +21,9 @@ struct EigenSettings {
   double tol = 1e-10;       ///< relative residual tolerance (overridable with -<prefix>eps_tol)
   std::string prefix;       ///< options prefix of the EPS (its ST/KSP/PC inherit it)
   std::string what = "eigenproblem";  ///< name used in messages
+  /// Prefix of the stage names (<stage>Factor, <stage>EigenSolve, <stage>EigenVectors), so that
+  /// several eigen solves of one run stay apart in the stage table and in -log_view.
+  std::string stage;
 };
 
 struct Eigenpairs {
