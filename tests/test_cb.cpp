@@ -300,3 +300,49 @@ TEST(CraigBampton, BadInputIsACollectiveError) {
   s.n_fixed = 100000;
   expect_error(s, "interior DOFs");
 }
+
+// The dense generalized eigen solver: with a cutoff, the eigenvectors below it (LAPACK sygvx)
+// satisfy K v = lambda M v and v^T M v = 1 like the full solve's, the other columns are zero,
+// and the eigenvalues are those of the full solve. A pencil with a 3-fold eigenvalue checks
+// that the vectors of a cluster come out M-orthonormal.
+TEST(DenseEigen, VectorsBelowACutoff) {
+  const int n = 30;
+  // M = R R^T and K = R S R^T with R invertible and S diagonal: K v = lambda M v <=> S u = lambda u
+  // with u = R^T v, so the eigenvalues are S's: 2 (three times), then 3.5, 4, 4.5, ...
+  std::vector<double> R(n * n), M(n * n, 0.0), K(n * n, 0.0);
+  for (int i = 0; i < n * n; ++i) R[i] = std::sin(1.0 + 0.37 * i);
+  for (int i = 0; i < n; ++i) R[i * n + i] += n;
+  auto s_of = [](int k) { return k < 3 ? 2.0 : 2.0 + 0.5 * k; };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        M[i * n + j] += R[i * n + k] * R[j * n + k];
+        K[i * n + j] += R[i * n + k] * s_of(k) * R[j * n + k];
+      }
+  std::vector<double> all, some;
+  auto w_all = cb::dense_eigenvalues(n, K, M, &all);
+  auto w_some = cb::dense_eigenvalues(n, K, M, &some, 0.5 * (w_all[5] + w_all[6]));
+  for (int k = 0; k < n; ++k) EXPECT_NEAR(w_some[k], w_all[k], 1e-12 * w_all.back());
+  for (int m = 0; m < n; ++m) {
+    double res = 0, scale = 0, zero = 0;
+    for (int i = 0; i < n; ++i) {
+      double kv = 0, mv = 0;
+      for (int j = 0; j < n; ++j) kv += K[i * n + j] * some[j * n + m], mv += M[i * n + j] * some[j * n + m];
+      res = std::max(res, std::abs(kv - w_some[m] * mv));
+      scale = std::max(scale, std::abs(kv));
+      zero += std::abs(some[i * n + m]);
+    }
+    if (m <= 5) {
+      EXPECT_LT(res, 1e-10 * scale) << "mode " << m;
+      for (int p = 0; p <= m; ++p) {  // M-orthonormality, inside the cluster too
+        double vmv = 0;
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j) vmv += some[i * n + p] * M[i * n + j] * some[j * n + m];
+        EXPECT_NEAR(vmv, p == m ? 1.0 : 0.0, 1e-10) << p << "," << m;
+      }
+    } else {
+      EXPECT_EQ(zero, 0.0) << "mode " << m;
+    }
+  }
+  for (int k = 0; k < n; ++k) EXPECT_NEAR(w_all[k], s_of(k), 1e-12 * s_of(n - 1)) << k;
+}

@@ -199,6 +199,7 @@ void run_select(MPI_Comm comm) {
   {
     cb::EigenSettings es;
     es.prefix = "select_fom_";
+    es.stage = "Fom";
     es.what = "full-model modes";
     if (so.fom_modes > 0)
       es.nev = so.fom_modes;
@@ -253,6 +254,7 @@ void run_select(MPI_Comm comm) {
         Ks = Kspring.get();
         cb::EigenSettings es;
         es.prefix = "select_imr_";
+        es.stage = "Imr";
         es.what = "IMR system modes";
         es.omega2_max = l_an;
         sys = cb::solve_eigen(Ks, md.ops.M.get(), es, nullptr);
@@ -282,25 +284,30 @@ void run_select(MPI_Comm comm) {
     std::vector<double> M, K;
   };
   std::vector<MethodResult> results;
-  UMat MV;
-  MORSE_CALL(MatMatMult(md.ops.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
   select::MacBasis mac_basis;
   {
     StageTimer t(comm, "MacProjections");
+    UMat MV;
+    MORSE_CALL(MatMatMult(md.ops.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
     mac_basis = select::mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
   }
   auto f_fom = [&](PetscInt j) { return std::sqrt(std::max(0.0, fom.omega2[j])) / kTwoPi; };
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-    StageTimer t(comm, cat("Select_", so.methods[mi]));
     MethodResult mr;
     mr.name = so.methods[mi];
-    mr.score = select::scores(comm, methods[mi], ic, res, ex, imr.get());
-    mr.sel = select::truncate(methods[mi], mr.score, so.num_modes, so.fraction);
+    {
+      // The ranking proper: scores, ranking, truncation.
+      StageTimer ts(comm, cat("Select_", so.methods[mi]));
+      mr.score = select::scores(comm, methods[mi], ic, res, ex, imr.get());
+      mr.sel = select::truncate(methods[mi], mr.score, so.num_modes, so.fraction);
+    }
+    // Its check: the restricted superelement's modes against the full model's.
+    StageTimer t(comm, cat("Check_", so.methods[mi]));
     mr.M = select::restrict_operator(res.M, nb, nr, mr.sel.selected);
     mr.K = select::restrict_operator(res.K, nb, nr, mr.sel.selected);
     const int n = static_cast<int>(nb + mr.sel.selected.size());
     std::vector<double> vec;
-    auto lam = cb::dense_eigenvalues(n, mr.K, mr.M, &vec);
+    auto lam = cb::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
     for (double l : lam) mr.rom_f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
     while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
     // Expand the in-band superelement modes on the full CB basis and compare with the FOM.

@@ -180,21 +180,38 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
 }
 
 std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
-                                      const std::vector<double>& M, std::vector<double>* vectors) {
+                                      const std::vector<double>& M, std::vector<double>* vectors,
+                                      double vectors_max) {
   // Row-major symmetric = column-major symmetric, so the arrays can go to LAPACK as they are.
   std::vector<double> A(K), B(M), w(n);
   PetscBLASInt itype = 1, nn = n, lwork = std::max(1, 8 * n), info = 0;
   std::vector<double> work(lwork);
-  const char* jobz = vectors ? "V" : "N";
-  LAPACKsygv_(&itype, jobz, "U", &nn, A.data(), &nn, B.data(), &nn, w.data(), work.data(), &lwork,
-              &info);
+  const bool all_vectors = vectors && !(vectors_max < std::numeric_limits<double>::infinity());
+  LAPACKsygv_(&itype, all_vectors ? "V" : "N", "U", &nn, A.data(), &nn, B.data(), &nn, w.data(), work.data(),
+              &lwork, &info);
   MORSE_CHECK(info == 0, "dense generalized eigen solve failed (LAPACK sygv info = ", info,
               "): the reduced mass matrix is not positive definite");
-  if (vectors) {
-    vectors->assign(static_cast<std::size_t>(n) * n, 0.0);
-    for (int i = 0; i < n; ++i)
-      for (int k = 0; k < n; ++k) (*vectors)[static_cast<std::size_t>(i) * n + k] = A[static_cast<std::size_t>(k) * n + i];
+  if (!vectors) return w;
+  vectors->assign(static_cast<std::size_t>(n) * n, 0.0);
+  PetscBLASInt k = n;
+  if (!all_vectors) {
+    k = 0;
+    while (k < n && w[k] <= vectors_max) ++k;
+    if (k == 0) return w;
+    A = K;
+    B = M;
+    PetscBLASInt il = 1, iu = k, found = 0;
+    const double unused = 0.0, abstol = 2 * std::numeric_limits<double>::min();  // most accurate (LAPACK)
+    std::vector<double> wk(n), Z(static_cast<std::size_t>(n) * k);
+    std::vector<PetscBLASInt> iwork(5 * static_cast<std::size_t>(n)), ifail(n);
+    LAPACKsygvx_(&itype, "V", "I", "U", &nn, A.data(), &nn, B.data(), &nn, &unused, &unused, &il, &iu, &abstol,
+                 &found, wk.data(), Z.data(), &nn, work.data(), &lwork, iwork.data(), ifail.data(), &info);
+    MORSE_CHECK(info == 0 && found == k, "dense generalized eigen solve failed (LAPACK sygvx info = ", info, ", ",
+                found, " of ", k, " eigenvectors)");
+    A.swap(Z);
   }
+  for (int i = 0; i < n; ++i)
+    for (int m = 0; m < k; ++m) (*vectors)[static_cast<std::size_t>(i) * n + m] = A[static_cast<std::size_t>(m) * n + i];
   return w;
 }
 

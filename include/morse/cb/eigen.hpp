@@ -7,6 +7,7 @@
 // depend on the number of ranks.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -51,9 +52,12 @@ PetscInt mumps_null_pivots(Mat F);
 
 /// Dense generalized symmetric eigenvalues of (K, M), row-major n x n, ascending (LAPACK sygv).
 /// If vectors is not null it receives the M-normalized eigenvectors (column k = mode k,
-/// row-major n x n).
+/// row-major n x n). With vectors_max finite, only the eigenvectors of the eigenvalues
+/// <= vectors_max are computed (LAPACK sygvx, bisection and inverse iteration: a few times
+/// cheaper than all of them when they are few); the other columns are zero.
 std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
                                       const std::vector<double>& M,
-                                      std::vector<double>* vectors = nullptr);
+                                      std::vector<double>* vectors = nullptr,
+                                      double vectors_max = std::numeric_limits<double>::infinity());
 
 }  // namespace morse::cb
