@@ -116,6 +116,12 @@ morse_add_error_case(unknown_option
   ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_mode 3
        ${MORSE_CASE_MATERIAL})
 
+morse_add_error_case(reduce_xdmf_without_basis
+  "morse: error: -cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis"
+  reduce_xdmf_without_basis.h5 BOX
+  ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 3 -cb_xdmf
+       ${MORSE_CASE_MATERIAL})
+
 morse_add_error_case(bad_box_type
   "morse: error: .*-box_type pyr5: unknown element type"
   bad_box_type.msh

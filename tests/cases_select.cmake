@@ -31,6 +31,11 @@ morse_add_error_case(select_fraction_above_one
   select_fraction_above_one.h5 BOX
   ARGS select ${MORSE_SELECT_CASE_MODEL} -select_fraction 1.5)
 
+morse_add_error_case(select_xdmf
+  "morse: error: -cb_xdmf is a reduce option \\(the mode shapes of -cb_write_basis\\): select writes no mode shapes"
+  select_xdmf.h5 BOX
+  ARGS select ${MORSE_SELECT_CASE_MODEL} -cb_xdmf 0)
+
 # --- method data errors (checked once the candidate modes exist)
 morse_add_error_case(select_ebr_no_excitation
   "morse: error: EBR without excitation: every amplitude of -select_ebr_amp is zero"

@@ -28,6 +28,8 @@ void run_reduce(MPI_Comm comm) {
   MORSE_CHECK(r.n_fixed >= 0 || r.fmax > 0, "give -cb_num_fixed_modes N or -cb_fmax HZ");
   MORSE_CHECK(!(r.n_fixed >= 0 && r.fmax > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
   MORSE_CHECK(r.damping >= 0 && r.damping < 1, "-cb_damping must be in [0, 1) (got ", r.damping, ")");
+  MORSE_CHECK(!(r.xdmf_set && r.xdmf && !r.write_basis),
+              "-cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis");
   Model md = build_model(comm, o);
   cb::CBSettings s;
   s.boundary_set = r.boundary;

@@ -164,6 +164,8 @@ void run_select(MPI_Comm comm) {
               "give the EBR excitation either as -select_ebr_load FILE or as -select_ebr_freq/-select_ebr_amp/"
               "-select_ebr_phase, not both");
   MORSE_CHECK(!r.write_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
+  MORSE_CHECK(!r.xdmf_set, "-cb_xdmf is a reduce option (the mode shapes of -cb_write_basis): select writes no mode "
+                           "shapes");
   MORSE_CHECK(so.imr_support == "free" || so.imr_support == "spring" || so.imr_support == "clamped",
               "-select_imr_support ", so.imr_support, ": expected free, spring or clamped");
   MORSE_CHECK(so.imr_support != "spring" || so.imr_stiffness > 0,

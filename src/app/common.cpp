@@ -6,6 +6,7 @@
 #include <petscsys.h>
 
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -22,12 +23,14 @@ namespace {
 
 // Options owned by inner PETSc/SLEPc objects of a command: accepted by the early check.
 bool inner_option(const std::string& name) {
-  static const char* inner[] = {"cb_eps_",         "cb_st_",         "cb_bv_",         "cb_ds_",       "cb_rg_",
-                                "modes_eps_",      "modes_st_",      "modes_bv_",      "modes_ds_",    "modes_rg_",
-                                "select_fom_eps_", "select_fom_st_", "select_fom_bv_", "select_fom_ds_", "select_imr_eps_",
-                                "select_imr_st_",  "select_imr_bv_", "select_imr_ds_"};
-  for (const char* p : inner)
-    if (name.rfind(p, 0) == 0) return true;
+  // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
+  // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
+  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_"};
+  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing"};
+  for (const char* p : solvers)
+    if (name.rfind(p, 0) == 0)
+      for (const char* q : inner)
+        if (name.compare(std::strlen(p), std::strlen(q), q) == 0) return true;
   return false;
 }
 
@@ -216,7 +219,7 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
   PetscCall(PetscOptionsBool("-cb_write_basis", "Write the constraint and fixed-interface modes (Psi, Phi)", "",
                              r->write_basis, &r->write_basis, nullptr));
   PetscCall(PetscOptionsBool("-cb_xdmf", "Write an XDMF file for ParaView (with -cb_write_basis)", "", r->xdmf,
-                             &r->xdmf, nullptr));
+                             &r->xdmf, &r->xdmf_set));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }

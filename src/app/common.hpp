@@ -66,6 +66,7 @@ struct ReduceOptions {
   PetscReal damping = 0;
   PetscBool write_basis = PETSC_FALSE;
   PetscBool xdmf = PETSC_TRUE;
+  PetscBool xdmf_set = PETSC_FALSE;  ///< -cb_xdmf given explicitly
 };
 
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);

@@ -56,24 +56,127 @@ PetscErrorCode progress_monitor(EPS, PetscInt, PetscInt nconv, PetscScalar*, Pet
 
 }  // namespace
 
+InertiaCounter::InertiaCounter(Mat K, Mat M, const std::string& prefix) : K_(K), M_(M) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
+  MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A_.ptr()));
+  MORSE_CALL(MatSetOptionsPrefix(A_.get(), (prefix + "inertia_").c_str()));
+  // K and M assembled by morse share their pattern (same elements, full element blocks); the
+  // fast axpy is used only when every rank sees the same number of stored entries.
+  MatInfo ik, im;
+  MORSE_CALL(MatGetInfo(K, MAT_LOCAL, &ik));
+  MORSE_CALL(MatGetInfo(M, MAT_LOCAL, &im));
+  same_pattern_ = !any_rank(comm, ik.nz_used != im.nz_used);
+}
+
+PetscInt InertiaCounter::count(double sigma) {
+  if (calls_ > 0) MORSE_CALL(MatCopy(K_, A_.get(), SAME_NONZERO_PATTERN));
+  MORSE_CALL(MatAXPY(A_.get(), -sigma, M_, same_pattern_ ? SAME_NONZERO_PATTERN : UNKNOWN_NONZERO_PATTERN));
+  MatFactorInfo info;
+  MORSE_CALL(MatFactorInfoInitialize(&info));
+  if (!F_) {
+    // K - sigma M is indefinite: MUMPS's symmetric indefinite LDL^T (not flagged SPD), with the
+    // inertia available in parallel (ICNTL(13) = 1) and room for delayed pivots (ICNTL(14)).
+    MORSE_CALL(MatGetFactor(A_.get(), MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F_.ptr()));
+    MORSE_CALL(MatMumpsSetIcntl(F_.get(), 13, 1));
+    MORSE_CALL(MatMumpsSetIcntl(F_.get(), 14, 50));
+    MORSE_CALL(MatCholeskyFactorSymbolic(F_.get(), A_.get(), nullptr, &info));
+  }
+  MORSE_CALL(MatCholeskyFactorNumeric(F_.get(), A_.get(), &info));
+  ++calls_;
+  PetscInt nneg = 0;
+  MORSE_CALL(MatGetInertia(F_.get(), &nneg, nullptr, nullptr));
+  return nneg;
+}
+
+namespace {
+
+// Cutoff sigma with nev <= N(sigma) <= 1.2 nev eigenvalues below it, N from inertia counts:
+// from the ratio of the diagonals (a high, safe start), then steps along the estimated local
+// power law N ~ sigma^p (secant in log-log, p starting at 3/2 as for a 3D solid) kept inside
+// the bracket, with the geometric mean as fallback.
+double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const std::string& what,
+                    PetscInt* factorizations) {
+  InertiaCounter c(K, M, prefix);
+  UVec dk, dm;
+  MORSE_CALL(MatCreateVecs(K, nullptr, dk.ptr()));
+  MORSE_CALL(MatCreateVecs(K, nullptr, dm.ptr()));
+  MORSE_CALL(MatGetDiagonal(K, dk.get()));
+  MORSE_CALL(MatGetDiagonal(M, dm.get()));
+  PetscScalar tk = 0, tm = 0;
+  MORSE_CALL(VecSum(dk.get(), &tk));
+  MORSE_CALL(VecSum(dm.get(), &tm));
+  MORSE_CHECK(PetscRealPart(tk) > 0 && PetscRealPart(tm) > 0, what, ": K or M has a non-positive trace");
+  double hi = PetscRealPart(tk) / PetscRealPart(tm), lo = 0;
+  PetscInt n_hi = c.count(hi);
+  for (int k = 0; n_hi < nev; ++k) {
+    MORSE_CHECK(k < 40, what, ": no cutoff with ", nev, " eigenvalues below it was found");
+    hi *= 4;
+    n_hi = c.count(hi);
+  }
+  double s_prev = hi, p = 1.5;
+  PetscInt n_prev = n_hi;
+  for (int it = 0; it < 12 && n_hi > 1.2 * nev; ++it) {
+    double sig = s_prev * std::pow(1.08 * nev / std::max<PetscInt>(n_prev, 1), 1.0 / p);
+    if (!(sig > lo && sig < hi)) sig = lo > 0 ? std::sqrt(lo * hi) : 0.25 * hi;
+    const PetscInt n_sig = c.count(sig);
+    if (n_sig > 0 && n_prev > 0 && n_sig != n_prev)
+      p = std::clamp(std::log(static_cast<double>(n_prev) / n_sig) / std::log(s_prev / sig), 0.5, 3.0);
+    if (n_sig >= nev)
+      hi = sig, n_hi = n_sig;
+    else
+      lo = sig;
+    s_prev = sig;
+    n_prev = n_sig;
+  }
+  *factorizations = c.factorizations();
+  return hi;
+}
+
+}  // namespace
+
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(K, &n, nullptr));
-  const bool slicing = s.omega2_max > 0;
+  bool slicing = s.omega2_max > 0;
+  double omega2_max = s.omega2_max;
   MORSE_CHECK(slicing || s.nev > 0, s.what, ": the number of modes must be positive (got ",
               s.nev, ")");
   MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ",
               n, " DOFs");
+  PetscInt count_slicing = s.count_slicing;
+  auto get_options = [&]() -> PetscErrorCode {
+    PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
+    PetscCall(PetscOptionsInt("-count_slicing",
+                              "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
+                              "", count_slicing, &count_slicing, nullptr));
+    PetscOptionsEnd();
+    return PETSC_SUCCESS;
+  };
+  MORSE_CALL(get_options());
+  MORSE_CHECK(count_slicing >= 0, "-", s.prefix, "count_slicing must be >= 0 (got ", count_slicing, ")");
+  const bool count_by_slicing =
+      !slicing && count_slicing > 0 && s.nev >= count_slicing && s.shift == 0.0 && 4 * s.nev <= n;
   const std::string p = "-" + s.prefix;
   set_default_option(p + "st_ksp_type", "preonly");
   set_default_option(p + "st_pc_type", "cholesky");
   set_default_option(p + "st_pc_factor_mat_solver_type", "mumps");
   set_default_option(p + "st_mat_mumps_icntl_24", "1");  // detect null pivots (singular K)
-  if (slicing) set_default_option(p + "st_mat_mumps_icntl_13", "1");  // inertia in parallel
+  if (slicing || count_by_slicing) set_default_option(p + "st_mat_mumps_icntl_13", "1");  // inertia in parallel
 
   Eigenpairs out;
+  if (count_by_slicing) {
+    StageTimer timer(comm, s.stage + "SliceCutoff");
+    auto t0 = std::chrono::steady_clock::now();
+    omega2_max = count_cutoff(K, M, s.nev, s.prefix, s.what, &out.inertia_counts);
+    slicing = true;
+    out.slice_omega2 = omega2_max;
+    print0(comm, "  %s: the %d lowest by spectrum slicing below %.6g Hz (cutoff from %d inertia counts, %.1f s)\n",
+           s.what.c_str(), (int)s.nev, std::sqrt(omega2_max) / (2 * M_PI), (int)out.inertia_counts,
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
   out.slicing = slicing;
   MORSE_CALL(EPSCreate(comm, out.eps.ptr()));
   EPS eps = out.eps.get();
@@ -90,7 +193,7 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MORSE_CALL(EPSSetPurify(eps, PETSC_FALSE));
   if (slicing) {
     MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_ALL));
-    MORSE_CALL(EPSSetInterval(eps, -1e-6 * s.omega2_max, s.omega2_max));
+    MORSE_CALL(EPSSetInterval(eps, -1e-6 * omega2_max, omega2_max));
   } else {
     MORSE_CALL(EPSSetWhichEigenpairs(eps, EPS_TARGET_MAGNITUDE));
     MORSE_CALL(EPSSetTarget(eps, s.shift));
@@ -124,12 +227,13 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   PetscInt nconv = 0;
   MORSE_CALL(EPSGetConverged(eps, &nconv));
   MORSE_CALL(EPSGetIterationNumber(eps, &out.iterations));
-  if (!slicing)
+  if (!slicing || count_by_slicing)
     MORSE_CHECK(nconv >= s.nev, s.what, ": only ", nconv, " of ", s.nev,
                 " eigenpairs converged; increase -", s.prefix, "eps_max_it or -", s.prefix,
-                "eps_ncv");
-  const PetscInt n_out = slicing ? nconv : s.nev;
-  MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", s.omega2_max, ")");
+                count_by_slicing ? "eps_ncv, or solve with one shift (-" + s.prefix + "count_slicing 0)"
+                                 : std::string("eps_ncv"));
+  const PetscInt n_out = slicing && !count_by_slicing ? nconv : s.nev;
+  MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", omega2_max, ")");
 
   StageTimer extract(comm, s.stage + "EigenVectors");
   std::vector<std::pair<double, PetscInt>> order;

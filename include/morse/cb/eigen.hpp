@@ -22,6 +22,12 @@ struct EigenSettings {
   double tol = 1e-10;       ///< relative residual tolerance (overridable with -<prefix>eps_tol)
   std::string prefix;       ///< options prefix of the EPS (its ST/KSP/PC inherit it)
   std::string what = "eigenproblem";  ///< name used in messages
+  /// Count mode with nev >= count_slicing (and shift 0): find the cutoff below which lie nev to
+  /// ~1.2 nev eigenvalues by inertia counts (Sylvester: negative pivots of K - sigma M), then
+  /// solve by spectrum slicing and keep the nev lowest. With one shift, every Krylov vector is
+  /// orthogonalized against all converged ones, which dominates for hundreds of modes; slicing
+  /// orthogonalizes within each subinterval. 0: never. -<prefix>count_slicing overrides.
+  PetscInt count_slicing = 500;
   /// Prefix of the stage names (<stage>Factor, <stage>EigenSolve, <stage>EigenVectors), so that
   /// several eigen solves of one run stay apart in the stage table and in -log_view.
   std::string stage;
@@ -34,6 +40,8 @@ struct Eigenpairs {
   PetscInt iterations = 0;
   double factor_seconds = 0;   ///< numeric factorization time (count mode)
   bool slicing = false;        ///< solved by spectrum slicing
+  double slice_omega2 = 0;     ///< count mode by slicing: the cutoff used
+  PetscInt inertia_counts = 0; ///< count mode by slicing: factorizations spent finding it
   /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
   Mat factor() const;
 };
@@ -49,6 +57,22 @@ void set_default_option(const std::string& name, const std::string& value);
 
 /// Number of null pivots MUMPS found in the factor F (needs ICNTL(24)=1).
 PetscInt mumps_null_pivots(Mat F);
+
+/// Number of eigenvalues of K x = lambda M x below sigma, from the inertia of an LDL^T
+/// factorization of K - sigma M (MUMPS, symmetric indefinite). K and M must have the same
+/// layout; the symbolic factorization is done once per counter. Collective.
+class InertiaCounter {
+ public:
+  InertiaCounter(Mat K, Mat M, const std::string& prefix);
+  PetscInt count(double sigma);
+  PetscInt factorizations() const { return calls_; }
+
+ private:
+  Mat K_, M_;
+  UMat A_, F_;
+  bool same_pattern_ = false;
+  PetscInt calls_ = 0;
+};
 
 /// Dense generalized symmetric eigenvalues of (K, M), row-major n x n, ascending (LAPACK sygv).
 /// If vectors is not null it receives the M-normalized eigenvectors (column k = mode k,
