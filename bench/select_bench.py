@@ -57,7 +57,7 @@ LOG_EVENTS = ["MatCholFctrSym", "MatCholFctrNum", "MatSolve", "MatMult", "MatMat
               "BVOrthogonalizeV", "BVMultInPlace", "DSSolve", "MatMatSolve"]
 
 GROUPS = {
-    "eigen_solve": ["Factor", "EigenSolve"],
+    "eigen_solve": ["SliceCutoff", "Factor", "EigenSolve"],
     "candidates_rest": ["EigenVectors", "ConstraintModes", "Project"],
     "ranking": ["InterfaceCoupling", "ImrSystemModes"] + ["Select_" + m for m in METHODS],
     "mac_and_checks": ["MacProjections"] + ["Check_" + m for m in METHODS],
