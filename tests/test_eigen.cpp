@@ -24,14 +24,7 @@ struct Small {
 
 // A 6 x 2 x 2 hex8 cantilever with a rectangular section (no repeated bending pairs): 162 free DOFs.
 Small small_beam() {
-  mesh::BoxSpec b;
-  b.type = mesh::ElementType::Hex8;
-  b.lx = 0.6;
-  b.ly = 0.1;
-  b.lz = 0.06;
-  b.nx = 6;
-  b.ny = 2;
-  b.nz = 2;
+  auto b = test::box_spec(mesh::ElementType::Hex8, 0.6, 0.1, 0.06, 6, 2, 2);
   Small s;
   s.lm = test::box_mesh(PETSC_COMM_WORLD, b);
   s.dofs = fe::number_dofs(s.lm, {"x0"});

@@ -51,14 +51,7 @@ Problem make(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::strin
 // each fixed-interface mode for a rigid translation of the interface in z, over the total mass,
 // equals the Euler–Bernoulli modal effective-mass fractions 0.6131, 0.1883, 0.0647, 0.0331.
 TEST(Select, CantileverEffectiveMassFractions) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Hex20;
-  b.lx = 1.0;
-  b.ly = 0.03;
-  b.lz = 0.02;
-  b.nx = 40;
-  b.ny = 3;
-  b.nz = 2;
+  auto b = test::box_spec(ElementType::Hex20, 1.0, 0.03, 0.02, 40, 3, 2);
   auto s = make(PETSC_COMM_WORLD, b, {}, "x0", 16);
   auto f = select::directional_mass_fractions(s.ic, s.ops.mass);
   // Modes bending in z: their z fraction dominates.
@@ -79,14 +72,7 @@ TEST(Select, CantileverEffectiveMassFractions) {
 // and (eq. 17) EIM = lambda VEIM = lambda^2 DEIM = lambda CMSchi = OMR / lambda per mode, OMR being
 // evaluated from its own formula (eq. 15) with K_sm.
 TEST(Select, IdentitiesWithAllInteriorModes) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Hex8;
-  b.lx = 1.0;
-  b.ly = 0.3;
-  b.lz = 0.2;
-  b.nx = 5;
-  b.ny = 1;
-  b.nz = 1;
+  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
   b.distortion = 0.1;
   auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
   auto dofs = fe::number_dofs(lm, {"x0"});
@@ -164,14 +150,7 @@ TEST(Select, IdentitiesWithAllInteriorModes) {
 
 // Selecting every mode gives plain Craig–Bampton; truncation by count and by fraction.
 TEST(Select, TruncationAndAllModes) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Wedge15;
-  b.lx = 1.0;
-  b.ly = 0.1;
-  b.lz = 0.06;
-  b.nx = 8;
-  b.ny = 2;
-  b.nz = 1;
+  auto b = test::box_spec(ElementType::Wedge15, 1.0, 0.1, 0.06, 8, 2, 1);
   auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 12);
   auto eim = select::scores(PETSC_COMM_WORLD, select::Method::EIM, s.ic, s.cb, {}, nullptr);
   auto all = select::truncate(select::Method::EIM, eim, -1, 1.0);
@@ -194,14 +173,7 @@ TEST(Select, TruncationAndAllModes) {
 // EBR: the default excitation (every boundary DOF alone, at several frequencies) ranks modes that
 // load the interface; an all-zero excitation is an error.
 TEST(Select, EbrExcitation) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Hex20;
-  b.lx = 1.0;
-  b.ly = 0.08;
-  b.lz = 0.05;
-  b.nx = 10;
-  b.ny = 2;
-  b.nz = 1;
+  auto b = test::box_spec(ElementType::Hex20, 1.0, 0.08, 0.05, 10, 2, 1);
   auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 10);
   select::Excitation ex;
   ex.freq_hz = {100, 500, 1500};
@@ -223,14 +195,7 @@ TEST(Select, EbrExcitation) {
 // (s(A + iB) = s(A) + s(B)), in-phase and anti-phase loads obey the parallelogram law
 // (s(A + B) + s(A - B) = 2 s(A) + 2 s(B)), and a common phase changes nothing.
 TEST(Select, EbrPhasesFollowTimeAveragedEnergy) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Hex20;
-  b.lx = 1.0;
-  b.ly = 0.08;
-  b.lz = 0.05;
-  b.nx = 10;
-  b.ny = 2;
-  b.nz = 1;
+  auto b = test::box_spec(ElementType::Hex20, 1.0, 0.08, 0.05, 10, 2, 1);
   auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 10);
   const PetscInt nb = s.cb.n_b;
   const double f1 = std::sqrt(s.cb.fixed_omega2[0]) / (2 * M_PI);
@@ -263,14 +228,7 @@ TEST(Select, EbrPhasesFollowTimeAveragedEnergy) {
 // The EBR load table: per-DOF lines grouped by frequency into harmonics, phases in degrees;
 // every bad line is an error naming the file and the line.
 TEST(Select, EbrLoadTable) {
-  mesh::BoxSpec b;
-  b.type = ElementType::Hex20;
-  b.lx = 1.0;
-  b.ly = 0.08;
-  b.lz = 0.05;
-  b.nx = 4;
-  b.ny = 1;
-  b.nz = 1;
+  auto b = test::box_spec(ElementType::Hex20, 1.0, 0.08, 0.05, 4, 1, 1);
   auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 4);
   const auto& ids = s.cb.boundary_node_ids;
   long pid = static_cast<long>(getpid());

@@ -24,6 +24,19 @@ inline mesh::Material steel() {
   return m;
 }
 
+/// A box of type with the given dimensions [m] and cells.
+inline mesh::BoxSpec box_spec(mesh::ElementType type, double lx, double ly, double lz, int nx, int ny, int nz) {
+  mesh::BoxSpec b;
+  b.type = type;
+  b.lx = lx;
+  b.ly = ly;
+  b.lz = lz;
+  b.nx = nx;
+  b.ny = ny;
+  b.nz = nz;
+  return b;
+}
+
 /// Generates a box on rank 0 of comm and distributes it. Collective.
 inline mesh::LocalMesh box_mesh(MPI_Comm comm, const mesh::BoxSpec& b) {
   int rank = 0;

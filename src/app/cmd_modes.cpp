@@ -52,8 +52,7 @@ void run_modes(MPI_Comm comm) {
   auto eig = cb::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
   check_options(comm, false);
 
-  std::vector<double> f_hz;
-  for (double l : eig.omega2) f_hz.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  const std::vector<double> f_hz = hz(eig.omega2);
   print0(comm, "\n  %-6s %16s %16s\n", "mode", "frequency [Hz]", "omega [rad/s]");
   for (std::size_t i = 0; i < f_hz.size(); ++i)
     print0(comm, "  %-6zu %16.6f %16.6f\n", i + 1, f_hz[i], kTwoPi * f_hz[i]);

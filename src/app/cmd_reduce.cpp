@@ -31,23 +31,16 @@ void run_reduce(MPI_Comm comm) {
   MORSE_CHECK(!(r.xdmf_set && r.xdmf && !r.write_basis),
               "-cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis");
   Model md = build_model(comm, o);
-  cb::CBSettings s;
-  s.boundary_set = r.boundary;
-  s.n_fixed = r.n_fixed;
-  s.fmax_hz = r.fmax;
-  s.damping = r.damping;
-  s.keep_basis = r.write_basis;
-  auto res = cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), s);
+  auto res = cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), cb_settings(r));
   check_options(comm, false);
 
   const int n = static_cast<int>(res.n());
   std::vector<double> rom_f;
   {
     StageTimer t(comm, "ReducedEigen");
-    for (double l : cb::dense_eigenvalues(n, res.K, res.M)) rom_f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+    rom_f = hz(cb::dense_eigenvalues(n, res.K, res.M));
   }
-  std::vector<double> fi_hz;
-  for (double l : res.fixed_omega2) fi_hz.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  const std::vector<double> fi_hz = hz(res.fixed_omega2);
   print0(comm, "morse: Craig-Bampton superelement: %d boundary DOFs (%zu nodes) + %d fixed-interface modes = %d\n",
          (int)res.n_b, res.boundary_node_ids.size(), (int)res.n_phi, n);
   print0(comm, "morse: K_ii factored once%s (%.3f s)\n", res.factor_reused ? ", shared by the eigen solver and the constraint modes" : "",

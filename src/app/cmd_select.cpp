@@ -126,7 +126,7 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
   return PETSC_SUCCESS;
 }
 
-std::string hz_of(double lambda) { return cat(std::sqrt(std::max(0.0, lambda)) / kTwoPi); }
+std::string hz_of(double lambda) { return cat(hz(lambda)); }
 
 }  // namespace
 
@@ -175,11 +175,7 @@ void run_select(MPI_Comm comm) {
               rom_name, " is not one of -select_method");
 
   Model md = build_model(comm, o);
-  cb::CBSettings cs;
-  cs.boundary_set = r.boundary;
-  cs.n_fixed = r.n_fixed;
-  cs.fmax_hz = r.fmax;
-  cs.damping = r.damping;
+  cb::CBSettings cs = cb_settings(r);
   cs.keep_basis = true;
   auto res = so.from.empty() ? cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), cs)
                              : cb::load_basis(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), so.from, r.boundary,
@@ -293,7 +289,7 @@ void run_select(MPI_Comm comm) {
     MORSE_CALL(MatMatMult(md.ops.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
     mac_basis = select::mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
   }
-  auto f_fom = [&](PetscInt j) { return std::sqrt(std::max(0.0, fom.omega2[j])) / kTwoPi; };
+  auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
   for (std::size_t mi = 0; mi < methods.size(); ++mi) {
     MethodResult mr;
     mr.name = so.methods[mi];
@@ -310,7 +306,7 @@ void run_select(MPI_Comm comm) {
     const int n = static_cast<int>(nb + mr.sel.selected.size());
     std::vector<double> vec;
     auto lam = cb::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
-    for (double l : lam) mr.rom_f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+    mr.rom_f = hz(lam);
     while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
     // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
     const PetscInt nq = std::max<PetscInt>(mr.in_band, 1);
@@ -365,10 +361,8 @@ void run_select(MPI_Comm comm) {
   io::write_provenance(out, "select", md.lm.mesh.units);
   auto gm = mesh::gather_to_rank0(md.lm);
   io::write_mesh(out, gm);
-  std::vector<double> fi_hz, fom_hz;
-  for (double l : res.fixed_omega2) fi_hz.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
-  for (PetscInt j = 0; j < n_fom; ++j) fom_hz.push_back(f_fom(j));
-  out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
+  const std::vector<double> fom_hz = hz(fom.omega2);
+  out.write("/cb/fixed_interface/frequencies_hz", hz(res.fixed_omega2));
   out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
   out.write("/select/fom/frequencies_hz", fom_hz);
   out.attribute("/select", "fmax_analysis_hz", f_an);

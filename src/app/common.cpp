@@ -224,4 +224,14 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
   return PETSC_SUCCESS;
 }
 
+cb::CBSettings cb_settings(const ReduceOptions& r) {
+  cb::CBSettings s;
+  s.boundary_set = r.boundary;
+  s.n_fixed = r.n_fixed;
+  s.fmax_hz = r.fmax;
+  s.damping = r.damping;
+  s.keep_basis = r.write_basis;
+  return s;
+}
+
 }  // namespace morse::app::detail

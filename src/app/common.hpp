@@ -8,10 +8,13 @@
 #include <petscmat.h>
 #include <petscsys.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "morse/cb/craig_bampton.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/mesh.hpp"
@@ -20,6 +23,15 @@
 namespace morse::app::detail {
 
 constexpr double kTwoPi = 6.283185307179586;
+
+/// Frequency [Hz] of an eigenvalue omega^2 (negative round-off of rigid modes clipped to 0).
+inline double hz(double omega2) { return std::sqrt(std::max(0.0, omega2)) / kTwoPi; }
+inline std::vector<double> hz(const std::vector<double>& omega2) {
+  std::vector<double> f;
+  f.reserve(omega2.size());
+  for (double l : omega2) f.push_back(hz(l));
+  return f;
+}
 
 struct CommonOptions {
   std::string mesh;
@@ -70,6 +82,9 @@ struct ReduceOptions {
 };
 
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
+
+/// The Craig-Bampton settings of the -boundary / -cb_* options (keep_basis as -cb_write_basis).
+cb::CBSettings cb_settings(const ReduceOptions& r);
 
 // The commands, one file each (cmd_<name>.cpp).
 void run_modes(MPI_Comm comm);
