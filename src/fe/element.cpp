@@ -573,6 +573,18 @@ double element_stiffness(ElementType t, const double* xyz, double E, double nu, 
   return min_det;
 }
 
+double stiffness_gradients(ElementType t, const double* xyz, double* g, double* wdet) {
+  const TypeData& d = type_data(t);
+  const int n = d.n;
+  double min_det = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < d.stiff.nq; ++q) {
+    const double det = physical_gradients(n, &d.stiff.dN[3 * n * q], xyz, g + 3 * n * q);
+    min_det = std::min(min_det, det);
+    wdet[q] = d.stiff.w[q] * det;
+  }
+  return min_det;
+}
+
 double element_mass(ElementType t, const double* xyz, double rho, double* Me) {
   const TypeData& d = type_data(t);
   const int n = d.n, nd = 3 * n;

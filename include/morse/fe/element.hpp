@@ -77,6 +77,13 @@ double element_mass(ElementType t, const double* xyz, double rho, double* Me);
 /// Isotropic elasticity matrix (6x6, Voigt order xx yy zz yz xz xy with engineering shear).
 std::array<double, 36> isotropic_elasticity(double E, double nu);
 
+/// Physical shape-function gradients at the points of stiffness_rule(t): g (nq x n x 3,
+/// row-major: dN_a/dx_k of node a at point q at g[3 (n q + a) + k]) and the weights w_q det J_q
+/// (nq). Returns the smallest det J (<= 0: inverted element; the outputs are then meaningless).
+/// Used by the geometrically nonlinear kernels (fe/nonlinear.hpp), so that they integrate with
+/// exactly the linear stiffness quadrature.
+double stiffness_gradients(ElementType t, const double* xyz, double* g, double* wdet);
+
 /// Strain-displacement evaluation: given xyz and xi, fills B (6 x 3n, row-major) and returns
 /// det J. Used for stress recovery and patch tests.
 double strain_displacement(ElementType t, const double* xyz, const double xi[3], double* B);

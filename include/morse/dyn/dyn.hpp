@@ -1,0 +1,162 @@
+// morse/dyn/dyn.hpp: loads, nonlinear statics and full-order nonlinear dynamics of the
+// distributed model (seed 003 eq. 1 without contact):
+//
+//   M u'' + C u' + K u + g_nl(u) = f_e(t).
+//
+// Loads are nodal: each names a node set, a direction, a force per node (newtons per node, not a
+// traction) and a harmonic time law F(t) = A sin(omega t + phase); omega = 0 means the constant
+// load A (the phase is then ignored).
+//
+// Statics: Newton (PETSc SNES, line search, MUMPS) on f_int(u) = lambda f_e(t_s), with load
+// stepping in lambda and cut-back of failed increments.
+//
+// Dynamics: an implicit, fixed-step, second-order, non-dissipative scheme in midpoint form
+//   M (v1 - v0)/h + C (v0 + v1)/2 + f_alg(u0, u1) = (f_e(t0) + f_e(t1))/2,
+//   (u1 - u0)/h = (v0 + v1)/2,
+// with f_alg either the energy-momentum midpoint force of St Venant–Kirchhoff (scheme "energy",
+// Simo & Tarnow 1992: exact discrete energy balance) or (f_int(u0) + f_int(u1))/2 (scheme
+// "trapezoidal", exactly Newmark's average acceleration rule). Both reduce to the same
+// trapezoidal rule for a linear model. Newton iterations with MUMPS on the symmetric iteration
+// matrix K_T + (2/h) C + (4/h^2) M; the factorization may be reused across iterations and steps
+// (modified Newton); the residual tolerance holds either way. Modal damping is a low-rank
+// operator, solved by the Sherman–Morrison–Woodbury formula, never a dense matrix.
+#pragma once
+
+#include <petscmat.h>
+#include <petscvec.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "morse/core/handle.hpp"
+#include "morse/fe/model.hpp"
+#include "morse/fe/nonlinear.hpp"
+#include "morse/mesh/partition.hpp"
+
+namespace morse::dyn {
+
+/// One nodal load: F(t) = amplitude * sin(omega t + phase) * dir on every node of `set`
+/// (omega = 0: constant amplitude * dir). dir is normalized by Loads.
+struct NodalLoad {
+  std::string set;
+  double dir[3] = {0, 0, 0};
+  double amplitude = 0.0;  ///< newtons per node
+  double omega = 0.0;      ///< rad/s
+  double phase = 0.0;      ///< rad
+};
+
+/// Parses a direction: x, y, z or vx,vy,vz. Returns "" or an error message.
+std::string parse_direction(const std::string& text, double dir[3]);
+
+/// The load vectors of a list of nodal loads on a distributed model. Collective.
+class Loads {
+ public:
+  /// Throws (collectively) if a set does not exist (the message lists the sets), is empty, or
+  /// a direction is zero. Loads on clamped DOFs are dropped (they are reactions).
+  Loads(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::vector<NodalLoad>& loads);
+  /// F = f_e(t) (F has the DOF layout). Collective.
+  void evaluate(double t, Vec F) const;
+  const std::vector<NodalLoad>& loads() const { return loads_; }
+  bool empty() const { return loads_.empty(); }
+  /// Largest omega of the loads (0 if none is harmonic).
+  double max_omega() const;
+
+ private:
+  std::vector<NodalLoad> loads_;
+  std::vector<UVec> patterns_;  // unit-amplitude spatial pattern of each load
+};
+
+// ------------------------------------------------------------------------------------------
+// Statics
+
+struct StaticSettings {
+  double time = 0.0;         ///< loads evaluated at this time
+  double load_factor = 1.0;  ///< final load factor lambda
+  PetscInt steps = 1;        ///< initial number of equal load increments
+  PetscInt max_cutbacks = 10;  ///< halvings of a failed increment before giving up
+  bool linear = false;       ///< solve K u = lambda f (no g_nl)
+  std::string prefix = "static_";  ///< options prefix of the SNES (and its KSP/PC)
+};
+
+/// One converged (or failed) load increment.
+struct StaticIncrement {
+  double lambda = 0.0;
+  PetscInt newton_iterations = 0;
+  double residual = 0.0;  ///< final ||f_int - lambda f||
+  bool converged = false;
+  std::string reason;     ///< SNES converged reason
+};
+
+struct StaticResult {
+  UVec u;
+  std::vector<StaticIncrement> history;  ///< every increment tried, failed ones included
+  double load_norm = 0.0;                ///< ||f_e(time)|| (lambda = 1)
+};
+
+/// Nonlinear (or linear) static solution. Throws morse::Error (collectively) when an increment
+/// still fails after max_cutbacks halvings, naming the load factor reached. Collective.
+StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSettings& s);
+
+// ------------------------------------------------------------------------------------------
+// Dynamics
+
+enum class Scheme { Energy, Trapezoidal };
+
+struct FomSettings {
+  double dt = 0.0;
+  double t_final = 0.0;
+  Scheme scheme = Scheme::Energy;
+  bool linear = false;           ///< g_nl = 0 (the linear twin, same everything else)
+  double modal_xi = 0.0;         ///< modal damping ratio on the first damping_modes modes
+  PetscInt damping_modes = 0;
+  double rayleigh_alpha = 0.0;   ///< C += alpha M
+  double rayleigh_beta = 0.0;    ///< C += beta K
+  double newton_rtol = 1e-8;     ///< ||R|| <= rtol * force scale + atol
+  double newton_atol = 1e-12;
+  PetscInt newton_max_it = 25;
+  /// Refactor the iteration matrix every `refactor_every` iterations within a step (1 = full
+  /// Newton); 0 = only when the residual does not fall by at least `refactor_ratio` in one
+  /// iteration (modified Newton, factor kept across steps).
+  PetscInt refactor_every = 0;
+  double refactor_ratio = 0.25;
+  std::string prefix = "fom_";   ///< options prefix of the KSP/PC and of the damping eigen solve
+};
+
+/// Energies at one instant (seed 003 eq. 46 is kinetic + strain_linear).
+struct Energies {
+  double kinetic = 0.0;
+  double strain_linear = 0.0;
+  double strain_nonlinear = 0.0;
+  double external_work = 0.0;   ///< work of f_e since t = 0
+  double damping_loss = 0.0;    ///< energy dissipated by C since t = 0
+  double eq46() const { return kinetic + strain_linear; }
+  /// kinetic + strain + damping loss - external work: constant in an exact balance.
+  double balance() const { return kinetic + strain_linear + strain_nonlinear + damping_loss - external_work; }
+};
+
+struct StepInfo {
+  PetscInt step = 0;  ///< 0 = initial state
+  double t = 0.0;
+  Vec u = nullptr, v = nullptr;  ///< lent for the callback's duration
+  Energies energy;
+  PetscInt newton_iterations = 0;
+  double residual = 0.0;
+};
+
+struct FomStats {
+  PetscInt steps = 0;
+  PetscInt newton_iterations = 0;
+  PetscInt factorizations = 0;
+  double seconds_force = 0, seconds_tangent = 0, seconds_factor = 0, seconds_solve = 0, seconds_total = 0;
+  std::vector<double> damping_omega;  ///< natural angular frequencies of the damped modes
+};
+
+/// Integrates from (u0, v0) (null: zero) to t_final in steps of dt. callback(info) runs after
+/// the initial state and after every step (collectively; may write output). Throws
+/// morse::Error (collectively) naming the time reached when Newton diverges or a NaN appears.
+/// Collective.
+FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSettings& s, Vec u0, Vec v0,
+                   const std::function<void(const StepInfo&)>& callback);
+
+}  // namespace morse::dyn

@@ -1,0 +1,340 @@
+// St Venant–Kirchhoff internal forces, tangent and energy (see morse/fe/nonlinear.hpp).
+//
+// Only the nonlinear parts are integrated here: g_nl, K_T - K and W - u^T K u / 2. Each is
+// written so that it vanishes term by term at u = 0 (no difference of large numbers), which
+// keeps K_T(0) = K and g_nl(0) = 0 exact and small displacements accurate. The linear parts
+// come from the assembled K.
+#include "morse/fe/nonlinear.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/fe/element.hpp"
+
+namespace morse::fe {
+
+namespace {
+
+// The stress-strain part of the kernel at one quadrature point, for the pair (Ha, Hb).
+struct PointState {
+  double Hm[9];   // (Ha + Hb) / 2
+  double S[9];    // S((E_a + E_b)/2)
+  double Pnl[9];  // P - S_lin(Hm) = S_nl + Hm S
+  double w_nl;    // nonlinear strain energy density (meaningful for Ha == Hb)
+};
+
+void point_state(const double* Ha, const double* Hb, double lam, double mu, PointState* p) {
+  double eps[9], enl[9];
+  for (int i = 0; i < 9; ++i) p->Hm[i] = 0.5 * (Ha[i] + Hb[i]);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      eps[3 * i + j] = 0.5 * (p->Hm[3 * i + j] + p->Hm[3 * j + i]);
+      double s = 0.0;
+      for (int k = 0; k < 3; ++k) s += Ha[3 * k + i] * Ha[3 * k + j] + Hb[3 * k + i] * Hb[3 * k + j];
+      enl[3 * i + j] = 0.25 * s;
+    }
+  const double tr_e = eps[0] + eps[4] + eps[8], tr_n = enl[0] + enl[4] + enl[8];
+  double snl[9];
+  double e_n = 0.0, n_n = 0.0;
+  for (int i = 0; i < 9; ++i) {
+    snl[i] = 2.0 * mu * enl[i];
+    p->S[i] = 2.0 * mu * (eps[i] + enl[i]);
+    e_n += eps[i] * enl[i];
+    n_n += enl[i] * enl[i];
+  }
+  for (int i = 0; i < 3; ++i) {
+    snl[4 * i] += lam * tr_n;
+    p->S[4 * i] += lam * (tr_e + tr_n);
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double s = snl[3 * i + j];
+      for (int k = 0; k < 3; ++k) s += p->Hm[3 * i + k] * p->S[3 * k + j];
+      p->Pnl[3 * i + j] = s;
+    }
+  p->w_nl = lam * tr_e * tr_n + 0.5 * lam * tr_n * tr_n + 2.0 * mu * e_n + mu * n_n;
+}
+
+// H[i][J] = sum_a u[3a+i] g[a][J].
+void displacement_gradient(int n, const double* u, const double* g, double* H) {
+  for (int k = 0; k < 9; ++k) H[k] = 0.0;
+  for (int a = 0; a < n; ++a) {
+    const double* ga = g + 3 * a;
+    const double* ua = u + 3 * a;
+    for (int i = 0; i < 3; ++i)
+      for (int J = 0; J < 3; ++J) H[3 * i + J] += ua[i] * ga[J];
+  }
+}
+
+}  // namespace
+
+Svk::Svk(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback, Mat K)
+    : comm_(lm.comm), K_(K) {
+  const auto& m = lm.mesh;
+  const std::int64_t nn = m.num_nodes(), ne = m.num_elements();
+  // Compact local numbering of the free DOFs of the local nodes.
+  std::vector<PetscInt> pos(3 * nn, -1), from;
+  for (std::int64_t k = 0; k < 3 * nn; ++k)
+    if (dofs.node_dof[k] >= 0) {
+      pos[k] = static_cast<PetscInt>(from.size());
+      from.push_back(dofs.node_dof[k]);
+    }
+  n_local_ = static_cast<PetscInt>(from.size());
+
+  type_n_.resize(ne);
+  elem_off_.assign(1, 0);
+  elem_nq_.resize(ne);
+  grad_off_.assign(1, 0);
+  wdet_off_.assign(1, 0);
+  lambda_.resize(ne);
+  mu_.resize(ne);
+  std::string err;
+  double xyz[3 * kMaxNodes];
+  for (std::int64_t e = 0; e < ne; ++e) {
+    const auto t = m.elem_types[e];
+    const auto off = m.elem_offsets[e];
+    const int n = static_cast<int>(m.elem_offsets[e + 1] - off);
+    type_n_[e] = n;
+    for (int a = 0; a < n; ++a) {
+      const auto k = m.elem_nodes[off + a];
+      for (int d = 0; d < 3; ++d) {
+        elem_pos_.push_back(pos[3 * k + d]);
+        elem_glob_.push_back(dofs.node_dof[3 * k + d]);
+        xyz[3 * a + d] = m.coords[3 * k + d];
+      }
+    }
+    elem_off_.push_back(static_cast<std::int64_t>(elem_pos_.size()));
+    const int nq = static_cast<int>(stiffness_rule(t).points.size());
+    elem_nq_[e] = nq;
+    grad_.resize(grad_.size() + 3 * n * nq);
+    wdet_.resize(wdet_.size() + nq);
+    const double det = stiffness_gradients(t, xyz, &grad_[grad_off_.back()], &wdet_[wdet_off_.back()]);
+    if (!(det > 0) && err.empty())
+      err = cat("element ", m.elem_ids[e], " of ", m.source, " is inverted or degenerate (min det J = ", det, ")");
+    grad_off_.push_back(static_cast<std::int64_t>(grad_.size()));
+    wdet_off_.push_back(static_cast<std::int64_t>(wdet_.size()));
+    const auto& mat = m.elem_material[e] >= 0 ? m.materials[m.elem_material[e]] : fallback;
+    lambda_[e] = mat.E * mat.nu / ((1.0 + mat.nu) * (1.0 - 2.0 * mat.nu));
+    mu_[e] = mat.E / (2.0 * (1.0 + mat.nu));
+  }
+  collective_check(comm_, err);
+
+  MORSE_CALL(VecCreateSeq(PETSC_COMM_SELF, n_local_, la_.ptr()));
+  MORSE_CALL(VecDuplicate(la_.get(), lb_.ptr()));
+  MORSE_CALL(VecDuplicate(la_.get(), lg_.ptr()));
+  UVec global;
+  MORSE_CALL(MatCreateVecs(K, global.ptr(), nullptr));
+  UIS is_from;
+  MORSE_CALL(ISCreateGeneral(PETSC_COMM_SELF, n_local_, from.data(), PETSC_COPY_VALUES, is_from.ptr()));
+  MORSE_CALL(VecScatterCreate(global.get(), is_from.get(), la_.get(), nullptr, scatter_.ptr()));
+}
+
+Svk::~Svk() = default;
+
+void Svk::to_local(Vec u, Vec local) const {
+  MORSE_CALL(VecScatterBegin(scatter_.get(), u, local, INSERT_VALUES, SCATTER_FORWARD));
+  MORSE_CALL(VecScatterEnd(scatter_.get(), u, local, INSERT_VALUES, SCATTER_FORWARD));
+}
+
+void Svk::add_to_global(Vec local, Vec g) const {
+  MORSE_CALL(VecSet(g, 0.0));
+  MORSE_CALL(VecScatterBegin(scatter_.get(), local, g, ADD_VALUES, SCATTER_REVERSE));
+  MORSE_CALL(VecScatterEnd(scatter_.get(), local, g, ADD_VALUES, SCATTER_REVERSE));
+}
+
+void Svk::element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt,
+                       double* energy) const {
+  const std::int64_t ne = static_cast<std::int64_t>(type_n_.size());
+  double ua[kMaxDofs], ub[kMaxDofs], ge[kMaxDofs], h[3 * kMaxNodes];
+  std::vector<double> Ke((what & kTangent) ? kMaxDofs * kMaxDofs : 0);
+  double w_total = 0.0;
+  for (std::int64_t e = 0; e < ne; ++e) {
+    const int n = type_n_[e], nd = 3 * n, nq = elem_nq_[e];
+    const PetscInt* pos = &elem_pos_[elem_off_[e]];
+    const double lam = lambda_[e], mu = mu_[e];
+    if (what & kTangent) std::fill(Ke.begin(), Ke.begin() + nd * nd, 0.0);
+    for (int v = 0; v < nv; ++v) {
+      const double* av = a + static_cast<std::int64_t>(v) * n_local_;
+      const double* bv = b ? b + static_cast<std::int64_t>(v) * n_local_ : nullptr;
+      for (int k = 0; k < nd; ++k) {
+        ua[k] = pos[k] >= 0 ? av[pos[k]] : 0.0;
+        if (bv) ub[k] = pos[k] >= 0 ? bv[pos[k]] : 0.0;
+      }
+      std::fill(ge, ge + nd, 0.0);
+      for (int q = 0; q < nq; ++q) {
+        const double* gq = &grad_[grad_off_[e] + 3 * n * q];
+        const double w = wdet_[wdet_off_[e] + q];
+        double Ha[9], Hb[9];
+        displacement_gradient(n, ua, gq, Ha);
+        if (bv)
+          displacement_gradient(n, ub, gq, Hb);
+        else
+          std::copy(Ha, Ha + 9, Hb);
+        PointState p;
+        point_state(Ha, Hb, lam, mu, &p);
+        if (what & kEnergy) w_total += w * p.w_nl;
+        if (what & kForce)
+          for (int c = 0; c < n; ++c) {
+            const double* gc = gq + 3 * c;
+            for (int i = 0; i < 3; ++i)
+              ge[3 * c + i] += w * (p.Pnl[3 * i] * gc[0] + p.Pnl[3 * i + 1] * gc[1] + p.Pnl[3 * i + 2] * gc[2]);
+          }
+        if (what & kTangent) {
+          // h_c = Hm g_c; B = Hm + Hm^T + Hm Hm^T (F F^T - I).
+          for (int c = 0; c < n; ++c) {
+            const double* gc = gq + 3 * c;
+            for (int i = 0; i < 3; ++i)
+              h[3 * c + i] = p.Hm[3 * i] * gc[0] + p.Hm[3 * i + 1] * gc[1] + p.Hm[3 * i + 2] * gc[2];
+          }
+          double B[9];
+          for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) {
+              double s = p.Hm[3 * i + k] + p.Hm[3 * k + i];
+              for (int l = 0; l < 3; ++l) s += p.Hm[3 * i + l] * p.Hm[3 * k + l];
+              B[3 * i + k] = w * mu * s;
+            }
+          const double wl = w * lam, wm = w * mu;
+          for (int c = 0; c < n; ++c) {
+            const double* gc = gq + 3 * c;
+            const double* hc = h + 3 * c;
+            double Sg[3];
+            for (int i = 0; i < 3; ++i) Sg[i] = w * (p.S[3 * i] * gc[0] + p.S[3 * i + 1] * gc[1] + p.S[3 * i + 2] * gc[2]);
+            for (int d = c; d < n; ++d) {
+              const double* gd = gq + 3 * d;
+              const double* hd = h + 3 * d;
+              const double geo = Sg[0] * gd[0] + Sg[1] * gd[1] + Sg[2] * gd[2];
+              const double gg = gc[0] * gd[0] + gc[1] * gd[1] + gc[2] * gd[2];
+              double* blk = &Ke[3 * c * nd + 3 * d];
+              for (int i = 0; i < 3; ++i)
+                for (int k = 0; k < 3; ++k)
+                  blk[i * nd + k] += (i == k ? geo : 0.0) +
+                                     wl * (gc[i] * hd[k] + hc[i] * gd[k] + hc[i] * hd[k]) + gg * B[3 * i + k] +
+                                     wm * (gd[i] * hc[k] + hd[i] * gc[k] + hd[i] * hc[k]);
+            }
+          }
+        }
+      }
+      if (what & kForce) {
+        double* gv = g + static_cast<std::int64_t>(v) * n_local_;
+        for (int k = 0; k < nd; ++k)
+          if (pos[k] >= 0) gv[pos[k]] += ge[k];
+      }
+    }
+    if (what & kTangent) {
+      for (int r = 0; r < nd; ++r)
+        for (int c = r + 1; c < nd; ++c) Ke[c * nd + r] = Ke[r * nd + c];
+      MORSE_CALL(MatSetValues(Kt, nd, &elem_glob_[elem_off_[e]], nd, &elem_glob_[elem_off_[e]], Ke.data(), ADD_VALUES));
+    }
+  }
+  if (energy) *energy = w_total;
+}
+
+void Svk::nonlinear_force(Vec u, Vec g) const { midpoint_nonlinear_force(u, nullptr, g); }
+
+void Svk::midpoint_nonlinear_force(Vec ua, Vec ub, Vec g) const {
+  PetscLogEvent ev = log_event("SvkForce");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  to_local(ua, la_.get());
+  if (ub) to_local(ub, lb_.get());
+  MORSE_CALL(VecSet(lg_.get(), 0.0));
+  const double *a, *b = nullptr;
+  double* gl;
+  MORSE_CALL(VecGetArrayRead(la_.get(), &a));
+  if (ub) MORSE_CALL(VecGetArrayRead(lb_.get(), &b));
+  MORSE_CALL(VecGetArray(lg_.get(), &gl));
+  element_loop(kForce, 1, a, b, gl, nullptr, nullptr);
+  MORSE_CALL(VecRestoreArray(lg_.get(), &gl));
+  if (ub) MORSE_CALL(VecRestoreArrayRead(lb_.get(), &b));
+  MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
+  add_to_global(lg_.get(), g);
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+void Svk::internal_force(Vec u, Vec f) const {
+  nonlinear_force(u, f);
+  MORSE_CALL(MatMultAdd(K_, u, f, f));
+}
+
+UMat Svk::create_tangent() const {
+  UMat Kt;
+  MORSE_CALL(MatDuplicate(K_, MAT_COPY_VALUES, Kt.ptr()));
+  return Kt;
+}
+
+void Svk::tangent(Vec u, Mat Kt) const { midpoint_tangent(u, nullptr, Kt); }
+
+void Svk::midpoint_tangent(Vec ua, Vec ub, Mat Kt) const {
+  PetscLogEvent ev = log_event("SvkTangent");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  MORSE_CALL(MatCopy(K_, Kt, SAME_NONZERO_PATTERN));
+  to_local(ua, la_.get());
+  if (ub) to_local(ub, lb_.get());
+  const double *a, *b = nullptr;
+  MORSE_CALL(VecGetArrayRead(la_.get(), &a));
+  if (ub) MORSE_CALL(VecGetArrayRead(lb_.get(), &b));
+  element_loop(kTangent, 1, a, b, nullptr, Kt, nullptr);
+  if (ub) MORSE_CALL(VecRestoreArrayRead(lb_.get(), &b));
+  MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
+  MORSE_CALL(MatAssemblyBegin(Kt, MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(Kt, MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+StrainEnergy Svk::energy(Vec u) const {
+  StrainEnergy s;
+  UVec Ku;
+  MORSE_CALL(VecDuplicate(u, Ku.ptr()));
+  MORSE_CALL(MatMult(K_, u, Ku.get()));
+  MORSE_CALL(VecDot(Ku.get(), u, &s.linear));
+  s.linear *= 0.5;
+  to_local(u, la_.get());
+  const double* a;
+  MORSE_CALL(VecGetArrayRead(la_.get(), &a));
+  double local = 0.0;
+  element_loop(kEnergy, 1, a, nullptr, nullptr, nullptr, &local);
+  MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
+  MPI_Allreduce(&local, &s.nonlinear, 1, MPI_DOUBLE, MPI_SUM, comm_);
+  return s;
+}
+
+void Svk::nonlinear_force_block(Mat U, Mat G, PetscInt chunk) const {
+  PetscInt nu = 0, ng = 0;
+  MORSE_CALL(MatGetSize(U, nullptr, &nu));
+  MORSE_CALL(MatGetSize(G, nullptr, &ng));
+  MORSE_CHECK(nu == ng, "Svk::nonlinear_force_block: U has ", nu, " columns, G has ", ng);
+  MORSE_CHECK(chunk > 0, "Svk::nonlinear_force_block: chunk must be positive");
+  PetscLogEvent ev = log_event("SvkForceBlock");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  std::vector<double> a, g;
+  for (PetscInt j0 = 0; j0 < nu; j0 += chunk) {
+    const PetscInt nv = std::min(chunk, nu - j0);
+    a.assign(static_cast<std::size_t>(nv) * n_local_, 0.0);
+    g.assign(a.size(), 0.0);
+    for (PetscInt j = 0; j < nv; ++j) {
+      Vec x;
+      MORSE_CALL(MatDenseGetColumnVecRead(U, j0 + j, &x));
+      to_local(x, la_.get());
+      MORSE_CALL(MatDenseRestoreColumnVecRead(U, j0 + j, &x));
+      const double* l;
+      MORSE_CALL(VecGetArrayRead(la_.get(), &l));
+      std::copy(l, l + n_local_, a.begin() + j * n_local_);
+      MORSE_CALL(VecRestoreArrayRead(la_.get(), &l));
+    }
+    element_loop(kForce, static_cast<int>(nv), a.data(), nullptr, g.data(), nullptr, nullptr);
+    for (PetscInt j = 0; j < nv; ++j) {
+      double* l;
+      MORSE_CALL(VecGetArray(lg_.get(), &l));
+      std::copy(g.begin() + j * n_local_, g.begin() + (j + 1) * n_local_, l);
+      MORSE_CALL(VecRestoreArray(lg_.get(), &l));
+      Vec y;
+      MORSE_CALL(MatDenseGetColumnVecWrite(G, j0 + j, &y));
+      add_to_global(lg_.get(), y);
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(G, j0 + j, &y));
+    }
+  }
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+}  // namespace morse::fe
