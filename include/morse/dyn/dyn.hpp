@@ -76,6 +76,8 @@ struct StaticSettings {
   PetscInt steps = 1;        ///< initial number of equal load increments
   PetscInt max_cutbacks = 10;  ///< halvings of a failed increment before giving up
   bool linear = false;       ///< solve K u = lambda f (no g_nl)
+  double rtol = 1e-9;        ///< converged when ||R|| <= rtol max(||lambda f||, ||K u||)
+  PetscInt max_it = 25;      ///< Newton iterations per increment
   std::string prefix = "static_";  ///< options prefix of the SNES (and its KSP/PC)
 };
 

@@ -1,0 +1,240 @@
+// Nonlinear statics and full-order dynamics (dyn/dyn.hpp) against references from outside
+// morse: the Euler elastica (large-deflection cantilever), modal superposition of a harmonic
+// response in closed form, modal damping decay exp(-xi w t), exact energy balance of the energy
+// scheme, and the independence of the rank count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "elastica.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "util.hpp"
+
+using namespace morse;
+using mesh::ElementType;
+
+namespace {
+
+struct Beam {
+  mesh::LocalMesh lm;
+  fe::DofMap dofs;
+  fe::Operators ops;
+  mesh::Material mat;
+};
+
+Beam cantilever(MPI_Comm comm, ElementType t, double L, double h, int nx, int nyz, double nu) {
+  Beam b;
+  b.mat = test::steel();
+  b.mat.nu = nu;
+  b.lm = test::box_mesh(comm, test::box_spec(t, L, h, h, nx, nyz, nyz));
+  b.dofs = fe::number_dofs(b.lm, {"x0"});
+  b.ops = fe::assemble(b.lm, b.dofs, b.mat);
+  return b;
+}
+
+// Mean of component d of u over the nodes of a set. Collective.
+double set_mean(const Beam& b, Vec u, const std::string& set, int d) {
+  int rank = 0;
+  MPI_Comm_rank(b.lm.comm, &rank);
+  const double* a;
+  MORSE_CALL(VecGetArrayRead(u, &a));
+  double s[2] = {0, 0}, g[2];
+  for (auto k : b.lm.mesh.node_sets.at(set)) {
+    if (b.lm.node_owner[k] != rank) continue;
+    const PetscInt dof = b.dofs.node_dof[3 * k + d];
+    s[0] += dof >= 0 ? a[dof - b.dofs.first] : 0.0;
+    s[1] += 1;
+  }
+  MORSE_CALL(VecRestoreArrayRead(u, &a));
+  MPI_Allreduce(s, g, 2, MPI_DOUBLE, MPI_SUM, b.lm.comm);
+  return g[0] / g[1];
+}
+
+dyn::NodalLoad tip_load(double amplitude, double omega, int dir = 2) {
+  dyn::NodalLoad l;
+  l.set = "x1";
+  l.dir[dir] = 1.0;
+  l.amplitude = amplitude;
+  l.omega = omega;
+  return l;
+}
+
+}  // namespace
+
+// Tip deflection of a slender cantilever (L/h = 25) under a dead tip load P against the
+// elliptic-integral elastica, at P L^2/EI = 1 and 5 (tip rotation 26 and 70 degrees).
+TEST(Static, CantileverMatchesEulerElastica) {
+  const double L = 1.0, h = 0.04;
+  auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex20, L, h, 24, 1, 0.0);
+  fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
+  const double EI = b.mat.E * h * h * h * h / 12.0;
+  const double n_tip = static_cast<double>(b.lm.node_set_sizes.at("x1"));
+  for (double alpha : {1.0, 5.0}) {
+    const double P = alpha * EI / (L * L);
+    dyn::Loads loads(b.lm, b.dofs, {tip_load(P / n_tip, 0.0)});
+    dyn::StaticSettings s;
+    s.steps = alpha > 2 ? 8 : 3;
+    auto r = dyn::solve_static(svk, loads, s);
+    const auto ref = test::cantilever_tip_load_elastica(alpha);
+    const double w = set_mean(b, r.u.get(), "x1", 2) / L, shortening = -set_mean(b, r.u.get(), "x1", 0) / L;
+    EXPECT_NEAR(w, ref.deflection, 0.01 * ref.deflection) << "alpha " << alpha;
+    EXPECT_NEAR(shortening, ref.shortening, 0.02 * ref.shortening) << "alpha " << alpha;
+    // The linear solution is w/L = alpha/3, far from the elastica at alpha = 5.
+    s.linear = true;
+    auto rl = dyn::solve_static(svk, loads, s);
+    EXPECT_NEAR(set_mean(b, rl.u.get(), "x1", 2) / L, alpha / 3.0, 0.01 * alpha / 3.0);
+  }
+}
+
+// Linear twin under a harmonic tip load from rest against modal superposition in closed form:
+// u(t) = sum_k phi_k phi_k^T F / (w_k^2 - W^2) (sin W t - W/w_k sin w_k t), with the modes of the
+// model (20 of them plus the quasi-static correction of the rest).
+TEST(Fom, LinearTwinMatchesModalSuperposition) {
+  auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex20, 1.0, 0.1, 6, 1, 0.3);
+  fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
+  cb::EigenSettings es;
+  es.nev = 20;
+  es.prefix = "test_modes_";
+  auto eig = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
+  const double w1 = std::sqrt(eig.omega2[0]), W = 0.6 * w1, A = 100.0;
+  dyn::Loads loads(b.lm, b.dofs, {tip_load(A, W)});
+  UVec F, ustat, tmp;
+  MORSE_CALL(MatCreateVecs(b.ops.K.get(), F.ptr(), ustat.ptr()));
+  MORSE_CALL(VecDuplicate(F.get(), tmp.ptr()));
+  loads.evaluate(M_PI / (2 * W), F.get());  // amplitude pattern
+  test::direct_solve(b.ops.K.get(), F.get(), ustat.get());  // K^-1 F (all modes, static)
+  // Tip response of each mode and of the static remainder.
+  const int m = 20;
+  std::vector<double> coef(m), tip(m);
+  double tip_static = set_mean(b, ustat.get(), "x1", 2), tip_rest = tip_static;
+  for (int k = 0; k < m; ++k) {
+    Vec phi;
+    MORSE_CALL(MatDenseGetColumnVecRead(eig.V.get(), k, &phi));
+    MORSE_CALL(VecDot(phi, F.get(), &coef[k]));
+    tip[k] = set_mean(b, phi, "x1", 2);
+    MORSE_CALL(MatDenseRestoreColumnVecRead(eig.V.get(), k, &phi));
+    tip_rest -= coef[k] * tip[k] / eig.omega2[k];
+  }
+  auto exact = [&](double t) {
+    double u = tip_rest * std::sin(W * t);
+    for (int k = 0; k < m; ++k) {
+      const double wk = std::sqrt(eig.omega2[k]);
+      u += tip[k] * coef[k] / (eig.omega2[k] - W * W) * (std::sin(W * t) - W / wk * std::sin(wk * t));
+    }
+    return u;
+  };
+  dyn::FomSettings s;
+  s.linear = true;
+  s.dt = 2 * M_PI / w1 / 200;
+  s.t_final = 3 * 2 * M_PI / W;
+  double err = 0, peak = 0;
+  dyn::integrate(svk, b.ops.M.get(), loads, s, nullptr, nullptr, [&](const dyn::StepInfo& i) {
+    const double u = set_mean(b, i.u, "x1", 2), e = exact(i.t);
+    err = std::max(err, std::abs(u - e));
+    peak = std::max(peak, std::abs(e));
+  });
+  EXPECT_LT(err, 0.01 * peak) << "max error " << err << " peak " << peak;
+}
+
+// Modal damping (low-rank C, Woodbury solve): free decay from the first mode's shape follows
+// exp(-xi w1 t).
+TEST(Fom, ModalDampingDecayRate) {
+  auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex20, 1.0, 0.1, 6, 1, 0.3);
+  fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
+  cb::EigenSettings es;
+  es.nev = 3;
+  es.prefix = "test_modes_";
+  auto eig = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
+  const double w1 = std::sqrt(eig.omega2[0]), xi = 0.02;
+  UVec u0;
+  MORSE_CALL(MatCreateVecs(b.ops.K.get(), u0.ptr(), nullptr));
+  Vec phi;
+  MORSE_CALL(MatDenseGetColumnVecRead(eig.V.get(), 0, &phi));
+  MORSE_CALL(VecCopy(phi, u0.get()));
+  MORSE_CALL(MatDenseRestoreColumnVecRead(eig.V.get(), 0, &phi));
+  dyn::Loads loads(b.lm, b.dofs, {});
+  dyn::FomSettings s;
+  s.linear = true;
+  s.modal_xi = xi;
+  s.damping_modes = 3;
+  const double T = 2 * M_PI / w1;
+  s.dt = T / 400;
+  s.t_final = 10 * T;
+  double peak_first = 0, peak_last = 0, q0 = 0;
+  dyn::integrate(svk, b.ops.M.get(), loads, s, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
+    const double q = set_mean(b, i.u, "x1", 2);
+    if (i.step == 0) q0 = q;
+    if (i.t < T) peak_first = std::max(peak_first, std::abs(q));
+    if (i.t > 9 * T - 1e-12) peak_last = std::max(peak_last, std::abs(q));
+  });
+  ASSERT_GT(std::abs(q0), 0.0);
+  // Envelope after 9 periods of the damped oscillator (w_d = w1 sqrt(1 - xi^2)).
+  const double expected = std::exp(-xi * w1 * 9 * T / std::sqrt(1 - xi * xi));
+  EXPECT_NEAR(peak_last / peak_first, expected, 0.01 * expected);
+}
+
+// Undamped, unforced large-amplitude vibration from a deflected state: the energy scheme keeps
+// kinetic + strain energy constant to the Newton tolerance over 1,000 steps.
+TEST(Fom, EnergySchemeConservesEnergy) {
+  auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex8, 1.0, 0.05, 8, 1, 0.3);
+  fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
+  const double EI = b.mat.E * std::pow(0.05, 4) / 12.0;
+  dyn::Loads push(b.lm, b.dofs, {tip_load(2.0 * EI / b.lm.node_set_sizes.at("x1"), 0.0)});
+  dyn::StaticSettings ss;
+  ss.steps = 4;
+  auto u0 = dyn::solve_static(svk, push, ss);
+  dyn::Loads none(b.lm, b.dofs, {});
+  dyn::FomSettings s;
+  s.dt = 2e-4;
+  s.t_final = 1000 * s.dt;
+  s.newton_rtol = 1e-10;
+  double e0 = 0, worst = 0, tip_min = 1e300, strain_nl = 0;
+  auto st = dyn::integrate(svk, b.ops.M.get(), none, s, u0.u.get(), nullptr, [&](const dyn::StepInfo& i) {
+    if (i.step == 0) e0 = i.energy.balance();
+    worst = std::max(worst, std::abs(i.energy.balance() - e0));
+    tip_min = std::min(tip_min, set_mean(b, i.u, "x1", 2));
+    strain_nl = std::max(strain_nl, std::abs(i.energy.strain_nonlinear));
+  });
+  EXPECT_EQ(st.steps, 1000);
+  EXPECT_LT(tip_min, 0.0) << "the beam should swing through";
+  EXPECT_GT(strain_nl, 1e-3 * e0) << "not a nonlinear test";
+  EXPECT_LT(worst, 1e-8 * e0) << "energy drift " << worst << " of " << e0;
+}
+
+// The same short nonlinear forced run on one rank and on all ranks agrees to round-off.
+TEST(Fom, IndependentOfRankCount) {
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  auto run = [](MPI_Comm comm) {
+    auto b = cantilever(comm, ElementType::Wedge15, 1.0, 0.05, 6, 1, 0.3);
+    fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
+    const double EI = b.mat.E * std::pow(0.05, 4) / 12.0;
+    dyn::Loads loads(b.lm, b.dofs, {tip_load(3.0 * EI / b.lm.node_set_sizes.at("x1"), 300.0, 1)});
+    dyn::FomSettings s;
+    s.dt = 1e-4;
+    s.t_final = 40 * s.dt;
+    s.rayleigh_alpha = 1.0;
+    std::vector<double> h;
+    dyn::integrate(svk, b.ops.M.get(), loads, s, nullptr, nullptr, [&](const dyn::StepInfo& i) {
+      for (int d = 0; d < 3; ++d) h.push_back(set_mean(b, i.u, "x1", d));
+      h.push_back(i.energy.balance());
+    });
+    return h;
+  };
+  std::vector<double> serial;
+  if (rank == 0) serial = run(PETSC_COMM_SELF);
+  auto all = run(PETSC_COMM_WORLD);
+  std::string msg;
+  if (rank == 0) {
+    // Per quantity (u_x, u_y, u_z at the tip, energy balance): max difference / max value.
+    for (std::size_t q = 0; q < 4; ++q) {
+      double scale = 0, diff = 0;
+      for (std::size_t i = q; i < all.size(); i += 4) {
+        scale = std::max(scale, std::abs(serial[i]));
+        diff = std::max(diff, std::abs(serial[i] - all[i]));
+      }
+      if (!(diff <= 1e-9 * scale)) msg += cat("quantity ", q, ": 1 rank vs all ranks differ by ", diff, " of ", scale, "; ");
+    }
+  }
+  EXPECT_FALSE(any_rank(PETSC_COMM_WORLD, !msg.empty())) << msg;
+}
