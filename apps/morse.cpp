@@ -16,6 +16,8 @@ static const char kHelp[] =
     "  modes     lowest eigenpairs of the clamped full model\n"
     "  reduce    Craig-Bampton superelement\n"
     "  select    rank and select fixed-interface modes (LPF EIM VEIM DEIM OMR CMSchi EBR IMR)\n"
+    "  static    nonlinear (St Venant-Kirchhoff) static solution under nodal loads\n"
+    "  fom       full-order nonlinear implicit dynamics under nodal loads (the reference)\n"
     "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n"
     "  mesh info -mesh FILE   read a mesh and report its content and quality\n";
 
@@ -55,7 +57,7 @@ int main(int argc, char** argv) {
       if (words.empty()) {
         PetscBool help = PETSC_FALSE;
         PetscOptionsHasHelp(nullptr, &help);
-        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, mesh); see -help");
+        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, static, fom, mesh); see -help");
       } else {
         morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
       }

@@ -25,8 +25,8 @@ namespace {
 bool inner_option(const std::string& name) {
   // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
   // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
-  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_"};
-  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing"};
+  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_"};
+  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "snes_", "ksp_", "pc_", "mat_mumps_"};
   for (const char* p : solvers)
     if (name.rfind(p, 0) == 0)
       for (const char* q : inner)
@@ -111,7 +111,8 @@ void check_options(MPI_Comm comm, bool early) {
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
   std::string bad;
   static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out",
-                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "sweep_"};
+                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "sweep_",
+                                         "load_", "static_", "fom_"};
   for (PetscInt i = 0; i < n; ++i) {
     std::string name = names[i];
     if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
@@ -200,6 +201,55 @@ void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vecto
   out.attribute("/rom", "dof_order",
                 "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then the "
                 "fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
+}
+
+PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets) {
+  char* v[64];
+  PetscInt n = 64;
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse set list", "");
+  PetscCall(PetscOptionsStringArray(name, help, "", v, &n, &set));
+  PetscOptionsEnd();
+  if (set)
+    for (PetscInt i = 0; i < n; ++i) {
+      sets->emplace_back(v[i]);
+      PetscCall(PetscFree(v[i]));
+    }
+  return PETSC_SUCCESS;
+}
+
+PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error) {
+  std::vector<std::string> sets;
+  PetscCall(get_set_list(comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated",
+                         &sets));
+  PetscOptionsBegin(comm, nullptr, "morse loads (F(t) = A sin(omega t + phase) per node; omega = 0: constant A)", "");
+  for (const auto& name : sets) {
+    dyn::NodalLoad l;
+    l.set = name;
+    const std::string p = "-load_" + name + "_";
+    char buf[256] = "";
+    PetscBool has_dir = PETSC_FALSE, has_amp = PETSC_FALSE;
+    PetscCall(PetscOptionsString((p + "dir").c_str(), "Direction: x, y, z or vx,vy,vz (normalized)", "", buf, buf,
+                                 sizeof buf, &has_dir));
+    PetscCall(PetscOptionsReal((p + "amplitude").c_str(), "Force per node [N] (not a traction)", "", l.amplitude,
+                               &l.amplitude, &has_amp));
+    PetscCall(PetscOptionsReal((p + "omega").c_str(), "Angular frequency [rad/s]; 0 = constant load", "", l.omega,
+                               &l.omega, nullptr));
+    PetscCall(PetscOptionsReal((p + "phase").c_str(), "Phase [rad]", "", l.phase, &l.phase, nullptr));
+    if (error->empty()) {
+      if (!has_dir)
+        *error = cat("load on set ", name, ": give its direction with ", p, "dir x|y|z|vx,vy,vz");
+      else if (!has_amp)
+        *error = cat("load on set ", name, ": give its force per node with ", p, "amplitude");
+      else if (auto why = dyn::parse_direction(buf, l.dir); !why.empty())
+        *error = cat(p, "dir: ", why);
+      else if (l.omega < 0)
+        *error = cat(p, "omega must be >= 0 (got ", l.omega, ")");
+    }
+    loads->push_back(l);
+  }
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
 }
 
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {

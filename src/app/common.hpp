@@ -11,10 +11,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/dyn/dyn.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/mesh.hpp"
@@ -86,10 +88,21 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
 /// The Craig-Bampton settings of the -boundary / -cb_* options (keep_basis as -cb_write_basis).
 cb::CBSettings cb_settings(const ReduceOptions& r);
 
+/// The shared nodal loads: -load_sets SET[,SET...] and, per set, -load_<SET>_dir x|y|z|vx,vy,vz,
+/// -load_<SET>_amplitude (newtons per node, required), -load_<SET>_omega (rad/s, 0 = constant)
+/// and -load_<SET>_phase (rad). A missing direction or amplitude, or a bad direction, is an
+/// error that names the option.
+PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error);
+
+/// A comma-separated list of node sets from option `name` (empty if not given).
+PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets);
+
 // The commands, one file each (cmd_<name>.cpp).
 void run_modes(MPI_Comm comm);
 void run_reduce(MPI_Comm comm);
 void run_select(MPI_Comm comm);
 void run_mesh(MPI_Comm comm, const std::vector<std::string>& args);
+void run_static(MPI_Comm comm);
+void run_fom(MPI_Comm comm);
 
 }  // namespace morse::app::detail

@@ -107,6 +107,7 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
   const double h = s.dt;
   const PetscInt n_steps = static_cast<PetscInt>(std::ceil(s.t_final / h - 1e-9));
   FomStats st;
+  StageTimer stage(comm, "Fom");
   const double t_start = now();
 
   UVec u0, v0, u1, v1, F0, F1, R, x, w, g0, g1, Cv, tmp;

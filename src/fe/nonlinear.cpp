@@ -72,6 +72,7 @@ void displacement_gradient(int n, const double* u, const double* g, double* H) {
 
 Svk::Svk(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback, Mat K)
     : comm_(lm.comm), K_(K) {
+  StageTimer stage(comm_, "SvkSetup");
   const auto& m = lm.mesh;
   const std::int64_t nn = m.num_nodes(), ne = m.num_elements();
   // Compact local numbering of the free DOFs of the local nodes.

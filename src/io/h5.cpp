@@ -2,6 +2,7 @@
 
 #include <petscsys.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -165,6 +166,191 @@ void H5Output::commit() {
   }
   collective_check(comm_, error_);
   committed_ = true;
+}
+
+void H5Output::suspend() {
+  if (rank_ == 0 && file_ >= 0) {
+    if (H5Fclose(file_) < 0) note_error("(suspend)");
+    file_ = -1;
+  }
+  collective_check(comm_, error_);
+}
+
+void H5Output::resume() {
+  if (rank_ == 0) {
+    file_ = H5Fopen(tmp_.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    if (file_ < 0) note_error("(reopen)");
+  }
+  collective_check(comm_, error_);
+}
+
+H5SliceWriter::H5SliceWriter(MPI_Comm comm, const std::string& file, std::int64_t n_global, std::int64_t first,
+                             std::int64_t n_local)
+    : comm_(comm), file_name_(file), n_global_(n_global), first_(first), n_local_(n_local) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_fapl_mpio(fapl, comm, MPI_INFO_NULL);
+  file_ = H5Fopen(file.c_str(), H5F_ACC_RDWR, fapl);
+  H5Pclose(fapl);
+  dxpl_ = H5Pcreate(H5P_DATASET_XFER);
+  H5Pset_dxpl_mpio(dxpl_, H5FD_MPIO_COLLECTIVE);
+  check(file_ >= 0, "(parallel open)");
+}
+
+H5SliceWriter::~H5SliceWriter() {
+  for (hid_t d : sets_)
+    if (d >= 0) H5Dclose(d);
+  if (dxpl_ >= 0) H5Pclose(dxpl_);
+  if (file_ >= 0) H5Fclose(file_);  // not collective-safe after an error; only on unwinding
+}
+
+void H5SliceWriter::check(bool ok, const std::string& what) {
+  collective_check(comm_, ok ? "" : cat("HDF5 error writing ", what, " to ", file_name_, " (parallel HDF5)"));
+}
+
+namespace {
+// Creates the intermediate groups of name (collective in parallel HDF5).
+hid_t create_with_groups(hid_t file, const std::string& name, hid_t type, hid_t space) {
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  hid_t d = H5Dcreate2(file, name.c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+  H5Pclose(lcpl);
+  return d;
+}
+}  // namespace
+
+int H5SliceWriter::create(const std::string& name, std::int64_t n_rows) {
+  hsize_t dims[2] = {static_cast<hsize_t>(n_rows), static_cast<hsize_t>(n_global_)};
+  const bool two = n_rows > 0;
+  hid_t space = two ? H5Screate_simple(2, dims, nullptr) : H5Screate_simple(1, dims + 1, nullptr);
+  hid_t d = create_with_groups(file_, name, H5T_NATIVE_DOUBLE, space);
+  H5Sclose(space);
+  check(d >= 0, name);
+  sets_.push_back(d);
+  two_d_.push_back(two);
+  return static_cast<int>(sets_.size()) - 1;
+}
+
+void H5SliceWriter::write_int(const std::string& name, const std::vector<std::int64_t>& local) {
+  hsize_t n = static_cast<hsize_t>(n_global_), off = static_cast<hsize_t>(first_), cnt = static_cast<hsize_t>(n_local_);
+  hid_t space = H5Screate_simple(1, &n, nullptr);
+  hid_t d = create_with_groups(file_, name, H5T_NATIVE_INT64, space);
+  bool ok = d >= 0 && static_cast<std::int64_t>(local.size()) == n_local_;
+  if (ok) {
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, &off, nullptr, &cnt, nullptr);
+    hid_t mem = H5Screate_simple(1, &cnt, nullptr);
+    ok = H5Dwrite(d, H5T_NATIVE_INT64, mem, space, dxpl_, local.data()) >= 0;
+    H5Sclose(mem);
+  }
+  if (d >= 0) H5Dclose(d);
+  H5Sclose(space);
+  check(ok, name);
+}
+
+void H5SliceWriter::write_row(int dataset, std::int64_t row, Vec x) {
+  hid_t d = sets_.at(dataset);
+  hid_t space = H5Dget_space(d);
+  const bool two = two_d_[dataset];
+  hsize_t off[2] = {static_cast<hsize_t>(row), static_cast<hsize_t>(first_)};
+  hsize_t cnt[2] = {1, static_cast<hsize_t>(n_local_)};
+  H5Sselect_hyperslab(space, H5S_SELECT_SET, two ? off : off + 1, nullptr, two ? cnt : cnt + 1, nullptr);
+  hid_t mem = H5Screate_simple(1, cnt + 1, nullptr);
+  const PetscScalar* a;
+  MORSE_CALL(VecGetArrayRead(x, &a));
+  bool ok = H5Dwrite(d, H5T_NATIVE_DOUBLE, mem, space, dxpl_, a) >= 0;
+  MORSE_CALL(VecRestoreArrayRead(x, &a));
+  H5Sclose(mem);
+  H5Sclose(space);
+  check(ok, "a row of a distributed dataset");
+}
+
+void H5SliceWriter::attribute(const std::string& object, const std::string& name, const std::string& value) {
+  hid_t obj = H5Oopen(file_, object.c_str(), H5P_DEFAULT);
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = obj >= 0 ? H5Acreate2(obj, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT) : -1;
+  bool ok = a >= 0 && H5Awrite(a, type, value.c_str()) >= 0;
+  if (a >= 0) H5Aclose(a);
+  H5Sclose(space);
+  H5Tclose(type);
+  if (obj >= 0) H5Oclose(obj);
+  check(ok, object + "@" + name);
+}
+
+void H5SliceWriter::close() {
+  bool ok = true;
+  for (hid_t& d : sets_) {
+    ok = H5Dclose(d) >= 0 && ok;
+    d = -1;
+  }
+  if (dxpl_ >= 0) H5Pclose(dxpl_);
+  dxpl_ = -1;
+  if (file_ >= 0) ok = H5Fclose(file_) >= 0 && ok;
+  file_ = -1;
+  check(ok, "(parallel close)");
+}
+
+void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+                      const std::string& dataset, Vec x) {
+  int rank = 0;
+  MPI_Comm_rank(lm.comm, &rank);
+  std::string err;
+  std::vector<std::int64_t> ids;
+  std::vector<double> val;
+  if (rank == 0) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) err = cat(file, ": cannot open as HDF5");
+    auto read = [&](const std::string& name, hid_t type, auto* out, std::vector<hsize_t>* dims) {
+      if (!err.empty()) return;
+      hid_t d = H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0 ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
+      if (d < 0) {
+        err = cat(file, ": no dataset ", name);
+        return;
+      }
+      hid_t sp = H5Dget_space(d);
+      dims->resize(H5Sget_simple_extent_ndims(sp));
+      H5Sget_simple_extent_dims(sp, dims->data(), nullptr);
+      hsize_t n = 1;
+      for (auto v : *dims) n *= v;
+      out->resize(n);
+      if (H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) err = cat(file, ": cannot read ", name);
+      H5Sclose(sp);
+      H5Dclose(d);
+    };
+    std::vector<hsize_t> di, dv;
+    read("/mesh/node_ids", H5T_NATIVE_INT64, &ids, &di);
+    read(dataset, H5T_NATIVE_DOUBLE, &val, &dv);
+    if (err.empty() && (dv.size() < 2 || dv.back() != 3 || dv[dv.size() - 2] != ids.size()))
+      err = cat(file, ": dataset ", dataset, " is not a nodal field [..][", ids.size(), "][3]");
+    if (err.empty()) val.erase(val.begin(), val.end() - 3 * ids.size());  // the last field
+    if (f >= 0) H5Fclose(f);
+  }
+  collective_check(lm.comm, err);
+  std::int64_t n = static_cast<std::int64_t>(ids.size());
+  MPI_Bcast(&n, 1, MPI_INT64_T, 0, lm.comm);
+  ids.resize(n);
+  val.resize(3 * n);
+  MPI_Bcast(ids.data(), static_cast<int>(n), MPI_INT64_T, 0, lm.comm);
+  MPI_Bcast(val.data(), static_cast<int>(3 * n), MPI_DOUBLE, 0, lm.comm);
+  std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (id, row)
+  for (std::int64_t i = 0; i < n; ++i) order.emplace_back(ids[i], i);
+  std::sort(order.begin(), order.end());
+  PetscScalar* a;
+  MORSE_CALL(VecGetArray(x, &a));
+  for (std::int64_t k = 0; k < lm.mesh.num_nodes() && err.empty(); ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    auto it = std::lower_bound(order.begin(), order.end(), std::make_pair(lm.mesh.node_ids[k], std::int64_t(-1)));
+    if (it == order.end() || it->first != lm.mesh.node_ids[k]) {
+      err = cat(file, ": node ", lm.mesh.node_ids[k], " of the mesh is not in /mesh/node_ids (another mesh?)");
+      break;
+    }
+    for (int d = 0; d < 3; ++d)
+      if (dofs.node_dof[3 * k + d] >= 0) a[dofs.node_dof[3 * k + d] - dofs.first] = val[3 * it->second + d];
+  }
+  MORSE_CALL(VecRestoreArray(x, &a));
+  collective_check(lm.comm, err);
 }
 
 std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x) {

@@ -67,6 +67,26 @@ class Loads {
   std::vector<UVec> patterns_;  // unit-amplitude spatial pattern of each load
 };
 
+/// The displacements of the nodes of one node set, sampled from distributed vectors onto rank 0
+/// (one small reduction per sample; the set's nodes only). Collective.
+class SetProbe {
+ public:
+  /// Throws (collectively) if the set does not exist or is empty.
+  SetProbe(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set);
+  /// Node ids of the set (file labels), ascending global node order. Rank 0 only.
+  const std::vector<std::int64_t>& node_ids() const { return ids_; }
+  /// x, y, z per node (n_nodes x 3, row-major) on rank 0; empty elsewhere. Clamped DOFs are 0.
+  std::vector<double> sample(Vec u) const;
+  const std::string& name() const { return name_; }
+
+ private:
+  MPI_Comm comm_;
+  std::string name_;
+  std::vector<std::int64_t> ids_;
+  std::vector<std::pair<int, PetscInt>> local_;  // (slot 3 i + d, local index in u) of owned DOFs
+  std::size_t n_ = 0;
+};
+
 // ------------------------------------------------------------------------------------------
 // Statics
 

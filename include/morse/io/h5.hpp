@@ -42,6 +42,13 @@ class H5Output {
   void commit();
 
   const std::string& path() const { return path_; }
+  /// The temporary file being written (renamed to path() by commit()).
+  const std::string& tmp_path() const { return tmp_; }
+
+  /// Closes rank 0's handle so that all ranks can open tmp_path() with H5SliceWriter (parallel
+  /// HDF5), and reopens it. Collective; throws on every rank if rank 0 cannot.
+  void suspend();
+  void resume();
 
  private:
   hid_t ensure_group(const std::string& name);
@@ -54,6 +61,47 @@ class H5Output {
   std::string error_;
   bool committed_ = false;
 };
+
+/// Parallel writer of distributed data into an existing HDF5 file (between H5Output::suspend()
+/// and resume()): all ranks open the file with MPI-IO, and each rank writes its contiguous slice
+/// [first, first + n_local) of every row of 2-D datasets (n_rows x n_global) or of 1-D datasets.
+/// No rank holds more than its own slice. Collective throughout; HDF5 failures throw on every
+/// rank.
+class H5SliceWriter {
+ public:
+  H5SliceWriter(MPI_Comm comm, const std::string& file, std::int64_t n_global, std::int64_t first, std::int64_t n_local);
+  ~H5SliceWriter();
+  H5SliceWriter(const H5SliceWriter&) = delete;
+  H5SliceWriter& operator=(const H5SliceWriter&) = delete;
+
+  /// Creates a dataset of doubles (n_rows x n_global; n_rows = 0: 1-D of n_global). Returns its index.
+  int create(const std::string& name, std::int64_t n_rows);
+  /// Creates a 1-D int64 dataset of n_global and writes this rank's slice of it.
+  void write_int(const std::string& name, const std::vector<std::int64_t>& local);
+  /// Writes this rank's slice of row `row` (ignored for 1-D) from a PETSc vector with the layout
+  /// (first, n_local).
+  void write_row(int dataset, std::int64_t row, Vec x);
+  void attribute(const std::string& object, const std::string& name, const std::string& value);
+  /// Closes the file. Collective.
+  void close();
+
+ private:
+  void check(bool ok, const std::string& what);
+  MPI_Comm comm_;
+  std::string file_name_;
+  hid_t file_ = -1, dxpl_ = -1;
+  std::vector<hid_t> sets_;
+  std::vector<bool> two_d_;
+  std::int64_t n_global_, first_, n_local_;
+};
+
+/// Reads a nodal field (dataset of shape [..][n_nodes][3] or [n_nodes][3]; the last field is
+/// taken) and its node ids (/mesh/node_ids) from a morse HDF5 file, and scatters it onto the free
+/// DOFs of x by node id. Rank 0 reads and broadcasts (O(nodes) memory per rank). Throws
+/// (collectively) naming the file and dataset if either is missing, or if the file lacks a node
+/// of the mesh. Collective.
+void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+                      const std::string& dataset, Vec x);
 
 /// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
 /// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.

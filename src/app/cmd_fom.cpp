@@ -1,0 +1,268 @@
+// app/cmd_fom.cpp: `morse fom`, the full-order nonlinear implicit dynamics under the nodal loads
+// (dyn::integrate), the reference of every reduced model. Writes /fom: time, monitored set
+// histories, energies, Newton statistics and full-field snapshots (written in parallel).
+#include <petscsys.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "morse/fe/nonlinear.hpp"
+#include "morse/io/h5.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+struct FomOptions {
+  dyn::FomSettings s;
+  std::vector<std::string> monitor;
+  PetscInt snapshot_every = 0;
+  PetscBool linear = PETSC_FALSE;
+  std::string initial;
+  std::string initial_dataset = "/static/u";
+  std::string scheme = "energy";
+  bool rayleigh_set = false;
+  std::string error;
+};
+
+PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
+  PetscCall(get_set_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &o->monitor));
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscReal ray[2] = {0, 0};
+  PetscInt n_ray = 2;
+  PetscOptionsBegin(comm, nullptr, "morse fom options", "");
+  PetscCall(PetscOptionsReal("-fom_dt", "Time step [s] (fixed)", "", o->s.dt, &o->s.dt, nullptr));
+  PetscCall(PetscOptionsReal("-fom_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
+  PetscCall(PetscOptionsBool("-fom_linear", "Linear twin (g_nl = 0), same everything else", "", o->linear, &o->linear,
+                             nullptr));
+  PetscCall(PetscOptionsString("-fom_scheme",
+                               "energy: energy-conserving midpoint (Simo-Tarnow), trapezoidal: Newmark average "
+                               "acceleration; identical for a linear model",
+                               "", o->scheme.c_str(), buf, sizeof buf, &set));
+  if (set) o->scheme = buf;
+  PetscCall(PetscOptionsInt("-fom_snapshot_every", "Write full-field snapshots of u and v every K steps (0: none)", "",
+                            o->snapshot_every, &o->snapshot_every, nullptr));
+  PetscCall(PetscOptionsReal("-fom_damping_modal", "Modal damping ratio xi on the first -fom_damping_modes modes", "",
+                             o->s.modal_xi, &o->s.modal_xi, nullptr));
+  PetscCall(PetscOptionsInt("-fom_damping_modes", "Number of modes carrying -fom_damping_modal", "",
+                            o->s.damping_modes, &o->s.damping_modes, nullptr));
+  PetscCall(PetscOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray,
+                                  &n_ray, &set));
+  if (set) {
+    o->rayleigh_set = true;
+    if (n_ray != 2) o->error = "-fom_rayleigh takes two values: alpha,beta";
+    o->s.rayleigh_alpha = ray[0];
+    o->s.rayleigh_beta = ray[1];
+  }
+  PetscCall(PetscOptionsReal("-fom_newton_rtol", "Newton tolerance: ||R|| <= rtol * force scale + atol", "",
+                             o->s.newton_rtol, &o->s.newton_rtol, nullptr));
+  PetscCall(PetscOptionsReal("-fom_newton_atol", "Newton absolute tolerance [N]", "", o->s.newton_atol,
+                             &o->s.newton_atol, nullptr));
+  PetscCall(PetscOptionsInt("-fom_newton_max_it", "Newton iterations per step", "", o->s.newton_max_it,
+                            &o->s.newton_max_it, nullptr));
+  PetscCall(PetscOptionsInt("-fom_refactor_every",
+                            "Refactor the iteration matrix every N iterations (1: full Newton); 0: modified Newton, "
+                            "refactor only when the residual falls by less than -fom_refactor_ratio",
+                            "", o->s.refactor_every, &o->s.refactor_every, nullptr));
+  PetscCall(PetscOptionsReal("-fom_refactor_ratio", "Modified Newton: refactor when ||R_k+1|| > ratio ||R_k||", "",
+                             o->s.refactor_ratio, &o->s.refactor_ratio, nullptr));
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-fom_initial", "Initial displacement from a morse file (e.g. a morse static run)", "",
+                               buf, buf, sizeof buf, &set));
+  if (set) o->initial = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-fom_initial_dataset", "Nodal dataset read by -fom_initial", "",
+                               o->initial_dataset.c_str(), buf, sizeof buf, &set));
+  if (set) o->initial_dataset = buf;
+  PetscOptionsEnd();
+  o->s.linear = o->linear;
+  if (o->scheme == "energy")
+    o->s.scheme = dyn::Scheme::Energy;
+  else if (o->scheme == "trapezoidal")
+    o->s.scheme = dyn::Scheme::Trapezoidal;
+  else if (o->error.empty())
+    o->error = cat("-fom_scheme ", o->scheme, ": unknown (energy or trapezoidal)");
+  return PETSC_SUCCESS;
+}
+
+void check(const FomOptions& o) {
+  const auto& s = o.s;
+  MORSE_CHECK(o.error.empty(), o.error);
+  MORSE_CHECK(s.dt > 0, "-fom_dt must be positive (got ", s.dt, ")");
+  MORSE_CHECK(s.t_final > 0, "-fom_tfinal must be positive (got ", s.t_final, ")");
+  MORSE_CHECK(s.t_final >= s.dt, "-fom_tfinal (", s.t_final, ") is shorter than one step -fom_dt (", s.dt, ")");
+  MORSE_CHECK(o.snapshot_every >= 0, "-fom_snapshot_every must be >= 0 (got ", o.snapshot_every, ")");
+  MORSE_CHECK(s.modal_xi >= 0 && s.modal_xi < 1, "-fom_damping_modal must be in [0, 1) (got ", s.modal_xi, ")");
+  MORSE_CHECK(s.damping_modes >= 0, "-fom_damping_modes must be >= 0 (got ", s.damping_modes, ")");
+  MORSE_CHECK(!(s.modal_xi > 0) || s.damping_modes > 0, "-fom_damping_modal needs -fom_damping_modes K > 0");
+  MORSE_CHECK(s.rayleigh_alpha >= 0 && s.rayleigh_beta >= 0, "-fom_rayleigh: alpha and beta must be >= 0");
+  MORSE_CHECK(s.newton_rtol > 0 && s.newton_atol >= 0 && s.newton_max_it > 0,
+              "-fom_newton_rtol, -fom_newton_max_it must be positive and -fom_newton_atol >= 0");
+  MORSE_CHECK(s.refactor_every >= 0, "-fom_refactor_every must be >= 0");
+  MORSE_CHECK(s.refactor_ratio > 0 && s.refactor_ratio < 1, "-fom_refactor_ratio must be in (0, 1)");
+}
+
+}  // namespace
+
+void run_fom(MPI_Comm comm) {
+  CommonOptions o;
+  MORSE_CALL(get_common(comm, "fom.h5", &o));
+  std::vector<dyn::NodalLoad> load_list;
+  std::string load_error;
+  MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  FomOptions fo;
+  MORSE_CALL(get_fom_options(comm, &fo));
+  if (help_requested()) return;
+  check_options(comm, true);
+  collective_check(comm, load_error);
+  check(fo);
+  const int rank = rank_of(comm);
+
+  Model md = build_model(comm, o);
+  dyn::Loads loads(md.lm, md.dofs, load_list);
+  std::vector<dyn::SetProbe> probes;
+  for (const auto& m : fo.monitor) probes.emplace_back(md.lm, md.dofs, m);
+  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
+  UVec u0;
+  if (!fo.initial.empty()) {
+    MORSE_CALL(MatCreateVecs(md.ops.K.get(), u0.ptr(), nullptr));
+    MORSE_CALL(VecSet(u0.get(), 0.0));
+    io::read_nodal_field(md.lm, md.dofs, fo.initial, fo.initial_dataset, u0.get());
+  }
+  const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fo.s.t_final / fo.s.dt - 1e-9));
+  if (std::abs(n_steps * fo.s.dt - fo.s.t_final) > 1e-9 * fo.s.t_final)
+    print0(comm, "morse fom: -fom_tfinal is not a multiple of -fom_dt: the run ends at t = %g (%lld steps)\n",
+           n_steps * fo.s.dt, (long long)n_steps);
+  print0(comm, "morse fom: %s, %s scheme, dt = %g s, %lld steps to t = %g s\n", fo.linear ? "linear twin" : "nonlinear",
+         fo.scheme.c_str(), fo.s.dt, (long long)n_steps, n_steps * fo.s.dt);
+
+  io::H5Output out(comm, o.out);  // early: a bad -out fails before the run; removed if the run fails
+  std::unique_ptr<io::H5SliceWriter> snaps;
+  int snap_u = -1, snap_v = -1;
+  std::vector<double> snap_times;
+  if (fo.snapshot_every > 0) {
+    out.suspend();
+    snaps = std::make_unique<io::H5SliceWriter>(comm, out.tmp_path(), md.dofs.n_global, md.dofs.first, md.dofs.n_owned);
+    const std::int64_t rows = n_steps / fo.snapshot_every + 1;
+    snap_u = snaps->create("/fom/snapshots/u", rows);
+    snap_v = snaps->create("/fom/snapshots/v", rows);
+    // The DOF map of the snapshot columns: node id and component of every free DOF.
+    std::vector<std::int64_t> node_id(md.dofs.n_owned), comp(md.dofs.n_owned);
+    for (std::int64_t k = 0; k < md.lm.mesh.num_nodes(); ++k) {
+      if (md.lm.node_owner[k] != rank) continue;
+      for (int d = 0; d < 3; ++d) {
+        const PetscInt g = md.dofs.node_dof[3 * k + d];
+        if (g < 0) continue;
+        node_id[g - md.dofs.first] = md.lm.mesh.node_ids[k];
+        comp[g - md.dofs.first] = d;
+      }
+    }
+    snaps->write_int("/fom/snapshots/dof_node_ids", node_id);
+    snaps->write_int("/fom/snapshots/dof_components", comp);
+    snaps->attribute("/fom/snapshots/u", "description",
+                     "[snapshot][free DOF] displacement [m]; column j is component dof_components[j] (0=x) of node "
+                     "dof_node_ids[j]; times in /fom/snapshots/time");
+  }
+
+  std::vector<double> time, e46, kin, sl, snl, wext, dloss, bal, res;
+  std::vector<std::int64_t> its;
+  std::vector<std::vector<double>> hist(probes.size());
+  auto stats = dyn::integrate(svk, md.ops.M.get(), loads, fo.s, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
+    time.push_back(i.t);
+    e46.push_back(i.energy.eq46());
+    kin.push_back(i.energy.kinetic);
+    sl.push_back(i.energy.strain_linear);
+    snl.push_back(i.energy.strain_nonlinear);
+    wext.push_back(i.energy.external_work);
+    dloss.push_back(i.energy.damping_loss);
+    bal.push_back(i.energy.balance());
+    its.push_back(i.newton_iterations);
+    res.push_back(i.residual);
+    for (std::size_t p = 0; p < probes.size(); ++p) {
+      auto u = probes[p].sample(i.u);
+      hist[p].insert(hist[p].end(), u.begin(), u.end());
+    }
+    if (snaps && i.step % fo.snapshot_every == 0) {
+      const auto row = static_cast<std::int64_t>(snap_times.size());
+      snaps->write_row(snap_u, row, i.u);
+      snaps->write_row(snap_v, row, i.v);
+      snap_times.push_back(i.t);
+    }
+  });
+  check_options(comm, false);
+  if (snaps) {
+    snaps->close();
+    snaps.reset();
+    out.resume();
+  }
+
+  const double per_step = stats.seconds_total / std::max<PetscInt>(1, stats.steps);
+  print0(comm, "\n  steps %lld, Newton iterations %lld (%.2f per step), factorizations %lld\n", (long long)stats.steps,
+         (long long)stats.newton_iterations, double(stats.newton_iterations) / std::max<PetscInt>(1, stats.steps),
+         (long long)stats.factorizations);
+  print0(comm, "  time per step %.4f s: forces %.1f s, tangent %.1f s, factor %.1f s, solves %.1f s (total %.1f s)\n",
+         per_step, stats.seconds_force, stats.seconds_tangent, stats.seconds_factor, stats.seconds_solve,
+         stats.seconds_total);
+  for (std::size_t p = 0; p < probes.size(); ++p) {
+    double peak = 0;
+    for (double v : hist[p]) peak = std::max(peak, std::abs(v));
+    print0(comm, "  set %s: max |u| component %.6e m\n", probes[p].name().c_str(), peak);
+  }
+
+  StageTimer t(comm, "Write");
+  io::write_provenance(out, "fom", md.lm.mesh.units);
+  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_mesh(out, gm);
+  out.write("/fom/time", time);
+  out.write("/fom/energy", e46);
+  out.attribute("/fom/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy, u'^T M u'/2 + u^T K u/2 [J]");
+  out.write("/fom/energies/kinetic", kin);
+  out.write("/fom/energies/strain_linear", sl);
+  out.write("/fom/energies/strain_nonlinear", snl);
+  out.write("/fom/energies/external_work", wext);
+  out.write("/fom/energies/damping_loss", dloss);
+  out.write("/fom/energies/balance", bal);
+  out.attribute("/fom/energies/balance", "description",
+                "kinetic + strain (linear + nonlinear) + damping loss - external work: constant for an exact balance");
+  out.write("/fom/newton_iterations", its);
+  out.write("/fom/residual", res);
+  for (std::size_t p = 0; p < probes.size(); ++p) {
+    const std::string g = "/fom/sets/" + probes[p].name();
+    const auto n = static_cast<hsize_t>(probes[p].node_ids().size());
+    out.write(g + "/node_ids", probes[p].node_ids());
+    out.write(g + "/u", hist[p], {static_cast<hsize_t>(time.size()), n, 3});
+    out.attribute(g + "/u", "description", "[time][node][x,y,z] displacement [m] in the mesh frame");
+  }
+  if (fo.snapshot_every > 0) {
+    out.write("/fom/snapshots/time", snap_times);
+    out.attribute_int("/fom/snapshots", "every", fo.snapshot_every);
+  }
+  if (!stats.damping_omega.empty()) out.write("/fom/damping/omega", stats.damping_omega);
+  out.attribute_int("/fom", "linear", fo.linear ? 1 : 0);
+  out.attribute("/fom", "scheme", fo.scheme);
+  out.attribute("/fom", "dt", fo.s.dt);
+  out.attribute_int("/fom", "steps", stats.steps);
+  out.attribute_int("/fom", "newton_iterations", stats.newton_iterations);
+  out.attribute_int("/fom", "factorizations", stats.factorizations);
+  out.attribute("/fom", "seconds_total", stats.seconds_total);
+  out.attribute("/fom", "seconds_force", stats.seconds_force);
+  out.attribute("/fom", "seconds_tangent", stats.seconds_tangent);
+  out.attribute("/fom", "seconds_factor", stats.seconds_factor);
+  out.attribute("/fom", "seconds_solve", stats.seconds_solve);
+  out.attribute("/fom", "modal_damping_ratio", fo.s.modal_xi);
+  out.attribute_int("/fom", "modal_damping_modes", fo.s.damping_modes);
+  out.attribute("/fom", "rayleigh_alpha", fo.s.rayleigh_alpha);
+  out.attribute("/fom", "rayleigh_beta", fo.s.rayleigh_beta);
+  out.commit();
+  print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
+}
+
+}  // namespace morse::app::detail

@@ -1,0 +1,118 @@
+// app/cmd_static.cpp: `morse static`, the nonlinear (or linear) static solution under the nodal
+// loads at one instant, by load stepping with Newton (dyn::solve_static).
+#include <petscsys.h>
+
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "morse/fe/nonlinear.hpp"
+#include "morse/io/h5.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+struct StaticOptions {
+  dyn::StaticSettings s;
+  std::vector<std::string> monitor;
+  PetscBool linear = PETSC_FALSE;
+  PetscBool xdmf = PETSC_TRUE;
+};
+
+PetscErrorCode get_static_options(MPI_Comm comm, StaticOptions* o) {
+  PetscCall(get_set_list(comm, "-static_monitor", "Node sets whose displacements are printed and written",
+                         &o->monitor));
+  PetscOptionsBegin(comm, nullptr, "morse static options", "");
+  PetscCall(PetscOptionsBool("-static_linear", "Linear solution K u = f (for comparison)", "", o->linear, &o->linear,
+                             nullptr));
+  PetscCall(PetscOptionsReal("-static_time", "Time at which the loads are evaluated [s]", "", o->s.time, &o->s.time,
+                             nullptr));
+  PetscCall(PetscOptionsReal("-static_load_factor", "Final load factor on the loads", "", o->s.load_factor,
+                             &o->s.load_factor, nullptr));
+  PetscCall(PetscOptionsInt("-static_steps", "Initial number of equal load increments", "", o->s.steps, &o->s.steps,
+                            nullptr));
+  PetscCall(PetscOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "",
+                            o->s.max_cutbacks, &o->s.max_cutbacks, nullptr));
+  PetscCall(PetscOptionsReal("-static_rtol", "Newton tolerance: ||R|| <= rtol max(||lambda f||, ||K u||)", "",
+                             o->s.rtol, &o->s.rtol, nullptr));
+  PetscCall(PetscOptionsInt("-static_max_it", "Newton iterations per increment", "", o->s.max_it, &o->s.max_it,
+                            nullptr));
+  PetscCall(PetscOptionsBool("-static_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+                             &o->xdmf, nullptr));
+  PetscOptionsEnd();
+  o->s.linear = o->linear;
+  return PETSC_SUCCESS;
+}
+
+}  // namespace
+
+void run_static(MPI_Comm comm) {
+  CommonOptions o;
+  MORSE_CALL(get_common(comm, "static.h5", &o));
+  std::vector<dyn::NodalLoad> load_list;
+  std::string load_error;
+  MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  StaticOptions so;
+  MORSE_CALL(get_static_options(comm, &so));
+  if (help_requested()) return;
+  check_options(comm, true);
+  collective_check(comm, load_error);
+  MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");
+  MORSE_CHECK(so.s.steps > 0, "-static_steps must be positive (got ", so.s.steps, ")");
+  MORSE_CHECK(so.s.max_cutbacks >= 0, "-static_max_cutbacks must be >= 0 (got ", so.s.max_cutbacks, ")");
+  MORSE_CHECK(so.s.rtol > 0 && so.s.max_it > 0, "-static_rtol and -static_max_it must be positive");
+
+  Model md = build_model(comm, o);
+  dyn::Loads loads(md.lm, md.dofs, load_list);
+  std::vector<dyn::SetProbe> probes;
+  for (const auto& m : so.monitor) probes.emplace_back(md.lm, md.dofs, m);
+  io::H5Output out(comm, o.out);  // early: a bad -out fails before the solve
+  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
+  auto res = dyn::solve_static(svk, loads, so.s);
+  check_options(comm, false);
+
+  for (const auto& p : probes) {
+    auto u = p.sample(res.u.get());
+    print0(comm, "\n  set %s: displacement [m]\n  %-10s %14s %14s %14s\n", p.name().c_str(), "node", "u_x", "u_y", "u_z");
+    for (std::size_t i = 0; i < p.node_ids().size(); ++i)
+      print0(comm, "  %-10lld %14.6e %14.6e %14.6e\n", (long long)p.node_ids()[i], u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+  }
+
+  StageTimer t(comm, "Write");
+  io::write_provenance(out, "static", md.lm.mesh.units);
+  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_mesh(out, gm);
+  auto nodal = io::gather_nodal(md.lm, md.dofs, res.u.get());
+  out.write("/static/u", nodal, {1, static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+  out.attribute("/static/u", "description", "[1][node][x,y,z] displacement [m], nodes as /mesh/node_ids");
+  for (const auto& p : probes) {
+    auto u = p.sample(res.u.get());
+    out.write("/static/sets/" + p.name() + "/node_ids", p.node_ids());
+    out.write("/static/sets/" + p.name() + "/u", u, {static_cast<hsize_t>(p.node_ids().size()), 3});
+  }
+  std::vector<double> lambda, residual;
+  std::vector<std::int64_t> iterations, converged;
+  for (const auto& h : res.history) {
+    lambda.push_back(h.lambda);
+    residual.push_back(h.residual);
+    iterations.push_back(h.newton_iterations);
+    converged.push_back(h.converged);
+  }
+  out.write("/static/history/load_factor", lambda);
+  out.write("/static/history/newton_iterations", iterations);
+  out.write("/static/history/residual", residual);
+  out.write("/static/history/converged", converged);
+  out.attribute_int("/static", "linear", so.linear ? 1 : 0);
+  out.attribute("/static", "time", so.s.time);
+  out.attribute("/static", "load_factor", so.s.load_factor);
+  out.attribute("/static", "load_norm", res.load_norm);
+  out.commit();
+  if (so.xdmf) write_xdmf_collective(comm, o.out, gm, {{"/static/u", "displacement", 1}});
+  print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
+}
+
+}  // namespace morse::app::detail
