@@ -27,7 +27,7 @@ struct FomOptions {
   PetscBool linear = PETSC_FALSE;
   std::string initial;
   std::string initial_dataset = "/static/u";
-  std::string scheme = "energy";
+  std::string scheme = "trapezoidal";
   bool rayleigh_set = false;
   std::string error;
 };

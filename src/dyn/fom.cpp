@@ -110,9 +110,9 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
   StageTimer stage(comm, "Fom");
   const double t_start = now();
 
-  UVec u0, v0, u1, v1, F0, F1, R, x, w, g0, g1, Cv, tmp;
+  UVec u0, v0, u1, v1, F0, F1, R, R_prev, x, w, g0, g1, Cv, tmp;
   MORSE_CALL(MatCreateVecs(K, u0.ptr(), v0.ptr()));
-  for (UVec* p : {&u1, &v1, &F0, &F1, &R, &x, &w, &g0, &g1, &Cv, &tmp}) MORSE_CALL(VecDuplicate(u0.get(), p->ptr()));
+  for (UVec* p : {&u1, &v1, &F0, &F1, &R, &R_prev, &x, &w, &g0, &g1, &Cv, &tmp}) MORSE_CALL(VecDuplicate(u0.get(), p->ptr()));
   if (u_init)
     MORSE_CALL(VecCopy(u_init, u0.get()));
   else
@@ -253,6 +253,7 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
     PetscInt it = 0;
     double rnorm = 0.0, rprev = 0.0;
     PetscInt since_factor = 0;
+    bool last_fresh = false;
     for (;; ++it) {
       // v1 = 2 (u1 - u0)/h - v0
       MORSE_CALL(VecWAXPY(v1.get(), -1.0, u0.get(), u1.get()));
@@ -296,15 +297,30 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
         throw Error(cat("fom: Newton did not converge at t = ", t1, " (step ", n, ") in ", s.newton_max_it,
                         " iterations (||R|| = ", rnorm, ", tolerance ", s.newton_rtol * scale + s.newton_atol,
                         "); last converged time ", t0, ". Reduce -fom_dt or raise -fom_newton_max_it"));
+      // A step taken with a stale factor that raised the residual is rejected: back to the previous
+      // iterate and refactor there (modified Newton may otherwise walk into the compressive range
+      // where St Venant-Kirchhoff loses stability, e.g. next to a point load).
+      bool rejected = false;
+      if (it > 0 && !last_fresh && rnorm > rprev && !s.linear) {
+        MORSE_CALL(VecAXPY(u1.get(), 1.0, x.get()));
+        MORSE_CALL(VecCopy(R_prev.get(), R.get()));
+        rnorm = rprev;
+        rejected = true;
+        ++st.rejected_steps;
+      }
       const bool slow = it > 0 && rnorm > s.refactor_ratio * rprev;
-      const bool refactor_now = !have_factor || (s.refactor_every > 0 ? since_factor >= s.refactor_every - 1 || it == 0 : slow);
+      const bool refactor_now =
+          !have_factor || rejected || (s.refactor_every > 0 ? since_factor >= s.refactor_every - 1 || it == 0 : slow);
       if (refactor_now && !(s.linear && have_factor)) {
         refactor(u0.get(), u1.get());
         have_factor = true;
         since_factor = 0;
+        last_fresh = true;
       } else {
         ++since_factor;
+        last_fresh = false;
       }
+      MORSE_CALL(VecCopy(R.get(), R_prev.get()));
       rprev = rnorm;
       double ts = now();
       solver.solve(R.get(), x.get());

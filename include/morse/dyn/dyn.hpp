@@ -128,7 +128,7 @@ enum class Scheme { Energy, Trapezoidal };
 struct FomSettings {
   double dt = 0.0;
   double t_final = 0.0;
-  Scheme scheme = Scheme::Energy;
+  Scheme scheme = Scheme::Trapezoidal;
   bool linear = false;           ///< g_nl = 0 (the linear twin, same everything else)
   double modal_xi = 0.0;         ///< modal damping ratio on the first damping_modes modes
   PetscInt damping_modes = 0;
@@ -170,6 +170,7 @@ struct FomStats {
   PetscInt steps = 0;
   PetscInt newton_iterations = 0;
   PetscInt factorizations = 0;
+  PetscInt rejected_steps = 0;  ///< Newton steps with a stale factor undone and refactored
   double seconds_force = 0, seconds_tangent = 0, seconds_factor = 0, seconds_solve = 0, seconds_total = 0;
   std::vector<double> damping_omega;  ///< natural angular frequencies of the damped modes
 };
