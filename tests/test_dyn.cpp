@@ -187,6 +187,7 @@ TEST(Fom, EnergySchemeConservesEnergy) {
   dyn::FomSettings s;
   s.dt = 2e-4;
   s.t_final = 1000 * s.dt;
+  s.scheme = dyn::Scheme::Energy;
   s.newton_rtol = 1e-10;
   double e0 = 0, worst = 0, tip_min = 1e300, strain_nl = 0;
   auto st = dyn::integrate(svk, b.ops.M.get(), none, s, u0.u.get(), nullptr, [&](const dyn::StepInfo& i) {
