@@ -1,0 +1,37 @@
+# Case tests of `morse static` and `morse fom` on the generated box (fixture case_setup_box), each
+# on 1 and 2 ranks: bad input fails cleanly with a message naming the set/option and leaves no
+# output file; good input writes its file. Included from tests/CMakeLists.txt after cases.cmake.
+set(MORSE_NL_BOX -mesh ${MORSE_CASE_BOX} -clamp x0 ${MORSE_CASE_MATERIAL})
+
+morse_add_error_case(static_unknown_load_set "morse: error: .*nosuchset" static_unknown_set.h5 BOX
+  ARGS static ${MORSE_NL_BOX} -load_sets nosuchset -load_nosuchset_dir z -load_nosuchset_amplitude 1)
+morse_add_error_case(static_zero_direction "morse: error: .*-load_x1_dir.*zero vector" static_zero_dir.h5 BOX
+  ARGS static ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir 0,0,0 -load_x1_amplitude 1)
+morse_add_error_case(static_bad_direction "morse: error: .*-load_x1_dir.*not x, y, z" static_bad_dir.h5 BOX
+  ARGS static ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir w -load_x1_amplitude 1)
+morse_add_error_case(static_no_amplitude "morse: error: .*-load_x1_amplitude" static_no_amp.h5 BOX
+  ARGS static ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z)
+morse_add_error_case(static_no_load "morse: error: .*no load" static_no_load.h5 BOX
+  ARGS static ${MORSE_NL_BOX})
+morse_add_error_case(fom_negative_dt "morse: error: .*-fom_dt must be positive" fom_negative_dt.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1 -fom_dt -1e-4 -fom_tfinal 1e-3)
+morse_add_error_case(fom_bad_scheme "morse: error: .*-fom_scheme" fom_bad_scheme.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 1e-3 -fom_scheme euler)
+morse_add_error_case(fom_misspelled_option "morse: error: unknown option.*-fom_dtt" fom_typo.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -fom_dtt 1e-4 -fom_tfinal 1e-3)
+morse_add_error_case(fom_diverges "morse: error: fom: .*last converged time" fom_diverges.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1e15 -fom_dt 1e-3 -fom_tfinal 1e-2
+       -fom_newton_max_it 5)
+morse_add_error_case(fom_missing_initial "morse: error: .*no_such_static\\.h5" fom_missing_initial.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 1e-3 -fom_initial ${MORSE_CASE_DIR}/no_such_static.h5)
+
+morse_add_ok_case(static_ok static_ok.h5
+  static -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir z
+  -load_x1_amplitude 1e8 -static_steps 2 -static_monitor x1)
+morse_add_ok_case(fom_ok fom_ok.h5
+  fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir z
+  -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_monitor x1 -fom_snapshot_every 5)
+morse_add_ok_case(fom_linear_damped_ok fom_linear_ok.h5
+  fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir y
+  -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_linear -fom_damping_modal 0.01
+  -fom_damping_modes 2 -fom_rayleigh 1,1e-6)
