@@ -1,7 +1,7 @@
 // St Venant–Kirchhoff forces, tangent and energy (fe/nonlinear.hpp) against exact identities and
 // closed forms: Taylor test of the tangent (error ~ eps^2), symmetry, frame indifference under a
 // large rigid rotation, the uniform-stretch closed form, K_T(0) = K and g_nl(0) = 0 exactly,
-// g_nl exactly quadratic + cubic, the block evaluation, and the midpoint energy identity.
+// g_nl exactly quadratic + cubic, the matrix-free tangent product, the block evaluation, and the midpoint energy identity.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -85,6 +85,11 @@ TEST_P(SvkByType, TangentTaylorTestAndSymmetry) {
   MORSE_CALL(MatNorm(Kt.get(), NORM_INFINITY, &kmax));
   MORSE_CALL(MatIsSymmetric(Kt.get(), 1e-12 * kmax, &sym));
   EXPECT_TRUE(sym);
+  // The matrix-free product equals the assembled tangent's.
+  auto y = dup(u.get());
+  svk.tangent_apply(u.get(), v.get(), y.get());
+  MORSE_CALL(VecAXPY(y.get(), -1.0, Ktv.get()));
+  EXPECT_LT(norm(y.get()), 1e-13 * norm(Ktv.get())) << mesh::element_name(GetParam());
 }
 
 // K_T(0) = K and g_nl(0) = 0 exactly; g_nl is exactly quadratic + cubic along a line.

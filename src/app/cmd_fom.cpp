@@ -28,6 +28,7 @@ struct FomOptions {
   std::string initial;
   std::string initial_dataset = "/static/u";
   std::string scheme = "trapezoidal";
+  std::string newton = "krylov";
   bool rayleigh_set = false;
   std::string error;
 };
@@ -74,6 +75,18 @@ PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
                             "", o->s.refactor_every, &o->s.refactor_every, nullptr));
   PetscCall(PetscOptionsReal("-fom_refactor_ratio", "Modified Newton: refactor when ||R_k+1|| > ratio ||R_k||", "",
                              o->s.refactor_ratio, &o->s.refactor_ratio, nullptr));
+  PetscCall(PetscOptionsString("-fom_newton",
+                               "krylov: exact Newton by CG on the matrix-free tangent, preconditioned by a reused "
+                               "MUMPS factor (trapezoidal scheme); modified: the reused factor is the Newton matrix",
+                               "", o->newton.c_str(), buf, sizeof buf, &set));
+  if (set) o->newton = buf;
+  PetscCall(PetscOptionsReal("-fom_krylov_rtol", "Newton-Krylov: smallest relative tolerance of a CG solve", "",
+                             o->s.krylov_rtol, &o->s.krylov_rtol, nullptr));
+  PetscCall(PetscOptionsInt("-fom_krylov_max_it", "Newton-Krylov: CG iterations before refactoring and retrying", "",
+                            o->s.krylov_max_it, &o->s.krylov_max_it, nullptr));
+  PetscCall(PetscOptionsInt("-fom_krylov_refactor_its",
+                            "Newton-Krylov: refresh the factor when a CG solve needs more iterations than this", "",
+                            o->s.krylov_refactor_its, &o->s.krylov_refactor_its, nullptr));
   buf[0] = 0;
   PetscCall(PetscOptionsString("-fom_initial", "Initial displacement from a morse file (e.g. a morse static run)", "",
                                buf, buf, sizeof buf, &set));
@@ -90,6 +103,12 @@ PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
     o->s.scheme = dyn::Scheme::Trapezoidal;
   else if (o->error.empty())
     o->error = cat("-fom_scheme ", o->scheme, ": unknown (energy or trapezoidal)");
+  if (o->newton == "krylov")
+    o->s.newton = dyn::Newton::Krylov;
+  else if (o->newton == "modified")
+    o->s.newton = dyn::Newton::Modified;
+  else if (o->error.empty())
+    o->error = cat("-fom_newton ", o->newton, ": unknown (krylov or modified)");
   return PETSC_SUCCESS;
 }
 
@@ -108,6 +127,9 @@ void check(const FomOptions& o) {
               "-fom_newton_rtol, -fom_newton_max_it must be positive and -fom_newton_atol >= 0");
   MORSE_CHECK(s.refactor_every >= 0, "-fom_refactor_every must be >= 0");
   MORSE_CHECK(s.refactor_ratio > 0 && s.refactor_ratio < 1, "-fom_refactor_ratio must be in (0, 1)");
+  MORSE_CHECK(s.krylov_rtol > 0 && s.krylov_rtol < 1, "-fom_krylov_rtol must be in (0, 1) (got ", s.krylov_rtol, ")");
+  MORSE_CHECK(s.krylov_max_it > 0 && s.krylov_refactor_its > 0,
+              "-fom_krylov_max_it and -fom_krylov_refactor_its must be positive");
 }
 
 }  // namespace
@@ -205,9 +227,10 @@ void run_fom(MPI_Comm comm) {
   }
 
   const double per_step = stats.seconds_total / std::max<PetscInt>(1, stats.steps);
-  print0(comm, "\n  steps %lld, Newton iterations %lld (%.2f per step), factorizations %lld\n", (long long)stats.steps,
-         (long long)stats.newton_iterations, double(stats.newton_iterations) / std::max<PetscInt>(1, stats.steps),
-         (long long)stats.factorizations);
+  print0(comm, "\n  steps %lld, Newton iterations %lld (%.2f per step), factorizations %lld, CG iterations %lld\n",
+         (long long)stats.steps, (long long)stats.newton_iterations,
+         double(stats.newton_iterations) / std::max<PetscInt>(1, stats.steps), (long long)stats.factorizations,
+         (long long)stats.krylov_iterations);
   print0(comm, "  time per step %.4f s: forces %.1f s, tangent %.1f s, factor %.1f s, solves %.1f s (total %.1f s)\n",
          per_step, stats.seconds_force, stats.seconds_tangent, stats.seconds_factor, stats.seconds_solve,
          stats.seconds_total);
@@ -252,6 +275,8 @@ void run_fom(MPI_Comm comm) {
   out.attribute_int("/fom", "steps", stats.steps);
   out.attribute_int("/fom", "newton_iterations", stats.newton_iterations);
   out.attribute_int("/fom", "factorizations", stats.factorizations);
+  out.attribute_int("/fom", "krylov_iterations", stats.krylov_iterations);
+  out.attribute("/fom", "newton", fo.s.linear || fo.s.scheme == dyn::Scheme::Energy ? std::string("modified") : fo.newton);
   out.attribute("/fom", "seconds_total", stats.seconds_total);
   out.attribute("/fom", "seconds_force", stats.seconds_force);
   out.attribute("/fom", "seconds_tangent", stats.seconds_tangent);

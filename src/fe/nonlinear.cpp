@@ -57,6 +57,34 @@ void point_state(const double* Ha, const double* Hb, double lam, double mu, Poin
   p->w_nl = lam * tr_e * tr_n + 0.5 * lam * tr_n * tr_n + 2.0 * mu * e_n + mu * n_n;
 }
 
+// Directional derivative of Pnl at H (S = S(E(H))) along dH:
+//   dPnl = dS_nl + dH S + H dS,  dE_nl = (dH^T H + H^T dH)/2,  dS = S_lin(dH) + dS_nl.
+void point_tangent_apply(const double* H, const double* dH, double lam, double mu, const double* S, double* dP) {
+  double den[9], dsnl[9], ds[9];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double s = 0.0;
+      for (int k = 0; k < 3; ++k) s += dH[3 * k + i] * H[3 * k + j] + H[3 * k + i] * dH[3 * k + j];
+      den[3 * i + j] = 0.5 * s;
+    }
+  const double tr_n = den[0] + den[4] + den[8], tr_e = dH[0] + dH[4] + dH[8];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      dsnl[3 * i + j] = 2.0 * mu * den[3 * i + j];
+      ds[3 * i + j] = dsnl[3 * i + j] + mu * (dH[3 * i + j] + dH[3 * j + i]);
+    }
+  for (int i = 0; i < 3; ++i) {
+    dsnl[4 * i] += lam * tr_n;
+    ds[4 * i] += lam * (tr_n + tr_e);
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      double s = dsnl[3 * i + j];
+      for (int k = 0; k < 3; ++k) s += dH[3 * i + k] * S[3 * k + j] + H[3 * i + k] * ds[3 * k + j];
+      dP[3 * i + j] = s;
+    }
+}
+
 // H[i][J] = sum_a u[3a+i] g[a][J].
 void displacement_gradient(int n, const double* u, const double* g, double* H) {
   for (int k = 0; k < 9; ++k) H[k] = 0.0;
@@ -168,7 +196,28 @@ void Svk::element_loop(int what, int nv, const double* a, const double* b, doubl
         const double* gq = &grad_[grad_off_[e] + 3 * n * q];
         const double w = wdet_[wdet_off_[e] + q];
         double Ha[9], Hb[9];
+        if (what & kApply) {
+          // ua is the direction: ge += (K_T(u*) - K) ua, u* = the state of tangent_point().
+          const double* hs = &point_cache_[18 * (wdet_off_[e] + q)];
+          displacement_gradient(n, ua, gq, Hb);
+          double dP[9];
+          point_tangent_apply(hs, Hb, lam, mu, hs + 9, dP);
+          for (int c = 0; c < n; ++c) {
+            const double* gc = gq + 3 * c;
+            for (int i = 0; i < 3; ++i)
+              ge[3 * c + i] += w * (dP[3 * i] * gc[0] + dP[3 * i + 1] * gc[1] + dP[3 * i + 2] * gc[2]);
+          }
+          continue;
+        }
         displacement_gradient(n, ua, gq, Ha);
+        if (what & kPoint) {  // cache H and S of the state a at this point
+          PointState p;
+          point_state(Ha, Ha, lam, mu, &p);
+          double* hs = &point_cache_[18 * (wdet_off_[e] + q)];
+          std::copy(Ha, Ha + 9, hs);
+          std::copy(p.S, p.S + 9, hs + 9);
+          continue;
+        }
         if (bv)
           displacement_gradient(n, ub, gq, Hb);
         else
@@ -217,7 +266,7 @@ void Svk::element_loop(int what, int nv, const double* a, const double* b, doubl
           }
         }
       }
-      if (what & kForce) {
+      if (what & (kForce | kApply)) {
         double* gv = g + static_cast<std::int64_t>(v) * n_local_;
         for (int k = 0; k < nd; ++k)
           if (pos[k] >= 0) gv[pos[k]] += ge[k];
@@ -251,6 +300,41 @@ void Svk::midpoint_nonlinear_force(Vec ua, Vec ub, Vec g) const {
   MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
   add_to_global(lg_.get(), g);
   MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+void Svk::tangent_point(Vec u) const {
+  PetscLogEvent ev = log_event("SvkTangentPoint");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  point_cache_.resize(18 * wdet_.size());
+  to_local(u, la_.get());
+  const double* a;
+  MORSE_CALL(VecGetArrayRead(la_.get(), &a));
+  element_loop(kPoint, 1, a, nullptr, nullptr, nullptr, nullptr);
+  MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+void Svk::tangent_apply_nonlinear(Vec v, Vec y) const {
+  MORSE_CHECK(point_cache_.size() == 18 * wdet_.size(), "Svk::tangent_apply_nonlinear before tangent_point");
+  PetscLogEvent ev = log_event("SvkTangentApply");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  to_local(v, la_.get());
+  MORSE_CALL(VecSet(lg_.get(), 0.0));
+  const double* a;
+  double* gl;
+  MORSE_CALL(VecGetArrayRead(la_.get(), &a));
+  MORSE_CALL(VecGetArray(lg_.get(), &gl));
+  element_loop(kApply, 1, a, nullptr, gl, nullptr, nullptr);
+  MORSE_CALL(VecRestoreArray(lg_.get(), &gl));
+  MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
+  add_to_global(lg_.get(), y);
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+void Svk::tangent_apply(Vec u, Vec v, Vec y) const {
+  tangent_point(u);
+  tangent_apply_nonlinear(v, y);
+  MORSE_CALL(MatMultAdd(K_, v, y, y));
 }
 
 void Svk::internal_force(Vec u, Vec f) const {

@@ -125,6 +125,15 @@ StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSe
 
 enum class Scheme { Energy, Trapezoidal };
 
+/// Newton variant of each step.
+///  - Krylov (default; trapezoidal scheme): exact Newton directions by preconditioned CG on the
+///    matrix-free Jacobian J(u) = 4/h^2 M + 2/h C + K_T(u) (Svk::tangent_apply), preconditioned by
+///    the last MUMPS factor of J, which is kept across iterations and steps and refreshed only when
+///    CG needs more than krylov_refactor_its iterations (or fails). Inexact-Newton forcing term
+///    eta = max(krylov_rtol, tol / (2 ||R||)), capped at 0.1; full steps (no line search).
+///  - Modified: the factor itself is the Newton matrix (modified Newton), refreshed as
+///    refactor_every / refactor_ratio say. The energy scheme and the linear twin always use it.
+enum class Newton { Krylov, Modified };
 struct FomSettings {
   double dt = 0.0;
   double t_final = 0.0;
@@ -142,6 +151,10 @@ struct FomSettings {
   /// iteration (modified Newton, factor kept across steps).
   PetscInt refactor_every = 0;
   double refactor_ratio = 0.25;
+  Newton newton = Newton::Krylov;
+  double krylov_rtol = 1e-2;         ///< smallest forcing term of the inexact Newton solves
+  PetscInt krylov_max_it = 60;       ///< CG iterations before the factor is refreshed and CG rerun
+  PetscInt krylov_refactor_its = 12; ///< refresh the factor for the next solve above this count
   std::string prefix = "fom_";   ///< options prefix of the KSP/PC and of the damping eigen solve
 };
 
@@ -170,7 +183,8 @@ struct FomStats {
   PetscInt steps = 0;
   PetscInt newton_iterations = 0;
   PetscInt factorizations = 0;
-  PetscInt rejected_steps = 0;  ///< Newton steps with a stale factor undone and refactored
+  PetscInt rejected_steps = 0;  ///< Newton steps with a stale factor undone and refactored (modified Newton)
+  PetscInt krylov_iterations = 0;  ///< CG iterations (Newton = Krylov)
   double seconds_force = 0, seconds_tangent = 0, seconds_factor = 0, seconds_solve = 0, seconds_total = 0;
   std::vector<double> damping_omega;  ///< natural angular frequencies of the damped modes
 };

@@ -65,6 +65,14 @@ class Svk {
   UMat create_tangent() const;
   /// Kt = K_T(u) = K + d g_nl/du (Kt from create_tangent()). Collective.
   void tangent(Vec u, Mat Kt) const;
+  /// y = K_T(u) v without assembling K_T (one pass over the elements plus K v; the Jacobian
+  /// product of Newton–Krylov solvers). Collective.
+  void tangent_apply(Vec u, Vec v, Vec y) const;
+  /// The two halves of tangent_apply for many products at one state: tangent_point(u) stores
+  /// grad u and S at every quadrature point (18 doubles each), then tangent_apply_nonlinear(v, y)
+  /// gives y = (K_T(u) - K) v. Collective.
+  void tangent_point(Vec u) const;
+  void tangent_apply_nonlinear(Vec v, Vec y) const;
   /// Strain energy of u. Collective.
   StrainEnergy energy(Vec u) const;
 
@@ -83,9 +91,11 @@ class Svk {
   Mat stiffness() const { return K_; }
 
  private:
-  enum Output { kForce = 1, kTangent = 2, kEnergy = 4 };
+  enum Output { kForce = 1, kTangent = 2, kEnergy = 4, kApply = 8, kPoint = 16 };
   // Runs the element loop over nv local field pairs (a, b), each of size n_local_ (compact
   // local DOFs). b == nullptr means b = a. g: nv x n_local_ (added), Kt: MatSetValues(ADD).
+  // kPoint (alone): fills point_cache_ from a. kApply (alone): g += (K_T(u*) - K) a for the
+  // direction a, u* being the state cached by kPoint.
   void element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt, double* energy) const;
   void to_local(Vec u, Vec local) const;
   void add_to_global(Vec local, Vec g) const;
@@ -105,6 +115,7 @@ class Svk {
   std::vector<double> lambda_, mu_;
   Unique<VecScatter, VecScatterDestroy> scatter_;
   UVec la_, lb_, lg_;  // local work vectors (sequential, n_local_)
+  mutable std::vector<double> point_cache_;  // per quadrature point: H (9), S (9) of tangent_point()
 };
 
 }  // namespace morse::fe
