@@ -7,7 +7,7 @@
 
 The case is seed 003's (§2.2, §4.3.1): clamped root, 300 N at node LE in e_y at 2000 rad/s, modal
 damping 5e-4 on 10 modes, h = 1e-4 s, nonlinear (St Venant-Kirchhoff), trapezoidal scheme,
-modified Newton. Each run is `mpirun -n R morse fom ... -log_view`; the script reads morse's
+Newton-Krylov (default; `--newton modified` for the other). Each run is `mpirun -n R morse fom ... -log_view`; the script reads morse's
 summary (steps, Newton iterations, factorizations, time split), the stage table and the -log_view
 events morse:Assemble (linear K and M assembly, once), morse:SvkForce (g_nl) and morse:SvkTangent
 (K_T) and writes bench/results/fom_<UTC>_<mesh>.json with medians over the runs:
@@ -41,13 +41,14 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--dt", type=float, default=1e-4)
+    ap.add_argument("--newton", default="krylov", choices=["krylov", "modified"])
     args = ap.parse_args()
     morse = os.path.join(ROOT, "build", "morse")
     work = tempfile.mkdtemp(prefix="fom_bench_")
     base = ["-mesh", args.mesh, "-clamp", "root", "-load_sets", "LE", "-load_LE_dir", "y",
             "-load_LE_amplitude", "300", "-load_LE_omega", "2000", "-fom_dt", str(args.dt),
             "-fom_tfinal", repr(args.steps * args.dt), "-fom_monitor", "LE", "-fom_damping_modal", "5e-4",
-            "-fom_damping_modes", "10", "-log_view", "-out", os.path.join(work, "fom.h5")]
+            "-fom_damping_modes", "10", "-fom_newton", args.newton, "-log_view", "-out", os.path.join(work, "fom.h5")]
     runs = []
     for k in range(args.runs):
         r, cmd = run_mpi("fom run %d" % (k + 1), [morse, "fom"] + base, args.ranks, work, 1)
@@ -56,7 +57,8 @@ def main():
         out = r["stdout"]
         ev = parse_log_view(out, [])
         sec, peak = parse_stage_table(out)
-        m = re.search(r"steps (\d+), Newton iterations (\d+) \(([0-9.]+) per step\), factorizations (\d+)", out)
+        m = re.search(r"steps (\d+), Newton iterations (\d+) \(([0-9.]+) per step\), factorizations (\d+), "
+                      r"CG iterations (\d+)", out)
         t = re.search(r"time per step ([0-9.]+) s: forces ([0-9.]+) s, tangent ([0-9.]+) s, factor ([0-9.]+) s, "
                       r"solves ([0-9.]+) s \(total ([0-9.]+) s\)", out)
         dofs = re.search(r"morse: (\d+) free DOFs", out)
@@ -66,6 +68,7 @@ def main():
         run = {
             "free_dofs": int(dofs.group(1)),
             "steps": int(m.group(1)), "newton_iterations": int(m.group(2)), "factorizations": int(m.group(4)),
+            "cg_iterations": int(m.group(5)),
             "seconds_per_step": float(t.group(1)), "seconds_force": float(t.group(2)),
             "seconds_tangent": float(t.group(3)), "seconds_factor": float(t.group(4)),
             "seconds_solve": float(t.group(5)), "seconds_integration": float(t.group(6)),
@@ -89,6 +92,8 @@ def main():
     steps = runs[0]["steps"]
     summary["newton_iterations_per_step"] = med([r["newton_iterations"] / r["steps"] for r in runs])
     summary["factorizations_per_step"] = med([r["factorizations"] / r["steps"] for r in runs])
+    summary["cg_iterations_per_newton_iteration"] = med([r["cg_iterations"] / max(1, r["newton_iterations"])
+                                                         for r in runs])
     summary["projected_seconds_300_steps"] = summary["seconds_per_step"] * 300
     summary["ratio_samcef_over_morse_300_steps"] = SAMCEF_SECONDS / summary["projected_seconds_300_steps"]
     summary["target_300_steps_seconds"] = TARGET_300_STEPS
@@ -98,8 +103,9 @@ def main():
           (os.path.basename(args.mesh), runs[0]["free_dofs"], args.ranks, steps, len(runs)))
     print("  time per step            %8.3f s   (300 steps: %.0f s; target %.0f s; SAMCEF 12,000 s)" %
           (summary["seconds_per_step"], summary["projected_seconds_300_steps"], TARGET_300_STEPS))
-    print("  Newton its / step        %8.2f     factorizations / step %.2f" %
-          (summary["newton_iterations_per_step"], summary["factorizations_per_step"]))
+    print("  Newton its / step        %8.2f     factorizations / step %.2f, CG its / Newton it %.2f (%s)" %
+          (summary["newton_iterations_per_step"], summary["factorizations_per_step"],
+           summary["cg_iterations_per_newton_iteration"], args.newton))
     print("  split [s]: forces %.1f, tangent %.1f, factor %.1f, solves %.1f of %.1f" %
           tuple(summary[k] for k in ["seconds_force", "seconds_tangent", "seconds_factor", "seconds_solve",
                                      "seconds_integration"]))
@@ -112,6 +118,7 @@ def main():
     path = os.path.join(RESULTS, "fom_%s_%s_%dsteps.json" % (stamp, name, steps))
     with open(path, "w") as fh:
         json.dump({"benchmark": "fom", "mesh": args.mesh, "ranks": args.ranks, "steps": steps, "dt": args.dt,
+                   "newton": args.newton,
                    "summary": summary, "runs": runs, "git": git_info(), "blas": blas_info(morse)}, fh, indent=1)
     print("wrote", path)
     return 0

@@ -68,13 +68,14 @@ Loads::Loads(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::vecto
   }
 }
 
+double Loads::factor(std::size_t i, double t) const {
+  const auto& l = loads_[i];
+  return l.omega == 0.0 ? l.amplitude : l.amplitude * std::sin(l.omega * t + l.phase);
+}
+
 void Loads::evaluate(double t, Vec F) const {
   MORSE_CALL(VecSet(F, 0.0));
-  for (std::size_t i = 0; i < loads_.size(); ++i) {
-    const auto& l = loads_[i];
-    const double f = l.omega == 0.0 ? l.amplitude : l.amplitude * std::sin(l.omega * t + l.phase);
-    MORSE_CALL(VecAXPY(F, f, patterns_[i].get()));
-  }
+  for (std::size_t i = 0; i < loads_.size(); ++i) MORSE_CALL(VecAXPY(F, factor(i, t), patterns_[i].get()));
 }
 
 double Loads::max_omega() const {

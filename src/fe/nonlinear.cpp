@@ -6,6 +6,9 @@
 // come from the assembled K.
 #include "morse/fe/nonlinear.hpp"
 
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -419,6 +422,163 @@ void Svk::nonlinear_force_block(Mat U, Mat G, PetscInt chunk) const {
       MORSE_CALL(MatDenseRestoreColumnVecWrite(G, j0 + j, &y));
     }
   }
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+}
+
+std::vector<double> Svk::local_columns(Mat A) const {
+  PetscInt nc = 0;
+  MORSE_CALL(MatGetSize(A, nullptr, &nc));
+  std::vector<double> out(static_cast<std::size_t>(nc) * n_local_);
+  for (PetscInt j = 0; j < nc; ++j) {
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecRead(A, j, &x));
+    to_local(x, la_.get());
+    MORSE_CALL(MatDenseRestoreColumnVecRead(A, j, &x));
+    const double* l;
+    MORSE_CALL(VecGetArrayRead(la_.get(), &l));
+    std::copy(l, l + n_local_, out.begin() + static_cast<std::size_t>(j) * n_local_);
+    MORSE_CALL(VecRestoreArrayRead(la_.get(), &l));
+  }
+  return out;
+}
+
+std::vector<double> Svk::reduced_nonlinear_forces(Mat Phi, Mat W, const std::vector<double>& Q, PetscInt nf,
+                                                  PetscInt chunk) const {
+  PetscLogEvent ev = log_event("SvkReducedForces");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  PetscInt r = 0, nw = 0;
+  MORSE_CALL(MatGetSize(Phi, nullptr, &r));
+  if (!W) W = Phi;
+  MORSE_CALL(MatGetSize(W, nullptr, &nw));
+  MORSE_CHECK(static_cast<PetscInt>(Q.size()) == r * nf, "Svk::reduced_nonlinear_forces: Q has ", Q.size(),
+              " entries, expected ", r, " x ", nf);
+  MORSE_CHECK(chunk > 0, "Svk::reduced_nonlinear_forces: chunk must be positive");
+  const auto phi = local_columns(Phi);
+  const auto w = W == Phi ? phi : local_columns(W);
+  std::vector<double> out(static_cast<std::size_t>(nw) * nf, 0.0), a, g;
+  PetscBLASInt n = static_cast<PetscBLASInt>(n_local_), rr = static_cast<PetscBLASInt>(r),
+               rw = static_cast<PetscBLASInt>(nw);
+  const double one = 1.0, zero = 0.0;
+  for (PetscInt f0 = 0; f0 < nf; f0 += chunk) {
+    const PetscInt nv = std::min(chunk, nf - f0);
+    PetscBLASInt m = static_cast<PetscBLASInt>(nv);
+    a.assign(static_cast<std::size_t>(nv) * n_local_, 0.0);
+    g.assign(a.size(), 0.0);
+    if (n > 0) {
+      // a = Phi_local Q(:, f0 : f0 + nv), g = element forces, out(:, f0..) = W_local^T g.
+      BLASgemm_("N", "N", &n, &m, &rr, &one, phi.data(), &n, Q.data() + static_cast<std::size_t>(f0) * r, &rr, &zero,
+                a.data(), &n);
+      element_loop(kForce, static_cast<int>(nv), a.data(), nullptr, g.data(), nullptr, nullptr);
+      BLASgemm_("T", "N", &rw, &m, &n, &one, w.data(), &n, g.data(), &n, &zero,
+                out.data() + static_cast<std::size_t>(f0) * nw, &rw);
+    }
+  }
+  // Ghost rows of W hold the same values as their owners, and each element is evaluated by one
+  // rank only, so the sum over ranks of the local projections is W^T g.
+  MPI_Allreduce(MPI_IN_PLACE, out.data(), static_cast<int>(out.size()), MPI_DOUBLE, MPI_SUM, comm_);
+  MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
+  return out;
+}
+
+namespace {
+// Symmetric 3x3 as 6 entries (00, 11, 22, 01, 02, 12); dot6(a, b) = a : b for symmetric a, b.
+inline double dot6(const double* a, const double* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + 2.0 * (a[3] * b[3] + a[4] * b[4] + a[5] * b[5]);
+}
+// sym(X^T Y) with X[i][J] (3x3 row-major): (X^T Y)_{KL} = sum_i X[i][K] Y[i][L].
+inline void sym_tn(const double* X, const double* Y, double* s) {
+  static const int K[6] = {0, 1, 2, 0, 0, 1}, L[6] = {0, 1, 2, 1, 2, 2};
+  for (int c = 0; c < 6; ++c) {
+    double v = 0.0;
+    for (int i = 0; i < 3; ++i) v += X[3 * i + K[c]] * Y[3 * i + L[c]] + Y[3 * i + K[c]] * X[3 * i + L[c]];
+    s[c] = 0.5 * v;
+  }
+}
+}  // namespace
+
+void Svk::project_tensors(Mat Phi, std::vector<double>* A, std::vector<double>* B) const {
+  PetscLogEvent ev = log_event("SvkProjectTensors");
+  MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
+  PetscInt r = 0;
+  MORSE_CALL(MatGetSize(Phi, nullptr, &r));
+  const std::size_t R = static_cast<std::size_t>(r);
+  const std::size_t n2 = R * (R + 1) / 2, n3 = R * (R + 1) * (R + 2) / 6;
+  A->assign(n2 * R, 0.0);
+  B->assign(n3 * R, 0.0);
+  const auto phi = local_columns(Phi);
+  // Monomial numbering: i <= j and i <= j <= k, lexicographic.
+  std::vector<std::size_t> idx2(R * R), idx3(R * R * R);
+  {
+    std::size_t m = 0;
+    for (std::size_t i = 0; i < R; ++i)
+      for (std::size_t j = i; j < R; ++j) idx2[i * R + j] = m++;
+    m = 0;
+    for (std::size_t i = 0; i < R; ++i)
+      for (std::size_t j = i; j < R; ++j)
+        for (std::size_t k = j; k < R; ++k) idx3[(i * R + j) * R + k] = m++;
+  }
+  std::vector<double> H(9 * R), Ssym(6 * R * R), Nsym(6 * R * R), Lsym(6 * R), Hsym(6 * R);
+  std::vector<double> ua(kMaxDofs);
+  const std::int64_t ne = static_cast<std::int64_t>(type_n_.size());
+  for (std::int64_t e = 0; e < ne; ++e) {
+    const int n = type_n_[e], nd = 3 * n, nq = elem_nq_[e];
+    const PetscInt* pos = &elem_pos_[elem_off_[e]];
+    const double lam = lambda_[e], mu = mu_[e];
+    for (int q = 0; q < nq; ++q) {
+      const double* gq = &grad_[grad_off_[e] + 3 * n * q];
+      const double w = wdet_[wdet_off_[e] + q];
+      for (std::size_t a = 0; a < R; ++a) {
+        const double* col = phi.data() + a * n_local_;
+        for (int k = 0; k < nd; ++k) ua[k] = pos[k] >= 0 ? col[pos[k]] : 0.0;
+        double* Ha = &H[9 * a];
+        displacement_gradient(n, ua.data(), gq, Ha);
+        // L_a = S_lin(H_a) = lam tr(H_a) I + mu (H_a + H_a^T); sym(H_a).
+        const double tr = Ha[0] + Ha[4] + Ha[8];
+        double* hs = &Hsym[6 * a];
+        hs[0] = Ha[0], hs[1] = Ha[4], hs[2] = Ha[8];
+        hs[3] = 0.5 * (Ha[1] + Ha[3]), hs[4] = 0.5 * (Ha[2] + Ha[6]), hs[5] = 0.5 * (Ha[5] + Ha[7]);
+        double* l = &Lsym[6 * a];
+        for (int c = 0; c < 6; ++c) l[c] = 2.0 * mu * hs[c] + (c < 3 ? lam * tr : 0.0);
+      }
+      // N_ap = sym(H_a^T H_p) (symmetric in a, p); S_bc = S_nl of E_bc = N_bc / 2.
+      for (std::size_t a = 0; a < R; ++a)
+        for (std::size_t b = a; b < R; ++b) {
+          double* nab = &Nsym[6 * (a * R + b)];
+          sym_tn(&H[9 * a], &H[9 * b], nab);
+          std::copy(nab, nab + 6, &Nsym[6 * (b * R + a)]);
+          double* sab = &Ssym[6 * (a * R + b)];
+          const double tr = 0.5 * (nab[0] + nab[1] + nab[2]);
+          for (int c = 0; c < 6; ++c) sab[c] = mu * nab[c] + (c < 3 ? lam * tr : 0.0);
+          std::copy(sab, sab + 6, &Ssym[6 * (b * R + a)]);
+        }
+      // Quadratic: coefficient of q_i q_j (i <= j) in output p:
+      //   (1/m!) (2 S_ij : sym H_p + L_j : N_ip + L_i : N_jp).
+      for (std::size_t i = 0; i < R; ++i)
+        for (std::size_t j = i; j < R; ++j) {
+          const double c = w * (i == j ? 0.5 : 1.0);
+          double* row = &(*A)[idx2[i * R + j] * R];
+          const double* sij = &Ssym[6 * (i * R + j)];
+          for (std::size_t p = 0; p < R; ++p)
+            row[p] += c * (2.0 * dot6(sij, &Hsym[6 * p]) + dot6(&Lsym[6 * j], &Nsym[6 * (i * R + p)]) +
+                           dot6(&Lsym[6 * i], &Nsym[6 * (j * R + p)]));
+        }
+      // Cubic: coefficient of q_i q_j q_k (i <= j <= k) in output p:
+      //   (2/prod m!) (S_jk : N_ip + S_ik : N_jp + S_ij : N_kp).
+      for (std::size_t i = 0; i < R; ++i)
+        for (std::size_t j = i; j < R; ++j)
+          for (std::size_t k = j; k < R; ++k) {
+            const double mf = (i == j && j == k) ? 6.0 : (i == j || j == k) ? 2.0 : 1.0;
+            const double c = 2.0 * w / mf;
+            double* row = &(*B)[idx3[(i * R + j) * R + k] * R];
+            const double *sjk = &Ssym[6 * (j * R + k)], *sik = &Ssym[6 * (i * R + k)], *sij = &Ssym[6 * (i * R + j)];
+            const double *ni = &Nsym[6 * i * R], *nj = &Nsym[6 * j * R], *nk = &Nsym[6 * k * R];
+            for (std::size_t p = 0; p < R; ++p)
+              row[p] += c * (dot6(sjk, ni + 6 * p) + dot6(sik, nj + 6 * p) + dot6(sij, nk + 6 * p));
+          }
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, A->data(), static_cast<int>(A->size()), MPI_DOUBLE, MPI_SUM, comm_);
+  MPI_Allreduce(MPI_IN_PLACE, B->data(), static_cast<int>(B->size()), MPI_DOUBLE, MPI_SUM, comm_);
   MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
 }
 

@@ -59,6 +59,10 @@ class Loads {
   void evaluate(double t, Vec F) const;
   const std::vector<NodalLoad>& loads() const { return loads_; }
   bool empty() const { return loads_.empty(); }
+  /// Time factor of load i: amplitude sin(omega t + phase) (amplitude if omega = 0).
+  double factor(std::size_t i, double t) const;
+  /// Unit-amplitude spatial pattern of load i (f_e(t) = sum_i factor(i, t) pattern(i)).
+  Vec pattern(std::size_t i) const { return patterns_[i].get(); }
   /// Largest omega of the loads (0 if none is harmonic).
   double max_omega() const;
 

@@ -90,6 +90,23 @@ class Svk {
 
   Mat stiffness() const { return K_; }
 
+  // ---- Reduced forces (seed 003 §3.3). Phi, W: MPIDENSE with K's row layout.
+
+  /// Gt(:, f) = W^T g_nl(Phi Q(:, f)) for nf coefficient vectors Q (r x nf, column-major, the same
+  /// on every rank), r = columns of Phi. Each rank evaluates its own elements and projects the
+  /// element forces on its local rows of W (no ghost exchange of forces), in chunks of `chunk`
+  /// fields; one reduction at the end. W == nullptr means W = Phi. Returns (cols of W) x nf,
+  /// column-major, on every rank. Collective.
+  std::vector<double> reduced_nonlinear_forces(Mat Phi, Mat W, const std::vector<double>& Q, PetscInt nf,
+                                               PetscInt chunk = 64) const;
+
+  /// Exact projection of g_nl onto Phi (St Venant–Kirchhoff is exactly cubic):
+  ///   Phi^T g_nl(Phi q) = sum_{i<=j} A_ij q_i q_j + sum_{i<=j<=k} B_ijk q_i q_j q_k,
+  /// integrated element by element with the stiffness quadrature. A: n2 x r and B: n3 x r,
+  /// row-major (row = monomial in lexicographic order of i <= j (<= k), column = output), where
+  /// n2 = r(r+1)/2 and n3 = r(r+1)(r+2)/6; identical on every rank. Collective.
+  void project_tensors(Mat Phi, std::vector<double>* A, std::vector<double>* B) const;
+
  private:
   enum Output { kForce = 1, kTangent = 2, kEnergy = 4, kApply = 8, kPoint = 16 };
   // Runs the element loop over nv local field pairs (a, b), each of size n_local_ (compact
@@ -98,6 +115,8 @@ class Svk {
   // direction a, u* being the state cached by kPoint.
   void element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt, double* energy) const;
   void to_local(Vec u, Vec local) const;
+  // Columns of a dense matrix on the compact local DOFs: n_local_ x cols, column-major.
+  std::vector<double> local_columns(Mat A) const;
   void add_to_global(Vec local, Vec g) const;
 
   MPI_Comm comm_;

@@ -1,0 +1,135 @@
+// morse/nlrom/nlrom.hpp: nonlinear reduced-order models of seed 003 (§3.2–3.3): reduction bases
+// that keep the boundary translations physical (q = [u_b; eta], eq. 9) and the reduced
+// St Venant–Kirchhoff force as a cubic polynomial (eq. 25–28),
+//
+//   g~(q) = Phi^T g_nl(Phi q) = sum_{i<=j} A_ij q_i q_j + sum_{i<=j<=k} B_ijk q_i q_j q_k,
+//
+// identified either by STEP (eq. 29–37: N = r^3/6 + r^2 + 5r/6 evaluations of g_nl at imposed
+// displacements, optionally POD-filtered, eq. 38–39) or projected exactly element by element.
+// For St Venant–Kirchhoff both are exact, so they agree to round-off.
+#pragma once
+
+#include <petscmat.h>
+
+#include <string>
+#include <vector>
+
+#include "morse/cb/craig_bampton.hpp"
+#include "morse/core/handle.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "morse/fe/nonlinear.hpp"
+
+namespace morse::nlrom {
+
+/// Number of monomials q_i q_j (i <= j) and q_i q_j q_k (i <= j <= k) of r coordinates.
+inline std::size_t n_quadratic(std::size_t r) { return r * (r + 1) / 2; }
+inline std::size_t n_cubic(std::size_t r) { return r * (r + 1) * (r + 2) / 6; }
+
+/// The reduced nonlinear force, seed 003 eq. 28. Rows are monomials in lexicographic order of
+/// i <= j (<= k); columns are the r outputs m (A~^m_ij = A[row(i,j) * r + m]).
+struct CubicForce {
+  std::size_t r = 0;
+  std::vector<double> A;  ///< n_quadratic(r) x r, row-major
+  std::vector<double> B;  ///< n_cubic(r) x r, row-major
+  /// g = g~(q) (reference evaluation, O(r^4)). g has r entries.
+  void evaluate(const double* q, double* g) const;
+  /// Largest |A| and |B| entries (scales for comparisons).
+  double max_abs_A() const;
+  double max_abs_B() const;
+};
+
+/// Exact projection (fe::Svk::project_tensors). Collective.
+CubicForce exact_forces(const fe::Svk& svk, Mat Phi);
+
+struct StepSettings {
+  /// Target displacement of the imposed fields [m]: q_i = displacement / max|phi_i| (seed 003
+  /// §4.2: "of the order of 1 cm" on the blade). -step_displacement.
+  double displacement = 0.01;
+  /// POD filtering (eq. 38–39): if set, the forces are g^f = Phi_f Phi_f^T g_nl, with Phi_f
+  /// orthonormal columns (MPIDENSE, K's row layout).
+  Mat filter = nullptr;
+  PetscInt chunk = 64;  ///< displacement fields per element pass
+};
+
+/// STEP identification (eq. 29–37). Every rank evaluates its own elements for blocks of imposed
+/// fields and projects them locally; one reduction at the end. Collective.
+CubicForce step_forces(const fe::Svk& svk, Mat Phi, const StepSettings& s);
+
+/// Number of STEP evaluations, eq. 37.
+inline std::size_t step_evaluations(std::size_t r) { return 2 * r + 3 * r * (r - 1) / 2 + r * (r - 1) * (r - 2) / 6; }
+
+// ------------------------------------------------------------------------------------------
+// Reduction bases (seed 003 §3.2). Coordinates q = [u_b; eta]: the first n_b columns are the
+// constraint modes (identity on the boundary DOFs), every other column vanishes on the boundary,
+// so u_b = q_b stays physical (eq. 9).
+
+enum class BasisKind { CB, CBMD, POD };
+
+struct BasisSettings {
+  BasisKind kind = BasisKind::CB;
+  std::string boundary_set;       ///< -boundary
+  PetscInt n_fixed = 0;           ///< -nlrom_num_fixed_modes (CB, CB + MD)
+  PetscInt n_derivatives = 0;     ///< -nlrom_num_derivatives (CB + MD)
+  PetscInt n_pod = 0;             ///< -nlrom_num_pod (POD)
+  std::string snapshots;          ///< -nlrom_snapshots: a morse fom file (POD; POD filtering)
+  /// Modified Gram–Schmidt: a vector whose M-norm falls below mgs_tol times its norm before the
+  /// projection is dependent and dropped (-nlrom_mgs_tol).
+  double mgs_tol = 1e-6;
+  /// Training of the modal-derivative selection (eq. 24): a linear CB reduced simulation
+  /// (trapezoidal rule, undamped) under these loads from 0 to training_tfinal in steps of
+  /// training_dt.
+  const dyn::Loads* training = nullptr;
+  double training_tfinal = 0.0;
+  double training_dt = 0.0;
+  std::string prefix = "nlrom_";  ///< options prefix of the fixed-interface eigen solve
+};
+
+struct Basis {
+  BasisKind kind = BasisKind::CB;
+  cb::CBResult cb;  ///< boundary layout (n_b, node ids, DOFs) and the CB part (CB, CB + MD)
+  UMat V;           ///< the basis, MPIDENSE n_free x r
+  PetscInt n_b = 0, n_fixed = 0, n_extra = 0;  ///< r = n_b + n_fixed + n_extra
+  std::vector<std::string> labels;             ///< one per column
+  /// CB + MD: every pair (i <= j) of CB coordinates with its weight W_ij (eq. 24), the chosen
+  /// order (descending W) and which pairs entered the basis after MGS.
+  std::vector<std::pair<PetscInt, PetscInt>> md_pairs;
+  std::vector<double> md_weights;
+  std::vector<int> md_selected;  ///< 1 if the pair's derivative is a basis column
+  std::vector<double> pod_singular_values;  ///< POD: all singular values of the snapshots
+  double seconds = 0.0;                     ///< t1 of seed 003 §4.3.2
+  PetscInt r() const { return n_b + n_fixed + n_extra; }
+};
+
+/// Modal derivatives with the interface fixed (eq. 22 restricted to the interior):
+///   psi_ij = -K_ii^-1 (dK_T/dq_i phi_j)_i,  psi_ij = 0 on the boundary,
+/// for the given pairs of columns of T, with one MUMPS factorization and one block solve.
+/// dK_T/dq_i phi_j = d^2 g_nl(0)[phi_i, phi_j] is evaluated exactly (the odd part of
+/// (K_T(e phi_i) - K) phi_j in e). Returns MPIDENSE n_free x pairs. Collective.
+UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& boundary_dofs,
+                       const std::vector<std::pair<PetscInt, PetscInt>>& pairs);
+
+/// Builds the basis. Throws (collectively) for a basis larger than the model, a missing
+/// snapshot file, or missing training settings. Collective.
+Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
+                  const BasisSettings& s);
+
+/// The POD basis of a snapshot matrix X (n_free x n_s, MPIDENSE) by the method of snapshots:
+/// X^T X = U S^2 U^T (replicated, LAPACK), modes X U S^-1 for the n largest values, orthonormal
+/// in the Euclidean inner product. sigma receives every singular value (descending). Collective.
+UMat pod(Mat X, PetscInt n, std::vector<double>* sigma);
+
+// ------------------------------------------------------------------------------------------
+// The reduced model.
+
+struct ReducedModel {
+  PetscInt r = 0, n_b = 0;
+  std::vector<double> M, K, C;  ///< r x r row-major, identical on every rank
+  CubicForce g;                 ///< reduced nonlinear force
+  std::vector<double> damping_omega;  ///< reduced natural angular frequencies carrying xi
+};
+
+/// M~ = V^T M V, K~ = V^T K V (symmetrized), and modal damping xi on the first k modes of the
+/// reduced model itself: C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T. Collective.
+ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscInt k);
+
+}  // namespace morse::nlrom
