@@ -194,3 +194,237 @@ TEST(Nlrom, FilteredStepMatchesFilteredForces) {
   ASSERT_GT(s, 0.0);
   for (int p = 0; p < r; ++p) EXPECT_NEAR(g[p], ref[p], 1e-8 * s);
 }
+
+// ---- Bases.
+
+namespace {
+
+double column_dot(Mat A, PetscInt i, Mat M, Mat B, PetscInt j) {  // A_i^T M B_j
+  Vec a, b;
+  UVec Mb;
+  MORSE_CALL(MatCreateVecs(M, Mb.ptr(), nullptr));
+  MORSE_CALL(MatDenseGetColumnVecRead(B, j, &b));
+  MORSE_CALL(MatMult(M, b, Mb.get()));
+  MORSE_CALL(MatDenseRestoreColumnVecRead(B, j, &b));
+  MORSE_CALL(MatDenseGetColumnVecRead(A, i, &a));
+  double d;
+  MORSE_CALL(VecDot(a, Mb.get(), &d));
+  MORSE_CALL(MatDenseRestoreColumnVecRead(A, i, &a));
+  return d;
+}
+
+// Largest |V(g, j) - [g == boundary j]| over the boundary rows (u_b = q_b, eq. 9).
+double boundary_defect(Mat V, const std::vector<PetscInt>& bdofs) {
+  PetscInt lo, hi, r;
+  MORSE_CALL(MatGetOwnershipRange(V, &lo, &hi));
+  MORSE_CALL(MatGetSize(V, nullptr, &r));
+  double worst = 0;
+  for (std::size_t k = 0; k < bdofs.size(); ++k) {
+    if (bdofs[k] < lo || bdofs[k] >= hi) continue;
+    for (PetscInt j = 0; j < r; ++j) {
+      PetscScalar v;
+      PetscInt row = bdofs[k];
+      MORSE_CALL(MatGetValues(V, 1, &row, 1, &j, &v));
+      worst = std::max(worst, std::abs(v - (j == static_cast<PetscInt>(k) ? 1.0 : 0.0)));
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &worst, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  return worst;
+}
+
+}  // namespace
+
+// Modal derivatives: symmetric (psi_ij = psi_ji), zero on the boundary, and they solve eq. 22
+// on the interior, checked with the assembled tangent: K psi_ij = -(K_T(e phi_i) - K_T(-e phi_i)) phi_j / 2e.
+TEST(Nlrom, ModalDerivativesSymmetricAndSolveEq22) {
+  auto m = box(ElementType::Hex20, 4);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  cb::CBSettings cs;
+  cs.boundary_set = "x1";
+  cs.n_fixed = 3;
+  cs.keep_basis = true;
+  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  const PetscInt i = 1, j = c.n_b + 1;  // a constraint mode and a fixed-interface mode
+  auto Psi = nlrom::modal_derivatives(svk, c.T.get(), c.boundary_dofs, {{i, j}, {j, i}, {j, j}});
+  UVec a, b, Ka, ti, tj, up, y1, y2;
+  MORSE_CALL(MatCreateVecs(m.ops.K.get(), a.ptr(), b.ptr()));
+  for (UVec* v : {&Ka, &ti, &tj, &up, &y1, &y2}) MORSE_CALL(VecDuplicate(a.get(), v->ptr()));
+  auto col = [](Mat A, PetscInt k, Vec out) {
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecRead(A, k, &x));
+    MORSE_CALL(VecCopy(x, out));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(A, k, &x));
+  };
+  col(Psi.get(), 0, a.get());
+  col(Psi.get(), 1, b.get());
+  double na, d;
+  MORSE_CALL(VecNorm(a.get(), NORM_INFINITY, &na));
+  ASSERT_GT(na, 0.0);
+  MORSE_CALL(VecAXPY(b.get(), -1.0, a.get()));
+  MORSE_CALL(VecNorm(b.get(), NORM_INFINITY, &d));
+  EXPECT_LT(d, 1e-10 * na) << "psi_ij != psi_ji";
+  // Eq. 22 on the interior with the assembled tangent.
+  col(c.T.get(), i, ti.get());
+  col(c.T.get(), j, tj.get());
+  double mi;
+  MORSE_CALL(VecNorm(ti.get(), NORM_INFINITY, &mi));
+  const double e = 1e-4 / mi;
+  auto Kt = svk.create_tangent();
+  MORSE_CALL(VecAXPBY(up.get(), e, 0.0, ti.get()));
+  svk.tangent(up.get(), Kt.get());
+  MORSE_CALL(MatMult(Kt.get(), tj.get(), y1.get()));
+  MORSE_CALL(VecScale(up.get(), -1.0));
+  svk.tangent(up.get(), Kt.get());
+  MORSE_CALL(MatMult(Kt.get(), tj.get(), y2.get()));
+  MORSE_CALL(VecAXPY(y1.get(), -1.0, y2.get()));
+  MORSE_CALL(VecScale(y1.get(), 0.5 / e));  // dK_T/dq_i phi_j
+  MORSE_CALL(MatMult(m.ops.K.get(), a.get(), Ka.get()));
+  double nr;
+  MORSE_CALL(VecNorm(y1.get(), NORM_INFINITY, &nr));
+  MORSE_CALL(VecAXPY(Ka.get(), 1.0, y1.get()));
+  PetscInt lo, hi;
+  MORSE_CALL(VecGetOwnershipRange(Ka.get(), &lo, &hi));
+  for (PetscInt g : c.boundary_dofs)
+    if (g >= lo && g < hi) MORSE_CALL(VecSetValue(Ka.get(), g, 0.0, INSERT_VALUES));
+  MORSE_CALL(VecAssemblyBegin(Ka.get()));
+  MORSE_CALL(VecAssemblyEnd(Ka.get()));
+  MORSE_CALL(VecNorm(Ka.get(), NORM_INFINITY, &d));
+  EXPECT_LT(d, 1e-8 * nr) << "K_ii psi_ij + (dK_T/dq_i phi_j)_i";
+  EXPECT_LT(boundary_defect(Psi.get(), {}), 1.0);  // collective no-op guard
+  // Boundary rows are zero.
+  UMat Z = nlrom::modal_derivatives(svk, c.T.get(), c.boundary_dofs, {{0, 0}});
+  double bmax = 0;
+  for (PetscInt g : c.boundary_dofs)
+    if (g >= lo && g < hi) {
+      PetscScalar v;
+      PetscInt zero = 0;
+      MORSE_CALL(MatGetValues(Z.get(), 1, &g, 1, &zero, &v));
+      bmax = std::max(bmax, std::abs(v));
+    }
+  MPI_Allreduce(MPI_IN_PLACE, &bmax, 1, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+  EXPECT_EQ(bmax, 0.0);
+}
+
+// CB + MD: the boundary stays physical, the derivatives are M-orthonormal among themselves and
+// to the fixed-interface modes (1e-12), the W weights select the pairs in descending order, and
+// STEP equals the exact tensors on this basis too.
+TEST(Nlrom, ModalDerivativeBasis) {
+  auto m = box(ElementType::Hex20, 4);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  dyn::NodalLoad l;
+  l.set = "x1";
+  l.dir[1] = 1.0;
+  l.amplitude = 1e4;
+  l.omega = 2000.0;
+  dyn::Loads loads(m.lm, m.dofs, {l});
+  nlrom::BasisSettings s;
+  s.kind = nlrom::BasisKind::CBMD;
+  s.boundary_set = "x1";
+  s.n_fixed = 2;
+  s.n_derivatives = 4;
+  s.training = &loads;
+  s.training_tfinal = 10 * 2 * M_PI / 2000.0;
+  s.training_dt = 2e-5;
+  auto b = nlrom::build_basis(m.lm, m.dofs, svk, m.ops.M.get(), s);
+  ASSERT_EQ(b.r(), b.n_b + 2 + 4);
+  EXPECT_LT(boundary_defect(b.V.get(), b.cb.boundary_dofs), 1e-14);
+  const PetscInt f0 = b.n_b;
+  double worst = 0;
+  for (PetscInt i = f0; i < b.r(); ++i)
+    for (PetscInt j = f0; j < b.r(); ++j)
+      worst = std::max(worst, std::abs(column_dot(b.V.get(), i, m.ops.M.get(), b.V.get(), j) - (i == j ? 1.0 : 0.0)));
+  EXPECT_LT(worst, 1e-12) << "fixed-interface modes and derivatives are not M-orthonormal";
+  // Weights: the selected pairs are the first independent ones in descending W.
+  ASSERT_EQ(b.md_weights.size(), b.md_pairs.size());
+  double wmin_sel = 1e300, wmax_all = 0;
+  for (std::size_t k = 0; k < b.md_weights.size(); ++k) {
+    EXPECT_GE(b.md_weights[k], 0.0);
+    wmax_all = std::max(wmax_all, b.md_weights[k]);
+    if (b.md_selected[k]) wmin_sel = std::min(wmin_sel, b.md_weights[k]);
+  }
+  EXPECT_GT(wmax_all, 0.0);
+  int above = 0;  // pairs heavier than the lightest selected one that were not selected (dependent)
+  for (std::size_t k = 0; k < b.md_weights.size(); ++k)
+    if (!b.md_selected[k] && b.md_weights[k] > wmin_sel) ++above;
+  EXPECT_LE(above, static_cast<int>(b.md_pairs.size()) - 4);
+  auto st = nlrom::step_forces(svk, b.V.get(), {});
+  auto ex = nlrom::exact_forces(svk, b.V.get());
+  double da = 0, db = 0;
+  for (std::size_t i = 0; i < ex.A.size(); ++i) da = std::max(da, std::abs(st.A[i] - ex.A[i]));
+  for (std::size_t i = 0; i < ex.B.size(); ++i) db = std::max(db, std::abs(st.B[i] - ex.B[i]));
+  EXPECT_LT(da, 1e-8 * ex.max_abs_A());
+  EXPECT_LT(db, 1e-8 * ex.max_abs_B());
+}
+
+// POD by the method of snapshots against a snapshot matrix with known singular values.
+TEST(Nlrom, PodRecoversKnownSingularValues) {
+  auto m = box(ElementType::Hex8, 4);
+  const int k = 3, ns = 6;
+  auto U = smooth_basis(m, k, 1.0);
+  {  // orthonormalize U
+    std::vector<UVec> cols(k);
+    for (PetscInt j = 0; j < k; ++j) {
+      Vec c;
+      MORSE_CALL(MatDenseGetColumnVecRead(U.get(), j, &c));
+      MORSE_CALL(VecDuplicate(c, cols[j].ptr()));
+      MORSE_CALL(VecCopy(c, cols[j].get()));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(U.get(), j, &c));
+      for (PetscInt i = 0; i < j; ++i) {
+        double d;
+        MORSE_CALL(VecDot(cols[j].get(), cols[i].get(), &d));
+        MORSE_CALL(VecAXPY(cols[j].get(), -d, cols[i].get()));
+      }
+      MORSE_CALL(VecNormalize(cols[j].get(), nullptr));
+      MORSE_CALL(MatDenseGetColumnVecWrite(U.get(), j, &c));
+      MORSE_CALL(VecCopy(cols[j].get(), c));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(U.get(), j, &c));
+    }
+  }
+  // X = U diag(sigma) W^T with W (ns x k) orthonormal columns (a scaled Hadamard-like set).
+  const double sig[k] = {5.0, 2.0, 0.5};
+  const double Wt[k][ns] = {{1, 1, 1, 1, 1, 1}, {1, -1, 1, -1, 1, -1}, {1, 1, -1, -1, 1, 1}};
+  double wn[k];
+  for (int a = 0; a < k; ++a) {
+    wn[a] = 0;
+    for (int t = 0; t < ns; ++t) wn[a] += Wt[a][t] * Wt[a][t];
+    wn[a] = std::sqrt(wn[a]);
+  }
+  // Rows 1 and 3 are orthogonal? (1,1,-1,-1,1,1).(1,1,1,1,1,1) = 2: make row 3 orthogonal to 1, 2.
+  double W3[ns];
+  {
+    double d1 = 0, d2 = 0;
+    for (int t = 0; t < ns; ++t) d1 += Wt[2][t] * Wt[0][t] / wn[0], d2 += Wt[2][t] * Wt[1][t] / wn[1];
+    double n = 0;
+    for (int t = 0; t < ns; ++t) {
+      W3[t] = Wt[2][t] - d1 * Wt[0][t] / wn[0] - d2 * Wt[1][t] / wn[1];
+      n += W3[t] * W3[t];
+    }
+    for (int t = 0; t < ns; ++t) W3[t] /= std::sqrt(n);
+  }
+  UMat X;
+  PetscInt mloc;
+  MORSE_CALL(MatGetLocalSize(U.get(), &mloc, nullptr));
+  MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, mloc, PETSC_DECIDE, m.dofs.n_global, ns, nullptr, X.ptr()));
+  for (int t = 0; t < ns; ++t) {
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecWrite(X.get(), t, &x));
+    MORSE_CALL(VecSet(x, 0.0));
+    for (int a = 0; a < k; ++a) {
+      const double w = a < 2 ? Wt[a][t] / wn[a] : W3[t];
+      Vec u;
+      MORSE_CALL(MatDenseGetColumnVecRead(U.get(), a, &u));
+      MORSE_CALL(VecAXPY(x, sig[a] * w, u));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(U.get(), a, &u));
+    }
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(X.get(), t, &x));
+  }
+  std::vector<double> sigma;
+  auto P = nlrom::pod(X.get(), k, &sigma);
+  ASSERT_EQ(sigma.size(), static_cast<std::size_t>(ns));
+  for (int a = 0; a < k; ++a) EXPECT_NEAR(sigma[a], sig[a], 1e-12 * sig[0]);
+  for (int a = k; a < ns; ++a) EXPECT_LT(sigma[a], 1e-6 * sig[0]);
+  // POD modes = +-U columns.
+  auto G = cb::transpose_product(PETSC_COMM_WORLD, P.get(), U.get());
+  for (int a = 0; a < k; ++a) EXPECT_NEAR(std::abs(G[a * k + a]), 1.0, 1e-12);
+  EXPECT_THROW(nlrom::pod(X.get(), ns, &sigma), Error) << "rank-deficient request must be refused";
+}

@@ -353,6 +353,101 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
   collective_check(lm.comm, err);
 }
 
+UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+                   const std::string& dataset) {
+  int rank = 0;
+  MPI_Comm_rank(lm.comm, &rank);
+  std::string err;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) err = cat(file, ": cannot open as HDF5 (a morse fom file with snapshots is expected)");
+  const std::string group = dataset.substr(0, dataset.rfind('/'));
+  auto open = [&](const std::string& name) -> hid_t {
+    if (!err.empty()) return -1;
+    hid_t d = H5Lexists(f, group.c_str(), H5P_DEFAULT) > 0 && H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0
+                  ? H5Dopen2(f, name.c_str(), H5P_DEFAULT)
+                  : -1;
+    if (d < 0) err = cat(file, ": no dataset ", name, " (run morse fom with -fom_snapshot_every K)");
+    return d;
+  };
+  std::vector<std::int64_t> ids, comps;
+  auto read_int = [&](const std::string& name, std::vector<std::int64_t>* out) {
+    hid_t d = open(name);
+    if (d < 0) return;
+    hid_t sp = H5Dget_space(d);
+    out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
+    if (H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) err = cat(file, ": cannot read ", name);
+    H5Sclose(sp);
+    H5Dclose(d);
+  };
+  read_int(group + "/dof_node_ids", &ids);
+  read_int(group + "/dof_components", &comps);
+  hid_t d = open(dataset);
+  hsize_t dims[2] = {0, 0};
+  if (d >= 0) {
+    hid_t sp = H5Dget_space(d);
+    if (H5Sget_simple_extent_ndims(sp) != 2) err = cat(file, ": ", dataset, " is not 2-D (rows x DOFs)");
+    else H5Sget_simple_extent_dims(sp, dims, nullptr);
+    H5Sclose(sp);
+    if (err.empty() && (dims[1] != ids.size() || comps.size() != ids.size()))
+      err = cat(file, ": ", dataset, " has ", dims[1], " columns but the DOF map has ", ids.size());
+  }
+  // Column of each owned free DOF.
+  std::vector<std::int64_t> col(dofs.n_owned, -1);
+  if (err.empty()) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (3 id + comp, column)
+    for (std::size_t j = 0; j < ids.size(); ++j) order.emplace_back(3 * ids[j] + comps[j], static_cast<std::int64_t>(j));
+    std::sort(order.begin(), order.end());
+    for (std::int64_t k = 0; k < lm.mesh.num_nodes() && err.empty(); ++k) {
+      if (lm.node_owner[k] != rank) continue;
+      for (int c = 0; c < 3; ++c) {
+        const PetscInt g = dofs.node_dof[3 * k + c];
+        if (g < 0) continue;
+        const std::int64_t key = 3 * lm.mesh.node_ids[k] + c;
+        auto it = std::lower_bound(order.begin(), order.end(), std::make_pair(key, std::int64_t(-1)));
+        if (it == order.end() || it->first != key) {
+          err = cat(file, ": ", dataset, " has no column for node ", lm.mesh.node_ids[k], " component ", c,
+                    " (another mesh or other clamped sets?)");
+          break;
+        }
+        col[g - dofs.first] = it->second;
+      }
+    }
+  }
+  collective_check(lm.comm, err);
+  std::int64_t rows = static_cast<std::int64_t>(dims[0]);
+  MPI_Allreduce(MPI_IN_PLACE, &rows, 1, MPI_INT64_T, MPI_MAX, lm.comm);
+  UMat X;
+  MORSE_CALL(MatCreateDense(lm.comm, dofs.n_owned, PETSC_DECIDE, dofs.n_global, static_cast<PetscInt>(rows), nullptr,
+                            X.ptr()));
+  PetscScalar* x;
+  PetscInt ld = 0;
+  MORSE_CALL(MatDenseGetLDA(X.get(), &ld));
+  MORSE_CALL(MatDenseGetArrayWrite(X.get(), &x));
+  std::vector<double> row(dims[1]);
+  hid_t fsp = H5Dget_space(d);
+  hsize_t cnt[2] = {1, dims[1]};
+  hid_t msp = H5Screate_simple(2, cnt, nullptr);
+  for (std::int64_t k = 0; k < rows && err.empty(); ++k) {
+    hsize_t start[2] = {static_cast<hsize_t>(k), 0};
+    H5Sselect_hyperslab(fsp, H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+    if (H5Dread(d, H5T_NATIVE_DOUBLE, msp, fsp, H5P_DEFAULT, row.data()) < 0) {
+      err = cat(file, ": cannot read row ", k, " of ", dataset);
+      break;
+    }
+    for (PetscInt i = 0; i < dofs.n_owned; ++i) x[i + static_cast<std::size_t>(ld) * k] = row[col[i]];
+  }
+  H5Sclose(msp);
+  H5Sclose(fsp);
+  H5Dclose(d);
+  H5Fclose(f);
+  MORSE_CALL(MatDenseRestoreArrayWrite(X.get(), &x));
+  collective_check(lm.comm, err);
+  MORSE_CALL(MatAssemblyBegin(X.get(), MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(X.get(), MAT_FINAL_ASSEMBLY));
+  return X;
+}
+
 std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x) {
   int rank = 0, size = 1;
   MPI_Comm_rank(lm.comm, &rank);

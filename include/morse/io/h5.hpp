@@ -103,6 +103,16 @@ class H5SliceWriter {
 void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
                       const std::string& dataset, Vec x);
 
+/// Reads the full-field rows of a `morse fom` snapshot dataset (e.g. /fom/snapshots/u, shaped
+/// n_rows x n_file_dofs, with /<group>/dof_node_ids and /dof_components beside it) into an
+/// MPIDENSE matrix X (n_free x n_rows, K's row layout): column k is row k, mapped onto this
+/// model's free DOFs by node id and component, so the writing run's rank count and partition do
+/// not matter. Every rank reads one row at a time (no rank holds the snapshot matrix). Throws
+/// (collectively) naming the file and dataset if either is missing or the file lacks a free DOF
+/// of the model. Collective.
+UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+                   const std::string& dataset);
+
 /// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
 /// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.
 std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x);

@@ -1,0 +1,460 @@
+// Reduction bases of seed 003 §3.2: Craig–Bampton, Craig–Bampton + modal derivatives (eq. 20–24,
+// selection by W_ij and modified Gram–Schmidt), POD + constraint modes (eq. 10, 14–16), and the
+// reduced operators.
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "morse/cb/eigen.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/nlrom/nlrom.hpp"
+
+namespace morse::nlrom {
+
+namespace {
+
+// A distributed vector gathered on every rank.
+std::vector<double> to_all(Vec x) {
+  VecScatter sc;
+  Vec all;
+  MORSE_CALL(VecScatterCreateToAll(x, &sc, &all));
+  MORSE_CALL(VecScatterBegin(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+  MORSE_CALL(VecScatterEnd(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+  PetscInt n;
+  MORSE_CALL(VecGetSize(all, &n));
+  std::vector<double> out(n);
+  const double* a;
+  MORSE_CALL(VecGetArrayRead(all, &a));
+  std::copy(a, a + n, out.begin());
+  MORSE_CALL(VecRestoreArrayRead(all, &a));
+  MORSE_CALL(VecScatterDestroy(&sc));
+  MORSE_CALL(VecDestroy(&all));
+  return out;
+}
+
+std::vector<double> project_vector(Mat V, Vec x) {
+  UVec y;
+  MORSE_CALL(MatCreateVecs(V, y.ptr(), nullptr));
+  MORSE_CALL(MatMultTranspose(V, x, y.get()));
+  return to_all(y.get());
+}
+
+// Copies columns [c0, c0 + n) of A into columns [d0, d0 + n) of B (same row layout).
+void copy_columns(Mat A, PetscInt c0, Mat B, PetscInt d0, PetscInt n) {
+  for (PetscInt j = 0; j < n; ++j) {
+    Vec a, b;
+    MORSE_CALL(MatDenseGetColumnVecRead(A, c0 + j, &a));
+    MORSE_CALL(MatDenseGetColumnVecWrite(B, d0 + j, &b));
+    MORSE_CALL(VecCopy(a, b));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(B, d0 + j, &b));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(A, c0 + j, &a));
+  }
+}
+
+UMat dense_like(Mat A, PetscInt cols) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)A, &comm));
+  PetscInt m, N;
+  MORSE_CALL(MatGetLocalSize(A, &m, nullptr));
+  MORSE_CALL(MatGetSize(A, &N, nullptr));
+  UMat B;
+  MORSE_CALL(MatCreateDense(comm, m, PETSC_DECIDE, N, cols, nullptr, B.ptr()));
+  MORSE_CALL(MatZeroEntries(B.get()));
+  MORSE_CALL(MatAssemblyBegin(B.get(), MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(B.get(), MAT_FINAL_ASSEMBLY));
+  return B;
+}
+
+// Linear reduced response (trapezoidal rule, undamped, zero initial state) under f(t) =
+// sum_l factor_l(t) p_l; returns q at every step (n_steps + 1 rows of r).
+std::vector<double> linear_training(const std::vector<double>& M, const std::vector<double>& K, PetscInt r,
+                                    const dyn::Loads& loads, const std::vector<std::vector<double>>& p, double dt,
+                                    double tfinal) {
+  const PetscInt n_steps = static_cast<PetscInt>(std::ceil(tfinal / dt - 1e-9));
+  std::vector<double> A(r * r), q(r, 0.0), v(r, 0.0), rhs(r), f0(r, 0.0), f1(r), out;
+  for (PetscInt i = 0; i < r * r; ++i) A[i] = 4.0 / (dt * dt) * M[i] + K[i];
+  std::vector<PetscBLASInt> piv(r);
+  PetscBLASInt n = static_cast<PetscBLASInt>(r), one = 1, info = 0;
+  LAPACKgetrf_(&n, &n, A.data(), &n, piv.data(), &info);
+  MORSE_CHECK(info == 0, "nlrom training: singular reduced iteration matrix");
+  auto force = [&](double t, std::vector<double>& f) {
+    std::fill(f.begin(), f.end(), 0.0);
+    for (std::size_t l = 0; l < p.size(); ++l) {
+      const double c = loads.factor(l, t);
+      for (PetscInt i = 0; i < r; ++i) f[i] += c * p[l][i];
+    }
+  };
+  force(0.0, f0);
+  out.insert(out.end(), q.begin(), q.end());
+  for (PetscInt s = 1; s <= n_steps; ++s) {
+    force(s * dt, f1);
+    // (4/h^2 M + K) q1 = f0 + f1 - K q0 + M (4/h^2 q0 + 4/h v0)
+    for (PetscInt i = 0; i < r; ++i) {
+      double x = f0[i] + f1[i];
+      for (PetscInt j = 0; j < r; ++j) x += -K[i * r + j] * q[j] + M[i * r + j] * (4.0 / (dt * dt) * q[j] + 4.0 / dt * v[j]);
+      rhs[i] = x;
+    }
+    const char tr = 'T';  // A is row-major (symmetric anyway)
+    LAPACKgetrs_(&tr, &n, &one, A.data(), &n, piv.data(), rhs.data(), &n, &info);
+    for (PetscInt i = 0; i < r; ++i) {
+      v[i] = 2.0 * (rhs[i] - q[i]) / dt - v[i];
+      q[i] = rhs[i];
+    }
+    f0 = f1;
+    out.insert(out.end(), q.begin(), q.end());
+  }
+  return out;
+}
+
+}  // namespace
+
+UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& boundary_dofs,
+                       const std::vector<std::pair<PetscInt, PetscInt>>& pairs) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)T, &comm));
+  StageTimer stage(comm, "ModalDerivatives");
+  Mat K = svk.stiffness();
+  PetscInt lo, hi;
+  MORSE_CALL(MatGetOwnershipRange(K, &lo, &hi));
+  std::vector<PetscInt> own_b;
+  for (PetscInt g : boundary_dofs)
+    if (g >= lo && g < hi) own_b.push_back(g);
+  // Right-hand sides -(dK_T/dq_i phi_j), zero on the boundary.
+  const PetscInt np = static_cast<PetscInt>(pairs.size());
+  UMat Rhs = dense_like(T, np), Psi = dense_like(T, np);
+  UVec up, um, yp, ym, ti;
+  MORSE_CALL(MatCreateVecs(K, up.ptr(), um.ptr()));
+  for (UVec* v : {&yp, &ym, &ti}) MORSE_CALL(VecDuplicate(up.get(), v->ptr()));
+  std::vector<PetscInt> by_i(np);
+  std::iota(by_i.begin(), by_i.end(), 0);
+  std::stable_sort(by_i.begin(), by_i.end(), [&](PetscInt a, PetscInt b) { return pairs[a].first < pairs[b].first; });
+  PetscInt current = -1;
+  double eps = 0.0;
+  for (PetscInt idx : by_i) {
+    const PetscInt i = pairs[idx].first, j = pairs[idx].second;
+    if (i != current) {
+      current = i;
+      Vec c;
+      MORSE_CALL(MatDenseGetColumnVecRead(T, i, &c));
+      MORSE_CALL(VecCopy(c, ti.get()));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(T, i, &c));
+      double m;
+      MORSE_CALL(VecNorm(ti.get(), NORM_INFINITY, &m));
+      MORSE_CHECK(m > 0, "modal derivatives: basis vector ", i, " is zero");
+      eps = 1e-6 / m;  // the result is exact for any eps; small keeps the cubic part tiny
+    }
+    Vec cj;
+    MORSE_CALL(MatDenseGetColumnVecRead(T, j, &cj));
+    // (K_T(+e t_i) - K) t_j - (K_T(-e t_i) - K) t_j = 2 e d^2g[t_i, t_j]
+    MORSE_CALL(VecCopy(ti.get(), up.get()));
+    MORSE_CALL(VecScale(up.get(), eps));
+    svk.tangent_point(up.get());
+    svk.tangent_apply_nonlinear(cj, yp.get());
+    MORSE_CALL(VecScale(up.get(), -1.0));
+    svk.tangent_point(up.get());
+    svk.tangent_apply_nonlinear(cj, ym.get());
+    MORSE_CALL(MatDenseRestoreColumnVecRead(T, j, &cj));
+    Vec b;
+    MORSE_CALL(MatDenseGetColumnVecWrite(Rhs.get(), idx, &b));
+    MORSE_CALL(VecWAXPY(b, -1.0, yp.get(), ym.get()));  // ym - yp = -2 e d^2g
+    MORSE_CALL(VecScale(b, 0.5 / eps));
+    for (PetscInt g : own_b) MORSE_CALL(VecSetValue(b, g, 0.0, INSERT_VALUES));
+    MORSE_CALL(VecAssemblyBegin(b));
+    MORSE_CALL(VecAssemblyEnd(b));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(Rhs.get(), idx, &b));
+  }
+  // K with the boundary rows and columns replaced by the identity: its interior block is K_ii.
+  UMat Kb;
+  MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, Kb.ptr()));
+  MORSE_CALL(MatZeroRowsColumns(Kb.get(), static_cast<PetscInt>(own_b.size()), own_b.data(), 1.0, nullptr, nullptr));
+  MORSE_CALL(MatSetOption(Kb.get(), MAT_SYMMETRIC, PETSC_TRUE));
+  UMat F;
+  MORSE_CALL(MatGetFactor(Kb.get(), MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F.ptr()));
+  MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));
+  MatFactorInfo info;
+  MORSE_CALL(MatFactorInfoInitialize(&info));
+  MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Kb.get(), nullptr, &info));
+  MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Kb.get(), &info));
+  const PetscInt nulls = cb::mumps_null_pivots(F.get());
+  MORSE_CHECK(nulls == 0, "modal derivatives: K_ii is singular (", nulls, " null pivots); check -clamp and -boundary");
+  if (np > 0) MORSE_CALL(MatMatSolve(F.get(), Rhs.get(), Psi.get()));
+  return Psi;
+}
+
+UMat pod(Mat X, PetscInt n, std::vector<double>* sigma) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)X, &comm));
+  PetscInt ns = 0, m = 0;
+  MORSE_CALL(MatGetSize(X, nullptr, &ns));
+  MORSE_CALL(MatGetLocalSize(X, &m, nullptr));
+  MORSE_CHECK(n > 0 && n <= ns, "POD: ", n, " modes asked from ", ns, " snapshots");
+  auto C = cb::transpose_product(comm, X, X);  // ns x ns, identical on every rank
+  std::vector<double> w(ns), work(1);
+  PetscBLASInt nn = static_cast<PetscBLASInt>(ns), lwork = -1, info = 0;
+  LAPACKsyev_("V", "U", &nn, C.data(), &nn, w.data(), work.data(), &lwork, &info);
+  lwork = static_cast<PetscBLASInt>(work[0]);
+  work.resize(lwork);
+  LAPACKsyev_("V", "U", &nn, C.data(), &nn, w.data(), work.data(), &lwork, &info);
+  MORSE_CHECK(info == 0, "POD: LAPACK syev failed (info ", info, ")");
+  // Descending; C's columns (LAPACK column-major) are the eigenvectors.
+  sigma->resize(ns);
+  for (PetscInt k = 0; k < ns; ++k) (*sigma)[k] = std::sqrt(std::max(0.0, w[ns - 1 - k]));
+  // X^T X squares the condition number: below sqrt(eps) sigma_1 a singular value is round-off.
+  MORSE_CHECK((*sigma)[n - 1] > 1e-7 * (*sigma)[0], "POD: ", n, " modes asked but the snapshots span fewer "
+              "independent fields (sigma_", n, " / sigma_1 = ", (*sigma)[n - 1] / std::max((*sigma)[0], 1e-300),
+              " < 1e-7)");
+  std::vector<double> U(static_cast<std::size_t>(ns) * n);
+  for (PetscInt k = 0; k < n; ++k)
+    for (PetscInt i = 0; i < ns; ++i) U[k * ns + i] = C[(ns - 1 - k) * ns + i] / (*sigma)[k];
+  UMat P = dense_like(X, n);
+  const PetscScalar* x;
+  PetscScalar* p;
+  PetscInt ldx, ldp;
+  MORSE_CALL(MatDenseGetLDA(X, &ldx));
+  MORSE_CALL(MatDenseGetLDA(P.get(), &ldp));
+  MORSE_CALL(MatDenseGetArrayRead(X, &x));
+  MORSE_CALL(MatDenseGetArrayWrite(P.get(), &p));
+  if (m > 0) {
+    PetscBLASInt bm = static_cast<PetscBLASInt>(m), bn = static_cast<PetscBLASInt>(n), bk = nn,
+                 lx = static_cast<PetscBLASInt>(ldx), lp = static_cast<PetscBLASInt>(ldp);
+    const double one = 1.0, zero = 0.0;
+    BLASgemm_("N", "N", &bm, &bn, &bk, &one, x, &lx, U.data(), &bk, &zero, p, &lp);
+  }
+  MORSE_CALL(MatDenseRestoreArrayWrite(P.get(), &p));
+  MORSE_CALL(MatDenseRestoreArrayRead(X, &x));
+  return P;
+}
+
+namespace {
+
+// M-orthonormalizes `cand` columns (in the given order) against `base` columns (M-orthonormal)
+// and the accepted ones, two passes of modified Gram–Schmidt; keeps at most `want`. Returns the
+// accepted candidate indices; accepted vectors are written to out (columns from d0).
+std::vector<PetscInt> mgs(Mat M, Mat base, PetscInt b0, PetscInt nb, Mat cand, const std::vector<PetscInt>& order,
+                          PetscInt want, double tol, Mat out, PetscInt d0) {
+  std::vector<PetscInt> taken;
+  UVec v, Mv;
+  MORSE_CALL(MatCreateVecs(M, v.ptr(), Mv.ptr()));
+  auto mdot = [&](Vec a, Vec b) {
+    MORSE_CALL(MatMult(M, b, Mv.get()));
+    double d;
+    MORSE_CALL(VecDot(a, Mv.get(), &d));
+    return d;
+  };
+  for (PetscInt c : order) {
+    if (static_cast<PetscInt>(taken.size()) >= want) break;
+    Vec x;
+    MORSE_CALL(MatDenseGetColumnVecRead(cand, c, &x));
+    MORSE_CALL(VecCopy(x, v.get()));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(cand, c, &x));
+    const double n0 = std::sqrt(std::max(0.0, mdot(v.get(), v.get())));
+    if (!(n0 > 0)) continue;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (PetscInt k = 0; k < nb; ++k) {
+        Vec b;
+        MORSE_CALL(MatDenseGetColumnVecRead(base, b0 + k, &b));
+        MORSE_CALL(VecAXPY(v.get(), -mdot(b, v.get()), b));
+        MORSE_CALL(MatDenseRestoreColumnVecRead(base, b0 + k, &b));
+      }
+      for (std::size_t k = 0; k < taken.size(); ++k) {
+        Vec b;
+        MORSE_CALL(MatDenseGetColumnVecRead(out, d0 + static_cast<PetscInt>(k), &b));
+        MORSE_CALL(VecAXPY(v.get(), -mdot(b, v.get()), b));
+        MORSE_CALL(MatDenseRestoreColumnVecRead(out, d0 + static_cast<PetscInt>(k), &b));
+      }
+    }
+    const double n1 = std::sqrt(std::max(0.0, mdot(v.get(), v.get())));
+    if (n1 < tol * n0) continue;  // dependent
+    MORSE_CALL(VecScale(v.get(), 1.0 / n1));
+    Vec y;
+    MORSE_CALL(MatDenseGetColumnVecWrite(out, d0 + static_cast<PetscInt>(taken.size()), &y));
+    MORSE_CALL(VecCopy(v.get(), y));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(out, d0 + static_cast<PetscInt>(taken.size()), &y));
+    taken.push_back(c);
+  }
+  return taken;
+}
+
+std::vector<std::string> cb_labels(const cb::CBResult& c) {
+  std::vector<std::string> l;
+  for (PetscInt j = 0; j < c.n_b; ++j)
+    l.push_back(cat("u_b node ", c.boundary_node_ids[j / 3], " ", "xyz"[j % 3]));
+  for (PetscInt j = 0; j < c.n_phi; ++j) l.push_back(cat("phi ", j + 1));
+  return l;
+}
+
+}  // namespace
+
+Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
+                  const BasisSettings& s) {
+  MPI_Comm comm = lm.comm;
+  const auto t0 = std::chrono::steady_clock::now();
+  StageTimer stage(comm, "Basis");
+  Mat K = svk.stiffness();
+  Basis b;
+  b.kind = s.kind;
+  MORSE_CHECK(!s.boundary_set.empty(), "nlrom: the boundary set (-boundary SET) is required");
+  MORSE_CHECK(s.n_fixed >= 0 && s.n_derivatives >= 0 && s.n_pod >= 0, "nlrom: basis sizes must be >= 0");
+  cb::CBSettings cs;
+  cs.boundary_set = s.boundary_set;
+  cs.n_fixed = s.kind == BasisKind::POD ? 0 : s.n_fixed;
+  cs.keep_basis = true;
+  cs.prefix = s.prefix;
+  const PetscInt want_extra = s.kind == BasisKind::CBMD ? s.n_derivatives : s.kind == BasisKind::POD ? s.n_pod : 0;
+  {
+    // Size check before any work: r must not exceed the free DOFs.
+    cb::CBResult probe;
+    cb::set_boundary(lm, dofs, s.boundary_set, &probe);
+    const PetscInt r = probe.n_b + cs.n_fixed + want_extra;
+    MORSE_CHECK(r <= dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", cs.n_fixed,
+                " fixed-interface modes + ", want_extra, " others) is larger than the model (", dofs.n_global,
+                " free DOFs)");
+  }
+  if (s.kind == BasisKind::POD) {
+    MORSE_CHECK(!s.snapshots.empty(), "nlrom: -nlrom_basis pod needs -nlrom_snapshots FILE.h5 (a morse fom file)");
+    MORSE_CHECK(s.n_pod > 0, "nlrom: -nlrom_basis pod needs -nlrom_num_pod N > 0");
+  }
+  if (s.kind == BasisKind::CBMD) {
+    MORSE_CHECK(s.n_derivatives > 0, "nlrom: -nlrom_basis cbmd needs -nlrom_num_derivatives N > 0");
+    MORSE_CHECK(s.training && !s.training->empty() && s.training_tfinal > 0 && s.training_dt > 0,
+                "nlrom: -nlrom_basis cbmd needs a training load (-load_sets ...) and -nlrom_training_tfinal T > 0");
+  }
+  b.cb = cb::craig_bampton(lm, dofs, K, M, cs);
+  b.n_b = b.cb.n_b;
+  b.n_fixed = b.cb.n_phi;
+  const PetscInt rcb = b.cb.n();
+  b.labels = cb_labels(b.cb);
+
+  if (s.kind == BasisKind::CB) {
+    b.V = std::move(b.cb.T);
+  } else if (s.kind == BasisKind::CBMD) {
+    for (PetscInt i = 0; i < rcb; ++i)
+      for (PetscInt j = i; j < rcb; ++j) b.md_pairs.emplace_back(i, j);
+    auto Psi = modal_derivatives(svk, b.cb.T.get(), b.cb.boundary_dofs, b.md_pairs);
+    // W_ij = int |q_i q_j| dt from the linear CB reduced response to the training load (eq. 24).
+    std::vector<std::vector<double>> p;
+    for (std::size_t l = 0; l < s.training->loads().size(); ++l)
+      p.push_back(project_vector(b.cb.T.get(), s.training->pattern(l)));
+    auto q = linear_training(b.cb.M, b.cb.K, rcb, *s.training, p, s.training_dt, s.training_tfinal);
+    const std::size_t nt = q.size() / rcb;
+    b.md_weights.assign(b.md_pairs.size(), 0.0);
+    for (std::size_t k = 0; k < b.md_pairs.size(); ++k) {
+      const auto [i, j] = b.md_pairs[k];
+      double w = 0.0;
+      for (std::size_t t = 0; t < nt; ++t) {  // trapezoidal rule in time
+        const double v = std::abs(q[t * rcb + i] * q[t * rcb + j]);
+        w += (t == 0 || t + 1 == nt) ? 0.5 * v : v;
+      }
+      b.md_weights[k] = w * s.training_dt;
+    }
+    std::vector<PetscInt> order(b.md_pairs.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt c) { return b.md_weights[a] > b.md_weights[c]; });
+    b.V = dense_like(K, rcb + s.n_derivatives);
+    copy_columns(b.cb.T.get(), 0, b.V.get(), 0, rcb);
+    auto taken = mgs(M, b.cb.T.get(), b.n_b, b.n_fixed, Psi.get(), order, s.n_derivatives, s.mgs_tol, b.V.get(), rcb);
+    b.n_extra = static_cast<PetscInt>(taken.size());
+    MORSE_CHECK(b.n_extra == s.n_derivatives, "nlrom: only ", b.n_extra, " independent modal derivatives (of ",
+                b.md_pairs.size(), " pairs, -nlrom_mgs_tol ", s.mgs_tol, ") but -nlrom_num_derivatives ",
+                s.n_derivatives);
+    b.md_selected.assign(b.md_pairs.size(), 0);
+    for (PetscInt k : taken) {
+      b.md_selected[k] = 1;
+      b.labels.push_back(cat("psi ", b.md_pairs[k].first + 1, ",", b.md_pairs[k].second + 1));
+    }
+  } else {
+    auto X = io::read_dof_rows(lm, dofs, s.snapshots, "/fom/snapshots/u");
+    PetscInt ns = 0;
+    MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
+    MORSE_CHECK(s.n_pod <= ns, "nlrom: -nlrom_num_pod ", s.n_pod, " exceeds the ", ns, " snapshots of ", s.snapshots);
+    // Remove the interface part (eq. 15): X_i = X - Psi X_b, so every POD vector vanishes on the
+    // boundary.
+    std::vector<double> Xb(static_cast<std::size_t>(b.n_b) * ns, 0.0);
+    {
+      PetscInt lo, hi, ld;
+      MORSE_CALL(MatGetOwnershipRange(X.get(), &lo, &hi));
+      MORSE_CALL(MatDenseGetLDA(X.get(), &ld));
+      const PetscScalar* x;
+      MORSE_CALL(MatDenseGetArrayRead(X.get(), &x));
+      for (PetscInt j = 0; j < b.n_b; ++j) {
+        const PetscInt g = b.cb.boundary_dofs[j];
+        if (g >= lo && g < hi)
+          for (PetscInt k = 0; k < ns; ++k) Xb[j * ns + k] = x[(g - lo) + static_cast<std::size_t>(ld) * k];
+      }
+      MORSE_CALL(MatDenseRestoreArrayRead(X.get(), &x));
+      MPI_Allreduce(MPI_IN_PLACE, Xb.data(), static_cast<int>(Xb.size()), MPI_DOUBLE, MPI_SUM, comm);
+      PetscScalar* xw;
+      const PetscScalar* t;
+      PetscInt ldt;
+      MORSE_CALL(MatDenseGetLDA(b.cb.T.get(), &ldt));
+      MORSE_CALL(MatDenseGetArrayRead(b.cb.T.get(), &t));
+      MORSE_CALL(MatDenseGetArray(X.get(), &xw));
+      for (PetscInt k = 0; k < ns; ++k)
+        for (PetscInt j = 0; j < b.n_b; ++j) {
+          const double c = Xb[j * ns + k];
+          if (c == 0.0) continue;
+          for (PetscInt i = 0; i < hi - lo; ++i)
+            xw[i + static_cast<std::size_t>(ld) * k] -= c * t[i + static_cast<std::size_t>(ldt) * j];
+        }
+      MORSE_CALL(MatDenseRestoreArray(X.get(), &xw));
+      MORSE_CALL(MatDenseRestoreArrayRead(b.cb.T.get(), &t));
+    }
+    auto P = pod(X.get(), s.n_pod, &b.pod_singular_values);
+    b.V = dense_like(K, b.n_b + s.n_pod);
+    copy_columns(b.cb.T.get(), 0, b.V.get(), 0, b.n_b);
+    copy_columns(P.get(), 0, b.V.get(), b.n_b, s.n_pod);
+    b.n_extra = s.n_pod;
+    for (PetscInt k = 0; k < s.n_pod; ++k) b.labels.push_back(cat("pod ", k + 1));
+  }
+  b.cb.T.reset();
+  b.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return b;
+}
+
+ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscInt k) {
+  StageTimer stage(comm, "Project");
+  ReducedModel rm;
+  PetscInt r = 0;
+  MORSE_CALL(MatGetSize(V, nullptr, &r));
+  rm.r = r;
+  UMat KV, MV;
+  MORSE_CALL(MatMatMult(K, V, MAT_INITIAL_MATRIX, PETSC_DEFAULT, KV.ptr()));
+  MORSE_CALL(MatMatMult(M, V, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+  rm.K = cb::transpose_product(comm, V, KV.get());
+  rm.M = cb::transpose_product(comm, V, MV.get());
+  for (auto* A : {&rm.K, &rm.M})
+    for (PetscInt i = 0; i < r; ++i)
+      for (PetscInt j = i + 1; j < r; ++j) {
+        const double a = 0.5 * ((*A)[i * r + j] + (*A)[j * r + i]);
+        (*A)[i * r + j] = (*A)[j * r + i] = a;
+      }
+  rm.C.assign(static_cast<std::size_t>(r) * r, 0.0);
+  if (xi > 0 && k > 0) {
+    MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
+    std::vector<double> A = rm.K, B = rm.M, w(r), work(1);
+    PetscBLASInt n = static_cast<PetscBLASInt>(r), one = 1, lwork = -1, info = 0;
+    LAPACKsygv_(&one, "V", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
+    lwork = static_cast<PetscBLASInt>(work[0]);
+    work.resize(lwork);
+    LAPACKsygv_(&one, "V", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
+    MORSE_CHECK(info == 0, "nlrom: reduced eigenproblem failed (LAPACK sygv info ", info, ")");
+    for (PetscInt m = 0; m < k; ++m) {
+      const double om = std::sqrt(std::max(0.0, w[m]));
+      rm.damping_omega.push_back(om);
+      std::vector<double> Mx(r, 0.0);  // x_m = column m of A (column-major), M-normalized
+      for (PetscInt i = 0; i < r; ++i)
+        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm.M[i * r + j] * A[m * r + j];
+      for (PetscInt i = 0; i < r; ++i)
+        for (PetscInt j = 0; j < r; ++j) rm.C[i * r + j] += 2.0 * xi * om * Mx[i] * Mx[j];
+    }
+  }
+  return rm;
+}
+
+}  // namespace morse::nlrom
