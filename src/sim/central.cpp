@@ -1,0 +1,217 @@
+// Explicit central differences on reduced models (see morse/sim/sim.hpp).
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "morse/core/error.hpp"
+#include "morse/sim/sim.hpp"
+
+namespace morse::sim {
+
+namespace {
+
+// Inverse of a dense r x r matrix (row-major) by LU.
+std::vector<double> inverse(std::vector<double> A, std::size_t r) {
+  PetscBLASInt n = static_cast<PetscBLASInt>(r), info = 0, lwork = static_cast<PetscBLASInt>(r * 64);
+  std::vector<PetscBLASInt> piv(r);
+  std::vector<double> work(lwork);
+  LAPACKgetrf_(&n, &n, A.data(), &n, piv.data(), &info);
+  MORSE_CHECK(info == 0, "simulate: singular reduced matrix (LAPACK getrf info ", info, ")");
+  LAPACKgetri_(&n, A.data(), &n, piv.data(), work.data(), &lwork, &info);
+  MORSE_CHECK(info == 0, "simulate: LAPACK getri failed (info ", info, ")");
+  return A;  // the inverse of the transpose of a row-major matrix, transposed: the inverse
+}
+
+std::vector<double> matmul(const std::vector<double>& A, const std::vector<double>& B, std::size_t r) {
+  std::vector<double> C(r * r, 0.0);
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t k = 0; k < r; ++k) {
+      const double a = A[i * r + k];
+      for (std::size_t j = 0; j < r; ++j) C[i * r + j] += a * B[k * r + j];
+    }
+  return C;
+}
+
+}  // namespace
+
+double critical_step(const nlrom::ReducedModel& m) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  std::vector<double> A = m.K, B = m.M, w(r), work(1);
+  PetscBLASInt n = static_cast<PetscBLASInt>(r), one = 1, lwork = -1, info = 0;
+  LAPACKsygv_(&one, "N", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
+  lwork = static_cast<PetscBLASInt>(work[0]);
+  work.resize(lwork);
+  LAPACKsygv_(&one, "N", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
+  MORSE_CHECK(info == 0, "simulate: the reduced mass matrix is not positive definite (LAPACK sygv info ", info, ")");
+  return 2.0 / std::sqrt(std::max(w[r - 1], 1e-300));
+}
+
+CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& P3) : r_(g.r) {
+  const std::size_t n2 = nlrom::n_quadratic(r_), n3 = nlrom::n_cubic(r_);
+  n_ = n2 + n3;
+  W_.assign(n_ * r_, 0.0);
+  z_.assign(n_, 0.0);
+  // W(m, p) = sum_k P3(p, k) coef(m, k)
+  auto fold = [&](const std::vector<double>& C, std::size_t rows, std::size_t off) {
+    for (std::size_t m = 0; m < rows; ++m)
+      for (std::size_t p = 0; p < r_; ++p) {
+        double v = 0.0;
+        for (std::size_t k = 0; k < r_; ++k) v += P3[p * r_ + k] * C[m * r_ + k];
+        W_[(off + m) * r_ + p] = v;
+      }
+  };
+  fold(g.A, n2, 0);
+  fold(g.B, n3, n2);
+}
+
+void CubicKernel::apply(const double* q, double* y) const {
+  const std::size_t r = r_;
+  double* z = z_.data();
+  // Monomials: all q_i q_j (i <= j), then all q_i q_j q_k (i <= j <= k), both lexicographic.
+  double* z2 = z;
+  double* z3 = z + r * (r + 1) / 2;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) *z2++ = q[i] * q[j];
+  const double* qq = z;
+  for (std::size_t i = 0; i < r; ++i) {
+    for (std::size_t j = i; j < r; ++j) {
+      const double a = qq[j - i];
+      for (std::size_t k = j; k < r; ++k) *z3++ = a * q[k];
+    }
+    qq += r - i;
+  }
+  std::fill(y, y + r, 0.0);
+  const double* w = W_.data();
+  for (std::size_t m = 0; m < n_; ++m, w += r) {
+    const double c = z[m];
+#pragma omp simd
+    for (std::size_t p = 0; p < r; ++p) y[p] += c * w[p];
+  }
+}
+
+double CubicKernel::flops() const {
+  return 2.0 * static_cast<double>(n_) * static_cast<double>(r_) + static_cast<double>(n_);
+}
+
+Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                const std::function<void(const StepState&)>& callback) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  const double h = s.dt;
+  MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
+  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final, ")");
+  Stats st;
+  st.critical_dt = critical_step(m);
+  MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h, " s is above the critical step of central differences, ",
+              st.critical_dt, " s (2 / omega_max of the reduced model); use -sim_dt <= ", st.critical_dt);
+  for (const auto& l : loads) MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
+  // Folded operators.
+  std::vector<double> D(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) D[i] = 2.0 * m.M[i] + h * m.C[i];
+  D = inverse(D, r);
+  std::vector<double> T1(r * r), T2(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) {
+    T1[i] = 4.0 * m.M[i] - 2.0 * h * h * m.K[i];
+    T2[i] = h * m.C[i] - 2.0 * m.M[i];
+  }
+  const auto P1 = matmul(D, T1, r), P2 = matmul(D, T2, r);
+  std::vector<double> P3(D);
+  for (double& x : P3) x *= 2.0 * h * h;
+  std::vector<std::vector<double>> lp;  // P3 p_l
+  for (const auto& l : loads) {
+    std::vector<double> y(r, 0.0);
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t j = 0; j < r; ++j) y[i] += P3[i * r + j] * l.p[j];
+    lp.push_back(std::move(y));
+  }
+  const bool nonlinear = !s.linear;
+  CubicKernel kernel(m.g.r == r ? m.g : nlrom::CubicForce{r, std::vector<double>(nlrom::n_quadratic(r) * r, 0.0),
+                                                           std::vector<double>(nlrom::n_cubic(r) * r, 0.0)},
+                     P3);
+  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+
+  std::vector<double> qm(r), q(r, 0.0), qp(r), v(r, 0.0), g(r), tmp(r);
+  if (!s.q0.empty()) {
+    MORSE_CHECK(s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
+    q = s.q0;
+  }
+  if (!s.v0.empty()) {
+    MORSE_CHECK(s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
+    v = s.v0;
+  }
+  auto energy = [&](const std::vector<double>& x, const std::vector<double>& y) {
+    double e = 0.0;
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t j = 0; j < r; ++j) e += 0.5 * (y[i] * m.M[i * r + j] * y[j] + x[i] * m.K[i * r + j] * x[j]);
+    return e;
+  };
+  // a0 = M^-1 (f(0) - K q0 - C v0 - g(q0)); q_{-1} = q0 - h v0 + h^2/2 a0.
+  {
+    std::vector<double> rhs(r, 0.0);
+    for (const auto& l : loads)
+      for (std::size_t i = 0; i < r; ++i) rhs[i] += l.factor(0.0) * l.p[i];
+    if (nonlinear) m.g.evaluate(q.data(), g.data());
+    for (std::size_t i = 0; i < r; ++i) {
+      double x = rhs[i] - (nonlinear ? g[i] : 0.0);
+      for (std::size_t j = 0; j < r; ++j) x -= m.K[i * r + j] * q[j] + m.C[i * r + j] * v[j];
+      rhs[i] = x;
+    }
+    auto Minv = inverse(m.M, r);
+    for (std::size_t i = 0; i < r; ++i) {
+      double a = 0.0;
+      for (std::size_t j = 0; j < r; ++j) a += Minv[i * r + j] * rhs[j];
+      qm[i] = q[i] - h * v[i] + 0.5 * h * h * a;
+    }
+  }
+  const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
+  StepState ss;
+  ss.q = q.data();
+  ss.v = v.data();
+  ss.energy = energy(q, v);
+  callback(ss);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
+  // runs one step late (the last state's velocity uses one extra step).
+  for (long n = 0; n <= n_steps; ++n) {
+    const double t = n * h;
+    for (std::size_t i = 0; i < r; ++i) {
+      double x = 0.0;
+      const double* p1 = &P1[i * r];
+      const double* p2 = &P2[i * r];
+      for (std::size_t j = 0; j < r; ++j) x += p1[j] * q[j] + p2[j] * qm[j];
+      qp[i] = x;
+    }
+    for (std::size_t l = 0; l < loads.size(); ++l) {
+      const double c = loads[l].factor(t);
+      for (std::size_t i = 0; i < r; ++i) qp[i] += c * lp[l][i];
+    }
+    if (nonlinear) {
+      kernel.apply(q.data(), g.data());
+      for (std::size_t i = 0; i < r; ++i) qp[i] -= g[i];
+    }
+    bool finite = true;
+    for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
+    if (!finite)
+      throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
+                      ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
+    if (n > 0) {  // state n with its central velocity
+      for (std::size_t i = 0; i < r; ++i) v[i] = (qp[i] - qm[i]) / (2.0 * h);
+      ss.q = q.data();
+      ss.v = v.data();
+      ss.step = n;
+      ss.t = t;
+      ss.energy = energy(q, v);
+      callback(ss);
+    }
+    std::swap(qm, q);
+    std::swap(q, qp);
+    ++st.steps;
+  }
+  st.steps = n_steps;
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+}  // namespace morse::sim
