@@ -36,7 +36,7 @@ void print_stage_table(MPI_Comm comm) {
 }  // namespace
 
 const std::vector<std::string>& command_names() {
-  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "mesh"};
+  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "mesh"};
   return names;
 }
 
@@ -53,10 +53,14 @@ void run_command(MPI_Comm comm, const std::string& command, const std::vector<st
     detail::run_static(comm);
   else if (command == "fom")
     detail::run_fom(comm);
+  else if (command == "nlrom")
+    detail::run_nlrom(comm);
+  else if (command == "simulate")
+    detail::run_simulate(comm);
   else if (command == "mesh")
     detail::run_mesh(comm, args);
   else
-    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, mesh)"));
+    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, mesh)"));
   if ((command != "mesh" || (!args.empty() && args[0] == "info")) && !detail::help_requested()) print_stage_table(comm);
 }
 

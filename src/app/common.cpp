@@ -25,7 +25,7 @@ namespace {
 bool inner_option(const std::string& name) {
   // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
   // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
-  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_krylov_", "fom_"};
+  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_krylov_", "fom_", "nlrom_"};
   static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "snes_", "ksp_", "pc_", "mat_mumps_"};
   for (const char* p : solvers)
     if (name.rfind(p, 0) == 0)
@@ -110,7 +110,7 @@ void check_options(MPI_Comm comm, bool early) {
   char** values = nullptr;
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
   std::string bad;
-  static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out",
+  static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
                                          "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "sweep_",
                                          "load_", "static_", "fom_krylov_", "fom_"};
   for (PetscInt i = 0; i < n; ++i) {

@@ -104,5 +104,7 @@ void run_select(MPI_Comm comm);
 void run_mesh(MPI_Comm comm, const std::vector<std::string>& args);
 void run_static(MPI_Comm comm);
 void run_fom(MPI_Comm comm);
+void run_nlrom(MPI_Comm comm);
+void run_simulate(MPI_Comm comm);
 
 }  // namespace morse::app::detail

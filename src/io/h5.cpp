@@ -353,6 +353,52 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
   collective_check(lm.comm, err);
 }
 
+namespace {
+template <class T>
+bool read_any(const std::string& file, const std::string& name, hid_t type, std::vector<T>* out,
+              std::vector<hsize_t>* dims, std::string* error) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) {
+    *error = cat(file, ": cannot open as HDF5");
+    return false;
+  }
+  // Every link on the path must exist (H5Lexists fails on a missing intermediate group).
+  bool exists = true;
+  for (std::size_t p = name.find('/', 1); exists; p = name.find('/', p + 1)) {
+    exists = H5Lexists(f, name.substr(0, p).c_str(), H5P_DEFAULT) > 0;
+    if (p == std::string::npos) break;
+  }
+  hid_t d = exists ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
+  bool ok = d >= 0;
+  if (!ok) *error = cat(file, ": no dataset ", name);
+  if (ok) {
+    hid_t sp = H5Dget_space(d);
+    dims->resize(H5Sget_simple_extent_ndims(sp));
+    H5Sget_simple_extent_dims(sp, dims->data(), nullptr);
+    out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
+    if (H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) {
+      *error = cat(file, ": cannot read ", name);
+      ok = false;
+    }
+    H5Sclose(sp);
+    H5Dclose(d);
+  }
+  H5Fclose(f);
+  return ok;
+}
+}  // namespace
+
+bool read_doubles(const std::string& file, const std::string& name, std::vector<double>* out,
+                  std::vector<hsize_t>* dims, std::string* error) {
+  return read_any(file, name, H5T_NATIVE_DOUBLE, out, dims, error);
+}
+
+bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
+               std::vector<hsize_t>* dims, std::string* error) {
+  return read_any(file, name, H5T_NATIVE_INT64, out, dims, error);
+}
+
 UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
                    const std::string& dataset) {
   int rank = 0;

@@ -113,6 +113,13 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
 UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
                    const std::string& dataset);
 
+/// Serial reads of one dataset (any rank, no communication): the values and the shape. Return
+/// false and set *error (naming the file and dataset) if the file or dataset is missing.
+bool read_doubles(const std::string& file, const std::string& name, std::vector<double>* out,
+                  std::vector<hsize_t>* dims, std::string* error);
+bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
+               std::vector<hsize_t>* dims, std::string* error);
+
 /// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
 /// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.
 std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x);

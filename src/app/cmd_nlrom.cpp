@@ -1,0 +1,246 @@
+// app/cmd_nlrom.cpp: `morse nlrom`, the offline stage of seed 003: a reduction basis (CB, CB +
+// modal derivatives, POD + constraint modes) and the reduced St Venant–Kirchhoff force (STEP or
+// exact tensors, optionally POD-filtered), written to /nlrom with the reduced M, K, C and the
+// basis as nodal fields (for reconstruction).
+#include <petscsys.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/mesh/partition.hpp"
+#include "morse/nlrom/nlrom.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+struct NlromOptions {
+  nlrom::BasisSettings b;
+  std::string basis = "cb", forces = "step", filter_file;
+  PetscInt n_filter = 0;
+  double step_displacement = 0.01;
+  double damping_xi = 0.0;
+  PetscInt damping_modes = 0;
+  std::string error;
+};
+
+PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
+  PetscCall(PetscOptionsString("-boundary", "Node set kept as physical DOFs (its x,y,z; the contact nodes)", "", buf, buf,
+                               sizeof buf, &set));
+  if (set) o->b.boundary_set = buf;
+  PetscCall(PetscOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
+                               o->basis.c_str(), buf, sizeof buf, &set));
+  if (set) o->basis = buf;
+  PetscCall(PetscOptionsInt("-nlrom_num_fixed_modes", "Fixed-interface modes (cb, cbmd)", "", o->b.n_fixed,
+                            &o->b.n_fixed, nullptr));
+  PetscCall(PetscOptionsInt("-nlrom_num_derivatives", "Modal derivatives kept (cbmd), by descending W_ij (eq. 24)", "",
+                            o->b.n_derivatives, &o->b.n_derivatives, nullptr));
+  PetscCall(PetscOptionsInt("-nlrom_num_pod", "POD vectors (pod)", "", o->b.n_pod, &o->b.n_pod, nullptr));
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-nlrom_snapshots", "morse fom file with snapshots (pod; POD filtering)", "", buf, buf,
+                               sizeof buf, &set));
+  if (set) o->b.snapshots = buf;
+  PetscCall(PetscOptionsReal("-nlrom_training_tfinal", "Length of the linear training run of cbmd [s]", "",
+                             o->b.training_tfinal, &o->b.training_tfinal, nullptr));
+  PetscCall(PetscOptionsReal("-nlrom_training_dt", "Time step of the training run [s] (default: 1/200 of the "
+                             "fastest load period)", "", o->b.training_dt, &o->b.training_dt, nullptr));
+  PetscCall(PetscOptionsReal("-nlrom_mgs_tol", "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
+                             "times its norm before projection", "", o->b.mgs_tol, &o->b.mgs_tol, nullptr));
+  PetscCall(PetscOptionsString("-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection)", "",
+                               o->forces.c_str(), buf, sizeof buf, &set));
+  if (set) o->forces = buf;
+  PetscCall(PetscOptionsReal("-step_displacement", "STEP: target displacement of the imposed fields [m]", "",
+                             o->step_displacement, &o->step_displacement, nullptr));
+  PetscCall(PetscOptionsInt("-nlrom_filter_pod", "POD filtering of g_nl (eq. 38-39): number of filter vectors from the "
+                            "snapshots' nonlinear forces (0: none)", "", o->n_filter, &o->n_filter, nullptr));
+  PetscCall(PetscOptionsReal("-nlrom_damping_modal", "Modal damping ratio on the first -nlrom_damping_modes modes of "
+                             "the reduced model", "", o->damping_xi, &o->damping_xi, nullptr));
+  PetscCall(PetscOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "",
+                            o->damping_modes, &o->damping_modes, nullptr));
+  PetscOptionsEnd();
+  if (o->basis == "cb")
+    o->b.kind = nlrom::BasisKind::CB;
+  else if (o->basis == "cbmd")
+    o->b.kind = nlrom::BasisKind::CBMD;
+  else if (o->basis == "pod")
+    o->b.kind = nlrom::BasisKind::POD;
+  else
+    o->error = cat("-nlrom_basis ", o->basis, ": unknown (cb, cbmd or pod)");
+  if (o->error.empty() && o->forces != "step" && o->forces != "exact")
+    o->error = cat("-nlrom_forces ", o->forces, ": unknown (step or exact)");
+  return PETSC_SUCCESS;
+}
+
+// Nonlinear forces of the snapshots, POD-compressed (eq. 38): the filter basis Phi_f.
+UMat force_filter(const Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {
+  StageTimer t(md.lm.comm, "PodFilter");
+  auto X = io::read_dof_rows(md.lm, md.dofs, file, "/fom/snapshots/u");
+  PetscInt ns = 0;
+  MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
+  MORSE_CHECK(n <= ns, "-nlrom_filter_pod ", n, " exceeds the ", ns, " snapshots of ", file);
+  UMat G;
+  MORSE_CALL(MatDuplicate(X.get(), MAT_DO_NOT_COPY_VALUES, G.ptr()));
+  svk.nonlinear_force_block(X.get(), G.get());
+  std::vector<double> sigma;
+  return nlrom::pod(G.get(), n, &sigma);
+}
+
+}  // namespace
+
+void run_nlrom(MPI_Comm comm) {
+  CommonOptions o;
+  MORSE_CALL(get_common(comm, "nlrom.h5", &o));
+  std::vector<dyn::NodalLoad> load_list;
+  std::string load_error;
+  MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  NlromOptions no;
+  MORSE_CALL(get_nlrom_options(comm, &no));
+  if (help_requested()) return;
+  check_options(comm, true);
+  collective_check(comm, load_error);
+  MORSE_CHECK(no.error.empty(), no.error);
+  MORSE_CHECK(!no.b.boundary_set.empty(), "morse nlrom: no boundary set given: use -boundary SET");
+  MORSE_CHECK(no.damping_xi >= 0 && no.damping_xi < 1 && no.damping_modes >= 0,
+              "-nlrom_damping_modal must be in [0, 1) and -nlrom_damping_modes >= 0");
+  MORSE_CHECK(no.n_filter >= 0, "-nlrom_filter_pod must be >= 0");
+  MORSE_CHECK(!(no.n_filter > 0 && no.b.snapshots.empty()), "-nlrom_filter_pod needs -nlrom_snapshots FILE.h5");
+  Model md = build_model(comm, o);
+  io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
+  std::unique_ptr<dyn::Loads> training;
+  if (!load_list.empty()) {
+    training = std::make_unique<dyn::Loads>(md.lm, md.dofs, load_list);
+    no.b.training = training.get();
+    if (no.b.training_dt <= 0) {
+      const double w = training->max_omega();
+      no.b.training_dt = w > 0 ? 2 * M_PI / w / 200 : no.b.training_tfinal / 1000;
+    }
+  }
+  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
+  auto basis = nlrom::build_basis(md.lm, md.dofs, svk, md.ops.M.get(), no.b);
+  const PetscInt r = basis.r();
+  print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",
+         no.basis.c_str(), (int)r, (int)basis.n_b, (int)basis.n_fixed, (int)basis.n_extra,
+         no.b.kind == nlrom::BasisKind::POD ? "POD vectors" : "modal derivatives", basis.seconds);
+
+  auto t2a = std::chrono::steady_clock::now();
+  UMat filter;
+  if (no.n_filter > 0) filter = force_filter(md, svk, no.b.snapshots, no.n_filter);
+  nlrom::CubicForce g;
+  if (no.forces == "exact") {
+    StageTimer t(comm, "ExactTensors");
+    MORSE_CHECK(no.n_filter == 0, "-nlrom_filter_pod applies to STEP (-nlrom_forces step)");
+    g = nlrom::exact_forces(svk, basis.V.get());
+  } else {
+    nlrom::StepSettings ss;
+    ss.displacement = no.step_displacement;
+    ss.filter = filter.get();
+    print0(comm, "morse nlrom: STEP, %zu evaluations of g_nl (eq. 37)\n", nlrom::step_evaluations(r));
+    g = nlrom::step_forces(svk, basis.V.get(), ss);
+  }
+  const double t2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2a).count();
+  auto t3a = std::chrono::steady_clock::now();
+  auto rm = nlrom::project_model(comm, basis.V.get(), md.ops.K.get(), md.ops.M.get(), no.damping_xi, no.damping_modes);
+  const double t3 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t3a).count();
+  check_options(comm, false);
+  print0(comm, "morse nlrom: offline times t1 (basis) %.2f s, t2 (forces) %.2f s, t3 (projection) %.2f s\n",
+         basis.seconds, t2, t3);
+
+  StageTimer t(comm, "Write");
+  io::write_provenance(out, "nlrom", md.lm.mesh.units);
+  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_mesh(out, gm);
+  // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
+  // owned members of every set (names from rank 0), gathered on rank 0.
+  {
+    int rank = 0, size = 1;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &size);
+    std::string names;
+    if (rank == 0)
+      for (const auto& kv : md.lm.mesh.node_sets) names += kv.first + "\n";
+    int len = static_cast<int>(names.size());
+    MPI_Bcast(&len, 1, MPI_INT, 0, comm);
+    names.resize(len);
+    MPI_Bcast(names.data(), len, MPI_CHAR, 0, comm);
+    for (std::size_t a = 0, b; (b = names.find('\n', a)) != std::string::npos; a = b + 1) {
+      const std::string name = names.substr(a, b - a);
+      std::vector<std::int64_t> mine;
+      auto it = md.lm.mesh.node_sets.find(name);
+      if (it != md.lm.mesh.node_sets.end())
+        for (auto k : it->second)
+          if (md.lm.node_owner[k] == rank) mine.push_back(md.lm.mesh.node_ids[k]);
+      int n = static_cast<int>(mine.size());
+      std::vector<int> counts(size), displs(size, 0);
+      MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+      for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
+      std::vector<std::int64_t> all(rank == 0 ? displs[size - 1] + counts[size - 1] : 0);
+      MPI_Gatherv(mine.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, comm);
+      std::sort(all.begin(), all.end());
+      out.write("/nlrom/node_sets/" + name, all);
+    }
+  }
+  const auto R = static_cast<hsize_t>(r);
+  out.write("/nlrom/M", rm.M, {R, R});
+  out.write("/nlrom/K", rm.K, {R, R});
+  out.write("/nlrom/C", rm.C, {R, R});
+  out.write("/nlrom/A", g.A, {static_cast<hsize_t>(nlrom::n_quadratic(r)), R});
+  out.write("/nlrom/B", g.B, {static_cast<hsize_t>(nlrom::n_cubic(r)), R});
+  out.attribute("/nlrom/A", "description", "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
+  out.attribute("/nlrom/B", "description",
+                "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
+  std::vector<double> nodal;
+  for (PetscInt j = 0; j < r; ++j) {
+    Vec c;
+    MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
+    auto col = io::gather_nodal(md.lm, md.dofs, c);
+    MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
+    nodal.insert(nodal.end(), col.begin(), col.end());
+  }
+  out.write("/nlrom/basis", nodal, {R, static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+  out.attribute("/nlrom/basis", "description", "[column][node][x,y,z] basis vectors, nodes as /mesh/node_ids");
+  std::string labels;
+  for (const auto& l : basis.labels) labels += l + "\n";
+  out.write_string("/nlrom/labels", labels);
+  out.write("/nlrom/boundary_nodes", basis.cb.boundary_node_ids);
+  if (!basis.md_pairs.empty()) {
+    std::vector<std::int64_t> pairs, sel;
+    for (std::size_t k = 0; k < basis.md_pairs.size(); ++k) {
+      pairs.push_back(basis.md_pairs[k].first + 1);
+      pairs.push_back(basis.md_pairs[k].second + 1);
+      sel.push_back(basis.md_selected[k]);
+    }
+    out.write("/nlrom/derivatives/pairs", pairs, {basis.md_pairs.size(), 2});
+    out.write("/nlrom/derivatives/weights", basis.md_weights);
+    out.write("/nlrom/derivatives/selected", sel);
+  }
+  if (!basis.pod_singular_values.empty()) out.write("/nlrom/pod/singular_values", basis.pod_singular_values);
+  if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);
+  out.attribute("/nlrom", "basis", no.basis);
+  out.attribute("/nlrom", "forces", no.forces);
+  out.attribute("/nlrom", "boundary_set", no.b.boundary_set);
+  out.attribute_int("/nlrom", "r", r);
+  out.attribute_int("/nlrom", "n_boundary_dofs", basis.n_b);
+  out.attribute_int("/nlrom", "n_fixed_modes", basis.n_fixed);
+  out.attribute_int("/nlrom", "n_extra", basis.n_extra);
+  out.attribute("/nlrom", "step_displacement", no.step_displacement);
+  out.attribute_int("/nlrom", "filter_pod", no.n_filter);
+  out.attribute("/nlrom", "modal_damping_ratio", no.damping_xi);
+  out.attribute("/nlrom", "t1_basis_seconds", basis.seconds);
+  out.attribute("/nlrom", "t2_forces_seconds", t2);
+  out.attribute("/nlrom", "t3_projection_seconds", t3);
+  out.commit();
+  print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
+}
+
+}  // namespace morse::app::detail
