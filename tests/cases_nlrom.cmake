@@ -1,0 +1,28 @@
+# Case tests of `morse nlrom` and `morse simulate` on the generated box (fixture case_setup_box),
+# each on 1 and 2 ranks: bad input fails cleanly (message naming the option or file, no output
+# file); the chains fom (snapshots) -> nlrom (cb, cbmd, pod) -> simulate run and write their files,
+# and a simulate step above the critical one is refused with the limit. Included from
+# tests/CMakeLists.txt after cases.cmake.
+set(MORSE_NLR_BOX -mesh ${MORSE_CASE_BOX} -clamp x0 ${MORSE_CASE_MATERIAL})
+
+morse_add_error_case(nlrom_basis_too_large "morse: error: .*larger than the model" nlrom_too_large.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 100000)
+morse_add_error_case(nlrom_missing_snapshots "morse: error: .*no_such_fom\\.h5" nlrom_missing_snap.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis pod -nlrom_num_pod 2
+       -nlrom_snapshots ${MORSE_CASE_DIR}/no_such_fom.h5)
+morse_add_error_case(nlrom_bad_basis "morse: error: .*-nlrom_basis" nlrom_bad_basis.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis svd)
+morse_add_error_case(nlrom_cbmd_without_training "morse: error: .*training load" nlrom_no_training.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 2)
+morse_add_error_case(simulate_missing_rom "morse: error: .*no_such_rom\\.h5" simulate_missing_rom.h5 BOX
+  ARGS simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
+
+# Chains: fom with snapshots -> nlrom (three bases, STEP and exact, POD filtering) -> simulate,
+# and the critical-step refusal (no output file).
+foreach(np 1 2)
+  add_test(NAME case_nlrom_chain_np${np}
+           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_nlrom_chain.sh ${MORSE_CASE_DIR}/nlrom_chain_np${np}
+                   $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX} ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
+  set_tests_properties(case_nlrom_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box FAIL_REGULAR_EXPRESSION "morse: error")
+endforeach()
