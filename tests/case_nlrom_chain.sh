@@ -14,7 +14,8 @@ run() { "$mpiexec" "${flags[@]}" -n "$np" "$morse" "$@"; }
 rm -rf "$d" && mkdir -p "$d"
 model=(-mesh "$box" -clamp x0 "${material[@]}")
 load=(-load_sets x1 -load_x1_dir y -load_x1_amplitude 1e6 -load_x1_omega 300)
-run fom "${model[@]}" "${load[@]}" -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_snapshot_every 2 -out "$d/fom.h5"
+run fom "${model[@]}" "${load[@]}" -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_snapshot_every 2 -fom_monitor x1 \
+  -out "$d/fom.h5"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
   -nlrom_damping_modal 0.01 -nlrom_damping_modes 2 -out "$d/cb.h5"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 3 \
@@ -28,6 +29,17 @@ for b in cb cbmd pod cbfilter; do
   run simulate -rom "$d/$b.h5" "${load[@]}" -sim_dt 1e-8 -sim_tfinal 2e-5 -sim_monitor x1 -out "$d/sim_$b.h5"
   test -s "$d/sim_$b.h5"
 done
+# The indicator of a POD ROM against the run its snapshots came from (short run, same sampling).
+run simulate -rom "$d/pod.h5" "${load[@]}" -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_monitor x1 -sim_output_every 100 \
+  -out "$d/sim_long.h5"
+run compare "$d/fom.h5" "$d/sim_long.h5" "${load[@]}" -compare_tip x1 -compare_tmax 1e-3 | tee "$d/compare.txt"
+grep -q "performance indicator I" "$d/compare.txt"
+/usr/bin/python3 - "$d/sim_long.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py
+f = h5py.File(sys.argv[1], "r")
+e, I = f["/compare/e"][:], f["/compare/I"][0]
+assert all(0 <= x <= 1 for x in e) and 0.5 < I <= 1, (e, I)
+PY
 set +e
 out=$(run simulate -rom "$d/cb.h5" -sim_dt 1 -sim_tfinal 10 -out "$d/bad.h5" 2>&1)
 rc=$?

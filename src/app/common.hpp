@@ -106,5 +106,6 @@ void run_static(MPI_Comm comm);
 void run_fom(MPI_Comm comm);
 void run_nlrom(MPI_Comm comm);
 void run_simulate(MPI_Comm comm);
+void run_compare(MPI_Comm comm, const std::vector<std::string>& args);
 
 }  // namespace morse::app::detail

@@ -1,0 +1,244 @@
+// app/cmd_compare.cpp: `morse compare FOM.h5 ROM.h5`, the performance indicator of seed 003
+// (eq. 43–51; eval/indicator.hpp) of a `morse simulate` run against a `morse fom` run of the same
+// case. Serial (rank 0). Prints a table and writes /compare into ROM.h5 (atomically: a copy is
+// modified, then renamed).
+#include <hdf5.h>
+#include <petscsys.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/eval/indicator.hpp"
+#include "morse/io/h5.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+struct CompareOptions {
+  std::string tip = "tip";
+  double tmax = -1;
+  std::vector<double> w = {0.25, 0.25, 0.25, 0.25};
+  std::string rom_model;
+};
+
+PetscErrorCode get_compare_options(MPI_Comm comm, CompareOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscReal w[4];
+  PetscInt nw = 4;
+  PetscOptionsBegin(comm, nullptr, "morse compare options", "");
+  PetscCall(PetscOptionsString("-compare_tip", "Node set of the blade tip (criteria e3, e4); monitored in both runs",
+                               "", o->tip.c_str(), buf, sizeof buf, &set));
+  if (set) o->tip = buf;
+  PetscCall(PetscOptionsReal("-compare_tmax", "Time of e1 [s] (default: first maximum of the first harmonic -load_*)",
+                             "", o->tmax, &o->tmax, nullptr));
+  PetscCall(PetscOptionsRealArray("-compare_weights", "Weights w1,w2,w3,w4 of eq. 43 (sum 1)", "", w, &nw, &set));
+  if (set) {
+    MORSE_CHECK(nw == 4, "-compare_weights takes four values w1,w2,w3,w4");
+    o->w.assign(w, w + 4);
+  }
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-compare_rom_model", "The nlrom file of the reduced run (default: /sim's 'rom')", "",
+                               buf, buf, sizeof buf, &set));
+  if (set) o->rom_model = buf;
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+std::string read_string_attribute(const std::string& file, const std::string& obj, const std::string& name) {
+  std::string out;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return out;
+  if (H5Aexists_by_name(f, obj.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
+    hid_t a = H5Aopen_by_name(f, obj.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+    hid_t t = H5Aget_type(a);
+    if (H5Tis_variable_str(t) > 0) {
+      char* s = nullptr;
+      hid_t mt = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mt, H5T_VARIABLE);
+      if (H5Aread(a, mt, &s) >= 0 && s) out = s;
+      if (s) H5free_memory(s);
+      H5Tclose(mt);
+    } else {
+      std::vector<char> b(H5Tget_size(t) + 1, 0);
+      if (H5Aread(a, t, b.data()) >= 0) out = b.data();
+    }
+    H5Tclose(t);
+    H5Aclose(a);
+  }
+  H5Fclose(f);
+  return out;
+}
+
+// Writes /compare into a copy of `file`, then renames the copy over it.
+void write_compare(const std::string& file, const eval::Indicator& ind, double tmax, double tsnap,
+                   const std::string& fom, const std::string& tip) {
+  const std::string tmp = file + ".tmp";
+  std::filesystem::copy_file(file, tmp, std::filesystem::copy_options::overwrite_existing);
+  hid_t f = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  MORSE_CHECK(f >= 0, "compare: cannot open ", tmp, " for writing");
+  if (H5Lexists(f, "/compare", H5P_DEFAULT) > 0) H5Ldelete(f, "/compare", H5P_DEFAULT);
+  hid_t g = H5Gcreate2(f, "/compare", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  bool ok = g >= 0;
+  auto put = [&](const char* name, const double* v, hsize_t n) {
+    hid_t sp = H5Screate_simple(1, &n, nullptr);
+    hid_t d = H5Dcreate2(g, name, H5T_NATIVE_DOUBLE, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ok = ok && d >= 0 && H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0;
+    if (d >= 0) H5Dclose(d);
+    H5Sclose(sp);
+  };
+  auto attr = [&](const char* name, const std::string& v) {
+    hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, v.size() + 1);
+    hid_t sp = H5Screate(H5S_SCALAR);
+    hid_t a = H5Acreate2(g, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
+    ok = ok && a >= 0 && H5Awrite(a, t, v.c_str()) >= 0;
+    if (a >= 0) H5Aclose(a);
+    H5Sclose(sp);
+    H5Tclose(t);
+  };
+  if (ok) {
+    const double I = ind.I();
+    put("e", ind.e.data(), 4);
+    put("weights", ind.w.data(), 4);
+    put("I", &I, 1);
+    put("t_max", &tmax, 1);
+    put("t_snapshot", &tsnap, 1);
+    attr("fom", fom);
+    attr("tip_set", tip);
+    attr("description", "seed 003 eq. 43-51: e = (e1 covariance at t_max, e2 energy, e3 tip peak-to-peak, "
+                        "e4 tip displacement), I = sum w e");
+  }
+  if (g >= 0) H5Gclose(g);
+  H5Fclose(f);
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw Error(cat("compare: cannot write /compare into ", file));
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+}  // namespace
+
+void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
+  CompareOptions co;
+  MORSE_CALL(get_compare_options(comm, &co));
+  std::vector<dyn::NodalLoad> load_list;
+  std::string load_error;
+  MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  if (help_requested()) return;
+  check_options(comm, true);
+  collective_check(comm, load_error);
+  MORSE_CHECK(args.size() == 2, "usage: morse compare FOM.h5 ROM.h5 (a morse fom file, a morse simulate file)");
+  const std::string fom = args[0], rom = args[1];
+  double ws = 0;
+  for (double x : co.w) ws += x;
+  MORSE_CHECK(std::abs(ws - 1.0) < 1e-12 && *std::min_element(co.w.begin(), co.w.end()) >= 0,
+              "-compare_weights must be >= 0 and sum to 1");
+  if (co.tmax < 0)
+    for (const auto& l : load_list)
+      if (l.omega > 0) {
+        double ph = std::fmod(M_PI / 2 - l.phase, 2 * M_PI);
+        if (ph < 0) ph += 2 * M_PI;
+        co.tmax = ph / l.omega;
+        break;
+      }
+  MORSE_CHECK(co.tmax >= 0, "compare: give -compare_tmax T or the harmonic load (-load_*) that defines t_max");
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string err;
+  eval::Indicator ind;
+  double tsnap = 0;
+  if (rank == 0) {
+    try {
+      std::vector<hsize_t> d;
+      std::vector<double> tf, tr, ef, er, uf, ur, q, snap_t, basis, row;
+      std::vector<std::int64_t> tip_f, tip_r, ids, comps, node_ids;
+      auto need = [&](bool ok) {
+        if (!ok) throw Error(err);
+      };
+      need(io::read_doubles(fom, "/fom/time", &tf, &d, &err));
+      need(io::read_doubles(fom, "/fom/energy", &ef, &d, &err));
+      need(io::read_doubles(rom, "/sim/time", &tr, &d, &err));
+      need(io::read_doubles(rom, "/sim/energy", &er, &d, &err));
+      need(io::read_ints(fom, "/fom/sets/" + co.tip + "/node_ids", &tip_f, &d, &err));
+      need(io::read_ints(rom, "/sim/sets/" + co.tip + "/node_ids", &tip_r, &d, &err));
+      MORSE_CHECK(tip_f == tip_r, "compare: the tip set '", co.tip, "' has different nodes in ", fom, " and ", rom);
+      need(io::read_doubles(fom, "/fom/sets/" + co.tip + "/u", &uf, &d, &err));
+      need(io::read_doubles(rom, "/sim/sets/" + co.tip + "/u", &ur, &d, &err));
+      MORSE_CHECK(tr.back() >= tf.back() - 1e-12 * tf.back(), "compare: ", rom, " ends at t = ", tr.back(),
+                  " before ", fom, " (t = ", tf.back(), ")");
+      // Align on the FOM's time samples.
+      const std::size_t ntip = 3 * tip_f.size();
+      auto er_f = eval::interpolate(tr, er, 1, tf);
+      auto ur_f = eval::interpolate(tr, ur, ntip, tf);
+      ind.w = {co.w[0], co.w[1], co.w[2], co.w[3]};
+      ind.e[1] = eval::energy_criterion(ef, er_f);
+      ind.e[2] = eval::peak_to_peak_criterion(uf, ur_f, ntip);
+      ind.e[3] = eval::displacement_criterion(uf, ur_f);
+      // e1: full fields at the snapshot nearest to t_max.
+      std::string model = co.rom_model.empty() ? read_string_attribute(rom, "/sim", "rom") : co.rom_model;
+      MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
+      if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
+        throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));
+      need(io::read_ints(fom, "/fom/snapshots/dof_node_ids", &ids, &d, &err));
+      need(io::read_ints(fom, "/fom/snapshots/dof_components", &comps, &d, &err));
+      MORSE_CHECK(co.tmax <= tf.back(), "compare: t_max = ", co.tmax, " s is after the end of ", fom, " (t = ",
+                  tf.back(), " s); give -compare_tmax");
+      std::size_t k = 0;
+      for (std::size_t j = 1; j < snap_t.size(); ++j)
+        if (std::abs(snap_t[j] - co.tmax) < std::abs(snap_t[k] - co.tmax)) k = j;
+      tsnap = snap_t[k];
+      {
+        std::vector<double> all;
+        need(io::read_doubles(fom, "/fom/snapshots/u", &all, &d, &err));
+        row.assign(all.begin() + k * ids.size(), all.begin() + (k + 1) * ids.size());
+      }
+      need(io::read_doubles(model, "/nlrom/basis", &basis, &d, &err));
+      need(io::read_ints(model, "/mesh/node_ids", &node_ids, &d, &err));
+      need(io::read_doubles(rom, "/sim/q", &q, &d, &err));
+      const std::size_t r = d.size() == 2 ? d[1] : 0, nn = node_ids.size();
+      MORSE_CHECK(r > 0 && basis.size() == r * nn * 3, "compare: ", model, "'s basis does not match ", rom, "'s q");
+      auto qt = eval::interpolate(tr, q, r, {tsnap});
+      std::map<std::int64_t, std::size_t> pos;
+      for (std::size_t n = 0; n < nn; ++n) pos[node_ids[n]] = n;
+      std::vector<double> x2(ids.size(), 0.0);
+      for (std::size_t j = 0; j < ids.size(); ++j) {
+        auto it = pos.find(ids[j]);
+        MORSE_CHECK(it != pos.end(), "compare: node ", ids[j], " of ", fom, " is not in ", model, " (another mesh?)");
+        for (std::size_t c = 0; c < r; ++c) x2[j] += basis[(c * nn + it->second) * 3 + comps[j]] * qt[c];
+      }
+      ind.e[0] = eval::covariance(row, x2);
+    } catch (const std::exception& e) {
+      err = e.what();
+    }
+  }
+  collective_check(comm, rank == 0 && !err.empty() ? err : std::string());
+  check_options(comm, false);
+  print0(comm, "morse compare: %s against %s (seed 003 eq. 43-51)\n", rom.c_str(), fom.c_str());
+  print0(comm, "  %-34s %8s %8s\n", "criterion", "e", "w");
+  const char* names[4] = {"e1 covariance at t_max", "e2 energy (eq. 46)", "e3 tip peak-to-peak", "e4 tip displacement"};
+  for (int i = 0; i < 4; ++i) print0(comm, "  %-34s %8.4f %8.3f\n", names[i], ind.e[i], ind.w[i]);
+  print0(comm, "  %-34s %8.4f\n", "performance indicator I", ind.I());
+  print0(comm, "  (t_max %.6g s, nearest snapshot %.6g s)\n", co.tmax, tsnap);
+  std::string werr;
+  if (rank == 0) try {
+      write_compare(rom, ind, co.tmax, tsnap, fom, co.tip);
+    } catch (const std::exception& e) {
+      werr = e.what();
+    }
+  collective_check(comm, werr);
+  print0(comm, "\nmorse: wrote /compare into %s\n", rom.c_str());
+}
+
+}  // namespace morse::app::detail

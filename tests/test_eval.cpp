@@ -1,0 +1,60 @@
+// The performance indicator (eval/indicator.hpp, seed 003 eq. 43–51): 1 for identical signals,
+// hand-computed values for a tiny case, and monotone decrease as a signal is perturbed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "morse/eval/indicator.hpp"
+
+using namespace morse;
+
+TEST(Indicator, IdenticalSignalsScoreOne) {
+  std::vector<double> u = {0.0, 1.0, 0.5, -2.0, 0.0, 1.0, 3.0, -1.0};
+  EXPECT_DOUBLE_EQ(eval::covariance(u, u), 1.0);
+  EXPECT_DOUBLE_EQ(eval::energy_criterion(u, u), 1.0);
+  EXPECT_DOUBLE_EQ(eval::peak_to_peak_criterion(u, u, 2), 1.0);
+  EXPECT_DOUBLE_EQ(eval::displacement_criterion(u, u), 1.0);
+  eval::Indicator ind;
+  ind.e = {1, 1, 1, 1};
+  EXPECT_DOUBLE_EQ(ind.I(), 1.0);
+}
+
+// Hand-computed: x1 = (1, 0), x2 = (1, 1): e1 = 1 / (1 * 2) = 0.5. Energies (3, 4) vs (3, 2):
+// e2 = 1 - 2 / 5 = 0.6. Two tip DOFs over 3 samples: FOM (0, 2), (1, -1), (2, 1) -> o = (2, 3);
+// ROM (0, 0), (1, 0), (1, 3) -> o = (1, 3): e3 = 1 - sqrt(((2-1)/2)^2 / 2) = 1 - sqrt(1/8).
+// e4 = 1 - ||(0,2,0,-1,1,-2)|| / ||(0,2,1,-1,2,1)|| = 1 - sqrt(10 / 11).
+TEST(Indicator, HandComputedTinyCase) {
+  EXPECT_NEAR(eval::covariance({1, 0}, {1, 1}), 0.5, 1e-15);
+  EXPECT_NEAR(eval::energy_criterion({3, 4}, {3, 2}), 0.6, 1e-15);
+  std::vector<double> uf = {0, 2, 1, -1, 2, 1}, ur = {0, 0, 1, 0, 1, 3};
+  EXPECT_NEAR(eval::peak_to_peak_criterion(uf, ur, 2), 1 - std::sqrt(1.0 / 8), 1e-15);
+  EXPECT_NEAR(eval::displacement_criterion(uf, ur), 1 - std::sqrt(10.0 / 11), 1e-15);
+  eval::Indicator ind;
+  ind.e = {0.5, 0.6, 1 - std::sqrt(1.0 / 8), 1 - std::sqrt(10.0 / 11)};
+  EXPECT_NEAR(ind.I(), 0.25 * (0.5 + 0.6 + 1 - std::sqrt(1.0 / 8) + 1 - std::sqrt(10.0 / 11)), 1e-15);
+  EXPECT_DOUBLE_EQ(eval::energy_criterion({1, 1}, {5, 5}), 0.0) << "clipped at 0";
+}
+
+TEST(Indicator, FallsAsTheSignalIsPerturbed) {
+  const int nt = 200;
+  std::vector<double> ref(nt);
+  for (int t = 0; t < nt; ++t) ref[t] = std::sin(0.1 * t);
+  double prev[3] = {1.0, 1.0, 1.0};
+  for (double eps : {0.01, 0.05, 0.2, 0.5}) {
+    std::vector<double> p(nt);
+    for (int t = 0; t < nt; ++t) p[t] = (1 + eps) * std::sin(0.1 * t + eps);
+    const double c[3] = {eval::energy_criterion(ref, p), eval::peak_to_peak_criterion(ref, p, 1),
+                         eval::displacement_criterion(ref, p)};
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LT(c[k], prev[k]) << "criterion " << k << " at eps " << eps;
+      prev[k] = c[k];
+    }
+  }
+  // Linear interpolation is exact on a linear signal.
+  auto y = eval::interpolate({0, 1, 3}, {0, 10, 2, 12, 6, 16}, 2, {0.5, 2.0, 5.0});
+  EXPECT_DOUBLE_EQ(y[0], 1.0);
+  EXPECT_DOUBLE_EQ(y[1], 11.0);
+  EXPECT_DOUBLE_EQ(y[2], 4.0);
+  EXPECT_DOUBLE_EQ(y[3], 14.0);
+  EXPECT_DOUBLE_EQ(y[4], 6.0);
+}
