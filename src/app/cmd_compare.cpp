@@ -173,9 +173,22 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       need(io::read_doubles(rom, "/sim/energy", &er, &d, &err));
       need(io::read_ints(fom, "/fom/sets/" + co.tip + "/node_ids", &tip_f, &d, &err));
       need(io::read_ints(rom, "/sim/sets/" + co.tip + "/node_ids", &tip_r, &d, &err));
-      MORSE_CHECK(tip_f == tip_r, "compare: the tip set '", co.tip, "' has different nodes in ", fom, " and ", rom);
       need(io::read_doubles(fom, "/fom/sets/" + co.tip + "/u", &uf, &d, &err));
       need(io::read_doubles(rom, "/sim/sets/" + co.tip + "/u", &ur, &d, &err));
+      {  // Match the ROM's tip rows to the FOM's by node id (the two files may order them differently).
+        auto a = tip_f, b = tip_r;
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        MORSE_CHECK(a == b, "compare: the tip set '", co.tip, "' has different nodes in ", fom, " and ", rom);
+        std::map<std::int64_t, std::size_t> at;
+        for (std::size_t k = 0; k < tip_r.size(); ++k) at[tip_r[k]] = k;
+        const std::size_t nn = tip_r.size(), nt = nn ? ur.size() / (3 * nn) : 0;
+        std::vector<double> v(ur.size());
+        for (std::size_t t = 0; t < nt; ++t)
+          for (std::size_t k = 0; k < nn; ++k)
+            for (int c = 0; c < 3; ++c) v[(t * nn + k) * 3 + c] = ur[(t * nn + at[tip_f[k]]) * 3 + c];
+        ur.swap(v);
+      }
       MORSE_CHECK(tr.back() >= tf.back() - 1e-12 * tf.back(), "compare: ", rom, " ends at t = ", tr.back(),
                   " before ", fom, " (t = ", tf.back(), ")");
       // Align on the FOM's time samples.
