@@ -131,14 +131,20 @@ void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::
   }
 }
 
+std::vector<double> project_symmetric(MPI_Comm comm, Mat A, Mat T) {
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(T, nullptr, &n));
+  UMat AT;
+  MORSE_CALL(MatMatMult(A, T, MAT_INITIAL_MATRIX, PETSC_DEFAULT, AT.ptr()));
+  auto R = transpose_product(comm, T, AT.get());
+  symmetrize(R, n);
+  return R;
+}
+
 void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out) {
   const PetscInt nr = out->n();
-  for (auto [A, R] : {std::pair{K, &out->K}, std::pair{M, &out->M}}) {
-    UMat AT;
-    MORSE_CALL(MatMatMult(A, out->T.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, AT.ptr()));
-    *R = transpose_product(comm, out->T.get(), AT.get());
-    symmetrize(*R, nr);
-  }
+  out->K = project_symmetric(comm, K, out->T.get());
+  out->M = project_symmetric(comm, M, out->T.get());
   out->C.assign(static_cast<std::size_t>(nr) * nr, 0.0);
   for (PetscInt j = 0; j < out->n_phi; ++j) {
     PetscInt q = out->n_b + j;

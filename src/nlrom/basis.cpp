@@ -423,33 +423,19 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
   PetscInt r = 0;
   MORSE_CALL(MatGetSize(V, nullptr, &r));
   rm.r = r;
-  UMat KV, MV;
-  MORSE_CALL(MatMatMult(K, V, MAT_INITIAL_MATRIX, PETSC_DEFAULT, KV.ptr()));
-  MORSE_CALL(MatMatMult(M, V, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
-  rm.K = cb::transpose_product(comm, V, KV.get());
-  rm.M = cb::transpose_product(comm, V, MV.get());
-  for (auto* A : {&rm.K, &rm.M})
-    for (PetscInt i = 0; i < r; ++i)
-      for (PetscInt j = i + 1; j < r; ++j) {
-        const double a = 0.5 * ((*A)[i * r + j] + (*A)[j * r + i]);
-        (*A)[i * r + j] = (*A)[j * r + i] = a;
-      }
+  rm.K = cb::project_symmetric(comm, K, V);
+  rm.M = cb::project_symmetric(comm, M, V);
   rm.C.assign(static_cast<std::size_t>(r) * r, 0.0);
   if (xi > 0 && k > 0) {
     MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
-    std::vector<double> A = rm.K, B = rm.M, w(r), work(1);
-    PetscBLASInt n = static_cast<PetscBLASInt>(r), one = 1, lwork = -1, info = 0;
-    LAPACKsygv_(&one, "V", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
-    lwork = static_cast<PetscBLASInt>(work[0]);
-    work.resize(lwork);
-    LAPACKsygv_(&one, "V", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
-    MORSE_CHECK(info == 0, "nlrom: reduced eigenproblem failed (LAPACK sygv info ", info, ")");
+    std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
+    const auto w = cb::dense_eigenvalues(static_cast<int>(r), rm.K, rm.M, &X);
     for (PetscInt m = 0; m < k; ++m) {
       const double om = std::sqrt(std::max(0.0, w[m]));
       rm.damping_omega.push_back(om);
-      std::vector<double> Mx(r, 0.0);  // x_m = column m of A (column-major), M-normalized
+      std::vector<double> Mx(r, 0.0);
       for (PetscInt i = 0; i < r; ++i)
-        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm.M[i * r + j] * A[m * r + j];
+        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm.M[i * r + j] * X[j * r + m];
       for (PetscInt i = 0; i < r; ++i)
         for (PetscInt j = 0; j < r; ++j) rm.C[i * r + j] += 2.0 * xi * om * Mx[i] * Mx[j];
     }

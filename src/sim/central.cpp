@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/sim/sim.hpp"
 
@@ -38,15 +39,8 @@ std::vector<double> matmul(const std::vector<double>& A, const std::vector<doubl
 }  // namespace
 
 double critical_step(const nlrom::ReducedModel& m) {
-  const std::size_t r = static_cast<std::size_t>(m.r);
-  std::vector<double> A = m.K, B = m.M, w(r), work(1);
-  PetscBLASInt n = static_cast<PetscBLASInt>(r), one = 1, lwork = -1, info = 0;
-  LAPACKsygv_(&one, "N", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
-  lwork = static_cast<PetscBLASInt>(work[0]);
-  work.resize(lwork);
-  LAPACKsygv_(&one, "N", "U", &n, A.data(), &n, B.data(), &n, w.data(), work.data(), &lwork, &info);
-  MORSE_CHECK(info == 0, "simulate: the reduced mass matrix is not positive definite (LAPACK sygv info ", info, ")");
-  return 2.0 / std::sqrt(std::max(w[r - 1], 1e-300));
+  const auto w = cb::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
+  return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
 }
 
 CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& P3) : r_(g.r) {

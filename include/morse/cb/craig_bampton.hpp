@@ -70,6 +70,10 @@ void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out);
 CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
                     const std::string& boundary_set, double damping);
 
+/// T^T A T for a sparse A and an MPIDENSE T (same row layout), symmetrized: row-major
+/// (cols of T)^2 on every rank. Collective.
+std::vector<double> project_symmetric(MPI_Comm comm, Mat A, Mat T);
+
 /// A^T B for two MPIDENSE matrices with the same row layout: local products summed over the
 /// ranks. Returns a row-major (cols of A) x (cols of B) matrix on every rank. Collective.
 std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B);
