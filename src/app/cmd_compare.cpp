@@ -212,11 +212,9 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       for (std::size_t j = 1; j < snap_t.size(); ++j)
         if (std::abs(snap_t[j] - co.tmax) < std::abs(snap_t[k] - co.tmax)) k = j;
       tsnap = snap_t[k];
-      {
-        std::vector<double> all;
-        need(io::read_doubles(fom, "/fom/snapshots/u", &all, &d, &err));
-        row.assign(all.begin() + k * ids.size(), all.begin() + (k + 1) * ids.size());
-      }
+      need(io::read_double_row(fom, "/fom/snapshots/u", static_cast<std::int64_t>(k), &row, &err));
+      MORSE_CHECK(row.size() == ids.size(), "compare: ", fom, ": /fom/snapshots/u has ", row.size(),
+                  " columns but the DOF map ", ids.size());
       need(io::read_doubles(model, "/nlrom/basis", &basis, &d, &err));
       need(io::read_ints(model, "/mesh/node_ids", &node_ids, &d, &err));
       need(io::read_doubles(rom, "/sim/q", &q, &d, &err));

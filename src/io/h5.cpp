@@ -299,33 +299,13 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
   std::vector<std::int64_t> ids;
   std::vector<double> val;
   if (rank == 0) {
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-    if (f < 0) err = cat(file, ": cannot open as HDF5");
-    auto read = [&](const std::string& name, hid_t type, auto* out, std::vector<hsize_t>* dims) {
-      if (!err.empty()) return;
-      hid_t d = H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0 ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
-      if (d < 0) {
-        err = cat(file, ": no dataset ", name);
-        return;
-      }
-      hid_t sp = H5Dget_space(d);
-      dims->resize(H5Sget_simple_extent_ndims(sp));
-      H5Sget_simple_extent_dims(sp, dims->data(), nullptr);
-      hsize_t n = 1;
-      for (auto v : *dims) n *= v;
-      out->resize(n);
-      if (H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) err = cat(file, ": cannot read ", name);
-      H5Sclose(sp);
-      H5Dclose(d);
-    };
     std::vector<hsize_t> di, dv;
-    read("/mesh/node_ids", H5T_NATIVE_INT64, &ids, &di);
-    read(dataset, H5T_NATIVE_DOUBLE, &val, &dv);
-    if (err.empty() && (dv.size() < 2 || dv.back() != 3 || dv[dv.size() - 2] != ids.size()))
-      err = cat(file, ": dataset ", dataset, " is not a nodal field [..][", ids.size(), "][3]");
-    if (err.empty()) val.erase(val.begin(), val.end() - 3 * ids.size());  // the last field
-    if (f >= 0) H5Fclose(f);
+    if (read_ints(file, "/mesh/node_ids", &ids, &di, &err) && read_doubles(file, dataset, &val, &dv, &err)) {
+      if (dv.size() < 2 || dv.back() != 3 || dv[dv.size() - 2] != ids.size())
+        err = cat(file, ": dataset ", dataset, " is not a nodal field [..][", ids.size(), "][3]");
+      else
+        val.erase(val.begin(), val.end() - 3 * ids.size());  // the last field
+    }
   }
   collective_check(lm.comm, err);
   std::int64_t n = static_cast<std::int64_t>(ids.size());
@@ -354,9 +334,10 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
 }
 
 namespace {
+// Reads a whole dataset, or only row `row` (>= 0) of a 2-D one (dims then holds {1, columns}).
 template <class T>
 bool read_any(const std::string& file, const std::string& name, hid_t type, std::vector<T>* out,
-              std::vector<hsize_t>* dims, std::string* error) {
+              std::vector<hsize_t>* dims, std::string* error, std::int64_t row = -1) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) {
@@ -376,11 +357,28 @@ bool read_any(const std::string& file, const std::string& name, hid_t type, std:
     hid_t sp = H5Dget_space(d);
     dims->resize(H5Sget_simple_extent_ndims(sp));
     H5Sget_simple_extent_dims(sp, dims->data(), nullptr);
-    out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
-    if (H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) {
-      *error = cat(file, ": cannot read ", name);
-      ok = false;
+    hid_t msp = H5S_ALL;
+    if (row >= 0) {
+      if (dims->size() != 2 || static_cast<hsize_t>(row) >= (*dims)[0]) {
+        *error = cat(file, ": ", name, " has no row ", row);
+        ok = false;
+      } else {
+        hsize_t start[2] = {static_cast<hsize_t>(row), 0}, count[2] = {1, (*dims)[1]};
+        H5Sselect_hyperslab(sp, H5S_SELECT_SET, start, nullptr, count, nullptr);
+        msp = H5Screate_simple(2, count, nullptr);
+        *dims = {1, count[1]};
+      }
     }
+    if (ok) {
+      hsize_t n = 1;
+      for (auto v : *dims) n *= v;
+      out->resize(static_cast<std::size_t>(n));
+      if (H5Dread(d, type, msp, row >= 0 ? sp : H5S_ALL, H5P_DEFAULT, out->data()) < 0) {
+        *error = cat(file, ": cannot read ", name);
+        ok = false;
+      }
+    }
+    if (msp != H5S_ALL) H5Sclose(msp);
     H5Sclose(sp);
     H5Dclose(d);
   }
@@ -397,6 +395,12 @@ bool read_doubles(const std::string& file, const std::string& name, std::vector<
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
                std::vector<hsize_t>* dims, std::string* error) {
   return read_any(file, name, H5T_NATIVE_INT64, out, dims, error);
+}
+
+bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
+                     std::string* error) {
+  std::vector<hsize_t> dims;
+  return read_any(file, name, H5T_NATIVE_DOUBLE, out, &dims, error, row);
 }
 
 UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,

@@ -119,6 +119,9 @@ bool read_doubles(const std::string& file, const std::string& name, std::vector<
                   std::vector<hsize_t>* dims, std::string* error);
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
                std::vector<hsize_t>* dims, std::string* error);
+/// Row `row` of a 2-D dataset of doubles (one hyperslab, not the whole dataset).
+bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
+                     std::string* error);
 
 /// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
 /// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.
