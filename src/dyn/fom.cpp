@@ -180,6 +180,16 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
       Uk.push_back(std::move(Mphi));
     }
   }
+  // out += scale sum_k c_k (U_k . v) U_k: the modal damping term, never assembled.
+  std::vector<Vec> us;
+  for (auto& u : Uk) us.push_back(u.get());
+  auto add_modal = [&](Vec v, Vec out, double scale) {
+    if (us.empty()) return;
+    std::vector<PetscScalar> y(us.size());
+    MORSE_CALL(VecMDot(v, static_cast<PetscInt>(us.size()), us.data(), y.data()));
+    for (std::size_t k = 0; k < us.size(); ++k) y[k] *= scale * ck[k];
+    MORSE_CALL(VecMAXPY(out, static_cast<PetscInt>(us.size()), y.data(), us.data()));
+  };
   auto apply_C = [&](Vec v, Vec out) {  // out = C v
     MORSE_CALL(VecSet(out, 0.0));
     if (s.rayleigh_alpha > 0) {
@@ -190,13 +200,7 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
       MORSE_CALL(MatMult(K, v, tmp.get()));
       MORSE_CALL(VecAXPY(out, s.rayleigh_beta, tmp.get()));
     }
-    if (!Uk.empty()) {
-      std::vector<PetscScalar> y(Uk.size());
-      std::vector<Vec> us;
-      for (auto& u : Uk) us.push_back(u.get());
-      MORSE_CALL(VecMDot(v, static_cast<PetscInt>(us.size()), us.data(), y.data()));
-      for (std::size_t k = 0; k < Uk.size(); ++k) MORSE_CALL(VecAXPY(out, ck[k] * y[k], us[k]));
-    }
+    add_modal(v, out, 1.0);
   };
   if (!Uk.empty()) {
     std::vector<UVec> U;
@@ -247,13 +251,7 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
   VecOp apply_J = [&](Vec in, Vec out) {  // state: svk.tangent_point(u1)
     svk.tangent_apply_nonlinear(in, out);
     MORSE_CALL(MatMultAdd(Alin.get(), in, out, out));
-    if (!Uk.empty()) {
-      std::vector<PetscScalar> y(Uk.size());
-      std::vector<Vec> us;
-      for (auto& u : Uk) us.push_back(u.get());
-      MORSE_CALL(VecMDot(in, static_cast<PetscInt>(us.size()), us.data(), y.data()));
-      for (std::size_t k = 0; k < Uk.size(); ++k) MORSE_CALL(VecAXPY(out, 2.0 / h * ck[k] * y[k], us[k]));
-    }
+    add_modal(in, out, 2.0 / h);
   };
   VecOp apply_P = [&](Vec in, Vec out) {
     double ts = now();

@@ -454,7 +454,8 @@ std::vector<double> Svk::reduced_nonlinear_forces(Mat Phi, Mat W, const std::vec
               " entries, expected ", r, " x ", nf);
   MORSE_CHECK(chunk > 0, "Svk::reduced_nonlinear_forces: chunk must be positive");
   const auto phi = local_columns(Phi);
-  const auto w = W == Phi ? phi : local_columns(W);
+  const auto w_own = W == Phi ? std::vector<double>() : local_columns(W);
+  const double* w = W == Phi ? phi.data() : w_own.data();
   std::vector<double> out(static_cast<std::size_t>(nw) * nf, 0.0), a, g;
   PetscBLASInt n = static_cast<PetscBLASInt>(n_local_), rr = static_cast<PetscBLASInt>(r),
                rw = static_cast<PetscBLASInt>(nw);
@@ -469,7 +470,7 @@ std::vector<double> Svk::reduced_nonlinear_forces(Mat Phi, Mat W, const std::vec
       BLASgemm_("N", "N", &n, &m, &rr, &one, phi.data(), &n, Q.data() + static_cast<std::size_t>(f0) * r, &rr, &zero,
                 a.data(), &n);
       element_loop(kForce, static_cast<int>(nv), a.data(), nullptr, g.data(), nullptr, nullptr);
-      BLASgemm_("T", "N", &rw, &m, &n, &one, w.data(), &n, g.data(), &n, &zero,
+      BLASgemm_("T", "N", &rw, &m, &n, &one, w, &n, g.data(), &n, &zero,
                 out.data() + static_cast<std::size_t>(f0) * nw, &rw);
     }
   }

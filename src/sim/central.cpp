@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 #include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
@@ -144,10 +145,9 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     lp.push_back(std::move(y));
   }
   const bool nonlinear = !s.linear;
-  CubicKernel kernel(m.g.r == r ? m.g : nlrom::CubicForce{r, std::vector<double>(nlrom::n_quadratic(r) * r, 0.0),
-                                                           std::vector<double>(nlrom::n_cubic(r) * r, 0.0)},
-                     P3);
   MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+  std::optional<CubicKernel> kernel;  // folded only when used
+  if (nonlinear) kernel.emplace(m.g, P3);
 
   std::vector<double> qm(r), q(r, 0.0), qp(r), v(r, 0.0), g(r), tmp(r);
   if (!s.q0.empty()) {
@@ -205,7 +205,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       for (std::size_t i = 0; i < r; ++i) qp[i] += c * lp[l][i];
     }
     if (nonlinear) {
-      kernel.apply(q.data(), g.data());
+      kernel->apply(q.data(), g.data());
       for (std::size_t i = 0; i < r; ++i) qp[i] -= g[i];
     }
     bool finite = true;
