@@ -17,20 +17,12 @@ using mesh::ElementType;
 
 namespace {
 
-struct Model {
-  mesh::LocalMesh lm;
-  fe::DofMap dofs;
-  fe::Operators ops;
-};
+using test::Model;
 
 Model box(ElementType t, int nx = 3) {
   auto b = test::box_spec(t, 1.0, 0.3, 0.2, nx, 1, 1);
   b.distortion = 0.15;
-  Model m;
-  m.lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  m.dofs = fe::number_dofs(m.lm, {"x0"});
-  m.ops = fe::assemble(m.lm, m.dofs, test::steel());
-  return m;
+  return test::assembled_box(PETSC_COMM_WORLD, b);
 }
 
 // A basis of r smooth fields with displacements of order `scale`.
@@ -61,25 +53,7 @@ std::vector<double> direct(const fe::Svk& svk, Mat Phi, Mat W, const std::vector
   MORSE_CALL(VecAssemblyEnd(c.get()));
   MORSE_CALL(MatMult(Phi, c.get(), u.get()));
   svk.nonlinear_force(u.get(), g.get());
-  UVec out;
-  MORSE_CALL(MatCreateVecs(W, out.ptr(), nullptr));
-  MORSE_CALL(MatMultTranspose(W, g.get(), out.get()));
-  PetscInt nw;
-  MORSE_CALL(VecGetSize(out.get(), &nw));
-  std::vector<double> res(nw);
-  // Gather to every rank.
-  VecScatter sc;
-  Vec all;
-  MORSE_CALL(VecScatterCreateToAll(out.get(), &sc, &all));
-  MORSE_CALL(VecScatterBegin(sc, out.get(), all, INSERT_VALUES, SCATTER_FORWARD));
-  MORSE_CALL(VecScatterEnd(sc, out.get(), all, INSERT_VALUES, SCATTER_FORWARD));
-  const double* a;
-  MORSE_CALL(VecGetArrayRead(all, &a));
-  std::copy(a, a + nw, res.begin());
-  MORSE_CALL(VecRestoreArrayRead(all, &a));
-  MORSE_CALL(VecScatterDestroy(&sc));
-  MORSE_CALL(VecDestroy(&all));
-  return res;
+  return nlrom::project_vector(W, g.get());
 }
 
 double max_abs(const std::vector<double>& v) {

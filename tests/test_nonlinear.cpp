@@ -17,20 +17,12 @@ namespace {
 constexpr ElementType kAllTypes[] = {ElementType::Tet4, ElementType::Tet10, ElementType::Wedge6,
                                      ElementType::Wedge15, ElementType::Hex8, ElementType::Hex20};
 
-struct Fixture {
-  mesh::LocalMesh lm;
-  fe::DofMap dofs;
-  fe::Operators ops;
-};
+using Fixture = test::Model;
 
 Fixture distorted_box(ElementType t, std::vector<std::string> clamp = {"x0"}) {
   auto b = test::box_spec(t, 1.0, 0.4, 0.3, 3, 2, 2);
   b.distortion = 0.2;
-  Fixture f;
-  f.lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  f.dofs = fe::number_dofs(f.lm, clamp);
-  f.ops = fe::assemble(f.lm, f.dofs, test::steel());
-  return f;
+  return test::assembled_box(PETSC_COMM_WORLD, b, clamp);
 }
 
 // A smooth displacement with gradients of order `scale`.

@@ -19,39 +19,10 @@ using mesh::ElementType;
 
 namespace {
 
-struct Model {
-  mesh::LocalMesh lm;
-  fe::DofMap dofs;
-  fe::Operators ops;
-};
+using test::Model;
 
 Model box(ElementType t, int nx) {
-  auto b = test::box_spec(t, 1.0, 0.2, 0.2, nx, 1, 1);
-  Model m;
-  m.lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  m.dofs = fe::number_dofs(m.lm, {"x0"});
-  m.ops = fe::assemble(m.lm, m.dofs, test::steel());
-  return m;
-}
-
-std::vector<double> project_load(Mat T, const dyn::Loads& loads, std::size_t l) {
-  UVec y;
-  MORSE_CALL(MatCreateVecs(T, y.ptr(), nullptr));
-  MORSE_CALL(MatMultTranspose(T, loads.pattern(l), y.get()));
-  VecScatter sc;
-  Vec all;
-  MORSE_CALL(VecScatterCreateToAll(y.get(), &sc, &all));
-  MORSE_CALL(VecScatterBegin(sc, y.get(), all, INSERT_VALUES, SCATTER_FORWARD));
-  MORSE_CALL(VecScatterEnd(sc, y.get(), all, INSERT_VALUES, SCATTER_FORWARD));
-  PetscInt n;
-  MORSE_CALL(VecGetSize(all, &n));
-  const double* a;
-  MORSE_CALL(VecGetArrayRead(all, &a));
-  std::vector<double> out(a, a + n);
-  MORSE_CALL(VecRestoreArrayRead(all, &a));
-  MORSE_CALL(VecScatterDestroy(&sc));
-  MORSE_CALL(VecDestroy(&all));
-  return out;
+  return test::assembled_box(PETSC_COMM_WORLD, test::box_spec(t, 1.0, 0.2, 0.2, nx, 1, 1));
 }
 
 }  // namespace
@@ -72,7 +43,7 @@ TEST(Sim, LinearSuperelementMatchesModalClosedForm) {
   l.omega = 3000.0;
   dyn::Loads loads(m.lm, m.dofs, {l});
   sim::ReducedLoad rl;
-  rl.p = project_load(c.T.get(), loads, 0);
+  rl.p = nlrom::project_vector(c.T.get(), loads.pattern(0));
   rl.amplitude = l.amplitude;
   rl.omega = l.omega;
   // Closed form: modes of (K~, M~), each driven from rest by A sin(W t).

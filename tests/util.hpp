@@ -46,6 +46,24 @@ inline mesh::LocalMesh box_mesh(MPI_Comm comm, const mesh::BoxSpec& b) {
   return mesh::distribute(comm, &m);
 }
 
+/// A distributed box with its DOF map and assembled K, M.
+struct Model {
+  mesh::LocalMesh lm;
+  fe::DofMap dofs;
+  fe::Operators ops;
+};
+
+/// Generates and distributes box b, clamps the given sets and assembles with `material`
+/// (default steel). Collective.
+inline Model assembled_box(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::string>& clamp = {"x0"},
+                           const mesh::Material& material = steel()) {
+  Model m;
+  m.lm = box_mesh(comm, b);
+  m.dofs = fe::number_dofs(m.lm, clamp);
+  m.ops = fe::assemble(m.lm, m.dofs, material);
+  return m;
+}
+
 /// A DOF vector from a nodal field f(x, y, z, d) on the free DOFs.
 template <class F>
 UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofMap& dofs, F f) {

@@ -38,13 +38,6 @@ std::vector<double> to_all(Vec x) {
   return out;
 }
 
-std::vector<double> project_vector(Mat V, Vec x) {
-  UVec y;
-  MORSE_CALL(MatCreateVecs(V, y.ptr(), nullptr));
-  MORSE_CALL(MatMultTranspose(V, x, y.get()));
-  return to_all(y.get());
-}
-
 // Copies columns [c0, c0 + n) of A into columns [d0, d0 + n) of B (same row layout).
 void copy_columns(Mat A, PetscInt c0, Mat B, PetscInt d0, PetscInt n) {
   for (PetscInt j = 0; j < n; ++j) {
@@ -113,6 +106,13 @@ std::vector<double> linear_training(const std::vector<double>& M, const std::vec
 }
 
 }  // namespace
+
+std::vector<double> project_vector(Mat V, Vec x) {
+  UVec y;
+  MORSE_CALL(MatCreateVecs(V, y.ptr(), nullptr));
+  MORSE_CALL(MatMultTranspose(V, x, y.get()));
+  return to_all(y.get());
+}
 
 UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& boundary_dofs,
                        const std::vector<std::pair<PetscInt, PetscInt>>& pairs) {

@@ -108,6 +108,9 @@ struct Basis {
 UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& boundary_dofs,
                        const std::vector<std::pair<PetscInt, PetscInt>>& pairs);
 
+/// V^T x, gathered on every rank (e.g. a reduced load pattern). Collective.
+std::vector<double> project_vector(Mat V, Vec x);
+
 /// Builds the basis. Throws (collectively) for a basis larger than the model, a missing
 /// snapshot file, or missing training settings. Collective.
 Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
