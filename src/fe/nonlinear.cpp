@@ -10,7 +10,9 @@
 #include <petscblaslapack.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <cstdint>
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
@@ -482,21 +484,65 @@ std::vector<double> Svk::reduced_nonlinear_forces(Mat Phi, Mat W, const std::vec
 }
 
 namespace {
-// Symmetric 3x3 as 6 entries (00, 11, 22, 01, 02, 12); dot6(a, b) = a : b for symmetric a, b.
-inline double dot6(const double* a, const double* b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + 2.0 * (a[3] * b[3] + a[4] * b[4] + a[5] * b[5]);
-}
-// sym(X^T Y) with X[i][J] (3x3 row-major): (X^T Y)_{KL} = sum_i X[i][K] Y[i][L].
-inline void sym_tn(const double* X, const double* Y, double* s) {
+// sym(X^T Y) with X[i][J] (3x3 row-major), in engineering Voigt order (00, 11, 22, 2·01, 2·02, 2·12):
+// (X^T Y)_{KL} = sum_i X[i][K] Y[i][L].
+inline void sym_tn_voigt(const double* X, const double* Y, double* s) {
   static const int K[6] = {0, 1, 2, 0, 0, 1}, L[6] = {0, 1, 2, 1, 2, 2};
   for (int c = 0; c < 6; ++c) {
     double v = 0.0;
     for (int i = 0; i < 3; ++i) v += X[3 * i + K[c]] * Y[3 * i + L[c]] + Y[3 * i + K[c]] * X[3 * i + L[c]];
-    s[c] = 0.5 * v;
+    s[c] = c < 3 ? 0.5 * v : v;
   }
 }
+// Upper Cholesky factor R of the isotropic elasticity matrix in engineering Voigt notation,
+// C = R^T R: the normal block 2 mu I + lam 1 1^T (3 x 3) and mu on the shear diagonal.
+// Stored as rn[3][3] (upper) and rs = sqrt(mu).
+struct VoigtRoot {
+  double rn[9] = {0.0};
+  double rs = 0.0;
+  VoigtRoot(double lam, double mu) {
+    double c[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) c[3 * i + j] = lam + (i == j ? 2.0 * mu : 0.0);
+    for (int j = 0; j < 3; ++j) {
+      double d = c[4 * j];
+      for (int k = 0; k < j; ++k) d -= rn[3 * k + j] * rn[3 * k + j];
+      MORSE_CHECK(d > 0.0 && mu > 0.0, "Svk::project_tensors: the elasticity matrix is not positive definite (lambda ",
+                  lam, ", mu ", mu, ")");
+      rn[4 * j] = std::sqrt(d);
+      for (int i = j + 1; i < 3; ++i) {
+        double v = c[3 * j + i];
+        for (int k = 0; k < j; ++k) v -= rn[3 * k + j] * rn[3 * k + i];
+        rn[3 * j + i] = v / rn[4 * j];
+      }
+    }
+    rs = std::sqrt(mu);
+  }
+  // y = s R v (six rows written with stride 1).
+  void apply(double s, const double* v, double* y) const {
+    for (int i = 0; i < 3; ++i) {
+      double t = 0.0;
+      for (int j = i; j < 3; ++j) t += rn[3 * i + j] * v[j];
+      y[i] = s * t;
+    }
+    for (int i = 3; i < 6; ++i) y[i] = s * rs * v[i];
+  }
+};
 }  // namespace
 
+// With H_a the displacement gradient of column a at a quadrature point, N_ab = sym(H_a^T H_b)
+// and h_a = sym(H_a), the strain energy of u = Phi q is quadratic + cubic + quartic in q with
+//   cubic   = 1/2 sum q_i q_j q_k  h_i : C : N_jk,
+//   quartic = 1/8 sum q_i q_j q_k q_l  N_ij : C : N_kl.
+// Both reduce to two Gram matrices over the pairs (i <= j), summed over the quadrature points:
+//   F_{(ij),(kl)} = sum w N_ij : C : N_kl      (n2 x n2, symmetric),
+//   G_{p,(jk)}    = sum w h_p  : C : N_jk      (r x n2).
+// With C = R^T R and the rows x = sqrt(w) R N (six per point), F = X^T X is a rank-k update
+// (BLAS-3 syrk) and G = Y^T X a product, in blocks of points. The coefficients of the gradient
+// of the energy are then
+//   A_(ij),p  = (G_{p,ij} + G_{j,ip} + G_{i,jp}) / m!,
+//   B_(ijk),p = (F_{jk,ip} + F_{ik,jp} + F_{ij,kp}) / (m!) (one over the number of repeated-index
+//               orderings: 1 distinct, 2 for one pair, 6 for i = j = k).
 void Svk::project_tensors(Mat Phi, std::vector<double>* A, std::vector<double>* B) const {
   PetscLogEvent ev = log_event("SvkProjectTensors");
   MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
@@ -504,82 +550,93 @@ void Svk::project_tensors(Mat Phi, std::vector<double>* A, std::vector<double>* 
   MORSE_CALL(MatGetSize(Phi, nullptr, &r));
   const std::size_t R = static_cast<std::size_t>(r);
   const std::size_t n2 = R * (R + 1) / 2, n3 = R * (R + 1) * (R + 2) / 6;
-  A->assign(n2 * R, 0.0);
-  B->assign(n3 * R, 0.0);
+  MORSE_CHECK(n2 * n2 < static_cast<std::size_t>(INT32_MAX), "Svk::project_tensors: ", r,
+              " basis vectors need a pair Gram matrix of ", n2, "^2 entries; use STEP (-nlrom_forces step)");
   const auto phi = local_columns(Phi);
-  // Monomial numbering: i <= j and i <= j <= k, lexicographic.
-  std::vector<std::size_t> idx2(R * R), idx3(R * R * R);
+  // Pair numbering: i <= j, lexicographic (the row order of A).
+  std::vector<std::size_t> idx2(R * R);
   {
     std::size_t m = 0;
     for (std::size_t i = 0; i < R; ++i)
-      for (std::size_t j = i; j < R; ++j) idx2[i * R + j] = m++;
-    m = 0;
-    for (std::size_t i = 0; i < R; ++i)
-      for (std::size_t j = i; j < R; ++j)
-        for (std::size_t k = j; k < R; ++k) idx3[(i * R + j) * R + k] = m++;
+      for (std::size_t j = i; j < R; ++j) idx2[i * R + j] = idx2[j * R + i] = m++;
   }
-  std::vector<double> H(9 * R), Ssym(6 * R * R), Nsym(6 * R * R), Lsym(6 * R), Hsym(6 * R);
-  std::vector<double> ua(kMaxDofs);
+  // Blocks of points: X (kb x n2) and Y (kb x r), column-major, kb = 6 x points.
+  const std::size_t block_points = std::max<std::size_t>(64, std::min<std::size_t>(512, (1u << 22) / (6 * n2 + 1)));
+  const std::size_t kb_max = 6 * block_points;
+  std::vector<double> X(kb_max * n2), Y(kb_max * R), F(n2 * n2, 0.0), G(R * n2, 0.0);
+  std::vector<double> H(9 * R), ua(kMaxDofs);
+  std::size_t kb = 0;
+  double flops = 0.0, points = 0.0;
+  auto flush = [&]() {
+    if (kb == 0) return;
+    flops += static_cast<double>(n2) * static_cast<double>(n2 + 1) * kb + 2.0 * R * n2 * kb;
+    PetscBLASInt k = static_cast<PetscBLASInt>(kb), np = static_cast<PetscBLASInt>(n2), nr = static_cast<PetscBLASInt>(R),
+                 ld = static_cast<PetscBLASInt>(kb_max);
+    const double one = 1.0;
+    BLASsyrk_("U", "T", &np, &k, &one, X.data(), &ld, &one, F.data(), &np);
+    BLASgemm_("T", "N", &nr, &np, &k, &one, Y.data(), &ld, X.data(), &ld, &one, G.data(), &nr);
+    kb = 0;
+  };
   const std::int64_t ne = static_cast<std::int64_t>(type_n_.size());
+  Progress progress(comm_, "exact tensors", static_cast<double>(ne));
+  const double t_start = MPI_Wtime();
+  double nvec[6];
   for (std::int64_t e = 0; e < ne; ++e) {
     const int n = type_n_[e], nd = 3 * n, nq = elem_nq_[e];
     const PetscInt* pos = &elem_pos_[elem_off_[e]];
-    const double lam = lambda_[e], mu = mu_[e];
+    const VoigtRoot root(lambda_[e], mu_[e]);
     for (int q = 0; q < nq; ++q) {
       const double* gq = &grad_[grad_off_[e] + 3 * n * q];
-      const double w = wdet_[wdet_off_[e] + q];
+      const double sw = std::sqrt(wdet_[wdet_off_[e] + q]);
       for (std::size_t a = 0; a < R; ++a) {
         const double* col = phi.data() + a * n_local_;
         for (int k = 0; k < nd; ++k) ua[k] = pos[k] >= 0 ? col[pos[k]] : 0.0;
         double* Ha = &H[9 * a];
         displacement_gradient(n, ua.data(), gq, Ha);
-        // L_a = S_lin(H_a) = lam tr(H_a) I + mu (H_a + H_a^T); sym(H_a).
-        const double tr = Ha[0] + Ha[4] + Ha[8];
-        double* hs = &Hsym[6 * a];
-        hs[0] = Ha[0], hs[1] = Ha[4], hs[2] = Ha[8];
-        hs[3] = 0.5 * (Ha[1] + Ha[3]), hs[4] = 0.5 * (Ha[2] + Ha[6]), hs[5] = 0.5 * (Ha[5] + Ha[7]);
-        double* l = &Lsym[6 * a];
-        for (int c = 0; c < 6; ++c) l[c] = 2.0 * mu * hs[c] + (c < 3 ? lam * tr : 0.0);
+        const double hv[6] = {Ha[0], Ha[4], Ha[8], Ha[1] + Ha[3], Ha[2] + Ha[6], Ha[5] + Ha[7]};
+        root.apply(sw, hv, &Y[a * kb_max + kb]);
       }
-      // N_ap = sym(H_a^T H_p) (symmetric in a, p); S_bc = S_nl of E_bc = N_bc / 2.
+      std::size_t m = 0;
       for (std::size_t a = 0; a < R; ++a)
-        for (std::size_t b = a; b < R; ++b) {
-          double* nab = &Nsym[6 * (a * R + b)];
-          sym_tn(&H[9 * a], &H[9 * b], nab);
-          std::copy(nab, nab + 6, &Nsym[6 * (b * R + a)]);
-          double* sab = &Ssym[6 * (a * R + b)];
-          const double tr = 0.5 * (nab[0] + nab[1] + nab[2]);
-          for (int c = 0; c < 6; ++c) sab[c] = mu * nab[c] + (c < 3 ? lam * tr : 0.0);
-          std::copy(sab, sab + 6, &Ssym[6 * (b * R + a)]);
+        for (std::size_t b = a; b < R; ++b, ++m) {
+          sym_tn_voigt(&H[9 * a], &H[9 * b], nvec);
+          root.apply(sw, nvec, &X[m * kb_max + kb]);
         }
-      // Quadratic: coefficient of q_i q_j (i <= j) in output p:
-      //   (1/m!) (2 S_ij : sym H_p + L_j : N_ip + L_i : N_jp).
-      for (std::size_t i = 0; i < R; ++i)
-        for (std::size_t j = i; j < R; ++j) {
-          const double c = w * (i == j ? 0.5 : 1.0);
-          double* row = &(*A)[idx2[i * R + j] * R];
-          const double* sij = &Ssym[6 * (i * R + j)];
-          for (std::size_t p = 0; p < R; ++p)
-            row[p] += c * (2.0 * dot6(sij, &Hsym[6 * p]) + dot6(&Lsym[6 * j], &Nsym[6 * (i * R + p)]) +
-                           dot6(&Lsym[6 * i], &Nsym[6 * (j * R + p)]));
-        }
-      // Cubic: coefficient of q_i q_j q_k (i <= j <= k) in output p:
-      //   (2/prod m!) (S_jk : N_ip + S_ik : N_jp + S_ij : N_kp).
-      for (std::size_t i = 0; i < R; ++i)
-        for (std::size_t j = i; j < R; ++j)
-          for (std::size_t k = j; k < R; ++k) {
-            const double mf = (i == j && j == k) ? 6.0 : (i == j || j == k) ? 2.0 : 1.0;
-            const double c = 2.0 * w / mf;
-            double* row = &(*B)[idx3[(i * R + j) * R + k] * R];
-            const double *sjk = &Ssym[6 * (j * R + k)], *sik = &Ssym[6 * (i * R + k)], *sij = &Ssym[6 * (i * R + j)];
-            const double *ni = &Nsym[6 * i * R], *nj = &Nsym[6 * j * R], *nk = &Nsym[6 * k * R];
-            for (std::size_t p = 0; p < R; ++p)
-              row[p] += c * (dot6(sjk, ni + 6 * p) + dot6(sik, nj + 6 * p) + dot6(sij, nk + 6 * p));
-          }
+      kb += 6;
+      points += 1.0;
+      if (kb == kb_max) flush();
     }
+    progress.update(static_cast<double>(e + 1));
   }
-  MPI_Allreduce(MPI_IN_PLACE, A->data(), static_cast<int>(A->size()), MPI_DOUBLE, MPI_SUM, comm_);
-  MPI_Allreduce(MPI_IN_PLACE, B->data(), static_cast<int>(B->size()), MPI_DOUBLE, MPI_SUM, comm_);
+  flush();
+  double seconds = MPI_Wtime() - t_start, sums[2] = {flops, points};
+  MPI_Allreduce(MPI_IN_PLACE, &seconds, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm_);
+  print0(comm_, "  exact tensors: r = %d, %zu pairs, %.0f quadrature points, %.3g GFLOP in BLAS-3 (%.1f GFLOP/s)\n",
+         static_cast<int>(r), n2, sums[1], sums[0] * 1e-9, sums[0] * 1e-9 / std::max(seconds, 1e-9));
+  MPI_Allreduce(MPI_IN_PLACE, F.data(), static_cast<int>(F.size()), MPI_DOUBLE, MPI_SUM, comm_);
+  MPI_Allreduce(MPI_IN_PLACE, G.data(), static_cast<int>(G.size()), MPI_DOUBLE, MPI_SUM, comm_);
+  auto f = [&](std::size_t x, std::size_t y) { return x <= y ? F[x + y * n2] : F[y + x * n2]; };
+  auto g = [&](std::size_t p, std::size_t x) { return G[p + x * R]; };
+  A->assign(n2 * R, 0.0);
+  B->assign(n3 * R, 0.0);
+  for (std::size_t i = 0; i < R; ++i)
+    for (std::size_t j = i; j < R; ++j) {
+      const double c = i == j ? 0.5 : 1.0;
+      const std::size_t ij = idx2[i * R + j];
+      double* row = &(*A)[ij * R];
+      for (std::size_t p = 0; p < R; ++p) row[p] = c * (g(p, ij) + g(j, idx2[i * R + p]) + g(i, idx2[j * R + p]));
+    }
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < R; ++i)
+    for (std::size_t j = i; j < R; ++j)
+      for (std::size_t k = j; k < R; ++k, ++m) {
+        const double c = (i == j && j == k) ? 1.0 / 6.0 : (i == j || j == k) ? 0.5 : 1.0;
+        const std::size_t jk = idx2[j * R + k], ik = idx2[i * R + k], ij = idx2[i * R + j];
+        const std::size_t *ip = &idx2[i * R], *jp = &idx2[j * R], *kp = &idx2[k * R];
+        double* row = &(*B)[m * R];
+        for (std::size_t p = 0; p < R; ++p) row[p] = c * (f(jk, ip[p]) + f(ik, jp[p]) + f(ij, kp[p]));
+      }
   MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
 }
 
