@@ -55,6 +55,43 @@ TEST(Model, MissingSetIsACollectiveError) {
   }
 }
 
+// A node set given by external ids (-mesh_node_sets): it holds exactly the local nodes with those
+// ids, its global size counts each id once, clamping it removes 3 DOFs per node, and an unknown
+// id or a taken name is a collective error naming the id or the set.
+TEST(Model, NodeSetFromIds) {
+  mesh::BoxSpec b;
+  b.nx = 3;
+  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
+  auto all = fe::number_dofs(lm, {});
+  // Ids of the x0 face, gathered from every rank.
+  std::vector<std::int64_t> ids;
+  for (auto k : lm.mesh.node_sets.at("x0")) ids.push_back(lm.mesh.node_ids[k]);
+  int n = static_cast<int>(ids.size()), size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, PETSC_COMM_WORLD);
+  for (int i = 1; i < size; ++i) displs[i] = displs[i - 1] + counts[i - 1];
+  std::vector<std::int64_t> every(displs.back() + counts.back());
+  MPI_Allgatherv(ids.data(), n, MPI_INT64_T, every.data(), counts.data(), displs.data(), MPI_INT64_T, PETSC_COMM_WORLD);
+  every.push_back(every.front());  // a duplicate counts once
+  mesh::add_node_set(&lm, "face", every, "-mesh_node_set_face");
+  EXPECT_EQ(lm.node_set_sizes.at("face"), lm.node_set_sizes.at("x0"));
+  EXPECT_EQ(lm.mesh.node_sets.at("face"), lm.mesh.node_sets.at("x0"));
+  auto dofs = fe::number_dofs(lm, {"face"});
+  EXPECT_EQ(all.n_global - dofs.n_global, 3 * lm.node_set_sizes.at("x0"));
+  auto expect_error = [&](const std::string& name, std::vector<std::int64_t> v, const std::string& needle) {
+    try {
+      mesh::add_node_set(&lm, name, v, "-mesh_node_set_" + name);
+      ADD_FAILURE() << "no error for set " << name;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_error("bad", {every.front(), 987654321}, "987654321");
+  expect_error("face", {every.front()}, "already exists");
+  EXPECT_EQ(lm.mesh.node_sets.count("bad"), 0u);
+}
+
 class ModelByType : public ::testing::TestWithParam<ElementType> {};
 
 // Total translational mass: 1^T M_x 1 = rho V for a distorted box, to round-off.

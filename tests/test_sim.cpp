@@ -10,6 +10,9 @@
 #include <cmath>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/log.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "morse/fe/nonlinear.hpp"
 #include "morse/nlrom/nlrom.hpp"
 #include "morse/sim/sim.hpp"
 #include "util.hpp"
@@ -152,4 +155,78 @@ TEST(Sim, NonlinearEnergyBoundedOverMillionSteps) {
   EXPECT_LT(emax, 2.0 * e0);
   EXPECT_GT(emin, 0.0);
   EXPECT_NEAR(late / n_late, early / n_early, 0.02 * e0) << "energy drift";
+}
+
+// A basis that spans the whole space (the identity on the free DOFs) makes the reduced model the
+// full model: simulate's central differences and fom's trapezoidal Newton scheme then solve the
+// same ODE, and their difference falls as h^2 (both are second order).
+TEST(Sim, FullBasisReproducesFullModel) {
+  auto b = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.05, 0.05, 4, 1, 1));
+  fe::Svk svk(b.lm, b.dofs, test::steel(), b.ops.K.get());
+  const PetscInt n = b.dofs.n_global;
+  PetscInt first = 0, last = 0;
+  MORSE_CALL(MatGetOwnershipRange(b.ops.K.get(), &first, &last));
+  UMat V;
+  MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, last - first, PETSC_DECIDE, n, n, nullptr, V.ptr()));
+  for (PetscInt i = first; i < last; ++i) MORSE_CALL(MatSetValue(V.get(), i, i, 1.0, INSERT_VALUES));
+  MORSE_CALL(MatAssemblyBegin(V.get(), MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(V.get(), MAT_FINAL_ASSEMBLY));
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, V.get(), b.ops.K.get(), b.ops.M.get(), 0.0, 0);
+  rm.g = nlrom::exact_forces(svk, V.get());
+  const double E = test::steel().E, EI = E * std::pow(0.05, 4) / 12.0;
+  dyn::NodalLoad l;
+  l.set = "x1";
+  l.dir[1] = 1.0;
+  l.amplitude = 0.5 * EI / static_cast<double>(b.lm.node_set_sizes.at("x1"));
+  l.omega = 300.0;
+  dyn::Loads loads(b.lm, b.dofs, {l});
+  sim::ReducedLoad rl;
+  rl.p = nlrom::project_vector(V.get(), loads.pattern(0));
+  rl.amplitude = l.amplitude;
+  rl.omega = l.omega;
+  const double hc = sim::critical_step(rm), T = 6e-3;
+  // Histories of the owned DOFs at every step.
+  auto run_fom = [&](double h) {
+    dyn::FomSettings s;
+    s.dt = h;
+    s.t_final = T;
+    s.newton_rtol = 1e-9;
+    std::vector<double> out;
+    dyn::integrate(svk, b.ops.M.get(), loads, s, nullptr, nullptr, [&](const dyn::StepInfo& i) {
+      const double* a;
+      MORSE_CALL(VecGetArrayRead(i.u, &a));
+      out.insert(out.end(), a, a + (last - first));
+      MORSE_CALL(VecRestoreArrayRead(i.u, &a));
+    });
+    return out;
+  };
+  auto run_sim = [&](double h, bool linear) {
+    sim::Settings s;
+    s.dt = h;
+    s.t_final = T;
+    s.linear = linear;
+    std::vector<double> out;
+    sim::integrate(rm, {rl}, s, [&](const sim::StepState& x) { out.insert(out.end(), x.q + first, x.q + last); });
+    return out;
+  };
+  // max_t ||a(t) - b(t)||_inf / max_t ||a(t)||_inf over all ranks.
+  auto rel = [&](const std::vector<double>& a, const std::vector<double>& c) {
+    double v[2] = {0.0, 0.0};
+    for (std::size_t i = 0; i < std::min(a.size(), c.size()); ++i) {
+      v[0] = std::max(v[0], std::abs(a[i] - c[i]));
+      v[1] = std::max(v[1], std::abs(a[i]));
+    }
+    if (a.size() != c.size()) v[0] = 1e300;
+    MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
+    return v[0] / v[1];
+  };
+  const double h = 0.5 * hc;
+  const auto f1 = run_fom(h), f2 = run_fom(h / 2);
+  const auto s1 = run_sim(h, false), s2 = run_sim(h / 2, false), lin = run_sim(h / 2, true);
+  const double d1 = rel(f1, s1), d2 = rel(f2, s2), nl = rel(s2, lin);
+  print0(PETSC_COMM_WORLD, "  simulate vs fom: %.3e at dt, %.3e at dt/2 (ratio %.2f); nonlinear effect %.3e\n", d1, d2,
+         d1 / d2, nl);
+  EXPECT_LT(d2, 1e-5) << "simulate vs fom at dt = " << h / 2;
+  EXPECT_GT(nl, 20.0 * d2) << "not a nonlinear test: the linear model is as close as the integrator error";
+  EXPECT_NEAR(d1 / d2, 4.0, 0.4) << "the difference does not fall as dt^2 (" << d1 << ", " << d2 << ")";
 }

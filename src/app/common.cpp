@@ -6,6 +6,7 @@
 #include <petscsys.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -32,6 +33,25 @@ bool inner_option(const std::string& name) {
       for (const char* q : inner)
         if (name.compare(std::strlen(p), std::strlen(q), q) == 0) return true;
   return false;
+}
+
+// "1,2,10-12" -> {1, 2, 10, 11, 12}; "" on success, else the reason.
+std::string parse_id_list(const std::string& text, std::vector<std::int64_t>* ids) {
+  std::size_t p = 0;
+  while (p <= text.size()) {
+    std::size_t q = text.find(',', p);
+    if (q == std::string::npos) q = text.size();
+    const std::string item = text.substr(p, q - p);
+    char* end = nullptr;
+    const long long a = std::strtoll(item.c_str(), &end, 10);
+    long long b = a;
+    if (end != item.c_str() && *end == '-') b = std::strtoll(end + 1, &end, 10);
+    if (item.empty() || *end != '\0' || b < a || b - a > 10000000)
+      return cat("'", item, "' is not a node id or a range a-b");
+    for (long long v = a; v <= b; ++v) ids->push_back(v);
+    p = q + 1;
+  }
+  return {};
 }
 
 std::string xdmf_path_of(const std::string& h5) {
@@ -95,6 +115,24 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
       PetscCall(PetscOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
       o->set_materials.push_back(m);
     }
+  n_sets = 16;
+  PetscCall(PetscOptionsStringArray("-mesh_node_sets",
+                                    "Node sets added to the mesh, comma separated; their nodes are given by "
+                                    "-mesh_node_set_<name> id,id,a-b,... (external node ids, a-b = a range)",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      std::string name = sets[i];
+      PetscCall(PetscFree(sets[i]));
+      const std::string opt = "-mesh_node_set_" + name;
+      char list[4096] = "";
+      PetscBool has = PETSC_FALSE;
+      PetscCall(PetscOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
+      std::vector<std::int64_t> ids;
+      std::string err = has ? parse_id_list(list, &ids) : cat("give the node ids of set ", name, " with ", opt);
+      if (!err.empty() && o->error.empty()) o->error = has ? cat(opt, ": ", err) : err;
+      o->node_sets.emplace_back(name, std::move(ids));
+    }
   PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
   PetscCall(PetscOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
   o->out = buf;
@@ -134,12 +172,14 @@ bool help_requested() {
 
 Model build_model(MPI_Comm comm, const CommonOptions& o) {
   MORSE_CHECK(!o.mesh.empty(), "no mesh given: use -mesh FILE (.msh or .inp)");
+  MORSE_CHECK(o.error.empty(), o.error);
   Model md;
   {
     StageTimer t(comm, "ReadDistribute");
     md.lm = mesh::read_and_distribute(comm, o.mesh);
     if (!o.units.empty()) md.lm.mesh.units = o.units;
     for (const auto& sm : o.set_materials) mesh::assign_set_material(&md.lm.mesh, sm);
+    for (const auto& [name, ids] : o.node_sets) mesh::add_node_set(&md.lm, name, ids, "-mesh_node_set_" + name);
   }
   {
     StageTimer t(comm, "NumberDofs");

@@ -41,6 +41,9 @@ struct CommonOptions {
   std::vector<std::string> clamp;
   mesh::Material material;
   std::vector<mesh::Material> set_materials;  ///< name = element set
+  /// Node sets given on the command line (-mesh_node_sets): name, external node ids.
+  std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
+  std::string error;  ///< a bad option value, raised by build_model (after -help)
   std::string out;
 };
 

@@ -34,6 +34,39 @@ std::string check_node_set(const LocalMesh& lm, const std::string& name, const s
   return {};
 }
 
+void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std::int64_t>& ids,
+                  const std::string& role) {
+  std::string err;
+  if (lm->node_set_sizes.count(name)) err = cat(role, ": node set '", name, "' already exists in ", lm->mesh.source);
+  else if (ids.empty()) err = cat(role, ": node set '", name, "' has no node ids");
+  collective_check(lm->comm, err);
+  std::vector<std::int64_t> sorted(ids);
+  std::sort(sorted.begin(), sorted.end());
+  sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+  std::vector<int> found(sorted.size(), 0);
+  auto& set = lm->mesh.node_sets[name];
+  set.clear();
+  const auto& node_ids = lm->mesh.node_ids;
+  for (std::int64_t k = 0; k < static_cast<std::int64_t>(node_ids.size()); ++k) {
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), node_ids[k]);
+    if (it == sorted.end() || *it != node_ids[k]) continue;
+    found[it - sorted.begin()] = 1;
+    set.push_back(k);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, found.data(), static_cast<int>(found.size()), MPI_INT, MPI_MAX, lm->comm);
+  std::string missing;
+  int n_missing = 0;
+  for (std::size_t i = 0; i < sorted.size(); ++i)
+    if (!found[i] && ++n_missing <= 10) missing += cat(n_missing > 1 ? ", " : "", sorted[i]);
+  if (n_missing) {
+    lm->mesh.node_sets.erase(name);
+    err = cat(role, ": node set '", name, "': ", n_missing, " id(s) are not nodes of ", lm->mesh.source, " (", missing,
+              n_missing > 10 ? ", ..." : "", ")");
+  }
+  collective_check(lm->comm, err);
+  lm->node_set_sizes[name] = static_cast<std::int64_t>(sorted.size());
+}
+
 namespace {
 
 // Removes nodes that no element uses (Gmsh files carry geometry points, decks carry spare

@@ -48,6 +48,13 @@ struct LocalMesh {
 /// (every rank knows every set name and global size, so every rank gets the same answer).
 std::string check_node_set(const LocalMesh& lm, const std::string& name, const std::string& role);
 
+/// Adds node set `name` made of the nodes with external ids `ids` (Nastran SET1 / Abaqus *NSET
+/// given on the command line). Throws (collectively) if the name is taken, `ids` is empty, or an
+/// id is not a node of the (distributed) mesh; `role` starts the message (e.g. the option name).
+/// Collective.
+void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std::int64_t>& ids,
+                  const std::string& role);
+
 /// Partitions *serial (significant on rank 0 only; emptied on return) and scatters it over comm.
 /// Collective. Throws morse::Error (on every rank) if the mesh has no solid element.
 LocalMesh distribute(MPI_Comm comm, Mesh* serial);
