@@ -40,6 +40,33 @@ f = h5py.File(sys.argv[1], "r")
 e, I = f["/compare/e"][:], f["/compare/I"][0]
 assert all(0 <= x <= 1 for x in e) and 0.5 < I <= 1, (e, I)
 PY
+# Three load cases spread over the ranks (one file each), with full-field snapshots at the fom's
+# snapshot times: case a repeats the single run above, so its q is the same to the last bit.
+run simulate -rom "$d/pod.h5" -sim_cases a,b,c -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_monitor x1 -sim_output_every 100 \
+  -a_load_sets x1 -a_load_x1_dir y -a_load_x1_amplitude 1e6 -a_load_x1_omega 300 \
+  -b_load_sets x1 -b_load_x1_dir y -b_load_x1_amplitude 1e6 -b_load_x1_omega 600 \
+  -c_load_sets x1 -c_load_x1_dir z -c_load_x1_amplitude 1e6 -c_load_x1_omega 300 \
+  -sim_snapshots "$d/fom.h5" -out "$d/cases.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+d = sys.argv[1]
+one, fom = h5py.File(d + "/sim_long.h5", "r"), h5py.File(d + "/fom.h5", "r")
+a, b, c = (h5py.File(d + "/cases_%s.h5" % k, "r") for k in "abc")
+assert np.array_equal(a["/sim/q"][:], one["/sim/q"][:]), "case a differs from the single run"
+assert not np.allclose(b["/sim/q"][:], a["/sim/q"][:]) and not np.allclose(c["/sim/q"][:], a["/sim/q"][:])
+st, ft = a["/sim/snapshots/time"][:], fom["/fom/snapshots/time"][:]
+assert np.allclose(st, ft, atol=1e-7), (st, ft)
+assert a["/sim/snapshots/u"].shape == fom["/fom/snapshots/u"].shape
+assert np.array_equal(a["/sim/snapshots/dof_node_ids"][:], fom["/fom/snapshots/dof_node_ids"][:])
+# The snapshot at the last time equals the reconstruction of the final state.
+basis, ids = h5py.File(d + "/pod.h5", "r")["/nlrom/basis"][:], h5py.File(d + "/pod.h5", "r")["/mesh/node_ids"][:]
+row = {n: k for k, n in enumerate(ids)}
+comp = a["/sim/snapshots/dof_components"][:]
+rows = [row[n] for n in a["/sim/snapshots/dof_node_ids"][:]]
+u = np.einsum("j,jn->n", a["/sim/final/q"][:], basis[:, rows, :].reshape(len(basis), len(rows), 3)[:, np.arange(len(rows)), comp])
+assert abs(a["/sim/final"].attrs["time"] - st[-1]) < 1e-9
+assert np.allclose(u, a["/sim/snapshots/u"][-1], rtol=1e-12, atol=1e-12 * abs(u).max())
+PY
 set +e
 out=$(run simulate -rom "$d/cb.h5" -sim_dt 1 -sim_tfinal 10 -out "$d/bad.h5" 2>&1)
 rc=$?
@@ -47,4 +74,20 @@ set -e
 test $rc -ne 0
 echo "$out" | grep -q 'above the critical step'
 test ! -e "$d/bad.h5"
+# Bad input: an initial state of the wrong size, a missing snapshot file. Each names the option
+# and leaves no file.
+expect_error() {
+  local pattern=$1 file=$2
+  shift 2
+  set +e
+  out=$(run simulate "$@" -out "$file" 2>&1)
+  rc=$?
+  set -e
+  test $rc -ne 0
+  echo "$out" | grep -q -- "$pattern" || { echo "missing '$pattern' in: $out"; exit 1; }
+  test ! -e "$file"
+}
+expect_error '-sim_q0 has 2 values' "$d/bad_q0.h5" -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 -sim_q0 1,2
+expect_error '-sim_snapshots.*no_such_fom.h5' "$d/bad_snap.h5" -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 \
+  -sim_snapshots "$d/no_such_fom.h5"
 echo "case: ok: nlrom chain"

@@ -16,6 +16,8 @@ morse_add_error_case(nlrom_cbmd_without_training "morse: error: .*training load"
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 2)
 morse_add_error_case(simulate_missing_rom "morse: error: .*no_such_rom\\.h5" simulate_missing_rom.h5 BOX
   ARGS simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
+morse_add_error_case(mesh_node_set_missing_id "morse: error: .*-mesh_node_set_tipx.*987654321" node_set_bad.h5 BOX
+  ARGS modes ${MORSE_NLR_BOX} -mesh_node_sets tipx -mesh_node_set_tipx 1,987654321)
 
 # Chains: fom with snapshots -> nlrom (three bases, STEP and exact, POD filtering) -> simulate,
 # and the critical-step refusal (no output file).

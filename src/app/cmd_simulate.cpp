@@ -1,7 +1,9 @@
 // app/cmd_simulate.cpp: `morse simulate`, the online stage of seed 003: a `morse nlrom` reduced
 // model integrated by explicit central differences (sim::integrate) under the shared -load_*
-// loads, on rank 0. Outputs mirror `morse fom` (/sim/time, /sim/sets/<SET>/u, /sim/energy) plus
-// /sim/q.
+// loads. One case runs on rank 0; several cases (-sim_cases a,b,...: loads -a_load_*, -b_load_*)
+// run one per rank, round robin, each writing its own file. The reduced model is read once by
+// rank 0 and broadcast. Outputs mirror `morse fom` (/sim/time, /sim/sets/<SET>/u, /sim/energy,
+// /sim/snapshots) plus /sim/q and /sim/final.
 #include <petscsys.h>
 
 #include <algorithm>
@@ -21,16 +23,21 @@ namespace morse::app::detail {
 namespace {
 
 struct SimOptions {
-  std::string rom, out = "simulate.h5";
+  std::string rom, out = "simulate.h5", snapshots;
   sim::Settings s;
   PetscBool linear = PETSC_FALSE;
   PetscInt every = 1;
-  std::vector<std::string> monitor;
+  std::vector<std::string> monitor, cases;
+  std::string error;
 };
 
 PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   PetscCall(get_set_list(comm, "-sim_monitor", "Node sets whose reconstructed displacements u = Phi q are written",
                          &o->monitor));
+  PetscCall(get_set_list(comm, "-sim_cases",
+                         "Independent load cases run one per rank; case c takes its loads from -c_load_sets, "
+                         "-c_load_<SET>_* and writes <out>_c.h5",
+                         &o->cases));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse simulate options", "");
@@ -44,9 +51,121 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
   PetscCall(PetscOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
   PetscCall(PetscOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-sim_snapshots",
+                               "A morse fom file: write the full field u = Phi q (and v) at its snapshot times and "
+                               "on its DOF map (/sim/snapshots)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->snapshots = buf;
+  std::vector<PetscReal> v(4096);
+  const char* names[2] = {"-sim_q0", "-sim_v0"};
+  const char* helps[2] = {"Initial reduced coordinates q(0), r values (default 0)",
+                          "Initial reduced velocities dq/dt(0), r values (default 0)"};
+  std::vector<double>* dest[2] = {&o->s.q0, &o->s.v0};
+  for (int i = 0; i < 2; ++i) {
+    PetscInt n = static_cast<PetscInt>(v.size());
+    PetscCall(PetscOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
+    if (set) dest[i]->assign(v.begin(), v.begin() + n);
+  }
   PetscOptionsEnd();
   o->s.linear = o->linear;
   return PETSC_SUCCESS;
+}
+
+// <out stem>_<case>.h5
+std::string case_path(const std::string& out, const std::string& c) {
+  auto dot = out.rfind('.');
+  auto slash = out.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return out + "_" + c + ".h5";
+  return out.substr(0, dot) + "_" + c + out.substr(dot);
+}
+
+// The fom file's snapshot times and DOF map.
+struct SnapshotPlan {
+  std::vector<double> time;
+  std::vector<std::int64_t> ids, comps;
+  std::vector<std::size_t> rows;
+};
+
+struct Case {
+  std::string name, out;
+  std::vector<dyn::NodalLoad> loads;
+};
+
+// Integrates one case and writes its file (serial: comm = PETSC_COMM_SELF of the rank that runs it).
+void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const SnapshotPlan& plan, const Case& c) {
+  const std::size_t r = sm.r();
+  std::vector<sim::ReducedLoad> loads;
+  for (const auto& l : c.loads) {
+    sim::ReducedLoad rl;
+    rl.amplitude = l.amplitude, rl.omega = l.omega, rl.phase = l.phase;
+    rl.p = sm.nodal_pattern(l.set, l.dir);
+    loads.push_back(std::move(rl));
+  }
+  const double hc = sim::critical_step(sm.model);
+  const char* label = c.name.empty() ? "" : " case ";
+  print0(PETSC_COMM_SELF, "morse simulate%s%s: r = %d, critical step %.4e s, dt = %.4e s, %s\n", label, c.name.c_str(),
+         (int)r, hc, so.s.dt, so.s.linear ? "linear" : "nonlinear");
+  // Snapshot steps: the step nearest each fom snapshot time within [0, t_final].
+  std::vector<long> snap_step;
+  for (double t : plan.time)
+    if (t <= so.s.t_final * (1 + 1e-12)) snap_step.push_back(std::lround(t / so.s.dt));
+  std::vector<double> time, energy, qh, su, sv, st, qf, vf;
+  std::map<std::string, std::vector<double>> hist;
+  std::size_t next_snap = 0;
+  double tf = 0.0;
+  auto stats = sim::integrate(sm.model, loads, so.s, [&](const sim::StepState& x) {
+    while (next_snap < snap_step.size() && snap_step[next_snap] == x.step) {
+      st.push_back(x.t);
+      sm.dof_values(plan.rows, x.q, &su);
+      sm.dof_values(plan.rows, x.v, &sv);
+      ++next_snap;
+    }
+    qf.assign(x.q, x.q + r);
+    vf.assign(x.v, x.v + r);
+    tf = x.t;
+    if (x.step % so.every != 0) return;
+    time.push_back(x.t);
+    energy.push_back(x.energy);
+    qh.insert(qh.end(), x.q, x.q + r);
+    for (const auto& m : so.monitor) sm.displacements(m, x.q, &hist[m]);
+  });
+  print0(PETSC_COMM_SELF, "  %s%s%ld steps in %.4f s (%.3g steps/s, with output)\n", c.name.c_str(),
+         c.name.empty() ? "" : ": ", stats.steps, stats.seconds, stats.seconds > 0 ? stats.steps / stats.seconds : 0.0);
+  io::H5Output out(PETSC_COMM_SELF, c.out);
+  io::write_provenance(out, "simulate", sm.units);
+  out.write("/sim/time", time);
+  out.write("/sim/energy", energy);
+  out.attribute("/sim/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
+  out.write("/sim/q", qh, {static_cast<hsize_t>(time.size()), static_cast<hsize_t>(r)});
+  out.write("/sim/final/q", qf);
+  out.write("/sim/final/v", vf);
+  out.attribute("/sim/final", "time", tf);
+  for (const auto& m : so.monitor) {
+    std::vector<std::int64_t> ids;
+    for (auto k : sm.sets.at(m)) ids.push_back(sm.node_ids[k]);
+    out.write("/sim/sets/" + m + "/node_ids", ids);
+    out.write("/sim/sets/" + m + "/u", hist[m], {static_cast<hsize_t>(time.size()), ids.size(), 3});
+    out.attribute("/sim/sets/" + m + "/u", "description", "[time][node][x,y,z] displacement u = Phi q [m]");
+  }
+  if (!so.snapshots.empty()) {
+    const auto ns = static_cast<hsize_t>(st.size()), nd = static_cast<hsize_t>(plan.rows.size());
+    out.write("/sim/snapshots/time", st);
+    out.write("/sim/snapshots/u", su, {ns, nd});
+    out.write("/sim/snapshots/v", sv, {ns, nd});
+    out.write("/sim/snapshots/dof_node_ids", plan.ids);
+    out.write("/sim/snapshots/dof_components", plan.comps);
+    out.attribute("/sim/snapshots", "fom", so.snapshots);
+  }
+  out.attribute("/sim", "rom", so.rom);
+  if (!c.name.empty()) out.attribute("/sim", "case", c.name);
+  out.attribute_int("/sim", "linear", so.s.linear ? 1 : 0);
+  out.attribute("/sim", "dt", so.s.dt);
+  out.attribute_int("/sim", "steps", stats.steps);
+  out.attribute("/sim", "seconds", stats.seconds);
+  out.attribute("/sim", "critical_dt", stats.critical_dt);
+  out.commit();
+  print0(PETSC_COMM_SELF, "morse: wrote %s\n", c.out.c_str());
 }
 
 }  // namespace
@@ -54,121 +173,63 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
 void run_simulate(MPI_Comm comm) {
   SimOptions so;
   MORSE_CALL(get_sim_options(comm, &so));
-  std::vector<dyn::NodalLoad> load_list;
+  std::vector<Case> cases;
   std::string load_error;
-  MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  if (so.cases.empty()) {
+    cases.push_back({"", so.out, {}});
+    MORSE_CALL(get_loads(comm, &cases.back().loads, &load_error));
+  } else {
+    for (const auto& name : so.cases) {
+      cases.push_back({name, case_path(so.out, name), {}});
+      const std::string prefix = name + "_";
+      MORSE_CALL(get_loads(comm, &cases.back().loads, &load_error, prefix.c_str()));
+    }
+  }
   if (help_requested()) return;
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(!so.rom.empty(), "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  // Rank 0 reads the reduced model, the basis and the sets; errors are collective.
-  nlrom::ReducedModel rm;
-  std::vector<double> basis;  // [r][node][3]
-  std::vector<std::int64_t> node_ids;
-  std::vector<sim::ReducedLoad> loads;
-  std::map<std::string, std::vector<std::size_t>> set_rows;  // set -> node rows of the basis
-  std::string err;
-  if (rank == 0) {
-    std::vector<hsize_t> d;
-    std::vector<std::int64_t> ids;
-    bool ok = io::read_doubles(so.rom, "/nlrom/M", &rm.M, &d, &err) && d.size() == 2 && d[0] == d[1];
-    if (ok) rm.r = static_cast<PetscInt>(d[0]);
-    ok = ok && io::read_doubles(so.rom, "/nlrom/K", &rm.K, &d, &err) && io::read_doubles(so.rom, "/nlrom/C", &rm.C, &d, &err) &&
-         io::read_doubles(so.rom, "/nlrom/A", &rm.g.A, &d, &err) && io::read_doubles(so.rom, "/nlrom/B", &rm.g.B, &d, &err) &&
-         io::read_doubles(so.rom, "/nlrom/basis", &basis, &d, &err) && io::read_ints(so.rom, "/mesh/node_ids", &node_ids, &d, &err);
-    const std::size_t r = static_cast<std::size_t>(rm.r);
-    rm.g.r = r;
-    if (ok && (rm.K.size() != r * r || rm.C.size() != r * r || rm.g.A.size() != nlrom::n_quadratic(r) * r ||
-               rm.g.B.size() != nlrom::n_cubic(r) * r || basis.size() != r * node_ids.size() * 3))
-      err = cat(so.rom, ": inconsistent /nlrom datasets (r = ", r, ")"), ok = false;
-    if (ok) {
-      std::map<std::int64_t, std::size_t> row;
-      for (std::size_t k = 0; k < node_ids.size(); ++k) row[node_ids[k]] = k;
-      auto rows_of = [&](const std::string& set) {
-        std::vector<std::int64_t> s;
-        if (!io::read_ints(so.rom, "/nlrom/node_sets/" + set, &s, &d, &err)) {
-          err = cat(so.rom, ": no node set '", set, "' in /nlrom/node_sets");
-          return false;
-        }
-        auto& v = set_rows[set];
-        for (auto id : s) v.push_back(row.at(id));
-        return true;
-      };
-      for (const auto& l : load_list) {
-        if (!set_rows.count(l.set) && !rows_of(l.set)) break;
-        const double n = std::sqrt(l.dir[0] * l.dir[0] + l.dir[1] * l.dir[1] + l.dir[2] * l.dir[2]);
-        sim::ReducedLoad rl;
-        rl.amplitude = l.amplitude, rl.omega = l.omega, rl.phase = l.phase;
-        rl.p.assign(r, 0.0);
-        for (std::size_t j = 0; j < r; ++j)
-          for (auto k : set_rows[l.set])
-            for (int c = 0; c < 3; ++c) rl.p[j] += l.dir[c] / n * basis[(j * node_ids.size() + k) * 3 + c];
-        loads.push_back(std::move(rl));
-      }
-      for (const auto& m : so.monitor)
-        if (err.empty() && !set_rows.count(m)) rows_of(m);
-    }
-  }
-  collective_check(comm, err);
-  io::H5Output out(comm, so.out);
-
-  std::vector<double> time, energy, qh;
-  std::map<std::string, std::vector<double>> hist;
-  sim::Stats st;
-  if (rank == 0) {
+  std::vector<std::string> sets(so.monitor);
+  for (const auto& c : cases)
+    for (const auto& l : c.loads) sets.push_back(l.set);
+  const auto sm = nlrom::read_stored_model(comm, so.rom, sets);
+  const std::size_t r = sm.r();
+  MORSE_CHECK(so.s.q0.empty() || so.s.q0.size() == r, "-sim_q0 has ", so.s.q0.size(), " values; the model has r = ", r);
+  MORSE_CHECK(so.s.v0.empty() || so.s.v0.size() == r, "-sim_v0 has ", so.s.v0.size(), " values; the model has r = ", r);
+  SnapshotPlan plan;
+  if (!so.snapshots.empty()) {
+    std::string err;
     try {
-      const double hc = sim::critical_step(rm);
-      print0(PETSC_COMM_SELF, "morse simulate: r = %d, critical step %.4e s, dt = %.4e s, %s\n", (int)rm.r, hc, so.s.dt,
-             so.s.linear ? "linear" : "nonlinear");
-      const std::size_t r = static_cast<std::size_t>(rm.r), nn = node_ids.size();
-      st = sim::integrate(rm, loads, so.s, [&](const sim::StepState& x) {
-        if (x.step % so.every != 0) return;
-        time.push_back(x.t);
-        energy.push_back(x.energy);
-        qh.insert(qh.end(), x.q, x.q + r);
-        for (const auto& m : so.monitor) {
-          auto& h = hist[m];
-          for (auto k : set_rows[m])
-            for (int c = 0; c < 3; ++c) {
-              double u = 0.0;
-              for (std::size_t j = 0; j < r; ++j) u += basis[(j * nn + k) * 3 + c] * x.q[j];
-              h.push_back(u);
-            }
-        }
-      });
+      std::vector<hsize_t> d;
+      if (!io::read_doubles(so.snapshots, "/fom/snapshots/time", &plan.time, &d, &err) ||
+          !io::read_ints(so.snapshots, "/fom/snapshots/dof_node_ids", &plan.ids, &d, &err) ||
+          !io::read_ints(so.snapshots, "/fom/snapshots/dof_components", &plan.comps, &d, &err))
+        err = cat("-sim_snapshots: ", err, " (a morse fom file run with -fom_snapshot_every K is expected)");
+      else
+        plan.rows = sm.dof_rows(plan.ids, plan.comps);
     } catch (const std::exception& e) {
-      err = e.what();
+      err = cat("-sim_snapshots ", so.snapshots, ": ", e.what());
+    }
+    collective_check(comm, err);
+  }
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  if (cases.size() > 1)
+    print0(comm, "morse simulate: %zu cases on %d rank(s), reduced model read once (r = %zu)\n", cases.size(), size, r);
+  std::string err;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    if (static_cast<int>(i % size) != rank) continue;
+    try {
+      run_case(so, sm, plan, cases[i]);
+    } catch (const std::exception& e) {
+      err = cases[i].name.empty() ? std::string(e.what()) : cat("case ", cases[i].name, ": ", e.what());
+      break;
     }
   }
   collective_check(comm, err);
   check_options(comm, false);
-  print0(comm, "  %ld steps in %.4f s (%.3g steps/s, with output)\n", st.steps, st.seconds,
-         st.seconds > 0 ? st.steps / st.seconds : 0.0);
-
-  StageTimer t(comm, "Write");
-  io::write_provenance(out, "simulate", "SI");
-  out.write("/sim/time", time);
-  out.write("/sim/energy", energy);
-  out.attribute("/sim/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
-  out.write("/sim/q", qh, {static_cast<hsize_t>(time.size()), static_cast<hsize_t>(rm.r)});
-  for (const auto& m : so.monitor) {
-    std::vector<std::int64_t> ids;
-    for (auto k : set_rows[m]) ids.push_back(node_ids[k]);
-    out.write("/sim/sets/" + m + "/node_ids", ids);
-    out.write("/sim/sets/" + m + "/u", hist[m], {static_cast<hsize_t>(time.size()), ids.size(), 3});
-    out.attribute("/sim/sets/" + m + "/u", "description", "[time][node][x,y,z] displacement u = Phi q [m]");
-  }
-  out.attribute("/sim", "rom", so.rom);
-  out.attribute_int("/sim", "linear", so.s.linear ? 1 : 0);
-  out.attribute("/sim", "dt", so.s.dt);
-  out.attribute_int("/sim", "steps", st.steps);
-  out.attribute("/sim", "seconds", st.seconds);
-  out.attribute("/sim", "critical_dt", st.critical_dt);
-  out.commit();
-  print0(comm, "\nmorse: wrote %s\n", so.out.c_str());
 }
 
 }  // namespace morse::app::detail

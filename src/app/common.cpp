@@ -243,11 +243,12 @@ void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vecto
                 "fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
 }
 
-PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets) {
+PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
+                            const char* prefix) {
   char* v[64];
   PetscInt n = 64;
   PetscBool set = PETSC_FALSE;
-  PetscOptionsBegin(comm, nullptr, "morse set list", "");
+  PetscOptionsBegin(comm, prefix, "morse set list", "");
   PetscCall(PetscOptionsStringArray(name, help, "", v, &n, &set));
   PetscOptionsEnd();
   if (set)
@@ -258,11 +259,12 @@ PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, s
   return PETSC_SUCCESS;
 }
 
-PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error) {
+PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error, const char* prefix) {
   std::vector<std::string> sets;
   PetscCall(get_set_list(comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated",
-                         &sets));
-  PetscOptionsBegin(comm, nullptr, "morse loads (F(t) = A sin(omega t + phase) per node; omega = 0: constant A)", "");
+                         &sets, prefix));
+  const std::string pre = prefix ? cat("-", prefix) : std::string("-");
+  PetscOptionsBegin(comm, prefix, "morse loads (F(t) = A sin(omega t + phase) per node; omega = 0: constant A)", "");
   for (const auto& name : sets) {
     dyn::NodalLoad l;
     l.set = name;
@@ -278,13 +280,13 @@ PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std:
     PetscCall(PetscOptionsReal((p + "phase").c_str(), "Phase [rad]", "", l.phase, &l.phase, nullptr));
     if (error->empty()) {
       if (!has_dir)
-        *error = cat("load on set ", name, ": give its direction with ", p, "dir x|y|z|vx,vy,vz");
+        *error = cat("load on set ", name, ": give its direction with ", pre, p.substr(1), "dir x|y|z|vx,vy,vz");
       else if (!has_amp)
-        *error = cat("load on set ", name, ": give its force per node with ", p, "amplitude");
+        *error = cat("load on set ", name, ": give its force per node with ", pre, p.substr(1), "amplitude");
       else if (auto why = dyn::parse_direction(buf, l.dir); !why.empty())
-        *error = cat(p, "dir: ", why);
+        *error = cat(pre, p.substr(1), "dir: ", why);
       else if (l.omega < 0)
-        *error = cat(p, "omega must be >= 0 (got ", l.omega, ")");
+        *error = cat(pre, p.substr(1), "omega must be >= 0 (got ", l.omega, ")");
     }
     loads->push_back(l);
   }

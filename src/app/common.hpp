@@ -95,10 +95,12 @@ cb::CBSettings cb_settings(const ReduceOptions& r);
 /// -load_<SET>_amplitude (newtons per node, required), -load_<SET>_omega (rad/s, 0 = constant)
 /// and -load_<SET>_phase (rad). A missing direction or amplitude, or a bad direction, is an
 /// error that names the option.
-PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error);
+PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error,
+                         const char* prefix = nullptr);
 
 /// A comma-separated list of node sets from option `name` (empty if not given).
-PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets);
+PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
+                            const char* prefix = nullptr);
 
 // The commands, one file each (cmd_<name>.cpp).
 void run_modes(MPI_Comm comm);

@@ -397,6 +397,33 @@ bool read_ints(const std::string& file, const std::string& name, std::vector<std
   return read_any(file, name, H5T_NATIVE_INT64, out, dims, error);
 }
 
+bool read_string(const std::string& file, const std::string& name, std::string* out, std::string* error) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) {
+    *error = cat(file, ": cannot open as HDF5");
+    return false;
+  }
+  bool ok = false;
+  hid_t d = H5Lexists(f, name.c_str(), H5P_DEFAULT) > 0 ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
+  if (d >= 0) {
+    hid_t t = H5Dget_type(d);
+    if (H5Tget_class(t) == H5T_STRING && !H5Tis_variable_str(t)) {
+      std::vector<char> buf(H5Tget_size(t) + 1, '\0');
+      hid_t mt = H5Tcopy(H5T_C_S1);
+      H5Tset_size(mt, buf.size());
+      ok = H5Dread(d, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) >= 0;
+      H5Tclose(mt);
+      if (ok) *out = buf.data();
+    }
+    H5Tclose(t);
+    H5Dclose(d);
+  }
+  H5Fclose(f);
+  if (!ok) *error = cat(file, ": no string dataset ", name);
+  return ok;
+}
+
 bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
                      std::string* error) {
   std::vector<hsize_t> dims;

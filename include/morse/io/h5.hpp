@@ -119,6 +119,8 @@ bool read_doubles(const std::string& file, const std::string& name, std::vector<
                   std::vector<hsize_t>* dims, std::string* error);
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
                std::vector<hsize_t>* dims, std::string* error);
+/// A scalar string dataset (as written by H5Output::write_string, e.g. /meta/units).
+bool read_string(const std::string& file, const std::string& name, std::string* out, std::string* error);
 /// Row `row` of a 2-D dataset of doubles (one hyperslab, not the whole dataset).
 bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
                      std::string* error);

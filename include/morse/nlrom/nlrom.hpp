@@ -11,6 +11,8 @@
 
 #include <petscmat.h>
 
+#include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -130,6 +132,33 @@ struct ReducedModel {
   CubicForce g;                 ///< reduced nonlinear force
   std::vector<double> damping_omega;  ///< reduced natural angular frequencies carrying xi
 };
+
+/// A `morse nlrom` file as the online stage uses it: the reduced model, the basis on every node
+/// of the mesh and the node sets, identical on every rank.
+struct StoredModel {
+  std::string file, units = "SI";
+  ReducedModel model;
+  std::vector<double> basis;                              ///< [r][node][3]
+  std::vector<std::int64_t> node_ids;                     ///< node of each basis row
+  std::map<std::string, std::vector<std::size_t>> sets;   ///< node set -> basis rows (ascending id)
+
+  std::size_t r() const { return static_cast<std::size_t>(model.r); }
+  /// Phi^T f for a unit force per node of `set` along `dir` (normalized here).
+  std::vector<double> nodal_pattern(const std::string& set, const double dir[3]) const;
+  /// Appends u = Phi q at the nodes of `set` (node-major, x y z).
+  void displacements(const std::string& set, const double* q, std::vector<double>* out) const;
+  /// Basis rows of (node id, component) pairs (a fom file's DOF map); throws naming the first
+  /// node that the model lacks.
+  std::vector<std::size_t> dof_rows(const std::vector<std::int64_t>& node_ids,
+                                    const std::vector<std::int64_t>& components) const;
+  /// Appends (Phi q) at the DOF rows of dof_rows().
+  void dof_values(const std::vector<std::size_t>& rows, const double* q, std::vector<double>* out) const;
+};
+
+/// Reads /nlrom/{M,K,C,A,B,basis}, /mesh/node_ids, /meta/units and the node sets `sets` of a
+/// `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the
+/// missing or inconsistent dataset, or the missing set (listing the file's sets). Collective.
+StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets);
 
 /// M~ = V^T M V, K~ = V^T K V (symmetrized), and modal damping xi on the first k modes of the
 /// reduced model itself: C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T. Collective.

@@ -1,0 +1,144 @@
+// Reading a `morse nlrom` file for the online stage (see morse/nlrom/nlrom.hpp).
+#include <cmath>
+
+#include "core/detail/pack.hpp"
+#include "morse/core/error.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/nlrom/nlrom.hpp"
+
+namespace morse::nlrom {
+
+std::vector<double> StoredModel::nodal_pattern(const std::string& set, const double dir[3]) const {
+  const double n = std::sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+  const std::size_t nn = node_ids.size();
+  std::vector<double> p(r(), 0.0);
+  for (std::size_t j = 0; j < r(); ++j)
+    for (auto k : sets.at(set))
+      for (int c = 0; c < 3; ++c) p[j] += dir[c] / n * basis[(j * nn + k) * 3 + c];
+  return p;
+}
+
+void StoredModel::displacements(const std::string& set, const double* q, std::vector<double>* out) const {
+  const std::size_t nn = node_ids.size();
+  for (auto k : sets.at(set))
+    for (int c = 0; c < 3; ++c) {
+      double u = 0.0;
+      for (std::size_t j = 0; j < r(); ++j) u += basis[(j * nn + k) * 3 + c] * q[j];
+      out->push_back(u);
+    }
+}
+
+std::vector<std::size_t> StoredModel::dof_rows(const std::vector<std::int64_t>& ids,
+                                               const std::vector<std::int64_t>& comps) const {
+  MORSE_CHECK(ids.size() == comps.size(), "DOF map: ", ids.size(), " node ids but ", comps.size(), " components");
+  std::map<std::int64_t, std::size_t> pos;
+  for (std::size_t k = 0; k < node_ids.size(); ++k) pos[node_ids[k]] = k;
+  std::vector<std::size_t> rows(ids.size());
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    auto it = pos.find(ids[j]);
+    MORSE_CHECK(it != pos.end(), "node ", ids[j], " is not a node of ", file, " (another mesh?)");
+    MORSE_CHECK(comps[j] >= 0 && comps[j] < 3, "DOF map: component ", comps[j], " of node ", ids[j]);
+    rows[j] = it->second * 3 + static_cast<std::size_t>(comps[j]);
+  }
+  return rows;
+}
+
+void StoredModel::dof_values(const std::vector<std::size_t>& rows, const double* q, std::vector<double>* out) const {
+  const std::size_t stride = node_ids.size() * 3;
+  for (auto row : rows) {
+    double u = 0.0;
+    for (std::size_t j = 0; j < r(); ++j) u += basis[j * stride + row] * q[j];
+    out->push_back(u);
+  }
+}
+
+StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  StoredModel s;
+  s.file = file;
+  std::string err;
+  detail::Packer pk;
+  if (rank == 0) {
+    auto& m = s.model;
+    std::vector<hsize_t> d;
+    bool ok = io::read_doubles(file, "/nlrom/M", &m.M, &d, &err) && d.size() == 2 && d[0] == d[1];
+    if (ok) m.r = static_cast<PetscInt>(d[0]);
+    else if (err.empty()) err = cat(file, ": /nlrom/M is not square");
+    ok = ok && io::read_doubles(file, "/nlrom/K", &m.K, &d, &err) && io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) &&
+         io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) && io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err) &&
+         io::read_doubles(file, "/nlrom/basis", &s.basis, &d, &err) &&
+         io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err);
+    const std::size_t r = static_cast<std::size_t>(m.r);
+    m.g.r = r;
+    if (ok && (m.K.size() != r * r || m.C.size() != r * r || m.g.A.size() != n_quadratic(r) * r ||
+               m.g.B.size() != n_cubic(r) * r || s.basis.size() != r * s.node_ids.size() * 3)) {
+      err = cat(file, ": inconsistent /nlrom datasets (r = ", r, ")");
+      ok = false;
+    }
+    std::string units, uerr;
+    if (ok && io::read_string(file, "/meta/units", &units, &uerr)) s.units = units;
+    if (ok) {
+      std::map<std::int64_t, std::size_t> row;
+      for (std::size_t k = 0; k < s.node_ids.size(); ++k) row[s.node_ids[k]] = k;
+      for (const auto& set : sets) {
+        if (s.sets.count(set)) continue;
+        std::vector<std::int64_t> ids;
+        if (!io::read_ints(file, "/nlrom/node_sets/" + set, &ids, &d, &err)) {
+          err = cat(file, ": no node set '", set, "' in /nlrom/node_sets (sets are those of the mesh given to nlrom)");
+          break;
+        }
+        auto& v = s.sets[set];
+        for (auto id : ids) {
+          auto it = row.find(id);
+          if (it == row.end()) {
+            err = cat(file, ": node ", id, " of set ", set, " is not in /mesh/node_ids");
+            break;
+          }
+          v.push_back(it->second);
+        }
+        if (!err.empty()) break;
+      }
+    }
+    if (err.empty()) {
+      pk.put(m.r);
+      pk.put(m.n_b);
+      pk.put_vec(m.M), pk.put_vec(m.K), pk.put_vec(m.C), pk.put_vec(m.g.A), pk.put_vec(m.g.B);
+      pk.put_vec(m.damping_omega), pk.put_vec(s.basis), pk.put_vec(s.node_ids);
+      pk.put_str(s.units);
+      pk.put<std::uint64_t>(s.sets.size());
+      for (const auto& [name, rows] : s.sets) pk.put_str(name), pk.put_vec(rows);
+    }
+  }
+  collective_check(comm, err);
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  if (size == 1) return s;
+  auto& buf = pk.buffer();
+  std::uint64_t n = buf.size();
+  MPI_Bcast(&n, 1, MPI_UINT64_T, 0, comm);
+  buf.resize(n);
+  for (std::uint64_t off = 0; off < n; off += (1u << 30))
+    MPI_Bcast(buf.data() + off, static_cast<int>(std::min<std::uint64_t>(1u << 30, n - off)), MPI_CHAR, 0, comm);
+  if (rank != 0) {
+    detail::Unpacker up(buf);
+    auto& m = s.model;
+    m.r = up.get<PetscInt>();
+    m.n_b = up.get<PetscInt>();
+    m.M = up.get_vec<double>(), m.K = up.get_vec<double>(), m.C = up.get_vec<double>();
+    m.g.A = up.get_vec<double>(), m.g.B = up.get_vec<double>();
+    m.g.r = static_cast<std::size_t>(m.r);
+    m.damping_omega = up.get_vec<double>();
+    s.basis = up.get_vec<double>();
+    s.node_ids = up.get_vec<std::int64_t>();
+    s.units = up.get_str();
+    const auto ns = up.get<std::uint64_t>();
+    for (std::uint64_t i = 0; i < ns; ++i) {
+      auto name = up.get_str();
+      s.sets[name] = up.get_vec<std::size_t>();
+    }
+  }
+  return s;
+}
+
+}  // namespace morse::nlrom
