@@ -230,3 +230,49 @@ TEST(Sim, FullBasisReproducesFullModel) {
   EXPECT_GT(nl, 20.0 * d2) << "not a nonlinear test: the linear model is as close as the integrator error";
   EXPECT_NEAR(d1 / d2, 4.0, 0.4) << "the difference does not fall as dt^2 (" << d1 << ", " << d2 << ")";
 }
+
+// The two storages of the nonlinear force give the same P3 g~(q): the potential form of exact
+// tensors (asymmetry at round-off) and of STEP tensors (its identification error), against the
+// folded product, at r = 30 where every index pattern (repeated, distinct) occurs. A force that
+// is no gradient (A perturbed) falls back to the folded form under Auto and is refused under
+// Potential.
+TEST(Sim, PotentialKernelMatchesFolded) {
+  auto m = box(ElementType::Hex8, 6);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  cb::CBSettings cs;
+  cs.boundary_set = "x1";
+  cs.n_fixed = 18;
+  cs.keep_basis = true;
+  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  const std::size_t r = 30;
+  ASSERT_EQ(static_cast<std::size_t>(c.n_b + cs.n_fixed), r);
+  auto exact = nlrom::exact_forces(svk, c.T.get());
+  nlrom::StepSettings ss;
+  ss.displacement = 1e-3;
+  auto step = nlrom::step_forces(svk, c.T.get(), ss);
+  std::vector<double> P3(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) P3[i] = std::sin(1.0 + 0.37 * static_cast<double>(i));  // any matrix
+  std::vector<double> q(r), y1(r), y2(r);
+  for (std::size_t i = 0; i < r; ++i) q[i] = 1e-3 * std::cos(0.9 * static_cast<double>(i) + 0.2);
+  auto compare = [&](const nlrom::CubicForce& g, double tol) {
+    sim::CubicKernel folded(g, P3, sim::KernelLayout::Folded), pot(g, P3, sim::KernelLayout::Potential);
+    EXPECT_FALSE(folded.potential());
+    EXPECT_TRUE(pot.potential());
+    EXPECT_LT(pot.bytes(), folded.bytes() / 3.0);  // 4r / (r + 3) asymptotically
+    folded.apply(q.data(), y1.data());
+    pot.apply(q.data(), y2.data());
+    double d = 0, s = 0;
+    for (std::size_t i = 0; i < r; ++i) d = std::max(d, std::abs(y1[i] - y2[i])), s = std::max(s, std::abs(y1[i]));
+    EXPECT_GT(s, 0.0);
+    EXPECT_LT(d, tol * s) << "potential vs folded kernel, asymmetry " << pot.asymmetry();
+    return pot.asymmetry();
+  };
+  EXPECT_LT(compare(exact, 1e-12), 1e-12);
+  EXPECT_LT(compare(step, 1e-7), 1e-6);
+  auto bad = exact;
+  bad.A[5 * r + 7] += 1e-3 * bad.max_abs_A();
+  sim::CubicKernel fallback(bad, P3, sim::KernelLayout::Auto);
+  EXPECT_FALSE(fallback.potential());
+  EXPECT_GT(fallback.asymmetry(), 1e-6);
+  EXPECT_THROW(sim::CubicKernel(bad, P3, sim::KernelLayout::Potential), Error);
+}

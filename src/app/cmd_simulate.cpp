@@ -49,6 +49,14 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   PetscCall(PetscOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
                              nullptr));
   PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
+  const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
+  PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
+  PetscCall(PetscOptionsEnum("-sim_kernel",
+                             "Nonlinear force in the time loop: folded (P3 [A;B] times the monomials), potential "
+                             "(symmetric energy coefficients, ~4 times fewer bytes; exact or STEP tensors), auto "
+                             "(potential when A, B derive from a potential and the folded matrix exceeds 12 MB)",
+                             "", layouts, layout, &layout, nullptr));
+  o->s.kernel = static_cast<sim::KernelLayout>(layout);
   PetscCall(PetscOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
   PetscCall(PetscOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
   buf[0] = 0;
@@ -130,8 +138,13 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     qh.insert(qh.end(), x.q, x.q + r);
     for (const auto& m : so.monitor) sm.displacements(m, x.q, &hist[m]);
   });
+  const double sps = stats.seconds > 0 ? stats.steps / stats.seconds : 0.0;
   print0(PETSC_COMM_SELF, "  %s%s%ld steps in %.4f s (%.3g steps/s, with output)\n", c.name.c_str(),
-         c.name.empty() ? "" : ": ", stats.steps, stats.seconds, stats.seconds > 0 ? stats.steps / stats.seconds : 0.0);
+         c.name.empty() ? "" : ": ", stats.steps, stats.seconds, sps);
+  if (stats.kernel != "linear")
+    print0(PETSC_COMM_SELF, "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
+           stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6, sps * stats.kernel_flops * 1e-9,
+           sps * stats.kernel_bytes * 1e-9);
   io::H5Output out(PETSC_COMM_SELF, c.out);
   io::write_provenance(out, "simulate", sm.units);
   out.write("/sim/time", time);
@@ -164,6 +177,7 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   out.attribute_int("/sim", "steps", stats.steps);
   out.attribute("/sim", "seconds", stats.seconds);
   out.attribute("/sim", "critical_dt", stats.critical_dt);
+  out.attribute("/sim", "kernel", stats.kernel);
   out.commit();
   print0(PETSC_COMM_SELF, "morse: wrote %s\n", c.out.c_str());
 }

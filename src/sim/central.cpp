@@ -44,9 +44,103 @@ double critical_step(const nlrom::ReducedModel& m) {
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
 }
 
-CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& P3) : r_(g.r) {
+namespace {
+// Lexicographic numbering of sorted index tuples: the triples i <= j <= k start at off2[i r + j]
+// (k = j.. r-1 follow), the quadruples i <= j <= k <= l at off3[(i r + j) r + k] (l = k.. r-1).
+struct SortedIndex {
+  std::size_t r;
+  std::vector<std::size_t> off2, off3;
+  std::size_t n3 = 0, n4 = 0;
+  explicit SortedIndex(std::size_t r_) : r(r_), off2(r_ * r_, 0), off3(r_ * r_ * r_, 0) {
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t j = i; j < r; ++j) {
+        off2[i * r + j] = n3;
+        n3 += r - j;
+        for (std::size_t k = j; k < r; ++k) {
+          off3[(i * r + j) * r + k] = n4;
+          n4 += r - k;
+        }
+      }
+  }
+  std::size_t at3(std::size_t a, std::size_t b, std::size_t c) const {
+    std::size_t t[3] = {a, b, c};
+    std::sort(t, t + 3);
+    return off2[t[0] * r + t[1]] + (t[2] - t[1]);
+  }
+  std::size_t at4(std::size_t a, std::size_t b, std::size_t c, std::size_t d) const {
+    std::size_t t[4] = {a, b, c, d};
+    std::sort(t, t + 4);
+    return off3[(t[0] * r + t[1]) * r + t[2]] + (t[3] - t[2]);
+  }
+};
+
+// Coefficients c (sorted tuples) of the potential whose gradient has the coefficients C: row m of
+// C (a sorted tuple T of size n - 1) and output p give c[sort(T, p)] = C(m, p) / (times p occurs
+// in (T, p)). Each c has up to n estimates; returns their mean and sets *dev to the largest
+// distance of an estimate from it.
+template <class RowTuples, class At>
+std::vector<double> potential_of(const std::vector<double>& C, std::size_t r, std::size_t n_out, RowTuples rows,
+                                 At at, double* dev) {
+  std::vector<double> sum(n_out, 0.0), first(n_out, 0.0);
+  std::vector<int> count(n_out, 0);
+  std::vector<std::size_t> idx;
+  std::vector<double> est;
+  rows([&](std::size_t m, const std::size_t* t, int nt) {
+    for (std::size_t p = 0; p < r; ++p) {
+      int mult = 1;
+      for (int a = 0; a < nt; ++a) mult += t[a] == p;
+      const double e = C[m * r + p] / mult;
+      const std::size_t c = at(t, p);
+      sum[c] += e;
+      idx.push_back(c);
+      est.push_back(e);
+      ++count[c];
+    }
+  });
+  for (std::size_t c = 0; c < n_out; ++c) sum[c] /= std::max(count[c], 1);
+  *dev = 0.0;
+  for (std::size_t k = 0; k < idx.size(); ++k) *dev = std::max(*dev, std::abs(est[k] - sum[idx[k]]));
+  return sum;
+}
+}  // namespace
+
+CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& P3, KernelLayout layout) : r_(g.r) {
   const std::size_t n2 = nlrom::n_quadratic(r_), n3 = nlrom::n_cubic(r_);
   n_ = n2 + n3;
+  if (layout != KernelLayout::Folded) {
+    const SortedIndex ix(r_);
+    double dev3 = 0.0, dev4 = 0.0;
+    c3_ = potential_of(
+        g.A, r_, ix.n3,
+        [&](auto f) {
+          std::size_t m = 0, t[2];
+          for (t[0] = 0; t[0] < r_; ++t[0])
+            for (t[1] = t[0]; t[1] < r_; ++t[1]) f(m++, t, 2);
+        },
+        [&](const std::size_t* t, std::size_t p) { return ix.at3(t[0], t[1], p); }, &dev3);
+    c4_ = potential_of(
+        g.B, r_, ix.n4,
+        [&](auto f) {
+          std::size_t m = 0, t[3];
+          for (t[0] = 0; t[0] < r_; ++t[0])
+            for (t[1] = t[0]; t[1] < r_; ++t[1])
+              for (t[2] = t[1]; t[2] < r_; ++t[2]) f(m++, t, 3);
+        },
+        [&](const std::size_t* t, std::size_t p) { return ix.at4(t[0], t[1], t[2], p); }, &dev4);
+    asymmetry_ = std::max(dev3 / std::max(g.max_abs_A(), 1e-300), dev4 / std::max(g.max_abs_B(), 1e-300));
+    if (g.max_abs_A() == 0.0 && g.max_abs_B() == 0.0) asymmetry_ = 0.0;
+    MORSE_CHECK(layout != KernelLayout::Potential || asymmetry_ <= 1e-6,
+                "simulate: the reduced nonlinear force is not the gradient of a potential (relative asymmetry ",
+                asymmetry_, " > 1e-6; POD-filtered forces are not): use the folded kernel");
+    const double folded_bytes = 8.0 * static_cast<double>(n_) * static_cast<double>(r_);
+    potential_ = asymmetry_ <= 1e-6 && (layout == KernelLayout::Potential || folded_bytes > 12e6);
+  }
+  if (potential_) {
+    P3_ = P3;
+    z_.assign(r_, 0.0);
+    return;
+  }
+  c3_.clear(), c4_.clear();
   W_.assign(n_ * r_, 0.0);
   z_.assign(n_, 0.0);
   // W(m, p) = sum_k P3(p, k) coef(m, k)
@@ -106,12 +200,86 @@ void monomials_and_product(std::size_t r, std::size_t n, const double* __restric
 }
 }  // namespace
 
+namespace {
+// g = grad of sum c3 q_i q_j q_k + sum c4 q_i q_j q_k q_l over sorted tuples, by the product
+// rule slot by slot (repeated indices come out right: each slot contributes once). Rows of c3
+// (k = j..r-1 for one (i, j)) and of c4 (l = k..r-1 for one (i, j, k)) are contiguous: one axpy
+// into g(k..) and one dot for the other slots per row.
+// One row: g(0..n) += s c, and returns c . x, with four partial sums (vectorizable without
+// reassociating the compiler's way).
+inline __attribute__((always_inline)) double row_update(std::size_t n, const double* __restrict c,
+                                                        const double* __restrict x, double s, double* __restrict g) {
+  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+  std::size_t t = 0;
+  for (; t + 4 <= n; t += 4) {
+    a0 += c[t] * x[t];
+    a1 += c[t + 1] * x[t + 1];
+    a2 += c[t + 2] * x[t + 2];
+    a3 += c[t + 3] * x[t + 3];
+    g[t] += c[t] * s;
+    g[t + 1] += c[t + 1] * s;
+    g[t + 2] += c[t + 2] * s;
+    g[t + 3] += c[t + 3] * s;
+  }
+  for (; t < n; ++t) {
+    a0 += c[t] * x[t];
+    g[t] += c[t] * s;
+  }
+  return (a0 + a1) + (a2 + a3);
+}
+
+MORSE_KERNEL_CLONES
+void potential_gradient(std::size_t r, const double* __restrict q, const double* __restrict c3,
+                        const double* __restrict c4, double* __restrict g) {
+  for (std::size_t p = 0; p < r; ++p) g[p] = 0.0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) {
+      const double qij = q[i] * q[j];
+      {
+        const std::size_t len = r - j;
+        const double* __restrict c = c3;
+        const double acc = row_update(len, c, q + j, qij, g + j);
+        c3 += len;
+        g[i] += acc * q[j];
+        g[j] += acc * q[i];
+      }
+      for (std::size_t k = j; k < r; ++k) {
+        const std::size_t len = r - k;
+        const double* __restrict c = c4;
+        const double p3 = qij * q[k];
+        const double acc = row_update(len, c, q + k, p3, g + k);
+        c4 += len;
+        g[i] += acc * q[j] * q[k];
+        g[j] += acc * q[i] * q[k];
+        g[k] += acc * qij;
+      }
+    }
+}
+}  // namespace
+
 void CubicKernel::apply(const double* q, double* y) const {
-  monomials_and_product(r_, n_, q, z_.data(), W_.data(), y);
+  if (!potential_) {
+    monomials_and_product(r_, n_, q, z_.data(), W_.data(), y);
+    return;
+  }
+  potential_gradient(r_, q, c3_.data(), c4_.data(), z_.data());
+  for (std::size_t p = 0; p < r_; ++p) {
+    double v = 0.0;
+    const double* row = &P3_[p * r_];
+    for (std::size_t k = 0; k < r_; ++k) v += row[k] * z_[k];
+    y[p] = v;
+  }
 }
 
 double CubicKernel::flops() const {
-  return 2.0 * static_cast<double>(n_) * static_cast<double>(r_) + static_cast<double>(n_);
+  const double r = static_cast<double>(r_);
+  if (potential_) return 4.0 * static_cast<double>(c3_.size() + c4_.size()) + 2.0 * r * r;
+  return 2.0 * static_cast<double>(n_) * r + static_cast<double>(n_);
+}
+
+double CubicKernel::bytes() const {
+  if (potential_) return 8.0 * static_cast<double>(c3_.size() + c4_.size() + P3_.size());
+  return 8.0 * static_cast<double>(W_.size());
 }
 
 Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
@@ -147,7 +315,12 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   const bool nonlinear = !s.linear;
   MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
   std::optional<CubicKernel> kernel;  // folded only when used
-  if (nonlinear) kernel.emplace(m.g, P3);
+  if (nonlinear) {
+    kernel.emplace(m.g, P3, s.kernel);
+    st.kernel = kernel->potential() ? "potential" : "folded";
+    st.kernel_flops = kernel->flops();
+    st.kernel_bytes = kernel->bytes();
+  }
 
   std::vector<double> qm(r), q(r, 0.0), qp(r), v(r, 0.0), g(r), tmp(r);
   if (!s.q0.empty()) {
