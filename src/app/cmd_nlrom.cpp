@@ -57,6 +57,19 @@ PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
                              "fastest load period)", "", o->b.training_dt, &o->b.training_dt, nullptr));
   PetscCall(PetscOptionsReal("-nlrom_mgs_tol", "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
                              "times its norm before projection", "", o->b.mgs_tol, &o->b.mgs_tol, nullptr));
+  {
+    const char* sel[] = {"weight", "random", "DerivativeSelection", "", nullptr};
+    PetscEnum e = o->b.random_derivatives ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
+    PetscCall(PetscOptionsEnum("-nlrom_derivative_selection",
+                               "Order in which modal derivatives enter the basis: weight (descending W_ij, eq. 24) "
+                               "or random (a seeded shuffle, the control of seed 003 Fig. 9)",
+                               "", sel, e, &e, nullptr));
+    o->b.random_derivatives = e == static_cast<PetscEnum>(1);
+    PetscInt seed = static_cast<PetscInt>(o->b.derivative_seed);
+    PetscCall(PetscOptionsInt("-nlrom_derivative_seed", "Seed of -nlrom_derivative_selection random", "", seed, &seed,
+                              nullptr));
+    o->b.derivative_seed = static_cast<unsigned>(seed);
+  }
   PetscCall(PetscOptionsString("-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection)", "",
                                o->forces.c_str(), buf, sizeof buf, &set));
   if (set) o->forces = buf;
@@ -223,6 +236,7 @@ void run_nlrom(MPI_Comm comm) {
     out.write("/nlrom/derivatives/pairs", pairs, {basis.md_pairs.size(), 2});
     out.write("/nlrom/derivatives/weights", basis.md_weights);
     out.write("/nlrom/derivatives/selected", sel);
+    out.attribute("/nlrom/derivatives", "selection", no.b.random_derivatives ? "random" : "weight");
   }
   if (!basis.pod_singular_values.empty()) out.write("/nlrom/pod/singular_values", basis.pod_singular_values);
   if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <random>
 
 #include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
@@ -356,6 +357,10 @@ Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::S
     std::vector<PetscInt> order(b.md_pairs.size());
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt c) { return b.md_weights[a] > b.md_weights[c]; });
+    if (s.random_derivatives) {  // Fisher–Yates with a portable generator: the same order everywhere
+      std::mt19937 gen(s.derivative_seed);
+      for (std::size_t k = order.size(); k > 1; --k) std::swap(order[k - 1], order[gen() % k]);
+    }
     b.V = dense_like(K, rcb + s.n_derivatives);
     copy_columns(b.cb.T.get(), 0, b.V.get(), 0, rcb);
     auto taken = mgs(M, b.cb.T.get(), b.n_b, b.n_fixed, Psi.get(), order, s.n_derivatives, s.mgs_tol, b.V.get(), rcb);

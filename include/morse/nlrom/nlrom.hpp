@@ -83,6 +83,10 @@ struct BasisSettings {
   const dyn::Loads* training = nullptr;
   double training_tfinal = 0.0;
   double training_dt = 0.0;
+  /// Order in which the modal derivatives enter the basis: by descending W_ij (eq. 24), or a
+  /// random order (a fixed-seed shuffle, the same on every rank: seed 003 Fig. 9's control).
+  bool random_derivatives = false;     ///< -nlrom_derivative_selection random
+  unsigned derivative_seed = 1;        ///< -nlrom_derivative_seed
   std::string prefix = "nlrom_";  ///< options prefix of the fixed-interface eigen solve
 };
 
