@@ -32,6 +32,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -57,6 +58,7 @@ def env():
 
 
 LOG = None
+BINARY = MORSE  # a private copy of build/morse (a rebuild during the study must not pull it away)
 
 
 class MorseFailed(Exception):
@@ -64,7 +66,7 @@ class MorseFailed(Exception):
 
 
 def morse(np_, args, label):
-    cmd = ["mpiexec", "--allow-run-as-root", "-n", str(np_), MORSE] + [str(a) for a in args]
+    cmd = ["mpiexec", "--allow-run-as-root", "-n", str(np_), BINARY] + [str(a) for a in args]
     t0 = time.time()
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env())
     dt = time.time() - t0
@@ -110,7 +112,20 @@ def main():
     args = ap.parse_args()
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
-    LOG = open(os.path.join(out, "morse.log"), "w")
+    global BINARY
+    LOG = open(os.path.join(out, "morse.log"), "a")
+    BINARY = os.path.join(out, "morse")
+    shutil.copy2(MORSE, BINARY + ".tmp")
+    os.replace(BINARY + ".tmp", BINARY)
+    # Resume: full-order runs recorded by an earlier study of the same mesh are reused.
+    previous = {}
+    try:
+        with open(os.path.join(out, "study.json")) as fh:
+            old = json.load(fh)
+        if old.get("mesh") == os.path.abspath(args.mesh):
+            previous = {k: v for k, v in old.get("fom", {}).items() if os.path.exists(v["file"])}
+    except (OSError, ValueError):
+        pass
     mesh = os.path.abspath(args.mesh)
     model = ["-mesh", mesh, "-clamp", "root"]
     damp_fom = ["-fom_damping_modal", "5e-4", "-fom_damping_modes", "10"]
@@ -147,11 +162,20 @@ def main():
 
     def run_fom(name, set_name, n_nodes, omega, tfinal, every):
         path = os.path.join(out, "fom_%s.h5" % name)
+        if name in previous and previous[name]["t_final"] == tfinal:
+            fom[name] = previous[name]
+            print("  fom %s: reused %s" % (name, path), flush=True)
+            study["fom"] = fom
+            return path
         _, secs = morse(2, ["fom"] + model + load_args(set_name, n_nodes, omega) + damp_fom +
                         ["-fom_dt", FOM_DT, "-fom_tfinal", tfinal, "-fom_snapshot_every", every,
                          "-fom_monitor", "LE,tip", "-out", path], "fom %s" % name)
         fom[name] = {"file": path, "seconds": secs, "set": set_name, "nodes": n_nodes, "omega": omega,
                      "t_final": tfinal, "steps": int(math.ceil(tfinal / FOM_DT - 1e-9))}  # as morse fom
+        study["fom"] = fom
+        with open(os.path.join(out, "study.json.tmp"), "w") as fh:
+            json.dump(study, fh, indent=1)
+        os.replace(os.path.join(out, "study.json.tmp"), os.path.join(out, "study.json"))
         return path
 
     train = run_fom("train_LE", "LE", 1, W_TRAIN, T_TRAIN, 1)

@@ -200,11 +200,13 @@ TEST(Sim, FullBasisReproducesFullModel) {
     });
     return out;
   };
-  auto run_sim = [&](double h, bool linear) {
+  auto run_sim = [&](double h, bool linear, sim::Scheme scheme = sim::Scheme::Central) {
     sim::Settings s;
     s.dt = h;
     s.t_final = T;
     s.linear = linear;
+    s.scheme = scheme;
+    s.newton_rtol = 1e-9;
     std::vector<double> out;
     sim::integrate(rm, {rl}, s, [&](const sim::StepState& x) { out.insert(out.end(), x.q + first, x.q + last); });
     return out;
@@ -229,6 +231,14 @@ TEST(Sim, FullBasisReproducesFullModel) {
   EXPECT_LT(d2, 1e-5) << "simulate vs fom at dt = " << h / 2;
   EXPECT_GT(nl, 20.0 * d2) << "not a nonlinear test: the linear model is as close as the integrator error";
   EXPECT_NEAR(d1 / d2, 4.0, 0.4) << "the difference does not fall as dt^2 (" << d1 << ", " << d2 << ")";
+  // The implicit scheme is fom's scheme: the same discrete solution (to the Newton tolerances),
+  // also at 8 times the critical step of central differences.
+  const auto f8 = run_fom(8 * hc);
+  const double t1 = rel(f1, run_sim(h, false, sim::Scheme::Trapezoidal));
+  const double t8 = rel(f8, run_sim(8 * hc, false, sim::Scheme::Trapezoidal));
+  print0(PETSC_COMM_WORLD, "  trapezoidal simulate vs fom: %.3e at dt, %.3e at 8 x critical step\n", t1, t8);
+  EXPECT_LT(t1, 1e-7);
+  EXPECT_LT(t8, 1e-7);
 }
 
 // The two storages of the nonlinear force give the same P3 g~(q): the potential form of exact

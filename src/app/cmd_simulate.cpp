@@ -49,6 +49,19 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   PetscCall(PetscOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
                              nullptr));
   PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
+  const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
+  PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
+  PetscCall(PetscOptionsEnum("-sim_scheme",
+                             "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
+                             "Newton on the reduced model: morse fom's scheme, any dt)",
+                             "", schemes, scheme, &scheme, nullptr));
+  o->s.scheme = static_cast<sim::Scheme>(scheme);
+  PetscCall(PetscOptionsReal("-sim_newton_rtol", "trapezoidal: Newton tolerance relative to the force scale", "",
+                             o->s.newton_rtol, &o->s.newton_rtol, nullptr));
+  PetscInt max_it = o->s.newton_max_it;
+  PetscCall(PetscOptionsInt("-sim_newton_max_it", "trapezoidal: Newton iterations per step before the run stops", "",
+                            max_it, &max_it, nullptr));
+  o->s.newton_max_it = static_cast<int>(max_it);
   const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
   PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
   PetscCall(PetscOptionsEnum("-sim_kernel",
@@ -112,8 +125,10 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   }
   const double hc = sim::critical_step(sm.model);
   const char* label = c.name.empty() ? "" : " case ";
-  print0(PETSC_COMM_SELF, "morse simulate%s%s: r = %d, critical step %.4e s, dt = %.4e s, %s\n", label, c.name.c_str(),
-         (int)r, hc, so.s.dt, so.s.linear ? "linear" : "nonlinear");
+  const bool implicit = so.s.scheme == sim::Scheme::Trapezoidal;
+  print0(PETSC_COMM_SELF, "morse simulate%s%s: r = %d, critical step %.4e s%s, dt = %.4e s, %s, %s\n", label,
+         c.name.c_str(), (int)r, hc, implicit ? " (not a limit: implicit)" : "", so.s.dt,
+         so.s.linear ? "linear" : "nonlinear", implicit ? "trapezoidal" : "central differences");
   // Snapshot steps: the step nearest each fom snapshot time within [0, t_final].
   std::vector<long> snap_step;
   for (double t : plan.time)
@@ -141,7 +156,10 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   const double sps = stats.seconds > 0 ? stats.steps / stats.seconds : 0.0;
   print0(PETSC_COMM_SELF, "  %s%s%ld steps in %.4f s (%.3g steps/s, with output)\n", c.name.c_str(),
          c.name.empty() ? "" : ": ", stats.steps, stats.seconds, sps);
-  if (stats.kernel != "linear")
+  if (implicit)
+    print0(PETSC_COMM_SELF, "  Newton: %ld iterations (%.2f per step)\n", stats.newton_iterations,
+           stats.steps ? static_cast<double>(stats.newton_iterations) / stats.steps : 0.0);
+  else if (stats.kernel != "linear")
     print0(PETSC_COMM_SELF, "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
            stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6, sps * stats.kernel_flops * 1e-9,
            sps * stats.kernel_bytes * 1e-9);
@@ -178,6 +196,8 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   out.attribute("/sim", "seconds", stats.seconds);
   out.attribute("/sim", "critical_dt", stats.critical_dt);
   out.attribute("/sim", "kernel", stats.kernel);
+  out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
+  if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
   out.commit();
   print0(PETSC_COMM_SELF, "morse: wrote %s\n", c.out.c_str());
 }

@@ -28,6 +28,30 @@ void CubicForce::evaluate(const double* q, double* g) const {
     }
 }
 
+void CubicForce::jacobian(const double* q, double* J) const {
+  // Column m of dg/dq accumulated contiguously (Jc[m r + p]), then transposed to row-major.
+  std::vector<double> Jc(r * r, 0.0);
+  auto axpy = [&](std::size_t m, const double* c, double s) {
+    double* col = &Jc[m * r];
+    for (std::size_t p = 0; p < r; ++p) col[p] += c[p] * s;
+  };
+  std::size_t m2 = 0, m3 = 0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) {
+      const double* a = &A[m2++ * r];
+      axpy(i, a, q[j]);  // d(q_i q_j) = q_j dq_i + q_i dq_j (both land on i when i = j)
+      axpy(j, a, q[i]);
+      for (std::size_t k = j; k < r; ++k) {
+        const double* b = &B[m3++ * r];
+        axpy(i, b, q[j] * q[k]);
+        axpy(j, b, q[i] * q[k]);
+        axpy(k, b, q[i] * q[j]);
+      }
+    }
+  for (std::size_t p = 0; p < r; ++p)
+    for (std::size_t m = 0; m < r; ++m) J[p * r + m] = Jc[m * r + p];
+}
+
 double CubicForce::max_abs_A() const {
   double m = 0;
   for (double v : A) m = std::max(m, std::abs(v));

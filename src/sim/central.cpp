@@ -39,6 +39,14 @@ std::vector<double> matmul(const std::vector<double>& A, const std::vector<doubl
 
 }  // namespace
 
+double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  double e = 0.0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < r; ++j) e += 0.5 * (v[i] * m.M[i * r + j] * v[j] + q[i] * m.K[i * r + j] * q[j]);
+  return e;
+}
+
 double critical_step(const nlrom::ReducedModel& m) {
   const auto w = cb::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
@@ -284,6 +292,7 @@ double CubicKernel::bytes() const {
 
 Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
                 const std::function<void(const StepState&)>& callback) {
+  if (s.scheme == Scheme::Trapezoidal) return integrate_trapezoidal(m, loads, s, callback);
   const std::size_t r = static_cast<std::size_t>(m.r);
   const double h = s.dt;
   MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
@@ -331,12 +340,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     MORSE_CHECK(s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
     v = s.v0;
   }
-  auto energy = [&](const std::vector<double>& x, const std::vector<double>& y) {
-    double e = 0.0;
-    for (std::size_t i = 0; i < r; ++i)
-      for (std::size_t j = 0; j < r; ++j) e += 0.5 * (y[i] * m.M[i * r + j] * y[j] + x[i] * m.K[i * r + j] * x[j]);
-    return e;
-  };
+
   // a0 = M^-1 (f(0) - K q0 - C v0 - g(q0)); q_{-1} = q0 - h v0 + h^2/2 a0.
   {
     std::vector<double> rhs(r, 0.0);
@@ -359,7 +363,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   StepState ss;
   ss.q = q.data();
   ss.v = v.data();
-  ss.energy = energy(q, v);
+  ss.energy = energy(m, q.data(), v.data());
   callback(ss);
   const auto t0 = std::chrono::steady_clock::now();
   // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
@@ -392,7 +396,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       ss.v = v.data();
       ss.step = n;
       ss.t = t;
-      ss.energy = energy(q, v);
+      ss.energy = energy(m, q.data(), v.data());
       callback(ss);
     }
     std::swap(qm, q);

@@ -35,6 +35,9 @@ struct CubicForce {
   std::vector<double> B;  ///< n_cubic(r) x r, row-major
   /// g = g~(q) (reference evaluation, O(r^4)). g has r entries.
   void evaluate(const double* q, double* g) const;
+  /// J = dg~/dq at q (r x r, row-major: J[p r + m] = dg_p/dq_m), 3 n_cubic(r) r + 2 n_quadratic(r) r
+  /// multiply-adds.
+  void jacobian(const double* q, double* J) const;
   /// Largest |A| and |B| entries (scales for comparisons).
   double max_abs_A() const;
   double max_abs_B() const;

@@ -37,7 +37,17 @@ struct ReducedLoad {
 ///    r = 60 1.7k vs 3.0k, r = 79 241 vs 1,190), else Folded.
 enum class KernelLayout { Auto, Folded, Potential };
 
+/// Time scheme of the reduced model.
+///  - Central: explicit central differences (eq. 40–41), conditionally stable (critical_step()).
+///  - Trapezoidal: the implicit scheme of `morse fom` (trapezoidal rule, Newton with the exact
+///    reduced tangent K~ + dg~/dq): no stability limit, the same step as the full model, and with a
+///    basis spanning the whole space the same discrete solution as `morse fom`.
+enum class Scheme { Central, Trapezoidal };
+
 struct Settings {
+  Scheme scheme = Scheme::Central;
+  double newton_rtol = 1e-8;    ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
+  int newton_max_it = 100;   ///< reduced Newton is cheap; stiff constraint modes need many at large dt
   double dt = 0.0;
   KernelLayout kernel = KernelLayout::Auto;
   double t_final = 0.0;
@@ -54,12 +64,16 @@ struct StepState {
 };
 
 struct Stats {
-  std::string kernel = "linear";  ///< folded | potential | linear (no nonlinear force)
+  std::string kernel = "linear";  ///< folded | potential | implicit | linear (no nonlinear force)
   double kernel_flops = 0.0, kernel_bytes = 0.0;  ///< per step (CubicKernel::flops(), bytes())
   long steps = 0;
+  long newton_iterations = 0;  ///< Trapezoidal
   double seconds = 0.0;
   double critical_dt = 0.0;
 };
+
+/// Seed 003 eq. 46 of the reduced model: v^T M~ v / 2 + q^T K~ q / 2.
+double energy(const nlrom::ReducedModel& m, const double* q, const double* v);
 
 /// Critical step of central differences for the linearized reduced model: 2 / omega_max
 /// (undamped bound), omega_max^2 the largest eigenvalue of (K~, M~).
@@ -90,10 +104,16 @@ class CubicKernel {
   std::vector<double> c3_, c4_, P3_;  // Potential: energy coefficients (sorted indices), P3
 };
 
-/// Integrates from the initial state to t_final. Refuses (throws, naming the limit) a dt above
-/// critical_step(); stops with an error naming the time reached if the state becomes NaN or
-/// infinite. callback(state) runs after the initial state and every step. Serial (one rank).
+/// Integrates from the initial state to t_final with s.scheme. Central: refuses (throws, naming
+/// the limit) a dt above critical_step(); stops with an error naming the time reached if the state
+/// becomes NaN or infinite. Trapezoidal: stops with an error naming the time reached if Newton
+/// does not converge in newton_max_it iterations. callback(state) runs after the initial state
+/// and every step. Serial (one rank).
 Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
                 const std::function<void(const StepState&)>& callback);
+
+/// The Trapezoidal branch of integrate().
+Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                            const std::function<void(const StepState&)>& callback);
 
 }  // namespace morse::sim
