@@ -22,8 +22,12 @@ Drives morse (fom, nlrom, simulate, compare) through the seed's study and writes
 Loads: the seed's A = 300 N is the total force; on N nodes each node carries 300/N N. Training
 runs last one period (0.00314 s), test runs ten. The fom uses the seed's step (1e-4 s) and its
 modal damping (5e-4 on the first 10 modes); the reduced models get the same damping on their own
-first 10 modes (all r modes when r < 10). Every reduced model is integrated at 0.9 x its critical step,
-at most 1e-7 s, rounded down to a whole number of steps per 1e-4 s, up to the end of the fom record.
+first 10 modes (all r modes when r < 10). Every reduced model is integrated twice, up to the end
+of the fom record: with the fom's own scheme and step (-sim_scheme trapezoidal, 1e-4 s), so that
+I measures the reduction error alone (the figures: roms[name]["cases"]), and with explicit
+central differences (eq. 40-41) at 0.9 x its critical step, at most 1e-7 s, rounded down to a
+whole number of steps per 1e-4 s (roms[name]["central"]["cases"]); the latter also carries the
+fom's own time-discretization error at 1e-4 s.
 Nested tip sets tip1 ⊂ ... ⊂ tip8 are ordered by distance from LE (-mesh_node_sets).
 """
 
@@ -196,17 +200,20 @@ def main():
                              "nlrom %s" % name)
         return path, offline_times(stdout), secs
 
-    def simulate_and_compare(rom, name, cases):
-        """cases: {case: (set, nodes, omega, fom name)}; one simulate run, cases spread over 2 ranks."""
+    def simulate_and_compare(rom, name, cases, scheme):
+        """cases: {case: (set, nodes, omega, fom name)}; one simulate run, cases spread over 2 ranks.
+        scheme "trapezoidal": the fom's scheme and step (1e-4 s), so that I measures the reduction
+        error alone; "central": explicit central differences at min(1e-7, 0.9 h_crit)."""
         # morse compare refuses a reduced run that ends before the fom record, and morse fom runs
-        # ceil(t_final / dt) steps (T_TEST: 315 steps, to 0.0315 s). So: at most min(1e-7, 0.9 h_crit),
-        # a whole number of steps per FOM_DT (states written at the fom's times), up to the fom's end.
+        # ceil(t_final / dt) steps (T_TEST: 315 steps, to 0.0315 s). So: a whole number of steps per
+        # FOM_DT (states written at the fom's times), up to the fom's end.
         hc = critical_dt(rom)
-        every = int(math.ceil(FOM_DT / min(1e-7, 0.9 * hc) - 1e-9))
+        every = 1 if scheme == "trapezoidal" else int(math.ceil(FOM_DT / min(1e-7, 0.9 * hc) - 1e-9))
         dt = FOM_DT / every
         t_end = max(fom[f]["steps"] for (_, _, _, f) in cases.values()) * FOM_DT
-        arg = ["simulate", "-rom", rom, "-sim_dt", repr(dt), "-sim_tfinal", repr(t_end), "-sim_monitor", "LE,tip",
-               "-sim_output_every", str(every), "-sim_cases", ",".join(cases),
+        name = name if scheme == "trapezoidal" else name + "_central"
+        arg = ["simulate", "-rom", rom, "-sim_scheme", scheme, "-sim_dt", repr(dt), "-sim_tfinal", repr(t_end),
+               "-sim_monitor", "LE,tip", "-sim_output_every", str(every), "-sim_cases", ",".join(cases),
                "-out", os.path.join(out, "sim_%s.h5" % name)]
         for c, (s, n, w, _) in cases.items():
             arg += load_args(s, n, w, prefix=c + "_")
@@ -250,15 +257,17 @@ def main():
         """Builds, simulates and compares one reduced model; a failure is recorded, not fatal."""
         try:
             path, off, secs = build(name, extra, r)
-            res = simulate_and_compare(path, name, cases or std_cases)
+            res = simulate_and_compare(path, name, cases or std_cases, "trapezoidal")
+            res["central"] = simulate_and_compare(path, name, cases or std_cases, "central")
         except MorseFailed as e:
             roms[name] = {"file": None, "family": family, "r": r, "error": str(e), "cases": {}}
             save()
             return
         roms[name] = {"file": path, "family": family, "r": r, "offline": off, "nlrom_wall_seconds": secs, **res}
         save()
-        print("    %s r = %d: %s" % (name, r, ", ".join(
-            "I(%s) = %s" % (c, "%.3f" % v["I"] if v["I"] is not None else "failed") for c, v in res["cases"].items())),
+        def fmt(cs):
+            return ", ".join("I(%s) = %s" % (c, "%.3f" % v["I"] if v["I"] is not None else "failed") for c, v in cs.items())
+        print("    %s r = %d: trapezoidal %s; central %s" % (name, r, fmt(res["cases"]), fmt(res["central"]["cases"])),
               flush=True)
 
     print("== Fig. 7: CB r = 15 with STEP, unfiltered and POD-filtered", flush=True)

@@ -255,24 +255,46 @@ def family_points(st, case):
     return {k: sorted(v) for k, v in pts.items()}
 
 
+def central_points(st, case):
+    """{prefix: [(r, I)]} of the explicit (central-difference) runs, roms[name]["central"]."""
+    pts = {}
+    for prefix, _, _, _ in FAMILIES:
+        for name in sorted(k for k in st.roms if k.startswith(prefix)):
+            c = ((st.roms[name].get("central") or {}).get("cases") or {}).get(case) or {}
+            if c.get("I") is None:
+                continue
+            try:
+                r = st.rom_size(name)
+            except Skip:
+                continue
+            pts.setdefault(prefix, []).append((r, float(c["I"])))
+    return {k: sorted(v) for k, v in pts.items()}
+
+
 def fig_I_vs_r(st, img, case, fname, title):
     pts = family_points(st, case)
-    if not pts:
+    cen = central_points(st, case)
+    if not pts and not cen:
         raise Skip("no pod_r*/cbf_r*/cbmd_r* entry has case %r" % case)
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    for prefix, lab, mk, col in FAMILIES:
-        if prefix not in pts:
-            print("  %s: no %s* entries for case %s" % (fname, prefix, case))
-            continue
-        r, I, _ = zip(*pts[prefix])
-        ax.plot(r, I, "-", marker=mk, color=col, label=lab, ms=7, clip_on=False)
-        print("  %s %s: %s" % (fname, lab, ", ".join("r=%d %.3f" % (a, b) for a, b in zip(r, I))))
-    ax.set_ylim(0, 1)
-    ax.set_xlabel("size r of the reduction basis")
-    ax.set_ylabel("performance indicator I")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower right")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True)
+    panels = [(axes[0], pts, "(a) fom's scheme and step: trapezoidal, h = 1e-4 s"),
+              (axes[1], {k: [(a, b, None) for a, b in v] for k, v in cen.items()},
+               "(b) central differences, h = min(1e-7 s, 0.9 h_crit)")]
+    for ax, data, sub in panels:
+        for prefix, lab, mk, col in FAMILIES:
+            if prefix not in data:
+                print("  %s: no %s* entries for case %s (%s)" % (fname, prefix, case, sub[:3]))
+                continue
+            r, I, _ = zip(*data[prefix])
+            ax.plot(r, I, "-", marker=mk, color=col, label=lab, ms=7, clip_on=False)
+            print("  %s %s %s: %s" % (fname, sub[:3], lab, ", ".join("r=%d %.3f" % (a, b) for a, b in zip(r, I))))
+        ax.set_ylim(0, 1)
+        ax.set_xlabel("size r of the reduction basis")
+        ax.set_title(sub, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower right")
+    axes[0].set_ylabel("performance indicator I")
+    fig.suptitle(title + "; missing points: the run diverged", fontsize=10)
     fig.tight_layout()
     return save(fig, img, fname)
 

@@ -41,7 +41,7 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   st.critical_dt = critical_step(m);
   st.kernel = nonlinear ? "implicit" : "linear";
   std::vector<double> q0(r, 0.0), v0(r, 0.0), q1(r), v1(r), g0(r, 0.0), g1(r, 0.0), f0(r, 0.0), f1(r, 0.0), R(r),
-      w(r), J(r * r), G(r * r);
+      w(r), internal(r), J(r * r), G(r * r);
   if (!s.q0.empty()) {
     MORSE_CHECK(s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
     q0 = s.q0;
@@ -87,7 +87,7 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
       const double inertia = norm2(R);
       for (std::size_t i = 0; i < r; ++i) w[i] = v0[i] + v1[i];
       matvec(m.C, w, 1.0, R);
-      std::vector<double> internal(r, 0.0);
+      std::fill(internal.begin(), internal.end(), 0.0);
       for (std::size_t i = 0; i < r; ++i) w[i] = q0[i] + q1[i];
       matvec(m.K, w, 1.0, internal);
       if (nonlinear) {
