@@ -252,17 +252,29 @@ void run_simulate(MPI_Comm comm) {
   MPI_Comm_size(comm, &size);
   if (cases.size() > 1)
     print0(comm, "morse simulate: %zu cases on %d rank(s), reduced model read once (r = %zu)\n", cases.size(), size, r);
+  // A failed case (NaN, Newton) does not stop the others; the command fails at the end, naming
+  // every failed case, and those cases leave no file.
   std::string err;
   for (std::size_t i = 0; i < cases.size(); ++i) {
     if (static_cast<int>(i % size) != rank) continue;
     try {
       run_case(so, sm, plan, cases[i]);
     } catch (const std::exception& e) {
-      err = cases[i].name.empty() ? std::string(e.what()) : cat("case ", cases[i].name, ": ", e.what());
-      break;
+      err += (err.empty() ? "" : "; ") +
+             (cases[i].name.empty() ? std::string(e.what()) : cat("case ", cases[i].name, ": ", e.what()));
     }
   }
-  collective_check(comm, err);
+  // Every rank's failures, joined in rank order, on every rank.
+  int len = static_cast<int>(err.size());
+  std::vector<int> lens(size), offs(size, 0);
+  MPI_Allgather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, comm);
+  for (int i = 1; i < size; ++i) offs[i] = offs[i - 1] + lens[i - 1];
+  std::string all(static_cast<std::size_t>(offs[size - 1] + lens[size - 1]), ' ');
+  MPI_Allgatherv(err.data(), len, MPI_CHAR, all.data(), lens.data(), offs.data(), MPI_CHAR, comm);
+  std::string joined;
+  for (int i = 0; i < size; ++i)
+    if (lens[i] > 0) joined += (joined.empty() ? "" : "; ") + all.substr(offs[i], lens[i]);
+  collective_check(comm, joined);
   check_options(comm, false);
 }
 
