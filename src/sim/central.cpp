@@ -39,6 +39,13 @@ std::vector<double> matmul(const std::vector<double>& A, const std::vector<doubl
 
 }  // namespace
 
+void initial_state(const Settings& s, std::size_t r, std::vector<double>* q, std::vector<double>* v) {
+  MORSE_CHECK(s.q0.empty() || s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
+  MORSE_CHECK(s.v0.empty() || s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
+  *q = s.q0.empty() ? std::vector<double>(r, 0.0) : s.q0;
+  *v = s.v0.empty() ? std::vector<double>(r, 0.0) : s.v0;
+}
+
 double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
   const std::size_t r = static_cast<std::size_t>(m.r);
   double e = 0.0;
@@ -331,15 +338,8 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     st.kernel_bytes = kernel->bytes();
   }
 
-  std::vector<double> qm(r), q(r, 0.0), qp(r), v(r, 0.0), g(r), tmp(r);
-  if (!s.q0.empty()) {
-    MORSE_CHECK(s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
-    q = s.q0;
-  }
-  if (!s.v0.empty()) {
-    MORSE_CHECK(s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
-    v = s.v0;
-  }
+  std::vector<double> qm(r), q, qp(r), v, g(r), tmp(r);
+  initial_state(s, r, &q, &v);
 
   // a0 = M^-1 (f(0) - K q0 - C v0 - g(q0)); q_{-1} = q0 - h v0 + h^2/2 a0.
   {

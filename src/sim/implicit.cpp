@@ -40,16 +40,9 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   Stats st;
   st.critical_dt = critical_step(m);
   st.kernel = nonlinear ? "implicit" : "linear";
-  std::vector<double> q0(r, 0.0), v0(r, 0.0), q1(r), v1(r), g0(r, 0.0), g1(r, 0.0), f0(r, 0.0), f1(r, 0.0), R(r),
-      w(r), internal(r), J(r * r), G(r * r);
-  if (!s.q0.empty()) {
-    MORSE_CHECK(s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
-    q0 = s.q0;
-  }
-  if (!s.v0.empty()) {
-    MORSE_CHECK(s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
-    v0 = s.v0;
-  }
+  std::vector<double> q0, v0, q1(r), v1(r), g0(r, 0.0), g1(r, 0.0), f0(r, 0.0), f1(r, 0.0), R(r), w(r), internal(r),
+      J(r * r), G(r * r);
+  initial_state(s, r, &q0, &v0);
   auto load = [&](double t, std::vector<double>& f) {
     std::fill(f.begin(), f.end(), 0.0);
     for (const auto& l : loads) {

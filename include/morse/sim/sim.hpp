@@ -72,6 +72,10 @@ struct Stats {
   double critical_dt = 0.0;
 };
 
+/// The initial state of s for a model of size r: s.q0 and s.v0, or zeros when empty. Throws if a
+/// given vector has another size.
+void initial_state(const Settings& s, std::size_t r, std::vector<double>* q, std::vector<double>* v);
+
 /// Seed 003 eq. 46 of the reduced model: v^T M~ v / 2 + q^T K~ q / 2.
 double energy(const nlrom::ReducedModel& m, const double* q, const double* v);
 
