@@ -142,11 +142,11 @@ TEST(Sim, NonlinearEnergyBoundedOverMillionSteps) {
   for (int i = 0; i < 4; ++i) kq = std::max(kq, std::abs(rm.K[i * 4 + i] * s.q0[i]));
   EXPECT_GT(gmax, 1e-3 * kq) << "not in the nonlinear regime";
   auto st = sim::integrate(rm, {}, s, [&](const sim::StepState& x) {
-    if (x.step == 0) e0 = x.energy;
-    emin = std::min(emin, x.energy);
-    emax = std::max(emax, x.energy);
-    if (x.step < 10000) early += x.energy, ++n_early;
-    if (x.step >= 990000) late += x.energy, ++n_late;
+    if (x.step == 0) e0 = x.energy();
+    emin = std::min(emin, x.energy());
+    emax = std::max(emax, x.energy());
+    if (x.step < 10000) early += x.energy(), ++n_early;
+    if (x.step >= 990000) late += x.energy(), ++n_late;
   });
   EXPECT_EQ(st.steps, 1000000);
   EXPECT_GT(e0, 0.0);

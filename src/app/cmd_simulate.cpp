@@ -149,7 +149,7 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     tf = x.t;
     if (x.step % so.every != 0) return;
     time.push_back(x.t);
-    energy.push_back(x.energy);
+    energy.push_back(x.energy());
     qh.insert(qh.end(), x.q, x.q + r);
     for (const auto& m : so.monitor) sm.displacements(m, x.q, &hist[m]);
   });

@@ -54,6 +54,8 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
   return e;
 }
 
+double StepState::energy() const { return sim::energy(*model, q, v); }
+
 double critical_step(const nlrom::ReducedModel& m) {
   const auto w = cb::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
@@ -361,9 +363,9 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   }
   const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
   StepState ss;
+  ss.model = &m;
   ss.q = q.data();
   ss.v = v.data();
-  ss.energy = energy(m, q.data(), v.data());
   callback(ss);
   const auto t0 = std::chrono::steady_clock::now();
   // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
@@ -396,7 +398,6 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       ss.v = v.data();
       ss.step = n;
       ss.t = t;
-      ss.energy = energy(m, q.data(), v.data());
       callback(ss);
     }
     std::swap(qm, q);

@@ -60,9 +60,9 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   if (nonlinear) m.g.evaluate(q0.data(), g0.data());
   load(0.0, f0);
   StepState ss;
+  ss.model = &m;
   ss.q = q0.data();
   ss.v = v0.data();
-  ss.energy = energy(m, q0.data(), v0.data());
   callback(ss);
   const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
   std::vector<PetscBLASInt> piv(r);
@@ -130,7 +130,6 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
     ss.t = t1;
     ss.q = q0.data();
     ss.v = v0.data();
-    ss.energy = energy(m, q0.data(), v0.data());
     callback(ss);
     ++st.steps;
   }
