@@ -401,4 +401,16 @@ TEST(Nlrom, PodRecoversKnownSingularValues) {
   auto G = cb::transpose_product(PETSC_COMM_WORLD, P.get(), U.get());
   for (int a = 0; a < k; ++a) EXPECT_NEAR(std::abs(G[a * k + a]), 1.0, 1e-12);
   EXPECT_THROW(nlrom::pod(X.get(), ns, &sigma), Error) << "rank-deficient request must be refused";
+  // STEP identifies the exact tensors on a POD basis as well (Euclidean-normalized columns).
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  nlrom::StepSettings ss;
+  ss.displacement = 0.01;
+  auto st = nlrom::step_forces(svk, P.get(), ss);
+  auto ex = nlrom::exact_forces(svk, P.get());
+  double da = 0, db = 0;
+  for (std::size_t i = 0; i < ex.A.size(); ++i) da = std::max(da, std::abs(st.A[i] - ex.A[i]));
+  for (std::size_t i = 0; i < ex.B.size(); ++i) db = std::max(db, std::abs(st.B[i] - ex.B[i]));
+  EXPECT_GT(ex.max_abs_B(), 0.0);
+  EXPECT_LT(da, 1e-8 * ex.max_abs_A());
+  EXPECT_LT(db, 1e-8 * ex.max_abs_B());
 }
