@@ -15,6 +15,9 @@ path is looked up by name in OUT_DIR), writes into IMG_DIR
   nlrom_fig10.png  I against r for POD, CB + POD filtering, CB + MD (300 N at LE, 2000 rad/s)
   nlrom_fig12.png  the same bases at 1000 rad/s
   nlrom_fig13.png  the same bases with the load spread over the tip nodes
+                   (Figs. 10, 12, 13: panel (a) the runs with the fom's scheme and step, roms[..]["cases"];
+                   panel (b) the central-difference runs, roms[..]["central"]["cases"]; a missing point is a
+                   run that diverged)
   nlrom_fig14.png  I of POD (3 + 10) trained on N_t tip nodes and tested on N_e tip nodes
 
 and prints seed 003 Tables 2-3 (offline and online times) as Markdown, also written to
