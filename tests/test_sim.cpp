@@ -286,3 +286,120 @@ TEST(Sim, PotentialKernelMatchesFolded) {
   EXPECT_GT(fallback.asymmetry(), 1e-6);
   EXPECT_THROW(sim::CubicKernel(bad, P3, sim::KernelLayout::Potential), Error);
 }
+
+// Contact with a rigid plane (Lagrange multipliers, eq. 42). A heavily damped linear CB model of
+// the clamped box, pushed axially at its free face x1 against a plane at x = 1 + delta: every
+// gap stays >= 0 to round-off, every multiplier is compressive, and the state settles on the
+// static solution of the constrained problem [K E; E^T 0][q; lambda] = [f; delta] solved
+// directly. With friction and a transverse load, friction does negative work and holds the face
+// back.
+TEST(Sim, ContactWithRigidPlane) {
+  auto m = box(ElementType::Hex8, 4);
+  cb::CBSettings cs;
+  cs.boundary_set = "x1";
+  cs.n_fixed = 3;
+  cs.keep_basis = true;
+  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
+                                 static_cast<PetscInt>(r));
+  dyn::NodalLoad lx;
+  lx.set = "x1";
+  lx.dir[0] = 1.0;
+  lx.amplitude = 1e7;
+  dyn::Loads loads(m.lm, m.dofs, {lx});
+  sim::ReducedLoad rl;
+  rl.p = nlrom::project_vector(c.T.get(), loads.pattern(0));
+  rl.amplitude = lx.amplitude;
+  // Free static axial displacement of the first face node; the plane stops it at half of it.
+  std::vector<double> K = rm.K, f(r);
+  for (std::size_t i = 0; i < r; ++i) f[i] = rl.amplitude * rl.p[i];
+  auto solve = [](std::vector<double> A, std::vector<double> b) {
+    PetscBLASInt n = static_cast<PetscBLASInt>(b.size()), one = 1, info = 0;
+    std::vector<PetscBLASInt> piv(b.size());
+    LAPACKgesv_(&n, &one, A.data(), &n, piv.data(), b.data(), &n, &info);  // A symmetric: layout moot
+    EXPECT_EQ(info, 0);
+    return b;
+  };
+  const auto qfree = solve(K, f);
+  const double delta = 0.5 * qfree[0];
+  ASSERT_GT(delta, 0.0);
+  sim::Settings s;
+  s.linear = true;
+  s.dt = 0.5 * sim::critical_step(rm);
+  s.t_final = 0.03;
+  s.contact.mu = 0.0;
+  s.contact.plane.point[0] = 1.0 + delta;
+  s.contact.plane.normal[2] = 0.0;
+  s.contact.plane.normal[0] = -1.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    sim::ContactNode node;
+    node.dof = 3 * k;
+    node.x[0] = 1.0;  // every x1 node has x = 1
+    s.contact.nodes.push_back(node);
+  }
+  double min_gap = 1e300, min_lam = 1e300;
+  int max_active = 0;
+  std::vector<double> qT(r), lamT(nb);
+  sim::integrate(rm, {rl}, s, [&](const sim::StepState& x) {
+    for (std::size_t k = 0; k < nb; ++k) {
+      min_gap = std::min(min_gap, x.gap[k]);
+      min_lam = std::min(min_lam, x.contact_normal[k]);
+      lamT[k] = x.contact_normal[k];
+    }
+    max_active = std::max(max_active, x.active);
+    std::copy(x.q, x.q + r, qT.begin());
+  });
+  EXPECT_EQ(max_active, static_cast<int>(nb));
+  EXPECT_GE(min_gap, -1e-12 * delta) << "penetration";
+  EXPECT_GE(min_lam, 0.0) << "tensile contact force";
+  // The constrained static solution, solved directly.
+  const std::size_t nz = r + nb;
+  std::vector<double> B(nz * nz, 0.0), rhs(nz, 0.0);
+  for (std::size_t i = 0; i < r; ++i) {
+    for (std::size_t j = 0; j < r; ++j) B[i * nz + j] = K[i * r + j];
+    rhs[i] = f[i];
+  }
+  for (std::size_t k = 0; k < nb; ++k) {
+    B[(3 * k) * nz + r + k] = B[(r + k) * nz + 3 * k] = 1.0;
+    rhs[r + k] = delta;
+  }
+  const auto z = solve(B, rhs);
+  double dq = 0, sq = 0, dl = 0, sl = 0;
+  for (std::size_t i = 0; i < r; ++i) dq = std::max(dq, std::abs(qT[i] - z[i])), sq = std::max(sq, std::abs(z[i]));
+  for (std::size_t k = 0; k < nb; ++k)
+    dl = std::max(dl, std::abs(lamT[k] - z[r + k])), sl = std::max(sl, std::abs(z[r + k]));
+  print0(PETSC_COMM_WORLD, "  contact: r = %zu, %zu nodes, delta %.3e m, min gap %.2e, final state vs statics %.2e, forces %.2e\n",
+         r, nb, delta, min_gap, dq / sq, dl / sl);
+  EXPECT_LT(dq, 1e-6 * sq) << "final state vs constrained statics";
+  EXPECT_LT(dl, 1e-5 * sl) << "contact forces vs constrained statics";
+  // Friction: a transverse load at the face; friction opposes sliding (negative work) and holds
+  // the face back compared with the frictionless run.
+  dyn::NodalLoad ly = lx;
+  ly.dir[0] = 0.0;
+  ly.dir[1] = 1.0;
+  ly.amplitude = 2e6;
+  dyn::Loads loads_y(m.lm, m.dofs, {ly});
+  sim::ReducedLoad rly;
+  rly.p = nlrom::project_vector(c.T.get(), loads_y.pattern(0));
+  rly.amplitude = ly.amplitude;
+  auto slide = [&](double mu, double* work) {
+    sim::Settings sf = s;
+    sf.contact.mu = mu;
+    sf.t_final = 0.01;
+    double uy = 0.0, w = 0.0;
+    sim::integrate(rm, {rl, rly}, sf, [&](const sim::StepState& x) {
+      for (std::size_t k = 0; k < nb; ++k)
+        for (int d = 0; d < 3; ++d) w += x.contact_friction[3 * k + d] * x.v[3 * k + d] * sf.dt;
+      uy = x.q[1];
+    });
+    *work = w;
+    return uy;
+  };
+  double w0 = 0, w1 = 0;
+  const double uy0 = slide(0.0, &w0), uy1 = slide(0.3, &w1);
+  print0(PETSC_COMM_WORLD, "  friction: work %.3e J, u_y %.3e (mu = 0.3) vs %.3e (mu = 0)\n", w1, uy1, uy0);
+  EXPECT_EQ(w0, 0.0);
+  EXPECT_LT(w1, 0.0) << "friction must dissipate";
+  EXPECT_LT(std::abs(uy1), std::abs(uy0)) << "friction must hold the face back";
+}

@@ -10,6 +10,7 @@
 #include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/sim/sim.hpp"
+#include "sim/contact.hpp"
 
 namespace morse::sim {
 
@@ -362,10 +363,28 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     }
   }
   const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
+  // Contact: P = (M/h^2 + C/2h)^-1 = P3. The forces of state n are reported with state n, one
+  // step after they are computed, so they are kept one step.
+  std::optional<detail::ContactSolver> contact;
+  std::vector<double> c_lam, c_fric, c_gap;
+  int c_active = 0;
+  if (!s.contact.nodes.empty()) {
+    contact.emplace(s.contact, P3, r);
+    const std::size_t nc = s.contact.nodes.size();
+    c_lam.assign(nc, 0.0), c_fric.assign(3 * nc, 0.0), c_gap.assign(nc, 0.0);
+    const double* nv = s.contact.plane.normal;
+    for (std::size_t k = 0; k < nc; ++k) {
+      double g = 0.0;
+      for (int d = 0; d < 3; ++d)
+        g += (s.contact.nodes[k].x[d] + q[s.contact.nodes[k].dof + d] - s.contact.plane.point[d]) * nv[d];
+      c_gap[k] = g;
+    }
+  }
   StepState ss;
   ss.model = &m;
   ss.q = q.data();
   ss.v = v.data();
+  if (contact) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
   callback(ss);
   const auto t0 = std::chrono::steady_clock::now();
   // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
@@ -387,6 +406,11 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       kernel->apply(q.data(), g.data());
       for (std::size_t i = 0; i < r; ++i) qp[i] -= g[i];
     }
+    int next_active = 0;
+    if (contact) {
+      contact->correct(qp.data(), qm.data(), h);
+      next_active = contact->active();
+    }
     bool finite = true;
     for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
     if (!finite)
@@ -398,7 +422,15 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       ss.v = v.data();
       ss.step = n;
       ss.t = t;
+      ss.active = c_active;
       callback(ss);
+    }
+    if (contact) {  // the forces that produced q_{n+1} belong to state n + 1
+      const std::size_t nc = s.contact.nodes.size();
+      std::copy(contact->normal(), contact->normal() + nc, c_lam.begin());
+      std::copy(contact->friction(), contact->friction() + 3 * nc, c_fric.begin());
+      std::copy(contact->gap(), contact->gap() + nc, c_gap.begin());
+      c_active = next_active;
     }
     std::swap(qm, q);
     std::swap(q, qp);

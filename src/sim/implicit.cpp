@@ -36,6 +36,7 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final, ")");
   for (const auto& l : loads) MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   const bool nonlinear = !s.linear;
+  MORSE_CHECK(s.contact.nodes.empty(), "simulate: contact needs the explicit scheme (-sim_scheme central)");
   MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
   Stats st;
   st.critical_dt = critical_step(m);

@@ -37,6 +37,27 @@ struct ReducedLoad {
 ///    r = 60 1.7k vs 3.0k, r = 79 241 vs 1,190), else Folded.
 enum class KernelLayout { Auto, Folded, Potential };
 
+/// Contact of physical nodes of the basis with a rigid obstacle (seed 003 §3.4; Carpenter,
+/// Taylor & Katona 1991): after the predictor q* of eq. 41, the gaps of the contact nodes are
+/// computed, and forward-increment Lagrange multipliers cancel every penetration exactly
+/// (eq. 42: q = q* + P f_c, P = (M~/h^2 + C~/2h)^-1), with Coulomb friction mu lambda opposing the
+/// predicted sliding velocity. The active set is iterated until every normal multiplier is
+/// compressive. Central differences only.
+struct ContactNode {
+  std::size_t dof = 0;           ///< index of u_x of the node in q (u_y, u_z follow)
+  double x[3] = {0.0, 0.0, 0.0};  ///< reference position
+};
+/// A rigid plane: gap = (x + u - point) . normal, normal pointing into the free side.
+struct Plane {
+  double point[3] = {0.0, 0.0, 0.0};
+  double normal[3] = {0.0, 0.0, 1.0};
+};
+struct ContactSettings {
+  std::vector<ContactNode> nodes;  ///< empty: no contact
+  Plane plane;
+  double mu = 0.15;                ///< Coulomb friction coefficient
+};
+
 /// Time scheme of the reduced model.
 ///  - Central: explicit central differences (eq. 40–41), conditionally stable (critical_step()).
 ///  - Trapezoidal: the implicit scheme of `morse fom` (trapezoidal rule, Newton with the exact
@@ -46,6 +67,7 @@ enum class Scheme { Central, Trapezoidal };
 
 struct Settings {
   Scheme scheme = Scheme::Central;
+  ContactSettings contact;
   double newton_rtol = 1e-8;    ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
   int newton_max_it = 100;   ///< reduced Newton is cheap; stiff constraint modes need many at large dt
   double dt = 0.0;
@@ -61,6 +83,13 @@ struct StepState {
   const double* q = nullptr;  ///< r
   const double* v = nullptr;  ///< r (central difference velocity)
   const nlrom::ReducedModel* model = nullptr;
+  /// Contact (Settings::contact): per contact node, the normal force lambda >= 0 [N], the
+  /// tangential (friction) force vector (3 values per node) and the gap of state q (after the
+  /// correction); null without contact.
+  const double* contact_normal = nullptr;
+  const double* contact_friction = nullptr;
+  const double* gap = nullptr;
+  int active = 0;  ///< nodes in contact
   /// Seed 003 eq. 46: v^T M v / 2 + q^T K q / 2, computed on demand (2 r^2 multiply-adds, a few
   /// per cent of a step at r = 20, so the time loop does not pay for it when nobody asks).
   double energy() const;
