@@ -403,3 +403,67 @@ TEST(Sim, ContactWithRigidPlane) {
   EXPECT_LT(w1, 0.0) << "friction must dissipate";
   EXPECT_LT(std::abs(uy1), std::abs(uy0)) << "friction must hold the face back";
 }
+
+// The seed's casing (eq. 52-53) at rest (omega = 0) with wide bumps that grow in time: it pushes
+// the free face of the damped box inward; no node penetrates, and every node in contact at the
+// end sits exactly on the casing, u . e_r = c0 - (1 - exp(-alpha T)) f(theta) (eq. 53 with g = 0).
+// (Friction along e_theta tilts the stiff face, so only some face nodes stay in contact.)
+TEST(Sim, ContactWithGrowingCasing) {
+  auto m = box(ElementType::Hex8, 4);
+  cb::CBSettings cs;
+  cs.boundary_set = "x1";
+  cs.n_fixed = 3;
+  cs.keep_basis = true;
+  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
+                                 static_cast<PetscInt>(r));
+  // Reference positions of the boundary nodes (in the order of the boundary DOFs), from every rank.
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  std::vector<double> X(3 * nb, 0.0);
+  for (std::size_t k = 0; k < nb; ++k) {
+    const auto loc = m.lm.local_of_global(c.boundary_global_nodes[k]);
+    if (loc >= 0 && m.lm.node_owner[loc] == rank)
+      for (int d = 0; d < 3; ++d) X[3 * k + d] = m.lm.mesh.coords[3 * loc + d];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  sim::Settings s;
+  s.linear = true;
+  s.dt = 0.5 * sim::critical_step(rm);
+  s.t_final = 0.03;
+  s.contact.obstacle = sim::Obstacle::Casing;
+  s.contact.casing.clearance = 1e-3;
+  s.contact.casing.bump_height = 2e-3;
+  s.contact.casing.width = 10.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    sim::ContactNode node;
+    node.dof = 3 * k;
+    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
+    s.contact.nodes.push_back(node);
+  }
+  double min_gap = 1e300;
+  int active = 0;
+  std::vector<double> qT(r), gT(nb), lT(nb);
+  sim::integrate(rm, {}, s, [&](const sim::StepState& x) {
+    for (std::size_t k = 0; k < nb; ++k) min_gap = std::min(min_gap, x.gap[k]), gT[k] = x.gap[k], lT[k] = x.contact_normal[k];
+    active = x.active;
+    std::copy(x.q, x.q + r, qT.begin());
+  });
+  EXPECT_GE(min_gap, -1e-15) << "penetration";
+  EXPECT_GE(active, 1) << "the grown bumps should hold the face";
+  const double alpha = std::log(100.0) / (0.2 * s.t_final), grow = 1.0 - std::exp(-alpha * s.t_final);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double rho = std::hypot(X[3 * k], X[3 * k + 1]), theta = std::atan2(X[3 * k + 1], X[3 * k]);
+    double th = std::fmod(theta, M_PI);
+    if (th < 0) th += M_PI;
+    const double f = 2e-3 * std::exp(-std::pow((th - M_PI / 2) / 10.0, 2));
+    const double ur = (qT[3 * k] * X[3 * k] + qT[3 * k + 1] * X[3 * k + 1]) / rho;
+    if (lT[k] > 0.0) worst = std::max(worst, std::abs(ur - (1e-3 - grow * f)));
+    else EXPECT_GE(gT[k], 0.0);
+  }
+  EXPECT_LT(worst, 1e-12) << "nodes in contact are not on the casing";
+  print0(PETSC_COMM_WORLD, "  casing: %d of %zu nodes in contact, |u_r - (c0 - f)| <= %.2e m, min gap %.2e\n", active,
+         nb, worst, min_gap);
+}

@@ -369,16 +369,10 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   std::vector<double> c_lam, c_fric, c_gap;
   int c_active = 0;
   if (!s.contact.nodes.empty()) {
-    contact.emplace(s.contact, P3, r);
+    contact.emplace(s.contact, P3, r, s.t_final);
     const std::size_t nc = s.contact.nodes.size();
     c_lam.assign(nc, 0.0), c_fric.assign(3 * nc, 0.0), c_gap.assign(nc, 0.0);
-    const double* nv = s.contact.plane.normal;
-    for (std::size_t k = 0; k < nc; ++k) {
-      double g = 0.0;
-      for (int d = 0; d < 3; ++d)
-        g += (s.contact.nodes[k].x[d] + q[s.contact.nodes[k].dof + d] - s.contact.plane.point[d]) * nv[d];
-      c_gap[k] = g;
-    }
+    for (std::size_t k = 0; k < nc; ++k) c_gap[k] = contact->gap_of(k, q.data(), 0.0);
   }
   StepState ss;
   ss.model = &m;
@@ -408,7 +402,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     }
     int next_active = 0;
     if (contact) {
-      contact->correct(qp.data(), qm.data(), h);
+      contact->correct(qp.data(), qm.data(), h, t + h);
       next_active = contact->active();
     }
     bool finite = true;

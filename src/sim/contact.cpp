@@ -11,21 +11,42 @@
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "morse/core/error.hpp"
 
 namespace morse::sim::detail {
 
-ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>& P, std::size_t r)
+ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>& P, std::size_t r, double t_final)
     : c_(c), r_(r), n_(c.nodes.size()) {
-  const double* nv = c.plane.normal;
-  const double nn = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
-  MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn, ")");
   MORSE_CHECK(c.mu >= 0 && std::isfinite(c.mu), "contact: the friction coefficient must be >= 0 (got ", c.mu, ")");
   for (const auto& node : c.nodes)
     MORSE_CHECK(node.dof + 3 <= r, "contact: node DOF ", node.dof, " is outside the reduced coordinates (r = ", r, ")");
-  for (int d = 0; d < 3; ++d) offset_ += c.plane.point[d] * nv[d];
+  normal_.assign(3 * n_, 0.0);
+  slide_.assign(3 * n_, 0.0);
+  theta0_.assign(n_, 0.0);
+  if (c.obstacle == Obstacle::Plane) {
+    const double* nv = c.plane.normal;
+    const double nn = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+    MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn, ")");
+    for (std::size_t k = 0; k < n_; ++k)
+      for (int d = 0; d < 3; ++d) normal_[3 * k + d] = nv[d];
+  } else {
+    const auto& cs = c.casing;
+    MORSE_CHECK(cs.clearance > 0 && cs.bump_height >= 0 && cs.lobes > 0 && cs.width > 0 && cs.alpha >= 0,
+                "contact: the casing needs clearance > 0, bump height >= 0, lobes > 0, width > 0, alpha >= 0");
+    alpha_ = cs.alpha > 0 ? cs.alpha : std::log(100.0) / (0.2 * t_final);
+    const double sgn = cs.omega >= 0 ? 1.0 : -1.0;
+    for (std::size_t k = 0; k < n_; ++k) {
+      const double* x = c.nodes[k].x;
+      const double rho = std::hypot(x[0], x[1]);
+      MORSE_CHECK(rho > 0, "contact: casing contact node ", k, " lies on the rotation axis");
+      normal_[3 * k] = -x[0] / rho, normal_[3 * k + 1] = -x[1] / rho;  // -e_r
+      slide_[3 * k] = -sgn * x[1] / rho, slide_[3 * k + 1] = sgn * x[0] / rho;  // sign(omega) e_theta
+      theta0_[k] = std::atan2(x[1], x[0]);
+    }
+  }
   Pc_.assign(r * 3 * n_, 0.0);
   for (std::size_t i = 0; i < r; ++i)
     for (std::size_t k = 0; k < n_; ++k)
@@ -37,43 +58,72 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
   act_.assign(n_, 0);
 }
 
-void ContactSolver::correct(double* qp, const double* qm, double h) {
-  const double* nv = c_.plane.normal;
+double ContactSolver::gap_of(std::size_t k, const double* q, double t) const {
+  const auto& node = c_.nodes[k];
+  const double* nv = &normal_[3 * k];
+  double g = 0.0;
+  if (c_.obstacle == Obstacle::Plane) {
+    for (int d = 0; d < 3; ++d) g += (node.x[d] + q[node.dof + d] - c_.plane.point[d]) * nv[d];
+    return g;
+  }
+  const auto& cs = c_.casing;
+  const double period = 2.0 * M_PI / cs.lobes;
+  double theta = std::fmod(theta0_[k] + cs.omega * t, period);
+  if (theta < 0) theta += period;
+  const double z = (theta - 0.5 * period) / cs.width;
+  const double f = cs.bump_height * std::exp(-z * z);
+  g = cs.clearance - (1.0 - std::exp(-alpha_ * t)) * f;
+  for (int d = 0; d < 3; ++d) g += q[node.dof + d] * nv[d];  // - u_r
+  return g;
+}
+
+void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
   std::fill(lam_.begin(), lam_.end(), 0.0);
   std::fill(fric_.begin(), fric_.end(), 0.0);
   std::vector<std::size_t> A;
   for (std::size_t k = 0; k < n_; ++k) {
     const auto& node = c_.nodes[k];
-    double g = -offset_, vt[3], vn = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      g += (node.x[d] + qp[node.dof + d]) * nv[d];
-      vt[d] = (qp[node.dof + d] - qm[node.dof + d]) / (2.0 * h);
-      vn += vt[d] * nv[d];
+    const double* nv = &normal_[3 * k];
+    gap_[k] = gap_of(k, qp, t);
+    double tv[3] = {slide_[3 * k], slide_[3 * k + 1], slide_[3 * k + 2]};
+    if (c_.obstacle == Obstacle::Plane) {  // sliding direction: tangential predicted velocity
+      double vn = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        tv[d] = (qp[node.dof + d] - qm[node.dof + d]) / (2.0 * h);
+        vn += tv[d] * nv[d];
+      }
+      double tn = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        tv[d] -= vn * nv[d];
+        tn += tv[d] * tv[d];
+      }
+      tn = std::sqrt(tn);
+      for (int d = 0; d < 3; ++d) tv[d] = tn > 0.0 ? tv[d] / tn : 0.0;
     }
-    gap_[k] = g;
-    // Sliding direction: the tangential part of the predicted velocity.
-    double tn = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      vt[d] -= vn * nv[d];
-      tn += vt[d] * vt[d];
-    }
-    tn = std::sqrt(tn);
-    for (int d = 0; d < 3; ++d) dir_[3 * k + d] = nv[d] - (tn > 0.0 ? c_.mu * vt[d] / tn : 0.0);
-    if (g < 0.0) A.push_back(k);
+    for (int d = 0; d < 3; ++d) dir_[3 * k + d] = nv[d] - c_.mu * tv[d];
+    if (gap_[k] < 0.0) A.push_back(k);
   }
-  while (!A.empty()) {
+  // Active-set iteration: drop the most adhesive node (lambda < 0), or add the node that the
+  // correction pushes deepest into the obstacle, until neither exists.
+  double gscale = 0.0;
+  for (double g : gap_) gscale = std::max(gscale, std::abs(g));
+  const double tol = 1e-12 * gscale;
+  auto coupling = [&](std::size_t a, std::size_t b) {  // n_a^T P(dof_a, dof_b) d_b
+    const auto& ca = c_.nodes[a];
+    const double* nv = &normal_[3 * a];
+    double w = 0.0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) w += nv[i] * Pc_[(ca.dof + i) * 3 * n_ + 3 * b + j] * dir_[3 * b + j];
+    return w;
+  };
+  std::vector<double> lam(n_, 0.0);
+  for (std::size_t iter = 0; iter < 4 * n_ + 4 && !A.empty(); ++iter) {
     const std::size_t na = A.size();
     W_.assign(na * na, 0.0);
     rhs_.assign(na, 0.0);
     for (std::size_t a = 0; a < na; ++a) {
-      const auto& ca = c_.nodes[A[a]];
       rhs_[a] = -gap_[A[a]];
-      for (std::size_t b = 0; b < na; ++b) {
-        double w = 0.0;  // n^T P(dof_a, dof_b) d_b
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) w += nv[i] * Pc_[(ca.dof + i) * 3 * n_ + 3 * A[b] + j] * dir_[3 * A[b] + j];
-        W_[b * na + a] = w;  // column-major for LAPACK
-      }
+      for (std::size_t b = 0; b < na; ++b) W_[b * na + a] = coupling(A[a], A[b]);  // column-major
     }
     PetscBLASInt nn = static_cast<PetscBLASInt>(na), one = 1, info = 0;
     std::vector<PetscBLASInt> piv(na);
@@ -82,27 +132,38 @@ void ContactSolver::correct(double* qp, const double* qm, double h) {
     std::size_t worst = na;
     for (std::size_t a = 0; a < na; ++a)
       if (rhs_[a] < 0.0 && (worst == na || rhs_[a] < rhs_[worst])) worst = a;
-    if (worst == na) {
-      for (std::size_t a = 0; a < na; ++a) lam_[A[a]] = rhs_[a];
+    if (worst != na) {
+      A.erase(A.begin() + static_cast<std::ptrdiff_t>(worst));
+      continue;
+    }
+    std::fill(lam.begin(), lam.end(), 0.0);
+    for (std::size_t a = 0; a < na; ++a) lam[A[a]] = rhs_[a];
+    // Gaps of the inactive nodes after this correction.
+    std::size_t add = n_;
+    double deepest = -tol;
+    for (std::size_t k = 0; k < n_; ++k) {
+      if (std::find(A.begin(), A.end(), k) != A.end()) continue;
+      double g = gap_[k];
+      for (std::size_t a = 0; a < na; ++a) g += coupling(k, A[a]) * lam[A[a]];
+      if (g < deepest) deepest = g, add = k;
+    }
+    if (add == n_) {
+      lam_ = lam;
       break;
     }
-    A.erase(A.begin() + static_cast<std::ptrdiff_t>(worst));
+    A.push_back(add);
   }
   active_ = 0;
   for (std::size_t k = 0; k < n_; ++k) {
     if (lam_[k] == 0.0) continue;
     ++active_;
-    for (int d = 0; d < 3; ++d) fric_[3 * k + d] = lam_[k] * (dir_[3 * k + d] - nv[d]);
+    for (int d = 0; d < 3; ++d) fric_[3 * k + d] = lam_[k] * (dir_[3 * k + d] - normal_[3 * k + d]);
     for (std::size_t i = 0; i < r_; ++i) {
       const double* pc = &Pc_[i * 3 * n_ + 3 * k];
       qp[i] += lam_[k] * (pc[0] * dir_[3 * k] + pc[1] * dir_[3 * k + 1] + pc[2] * dir_[3 * k + 2]);
     }
   }
-  for (std::size_t k = 0; k < n_; ++k) {  // gaps of the corrected state
-    double g = -offset_;
-    for (int d = 0; d < 3; ++d) g += (c_.nodes[k].x[d] + qp[c_.nodes[k].dof + d]) * nv[d];
-    gap_[k] = g;
-  }
+  for (std::size_t k = 0; k < n_; ++k) gap_[k] = gap_of(k, qp, t);  // of the corrected state
 }
 
 }  // namespace morse::sim::detail

@@ -11,10 +11,12 @@ namespace morse::sim::detail {
 class ContactSolver {
  public:
   /// P = (M~/h^2 + C~/2h)^-1 (r x r, row-major), the operator of eq. 42.
-  ContactSolver(const ContactSettings& c, const std::vector<double>& P, std::size_t r);
-  /// Corrects the predictor qp in place (qm = q_{n-1}, for the sliding velocity, h the step) and
-  /// records the forces and gaps of the new state.
-  void correct(double* qp, const double* qm, double h);
+  ContactSolver(const ContactSettings& c, const std::vector<double>& P, std::size_t r, double t_final);
+  /// Corrects the predictor qp of time t in place (qm = q_{n-1}, for the sliding velocity, h the
+  /// step) and records the forces and gaps of the new state.
+  void correct(double* qp, const double* qm, double h, double t);
+  /// Gap of node k at time t for the state q.
+  double gap_of(std::size_t k, const double* q, double t) const;
   const double* normal() const { return lam_.data(); }
   const double* friction() const { return fric_.data(); }
   const double* gap() const { return gap_.data(); }
@@ -24,7 +26,9 @@ class ContactSolver {
   const ContactSettings& c_;
   std::size_t r_, n_;
   std::vector<double> Pc_;    // r x 3n: the columns of P at the contact DOFs
-  double offset_ = 0.0;       // point . normal
+  std::vector<double> normal_, slide_;  // per node: unit normal (free side), casing: fixed sliding direction
+  std::vector<double> theta0_;           // casing: reference angle of each node
+  double alpha_ = 0.0;
   std::vector<double> lam_, fric_, gap_, dir_, W_, rhs_;
   std::vector<int> act_;
   int active_ = 0;

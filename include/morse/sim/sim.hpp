@@ -52,9 +52,25 @@ struct Plane {
   double point[3] = {0.0, 0.0, 0.0};
   double normal[3] = {0.0, 0.0, 1.0};
 };
+/// The seed's rigid casing of revolution about z around a blade rotating at omega (eq. 52–53), in
+/// the blade's frame: gap = c0 - (1 - exp(-alpha t)) f(theta_b(t)) - u_r with theta_b = theta_b0 +
+/// omega t, u_r the displacement along the node's radial direction e_r = (x, y, 0)/|(x, y)|, and
+/// f(theta) = h_b exp(-((theta mod (2 pi / lobes) - pi / lobes) / width)^2) (eq. 52 for 2 lobes).
+/// Friction opposes the sliding of the tip along the casing, i.e. acts along -sign(omega) e_theta.
+struct Casing {
+  double clearance = 0.356e-3;    ///< c0 [m]
+  double bump_height = 0.712e-3;  ///< h_b [m]
+  int lobes = 2;
+  double width = 0.15;            ///< of each bump [rad]
+  double alpha = 0.0;             ///< growth rate [1/s]; 0: 99 % of h_b at 20 % of t_final
+  double omega = 0.0;             ///< rotation speed [rad/s]
+};
+enum class Obstacle { Plane, Casing };
 struct ContactSettings {
   std::vector<ContactNode> nodes;  ///< empty: no contact
+  Obstacle obstacle = Obstacle::Plane;
   Plane plane;
+  Casing casing;
   double mu = 0.15;                ///< Coulomb friction coefficient
 };
 
