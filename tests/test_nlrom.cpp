@@ -102,11 +102,7 @@ TEST_P(NlromByType, ExactTensorsMatchFullModel) {
 TEST_P(NlromByType, StepEqualsExactOnCraigBampton) {
   auto m = box(GetParam(), 2);
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 3;
-  cs.keep_basis = true;
-  auto cbr = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto cbr = test::cb_basis(m, "x1", 3);
   nlrom::StepSettings ss;
   ss.displacement = 0.01;
   ss.chunk = 50;
@@ -213,11 +209,7 @@ double boundary_defect(Mat V, const std::vector<PetscInt>& bdofs) {
 TEST(Nlrom, ModalDerivativesSymmetricAndSolveEq22) {
   auto m = box(ElementType::Hex20, 4);
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 3;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto c = test::cb_basis(m, "x1", 3);
   const PetscInt i = 1, j = c.n_b + 1;  // a constraint mode and a fixed-interface mode
   auto Psi = nlrom::modal_derivatives(svk, c.T.get(), c.boundary_dofs, {{i, j}, {j, i}, {j, j}});
   UVec a, b, Ka, ti, tj, up, y1, y2;

@@ -32,11 +32,7 @@ Model box(ElementType t, int nx) {
 
 TEST(Sim, LinearSuperelementMatchesModalClosedForm) {
   auto m = box(ElementType::Hex8, 4);
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 3;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto c = test::cb_basis(m, "x1", 3);
   auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
   const std::size_t r = rm.r;
   dyn::NodalLoad l;
@@ -105,14 +101,8 @@ TEST(Sim, LinearSuperelementMatchesModalClosedForm) {
 TEST(Sim, NonlinearEnergyBoundedOverMillionSteps) {
   auto m = box(ElementType::Hex8, 6);
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  // Basis: the first 4 fixed-interface modes of the clamped-free beam (boundary: none needed,
-  // use the free end's 'x1' set as boundary with 0 modes... instead take CB with boundary x1 and
-  // keep only the fixed-interface columns).
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 4;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  // Basis: the 4 fixed-interface columns of a CB basis with boundary x1 (no constraint modes).
+  auto c = test::cb_basis(m, "x1", 4);
   UMat V;
   {
     PetscInt ml;
@@ -249,13 +239,9 @@ TEST(Sim, FullBasisReproducesFullModel) {
 TEST(Sim, PotentialKernelMatchesFolded) {
   auto m = box(ElementType::Hex8, 6);
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 18;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto c = test::cb_basis(m, "x1", 18);
   const std::size_t r = 30;
-  ASSERT_EQ(static_cast<std::size_t>(c.n_b + cs.n_fixed), r);
+  ASSERT_EQ(static_cast<std::size_t>(c.n()), r);
   auto exact = nlrom::exact_forces(svk, c.T.get());
   nlrom::StepSettings ss;
   ss.displacement = 1e-3;
@@ -295,11 +281,7 @@ TEST(Sim, PotentialKernelMatchesFolded) {
 // back.
 TEST(Sim, ContactWithRigidPlane) {
   auto m = box(ElementType::Hex8, 4);
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 3;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
   auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
                                  static_cast<PetscInt>(r));
@@ -410,11 +392,7 @@ TEST(Sim, ContactWithRigidPlane) {
 // (Friction along e_theta tilts the stiff face, so only some face nodes stay in contact.)
 TEST(Sim, ContactWithGrowingCasing) {
   auto m = box(ElementType::Hex8, 4);
-  cb::CBSettings cs;
-  cs.boundary_set = "x1";
-  cs.n_fixed = 3;
-  cs.keep_basis = true;
-  auto c = cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
   auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
                                  static_cast<PetscInt>(r));

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/cb/craig_bampton.hpp"
 #include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/fe/model.hpp"
@@ -62,6 +63,16 @@ inline Model assembled_box(MPI_Comm comm, const mesh::BoxSpec& b, const std::vec
   m.dofs = fe::number_dofs(m.lm, clamp);
   m.ops = fe::assemble(m.lm, m.dofs, material);
   return m;
+}
+
+/// Craig–Bampton of an assembled model with the basis kept: `boundary` as the physical nodes and
+/// `n_fixed` fixed-interface modes. Collective.
+inline cb::CBResult cb_basis(const Model& m, const std::string& boundary, PetscInt n_fixed) {
+  cb::CBSettings cs;
+  cs.boundary_set = boundary;
+  cs.n_fixed = n_fixed;
+  cs.keep_basis = true;
+  return cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
 }
 
 /// A DOF vector from a nodal field f(x, y, z, d) on the free DOFs.
