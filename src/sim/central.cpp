@@ -400,11 +400,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       kernel->apply(q.data(), g.data());
       for (std::size_t i = 0; i < r; ++i) qp[i] -= g[i];
     }
-    int next_active = 0;
-    if (contact) {
-      contact->correct(qp.data(), qm.data(), h, t + h);
-      next_active = contact->active();
-    }
+    if (contact) contact->correct(qp.data(), qm.data(), h, t + h);
     bool finite = true;
     for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
     if (!finite)
@@ -424,7 +420,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       std::copy(contact->normal(), contact->normal() + nc, c_lam.begin());
       std::copy(contact->friction(), contact->friction() + 3 * nc, c_fric.begin());
       std::copy(contact->gap(), contact->gap() + nc, c_gap.begin());
-      c_active = next_active;
+      c_active = contact->active();
     }
     std::swap(qm, q);
     std::swap(q, qp);

@@ -55,7 +55,11 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
   fric_.assign(3 * n_, 0.0);
   gap_.assign(n_, 0.0);
   dir_.assign(3 * n_, 0.0);
-  act_.assign(n_, 0);
+  in_set_.assign(n_, 0);
+  set_.reserve(n_ + 1);
+  piv_.assign(n_ + 1, 0);
+  W_.reserve(n_ * n_);
+  rhs_.reserve(n_);
 }
 
 double ContactSolver::gap_of(std::size_t k, const double* q, double t) const {
@@ -80,7 +84,9 @@ double ContactSolver::gap_of(std::size_t k, const double* q, double t) const {
 void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
   std::fill(lam_.begin(), lam_.end(), 0.0);
   std::fill(fric_.begin(), fric_.end(), 0.0);
-  std::vector<std::size_t> A;
+  auto& A = set_;  // active nodes (member storage: no allocation per step)
+  A.clear();
+  std::fill(in_set_.begin(), in_set_.end(), 0);
   for (std::size_t k = 0; k < n_; ++k) {
     const auto& node = c_.nodes[k];
     const double* nv = &normal_[3 * k];
@@ -101,7 +107,7 @@ void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
       for (int d = 0; d < 3; ++d) tv[d] = tn > 0.0 ? tv[d] / tn : 0.0;
     }
     for (int d = 0; d < 3; ++d) dir_[3 * k + d] = nv[d] - c_.mu * tv[d];
-    if (gap_[k] < 0.0) A.push_back(k);
+    if (gap_[k] < 0.0) A.push_back(k), in_set_[k] = 1;
   }
   // Active-set iteration: drop the most adhesive node (lambda < 0), or add the node that the
   // correction pushes deepest into the obstacle, until neither exists.
@@ -116,9 +122,13 @@ void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
       for (int j = 0; j < 3; ++j) w += nv[i] * Pc_[(ca.dof + i) * 3 * n_ + 3 * b + j] * dir_[3 * b + j];
     return w;
   };
-  std::vector<double> lam(n_, 0.0);
-  for (std::size_t iter = 0; iter < 4 * n_ + 4 && !A.empty(); ++iter) {
+  bool settled = A.empty();
+  for (std::size_t iter = 0; iter < 4 * n_ + 4 && !settled; ++iter) {
     const std::size_t na = A.size();
+    if (na == 0) {
+      settled = true;
+      break;
+    }
     W_.assign(na * na, 0.0);
     rhs_.assign(na, 0.0);
     for (std::size_t a = 0; a < na; ++a) {
@@ -126,33 +136,35 @@ void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
       for (std::size_t b = 0; b < na; ++b) W_[b * na + a] = coupling(A[a], A[b]);  // column-major
     }
     PetscBLASInt nn = static_cast<PetscBLASInt>(na), one = 1, info = 0;
-    std::vector<PetscBLASInt> piv(na);
-    LAPACKgesv_(&nn, &one, W_.data(), &nn, piv.data(), rhs_.data(), &nn, &info);
+    LAPACKgesv_(&nn, &one, W_.data(), &nn, piv_.data(), rhs_.data(), &nn, &info);
     MORSE_CHECK(info == 0, "contact: singular contact compliance (LAPACK gesv info ", info, ")");
     std::size_t worst = na;
     for (std::size_t a = 0; a < na; ++a)
       if (rhs_[a] < 0.0 && (worst == na || rhs_[a] < rhs_[worst])) worst = a;
     if (worst != na) {
+      in_set_[A[worst]] = 0;
       A.erase(A.begin() + static_cast<std::ptrdiff_t>(worst));
       continue;
     }
-    std::fill(lam.begin(), lam.end(), 0.0);
-    for (std::size_t a = 0; a < na; ++a) lam[A[a]] = rhs_[a];
     // Gaps of the inactive nodes after this correction.
     std::size_t add = n_;
     double deepest = -tol;
     for (std::size_t k = 0; k < n_; ++k) {
-      if (std::find(A.begin(), A.end(), k) != A.end()) continue;
+      if (in_set_[k]) continue;
       double g = gap_[k];
-      for (std::size_t a = 0; a < na; ++a) g += coupling(k, A[a]) * lam[A[a]];
+      for (std::size_t a = 0; a < na; ++a) g += coupling(k, A[a]) * rhs_[a];
       if (g < deepest) deepest = g, add = k;
     }
     if (add == n_) {
-      lam_ = lam;
+      for (std::size_t a = 0; a < na; ++a) lam_[A[a]] = rhs_[a];
+      settled = true;
       break;
     }
     A.push_back(add);
+    in_set_[add] = 1;
   }
+  MORSE_CHECK(settled, "contact: the active set did not settle in ", 4 * n_ + 4, " iterations at t = ", t,
+              " (cycling between contact states); reduce -sim_dt");
   active_ = 0;
   for (std::size_t k = 0; k < n_; ++k) {
     if (lam_[k] == 0.0) continue;

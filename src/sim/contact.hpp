@@ -2,6 +2,9 @@
 // morse/sim/sim.hpp, ContactSettings).
 #pragma once
 
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
 #include <vector>
 
 #include "morse/sim/sim.hpp"
@@ -30,7 +33,9 @@ class ContactSolver {
   std::vector<double> theta0_;           // casing: reference angle of each node
   double alpha_ = 0.0;
   std::vector<double> lam_, fric_, gap_, dir_, W_, rhs_;
-  std::vector<int> act_;
+  std::vector<std::size_t> set_;  // the active set of the current correction
+  std::vector<int> in_set_;       // membership flags of set_
+  std::vector<PetscBLASInt> piv_;
   int active_ = 0;
 };
 
