@@ -18,6 +18,7 @@
 #include "morse/core/log.hpp"
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/nlrom/nlrom.hpp"
 
 namespace morse::app::detail {
 
@@ -162,8 +163,8 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   if (rank == 0) {
     try {
       std::vector<hsize_t> d;
-      std::vector<double> tf, tr, ef, er, uf, ur, q, snap_t, basis, row;
-      std::vector<std::int64_t> tip_f, tip_r, ids, comps, node_ids;
+      std::vector<double> tf, tr, ef, er, uf, ur, q, snap_t, row;
+      std::vector<std::int64_t> tip_f, tip_r, ids, comps;
       auto need = [&](bool ok) {
         if (!ok) throw Error(err);
       };
@@ -215,20 +216,19 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       need(io::read_double_row(fom, "/fom/snapshots/u", static_cast<std::int64_t>(k), &row, &err));
       MORSE_CHECK(row.size() == ids.size(), "compare: ", fom, ": /fom/snapshots/u has ", row.size(),
                   " columns but the DOF map ", ids.size());
-      need(io::read_doubles(model, "/nlrom/basis", &basis, &d, &err));
-      need(io::read_ints(model, "/mesh/node_ids", &node_ids, &d, &err));
+      // Only the basis is needed (not the tensors): fill the reconstruction part of a StoredModel.
+      nlrom::StoredModel sm;
+      sm.file = model;
+      need(io::read_doubles(model, "/nlrom/basis", &sm.basis, &d, &err));
+      need(io::read_ints(model, "/mesh/node_ids", &sm.node_ids, &d, &err));
       need(io::read_doubles(rom, "/sim/q", &q, &d, &err));
-      const std::size_t r = d.size() == 2 ? d[1] : 0, nn = node_ids.size();
-      MORSE_CHECK(r > 0 && basis.size() == r * nn * 3, "compare: ", model, "'s basis does not match ", rom, "'s q");
+      const std::size_t r = d.size() == 2 ? d[1] : 0;
+      MORSE_CHECK(r > 0 && sm.basis.size() == r * sm.node_ids.size() * 3, "compare: ", model,
+                  "'s basis does not match ", rom, "'s q");
+      sm.model.r = static_cast<PetscInt>(r);
       auto qt = eval::interpolate(tr, q, r, {tsnap});
-      std::map<std::int64_t, std::size_t> pos;
-      for (std::size_t n = 0; n < nn; ++n) pos[node_ids[n]] = n;
-      std::vector<double> x2(ids.size(), 0.0);
-      for (std::size_t j = 0; j < ids.size(); ++j) {
-        auto it = pos.find(ids[j]);
-        MORSE_CHECK(it != pos.end(), "compare: node ", ids[j], " of ", fom, " is not in ", model, " (another mesh?)");
-        for (std::size_t c = 0; c < r; ++c) x2[j] += basis[(c * nn + it->second) * 3 + comps[j]] * qt[c];
-      }
+      std::vector<double> x2;
+      sm.dof_values(sm.dof_rows(ids, comps), qt.data(), &x2);
       ind.e[0] = eval::covariance(row, x2);
     } catch (const std::exception& e) {
       err = e.what();
