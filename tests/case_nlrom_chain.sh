@@ -20,6 +20,20 @@ run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -n
   -nlrom_damping_modal 0.01 -nlrom_damping_modes 2 -out "$d/cb.h5"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 3 \
   "${load[@]}" -nlrom_training_tfinal 2e-3 -out "$d/cbmd.h5"
+# The random control of seed 003 Fig. 9: the same weights W_ij, another (seeded) choice of pairs.
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 3 \
+  "${load[@]}" -nlrom_training_tfinal 2e-3 -nlrom_derivative_selection random -nlrom_derivative_seed 3 \
+  -out "$d/cbmd_random.h5"
+/usr/bin/python3 - "$d/cbmd.h5" "$d/cbmd_random.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+w, rnd = (h5py.File(f, "r")["/nlrom/derivatives"] for f in sys.argv[1:3])
+assert w.attrs["selection"] in (b"weight", "weight") and rnd.attrs["selection"] in (b"random", "random")
+assert np.allclose(w["weights"][:], rnd["weights"][:], rtol=1e-10)
+sw, sr = w["selected"][:], rnd["selected"][:]
+assert sw.sum() == sr.sum() == 3 and not np.array_equal(sw, sr), (sw, sr)
+# By weight: the 3 selected pairs carry the 3 largest weights.
+assert set(np.argsort(-w["weights"][:])[:3]) == set(np.nonzero(sw)[0])
+PY
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis pod -nlrom_num_pod 3 -nlrom_snapshots "$d/fom.h5" \
   -nlrom_filter_pod 0 -out "$d/pod.h5"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_snapshots "$d/fom.h5" \

@@ -384,6 +384,16 @@ TEST(Sim, ContactWithRigidPlane) {
   EXPECT_EQ(w0, 0.0);
   EXPECT_LT(w1, 0.0) << "friction must dissipate";
   EXPECT_LT(std::abs(uy1), std::abs(uy0)) << "friction must hold the face back";
+  // Bad input is refused with a message naming it.
+  sim::Settings bad = s;
+  bad.contact.plane.normal[0] = -2.0;
+  EXPECT_THROW(sim::integrate(rm, {rl}, bad, [](const sim::StepState&) {}), Error);
+  bad = s;
+  bad.contact.mu = -0.1;
+  EXPECT_THROW(sim::integrate(rm, {rl}, bad, [](const sim::StepState&) {}), Error);
+  bad = s;
+  bad.contact.nodes[0].dof = r;
+  EXPECT_THROW(sim::integrate(rm, {rl}, bad, [](const sim::StepState&) {}), Error);
 }
 
 // The seed's casing (eq. 52-53) at rest (omega = 0) with wide bumps that grow in time: it pushes
