@@ -455,3 +455,118 @@ TEST(Sim, ContactWithGrowingCasing) {
   print0(PETSC_COMM_WORLD, "  casing: %d of %zu nodes in contact, |u_r - (c0 - f)| <= %.2e m, min gap %.2e\n", active,
          nb, worst, min_gap);
 }
+
+// The amplitude spectrum of a sampled sinusoid (Hann window): a at its frequency, and a constant
+// offset removed.
+TEST(Sim, AmplitudeSpectrumOfSinusoid) {
+  const double dt = 1e-4, f0 = 250.0, a = 3e-4;
+  std::vector<double> x(20000);
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = 0.7 + a * std::sin(2 * M_PI * f0 * k * dt + 0.3);
+  std::vector<double> f = {0.0, 100.0, 250.0, 400.0};
+  auto A = sim::amplitude_spectrum(x, dt, f);
+  EXPECT_NEAR(A[2], a, 2e-4 * a);
+  EXPECT_LT(A[0], 1e-6 * a);
+  EXPECT_LT(A[1], 1e-4 * a);
+  EXPECT_LT(A[3], 1e-4 * a);
+}
+
+// A speed sweep of the clamped box rubbing its free face on the growing two-lobe casing. Each
+// speed's result is checked against a single run of sim::integrate (the unbatched scheme and
+// kernel) post-processed here, and the sweep on all ranks with 3 lanes per rank (dynamic load
+// balancing) gives bitwise the same results as one rank running the speeds one at a time.
+TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
+  auto m = box(ElementType::Hex8, 4);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  auto c = test::cb_basis(m, "x1", 3);
+  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.01,
+                                 static_cast<PetscInt>(r));
+  rm.g = nlrom::exact_forces(svk, c.T.get());
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  std::vector<double> X(3 * nb, 0.0);
+  for (std::size_t k = 0; k < nb; ++k) {
+    const auto loc = m.lm.local_of_global(c.boundary_global_nodes[k]);
+    if (loc >= 0 && m.lm.node_owner[loc] == rank)
+      for (int d = 0; d < 3; ++d) X[3 * k + d] = m.lm.mesh.coords[3 * loc + d];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  sim::SweepSettings s;
+  s.base.dt = 0.5 * sim::critical_step(rm);
+  s.base.contact.obstacle = sim::Obstacle::Casing;
+  s.base.contact.casing.clearance = 2e-4;
+  s.base.contact.casing.bump_height = 6e-4;
+  s.base.contact.casing.width = 0.3;
+  s.base.contact.mu = 0.15;
+  for (std::size_t k = 0; k < nb; ++k) {
+    sim::ContactNode node;
+    node.dof = 3 * k;
+    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
+    s.base.contact.nodes.push_back(node);
+  }
+  s.revolutions = 3.0;
+  s.monitor.assign(r, 0.0);
+  {
+    const double rho = std::hypot(X[0], X[1]);
+    s.monitor[0] = X[0] / rho, s.monitor[1] = X[1] / rho;  // e_r . u of the first face node
+  }
+  s.spectrum_fmax = 2000.0;
+  s.spectrum_bins = 40;
+  std::vector<sim::SpeedTask> tasks;
+  for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
+  auto run = [&](MPI_Comm comm, int batch) {
+    std::vector<sim::SpeedResult> out(tasks.size());
+    sim::SweepSettings sb = s;
+    sb.batch = batch;
+    sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) { out[static_cast<std::size_t>(R.index)] = R; });
+    return out;
+  };
+  const auto all = run(PETSC_COMM_WORLD, 3);    // rank 0 holds the results
+  const auto one = run(PETSC_COMM_SELF, 1);     // every rank alone, one lane
+  // Bitwise agreement, decided on rank 0 and shared.
+  int same = 1;
+  if (rank == 0)
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      const auto &a = all[i], &b = one[i];
+      same &= a.status == 0 && b.status == 0 && a.steps == b.steps && a.rms == b.rms && a.mean == b.mean &&
+              a.max_displacement == b.max_displacement && a.time_of_max == b.time_of_max && a.max_force == b.max_force &&
+              a.max_node_force == b.max_node_force && a.max_active == b.max_active && a.spectrum == b.spectrum;
+    }
+  MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch";
+  // Against sim::integrate, speed by speed (on every rank, from `one`).
+  int touched = 0;
+  for (std::size_t i = 0; i < tasks.size(); ++i) {
+    sim::Settings si = s.base;
+    si.kernel = sim::KernelLayout::Folded;
+    si.contact.casing.omega = tasks[i].omega;
+    si.t_final = s.revolutions * 2 * M_PI / tasks[i].omega;
+    const long n_steps = static_cast<long>(std::ceil(si.t_final / si.dt - 1e-9)), half = (n_steps + 1) / 2;
+    double sum2 = 0, umax = 0, fmax = 0;
+    long cnt = 0, steps = 0;
+    int act = 0;
+    sim::integrate(rm, {}, si, [&](const sim::StepState& x) {
+      if (x.step == 0) return;
+      steps = x.step;
+      if (x.step > n_steps) return;
+      double u = 0;
+      for (std::size_t j = 0; j < r; ++j) u += s.monitor[j] * x.q[j];
+      umax = std::max(umax, std::abs(u));
+      if (x.step >= half) sum2 += u * u, ++cnt;
+      double tot = 0;
+      for (std::size_t k = 0; k < nb; ++k) tot += x.contact_normal[k];
+      fmax = std::max(fmax, tot);
+      act = std::max(act, x.active);
+    });
+    const auto& R = one[i];
+    EXPECT_EQ(R.steps, n_steps);
+    EXPECT_NEAR(R.rms, std::sqrt(sum2 / cnt), 1e-9 * R.rms) << "omega " << tasks[i].omega;
+    EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);
+    EXPECT_NEAR(R.max_force, fmax, 1e-7 * fmax + 1e-12);
+    EXPECT_EQ(R.max_active, act);
+    touched += R.max_active > 0;
+    print0(PETSC_COMM_WORLD, "  sweep: omega %.0f rad/s, %ld steps, rms %.3e m, max |u_r| %.3e m, max force %.3e N, %d nodes\n",
+           R.omega, R.steps, R.rms, R.max_displacement, R.max_force, R.max_active);
+  }
+  EXPECT_GE(touched, 3) << "the casing should be touched at most speeds";
+}

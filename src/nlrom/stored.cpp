@@ -1,5 +1,9 @@
 // Reading a `morse nlrom` file for the online stage (see morse/nlrom/nlrom.hpp).
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
 #include <cmath>
+#include <map>
 
 #include "core/detail/pack.hpp"
 #include "morse/core/error.hpp"
@@ -52,6 +56,52 @@ void StoredModel::dof_values(const std::vector<std::size_t>& rows, const double*
   }
 }
 
+std::vector<std::size_t> StoredModel::boundary_positions(const std::string& set) const {
+  std::map<std::int64_t, std::size_t> pos;
+  for (std::size_t k = 0; k < boundary_nodes.size(); ++k) pos[boundary_nodes[k]] = k;
+  std::vector<std::size_t> out;
+  for (auto row : sets.at(set)) {
+    auto it = pos.find(node_ids[row]);
+    MORSE_CHECK(it != pos.end(), file, ": node ", node_ids[row], " of set ", set,
+                " is not a physical boundary node of the reduced model (its boundary set has ", boundary_nodes.size(),
+                " nodes); rebuild it with morse nlrom -boundary naming a set that contains ", set);
+    out.push_back(it->second);
+  }
+  return out;
+}
+
+std::vector<double> StoredModel::fit(const std::vector<double>& u, double* rel_residual) const {
+  const std::size_t n = node_ids.size() * 3, nr = r();
+  MORSE_CHECK(u.size() == n, "fit: ", u.size(), " values for ", n, " basis rows");
+  std::vector<double> G(nr * nr, 0.0), q(nr, 0.0);
+  for (std::size_t i = 0; i < nr; ++i) {
+    const double* bi = &basis[i * n];
+    for (std::size_t j = 0; j <= i; ++j) {
+      const double* bj = &basis[j * n];
+      double s = 0.0;
+      for (std::size_t k = 0; k < n; ++k) s += bi[k] * bj[k];
+      G[i * nr + j] = G[j * nr + i] = s;
+    }
+    double s = 0.0;
+    for (std::size_t k = 0; k < n; ++k) s += bi[k] * u[k];
+    q[i] = s;
+  }
+  PetscBLASInt nn = static_cast<PetscBLASInt>(nr), one = 1, info = 0;
+  const char uplo = 'L';
+  LAPACKpotrf_(&uplo, &nn, G.data(), &nn, &info);
+  MORSE_CHECK(info == 0, file, ": the basis is rank deficient (Cholesky of its Gram matrix, info ", info, ")");
+  LAPACKpotrs_(&uplo, &nn, &one, G.data(), &nn, q.data(), &nn, &info);
+  double e = 0.0, t = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    double v = 0.0;
+    for (std::size_t j = 0; j < nr; ++j) v += basis[j * n + k] * q[j];
+    e += (v - u[k]) * (v - u[k]);
+    t += u[k] * u[k];
+  }
+  if (rel_residual) *rel_residual = t > 0 ? std::sqrt(e / t) : 0.0;
+  return q;
+}
+
 StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
@@ -68,11 +118,15 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     ok = ok && io::read_doubles(file, "/nlrom/K", &m.K, &d, &err) && io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) &&
          io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) && io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err) &&
          io::read_doubles(file, "/nlrom/basis", &s.basis, &d, &err) &&
-         io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err);
+         io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err) &&
+         io::read_doubles(file, "/mesh/coordinates", &s.coords, &d, &err) &&
+         io::read_ints(file, "/nlrom/boundary_nodes", &s.boundary_nodes, &d, &err);
     const std::size_t r = static_cast<std::size_t>(m.r);
+    m.n_b = static_cast<PetscInt>(3 * s.boundary_nodes.size());
     m.g.r = r;
     if (ok && (m.K.size() != r * r || m.C.size() != r * r || m.g.A.size() != n_quadratic(r) * r ||
-               m.g.B.size() != n_cubic(r) * r || s.basis.size() != r * s.node_ids.size() * 3)) {
+               m.g.B.size() != n_cubic(r) * r || s.basis.size() != r * s.node_ids.size() * 3 ||
+               s.coords.size() != 3 * s.node_ids.size() || static_cast<std::size_t>(m.n_b) > r)) {
       err = cat(file, ": inconsistent /nlrom datasets (r = ", r, ")");
       ok = false;
     }
@@ -105,6 +159,7 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
       pk.put(m.n_b);
       pk.put_vec(m.M), pk.put_vec(m.K), pk.put_vec(m.C), pk.put_vec(m.g.A), pk.put_vec(m.g.B);
       pk.put_vec(m.damping_omega), pk.put_vec(s.basis), pk.put_vec(s.node_ids);
+      pk.put_vec(s.coords), pk.put_vec(s.boundary_nodes);
       pk.put_str(s.units);
       pk.put<std::uint64_t>(s.sets.size());
       for (const auto& [name, rows] : s.sets) pk.put_str(name), pk.put_vec(rows);
@@ -131,6 +186,8 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     m.damping_omega = up.get_vec<double>();
     s.basis = up.get_vec<double>();
     s.node_ids = up.get_vec<std::int64_t>();
+    s.coords = up.get_vec<double>();
+    s.boundary_nodes = up.get_vec<std::int64_t>();
     s.units = up.get_str();
     const auto ns = up.get<std::uint64_t>();
     for (std::uint64_t i = 0; i < ns; ++i) {

@@ -40,6 +40,46 @@ std::vector<double> matmul(const std::vector<double>& A, const std::vector<doubl
 
 }  // namespace
 
+namespace detail {
+
+void step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
+                    std::vector<double>* P3) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  std::vector<double> D(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) D[i] = 2.0 * m.M[i] + h * m.C[i];
+  D = inverse(D, r);
+  std::vector<double> T1(r * r), T2(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) {
+    T1[i] = 4.0 * m.M[i] - 2.0 * h * h * m.K[i];
+    T2[i] = h * m.C[i] - 2.0 * m.M[i];
+  }
+  *P1 = matmul(D, T1, r), *P2 = matmul(D, T2, r);
+  *P3 = D;
+  for (double& x : *P3) x *= 2.0 * h * h;
+}
+
+void previous_state(const nlrom::ReducedModel& m, double h, bool nonlinear, const std::vector<double>& f0,
+                    const std::vector<double>& q, const std::vector<double>& v, std::vector<double>* qm) {
+  // a0 = M^-1 (f(0) - K q0 - C v0 - g(q0)); q_{-1} = q0 - h v0 + h^2/2 a0.
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  std::vector<double> rhs(f0), g(r, 0.0);
+  if (nonlinear) m.g.evaluate(q.data(), g.data());
+  for (std::size_t i = 0; i < r; ++i) {
+    double x = rhs[i] - g[i];
+    for (std::size_t j = 0; j < r; ++j) x -= m.K[i * r + j] * q[j] + m.C[i * r + j] * v[j];
+    rhs[i] = x;
+  }
+  auto Minv = inverse(m.M, r);
+  qm->assign(r, 0.0);
+  for (std::size_t i = 0; i < r; ++i) {
+    double a = 0.0;
+    for (std::size_t j = 0; j < r; ++j) a += Minv[i * r + j] * rhs[j];
+    (*qm)[i] = q[i] - h * v[i] + 0.5 * h * h * a;
+  }
+}
+
+}  // namespace detail
+
 void initial_state(const Settings& s, std::size_t r, std::vector<double>* q, std::vector<double>* v) {
   MORSE_CHECK(s.q0.empty() || s.q0.size() == r, "simulate: initial q has ", s.q0.size(), " entries, not ", r);
   MORSE_CHECK(s.v0.empty() || s.v0.size() == r, "simulate: initial v has ", s.v0.size(), " entries, not ", r);
@@ -310,18 +350,8 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h, " s is above the critical step of central differences, ",
               st.critical_dt, " s (2 / omega_max of the reduced model); use -sim_dt <= ", st.critical_dt);
   for (const auto& l : loads) MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
-  // Folded operators.
-  std::vector<double> D(r * r);
-  for (std::size_t i = 0; i < r * r; ++i) D[i] = 2.0 * m.M[i] + h * m.C[i];
-  D = inverse(D, r);
-  std::vector<double> T1(r * r), T2(r * r);
-  for (std::size_t i = 0; i < r * r; ++i) {
-    T1[i] = 4.0 * m.M[i] - 2.0 * h * h * m.K[i];
-    T2[i] = h * m.C[i] - 2.0 * m.M[i];
-  }
-  const auto P1 = matmul(D, T1, r), P2 = matmul(D, T2, r);
-  std::vector<double> P3(D);
-  for (double& x : P3) x *= 2.0 * h * h;
+  std::vector<double> P1, P2, P3;
+  detail::step_operators(m, h, &P1, &P2, &P3);
   std::vector<std::vector<double>> lp;  // P3 p_l
   for (const auto& l : loads) {
     std::vector<double> y(r, 0.0);
@@ -342,23 +372,11 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   std::vector<double> qm(r), q, qp(r), v, g(r), tmp(r);
   initial_state(s, r, &q, &v);
 
-  // a0 = M^-1 (f(0) - K q0 - C v0 - g(q0)); q_{-1} = q0 - h v0 + h^2/2 a0.
   {
-    std::vector<double> rhs(r, 0.0);
+    std::vector<double> f0(r, 0.0);
     for (const auto& l : loads)
-      for (std::size_t i = 0; i < r; ++i) rhs[i] += l.factor(0.0) * l.p[i];
-    if (nonlinear) m.g.evaluate(q.data(), g.data());
-    for (std::size_t i = 0; i < r; ++i) {
-      double x = rhs[i] - (nonlinear ? g[i] : 0.0);
-      for (std::size_t j = 0; j < r; ++j) x -= m.K[i * r + j] * q[j] + m.C[i * r + j] * v[j];
-      rhs[i] = x;
-    }
-    auto Minv = inverse(m.M, r);
-    for (std::size_t i = 0; i < r; ++i) {
-      double a = 0.0;
-      for (std::size_t j = 0; j < r; ++j) a += Minv[i * r + j] * rhs[j];
-      qm[i] = q[i] - h * v[i] + 0.5 * h * h * a;
-    }
+      for (std::size_t i = 0; i < r; ++i) f0[i] += l.factor(0.0) * l.p[i];
+    detail::previous_state(m, h, nonlinear, f0, q, v, &qm);
   }
   const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
   // Contact: P = (M/h^2 + C/2h)^-1 = P3. The forces of state n are reported with state n, one

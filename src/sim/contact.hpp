@@ -1,5 +1,6 @@
-// Private to src/sim: the Lagrange-multiplier contact correction of central differences (see
-// morse/sim/sim.hpp, ContactSettings).
+// Private to src/sim: the folded step operators shared by the single and the batched integrators,
+// and the Lagrange-multiplier contact correction of central differences (see morse/sim/sim.hpp,
+// ContactSettings).
 #pragma once
 
 #include <petscsys.h>
@@ -10,6 +11,14 @@
 #include "morse/sim/sim.hpp"
 
 namespace morse::sim::detail {
+
+/// The folded central-difference operators of step h: q_{n+1} = P1 q_n + P2 q_{n-1} + P3 (f - g)
+/// with P3 = 2 h^2 (2M + hC)^-1 (r x r, row-major).
+void step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
+                    std::vector<double>* P3);
+/// q_{-1} = q0 - h v0 + h^2/2 a0, a0 = M^-1 (f0 - K q0 - C v0 - g(q0)) (g = 0 if !nonlinear).
+void previous_state(const nlrom::ReducedModel& m, double h, bool nonlinear, const std::vector<double>& f0,
+                    const std::vector<double>& q, const std::vector<double>& v, std::vector<double>* qm);
 
 class ContactSolver {
  public:

@@ -148,6 +148,8 @@ struct StoredModel {
   std::vector<double> basis;                              ///< [r][node][3]
   std::vector<std::int64_t> node_ids;                     ///< node of each basis row
   std::map<std::string, std::vector<std::size_t>> sets;   ///< node set -> basis rows (ascending id)
+  std::vector<double> coords;                             ///< [node][3] reference positions (/mesh/coordinates)
+  std::vector<std::int64_t> boundary_nodes;               ///< q[3k..3k+2] = u of boundary_nodes[k] (eq. 9)
 
   std::size_t r() const { return static_cast<std::size_t>(model.r); }
   /// Phi^T f for a unit force per node of `set` along `dir` (normalized here).
@@ -160,9 +162,15 @@ struct StoredModel {
                                     const std::vector<std::int64_t>& components) const;
   /// Appends (Phi q) at the DOF rows of dof_rows().
   void dof_values(const std::vector<std::size_t>& rows, const double* q, std::vector<double>* out) const;
+  /// Index k of each node of `set` in boundary_nodes (its u is q[3k..3k+2]), in the set's order.
+  /// Throws naming the first node of the set that is not a physical boundary node of the basis.
+  std::vector<std::size_t> boundary_positions(const std::string& set) const;
+  /// The least-squares coordinates of a nodal field (3 values per basis node): argmin ||Phi q - u||,
+  /// by the normal equations on the stored basis. *rel_residual receives ||Phi q - u|| / ||u||.
+  std::vector<double> fit(const std::vector<double>& u, double* rel_residual) const;
 };
 
-/// Reads /nlrom/{M,K,C,A,B,basis}, /mesh/node_ids, /meta/units and the node sets `sets` of a
+/// Reads /nlrom/{M,K,C,A,B,basis,boundary_nodes}, /mesh/{node_ids,coordinates}, /meta/units and the node sets `sets` of a
 /// `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the
 /// missing or inconsistent dataset, or the missing set (listing the file's sets). Collective.
 StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets);

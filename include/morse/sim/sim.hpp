@@ -146,6 +146,8 @@ class CubicKernel {
   /// Floating-point operations and bytes of coefficients read by one apply().
   double flops() const;
   double bytes() const;
+  /// Folded layout: the (n2 + n3) x r matrix P3 [A; B] transposed (row m: monomial m), row-major.
+  const std::vector<double>& folded() const { return W_; }
 
  private:
   std::size_t r_ = 0, n_ = 0;
@@ -167,5 +169,70 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
 /// The Trapezoidal branch of integrate().
 Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
                             const std::function<void(const StepState&)>& callback);
+
+// ------------------------------------------------------------------------------------------
+// Speed sweeps (interaction maps, seed 003 §5): constant-speed runs against the casing.
+
+/// One speed of a sweep: its index in the sweep's speed grid and Omega [rad/s].
+struct SpeedTask {
+  long index = 0;
+  double omega = 0.0;
+};
+
+/// Everything a constant-speed run of a sweep records (Fig. 23–24 of seed 003).
+struct SpeedResult {
+  long index = -1;
+  double omega = 0.0;
+  int status = 0;           ///< 0 done; 1 failed (error says why; the other fields hold what was reached)
+  std::string error;
+  long steps = 0;           ///< states after the initial one
+  double t_final = 0.0;     ///< revolutions * 2 pi / |Omega|
+  double rms = 0.0;         ///< RMS of the monitored displacement over t >= t_final / 2
+  double mean = 0.0;        ///< its mean over the same window
+  double max_displacement = 0.0, time_of_max = 0.0;  ///< max |monitored displacement| over the run
+  double max_force = 0.0, time_of_max_force = 0.0;   ///< max over time of the total normal force [N]
+  double max_node_force = 0.0;                       ///< max over time and nodes of one normal force
+  int max_active = 0;       ///< most nodes in contact at once
+  double seconds = 0.0;     ///< wall time on its rank (shared with the other lanes of its batch)
+  std::vector<double> spectrum;  ///< amplitude at SweepSettings::frequencies(), same window, mean removed
+};
+
+struct SweepSettings {
+  /// dt, linear, contact (nodes, casing, mu); t_final and casing.omega are set per speed, the
+  /// kernel is the batched folded product. The run starts at rest (no q0, v0, loads).
+  Settings base;
+  double revolutions = 200.0;
+  std::vector<double> monitor;   ///< r: the recorded displacement is monitor . q (e.g. e_r . u at LE)
+  double spectrum_fmax = 0.0;    ///< [Hz]; 0: no spectrum
+  int spectrum_bins = 0;         ///< frequencies k fmax / bins, k = 0..bins
+  int batch = 8;                 ///< speeds advanced together per rank (lanes)
+  /// Progress is printed by rank 0 as results arrive; every finished speed is passed to on_result
+  /// on rank 0 (the checkpoint), in the order they finish.
+  std::vector<double> frequencies() const;
+};
+
+/// Amplitude spectrum of a signal x sampled every dt, at the frequencies f [Hz]: the mean removed,
+/// a Hann window w, A(f) = 2 |sum_k w_k x_k exp(-2 pi i f k dt)| / sum_k w_k (A(0) without the 2),
+/// so that a sinusoid of amplitude a at a frequency of f gives a.
+std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const std::vector<double>& f);
+
+/// Throughput counters of one rank's part of a sweep.
+struct SweepStats {
+  long lane_steps = 0;     ///< sum over speeds of their steps
+  long batch_steps = 0;    ///< passes of the batched kernel
+  double seconds = 0.0;
+  double kernel_seconds = 0.0;  ///< in the batched linear + cubic product
+};
+
+/// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
+/// speeds one at a time (longest first) to whichever rank has a free lane, and also computes.
+/// Each rank advances up to s.batch speeds together, so the cubic force of all its speeds is one
+/// pass over the folded tensor (a matrix-matrix product with the monomials computed on the fly).
+/// The arithmetic of a speed does not depend on which other speeds share its pass, so a speed's
+/// result is bitwise the same on any number of ranks and with any batch. A speed that fails
+/// (NaN, contact that does not settle) is returned with status 1 and does not stop the others.
+/// on_result runs on rank 0 for each finished speed. Collective. Returns this rank's counters.
+SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
+                 const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
 
 }  // namespace morse::sim

@@ -1,0 +1,451 @@
+// Speed sweeps: batched central differences with contact, spread over ranks (see
+// morse/sim/sim.hpp, sweep()).
+//
+// A rank holds up to `batch` speeds ("lanes"), stored lane-inner: Q[j * L + l] is coordinate j of
+// lane l, L a multiple of 4. One pass of the folded cubic tensor W (n x r, row m = monomial m)
+// serves every lane: Y(p, l) = sum_m W(m, p) z_m(l), the monomials z_m(l) of each lane computed on
+// the fly, four rows of W at a time. Every lane's arithmetic (the order of its sums) is fixed by m
+// and p alone, so a speed gives the same bits whichever speeds share its pass.
+#include <petscsys.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <memory>
+
+#include "core/detail/pack.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/sim/sim.hpp"
+#include "sim/contact.hpp"
+
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define MORSE_BATCH_CLONES __attribute__((target_clones("arch=haswell", "default")))
+#else
+#define MORSE_BATCH_CLONES
+#endif
+
+namespace morse::sim {
+
+std::vector<double> SweepSettings::frequencies() const {
+  std::vector<double> f;
+  if (spectrum_fmax <= 0 || spectrum_bins <= 0) return f;
+  for (int k = 0; k <= spectrum_bins; ++k) f.push_back(spectrum_fmax * k / spectrum_bins);
+  return f;
+}
+
+std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const std::vector<double>& f) {
+  std::vector<double> a(f.size(), 0.0);
+  const std::size_t n = x.size();
+  if (n < 2) return a;
+  double mean = 0.0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  double wsum = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double w = 0.5 * (1.0 - std::cos(2.0 * M_PI * static_cast<double>(k) / static_cast<double>(n - 1)));
+    x[k] = (x[k] - mean) * w;
+    wsum += w;
+  }
+  for (std::size_t b = 0; b < f.size(); ++b) {
+    const std::complex<double> rot = std::polar(1.0, -2.0 * M_PI * f[b] * dt);
+    std::complex<double> z(1.0, 0.0), acc(0.0, 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      acc += x[k] * z;
+      z *= rot;
+      if ((k & 1023) == 1023) z /= std::abs(z);  // keep the phasor on the unit circle
+    }
+    a[b] = (b == 0 ? 1.0 : 2.0) * std::abs(acc) / wsum;
+  }
+  return a;
+}
+
+namespace {
+
+constexpr std::size_t kGroup = 4;  // lanes per vector group
+
+// Qp(:, g) = P1 Q(:, g) + P2 Qm(:, g) for the listed groups g.
+MORSE_BATCH_CLONES
+void batch_linear(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict P1,
+                  const double* __restrict P2, const double* __restrict Q, const double* __restrict Qm,
+                  double* __restrict Qp) {
+  for (std::size_t i = 0; i < r; ++i) {
+    const double* __restrict p1 = P1 + i * r;
+    const double* __restrict p2 = P2 + i * r;
+    for (std::size_t gi = 0; gi < ng; ++gi) {
+      const std::size_t g = groups[gi] * kGroup;
+      double a[kGroup] = {0.0, 0.0, 0.0, 0.0};
+      for (std::size_t j = 0; j < r; ++j) {
+        const double* __restrict qj = Q + j * L + g;
+        const double* __restrict mj = Qm + j * L + g;
+        for (std::size_t l = 0; l < kGroup; ++l) a[l] += p1[j] * qj[l] + p2[j] * mj[l];
+      }
+      for (std::size_t l = 0; l < kGroup; ++l) Qp[i * L + g + l] = a[l];
+    }
+  }
+}
+
+// Y(:, g) += sum over the 4 (or fewer) monomial rows in Z (lane-inner, 4 x L) of W(m, :)^T z_m.
+inline __attribute__((always_inline)) void apply_rows(std::size_t r, std::size_t L, const std::size_t* groups,
+                                                      std::size_t ng, const double* __restrict W, std::size_t nrows,
+                                                      const double* __restrict Z, double* __restrict Y) {
+  if (nrows == 4) {
+    const double* __restrict w0 = W;
+    const double* __restrict w1 = W + r;
+    const double* __restrict w2 = W + 2 * r;
+    const double* __restrict w3 = W + 3 * r;
+    for (std::size_t gi = 0; gi < ng; ++gi) {
+      const std::size_t g = groups[gi] * kGroup;
+      const double* __restrict z0 = Z + g;
+      const double* __restrict z1 = Z + L + g;
+      const double* __restrict z2 = Z + 2 * L + g;
+      const double* __restrict z3 = Z + 3 * L + g;
+      for (std::size_t p = 0; p < r; ++p) {
+        double* __restrict y = Y + p * L + g;
+        for (std::size_t l = 0; l < kGroup; ++l) y[l] += w0[p] * z0[l] + w1[p] * z1[l] + w2[p] * z2[l] + w3[p] * z3[l];
+      }
+    }
+    return;
+  }
+  for (std::size_t t = 0; t < nrows; ++t)
+    for (std::size_t gi = 0; gi < ng; ++gi) {
+      const std::size_t g = groups[gi] * kGroup;
+      const double* __restrict z = Z + t * L + g;
+      const double* __restrict w = W + t * r;
+      for (std::size_t p = 0; p < r; ++p) {
+        double* __restrict y = Y + p * L + g;
+        for (std::size_t l = 0; l < kGroup; ++l) y[l] += w[p] * z[l];
+      }
+    }
+}
+
+// Y(:, g) = W^T z(Q(:, g)), z = [q_i q_j (i <= j); q_i q_j q_k (i <= j <= k)] as in CubicKernel.
+MORSE_BATCH_CLONES
+void batch_cubic(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict W,
+                 const double* __restrict Q, double* __restrict Y, double* __restrict Z, double* __restrict QQ) {
+  for (std::size_t gi = 0; gi < ng; ++gi)
+    for (std::size_t p = 0; p < r; ++p)
+      for (std::size_t l = 0; l < kGroup; ++l) Y[p * L + groups[gi] * kGroup + l] = 0.0;
+  std::size_t fill = 0, m = 0;  // rows buffered in Z, first row of the buffer
+  auto flush = [&]() {
+    apply_rows(r, L, groups, ng, W + m * r, fill, Z, Y);
+    m += fill;
+    fill = 0;
+  };
+  // Quadratic monomials; QQ(ij, l) keeps q_i q_j for the cubic ones (r(r+1)/2 x L).
+  std::size_t ij = 0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j, ++ij) {
+      for (std::size_t gi = 0; gi < ng; ++gi) {
+        const std::size_t g = groups[gi] * kGroup;
+        for (std::size_t l = 0; l < kGroup; ++l) {
+          const double v = Q[i * L + g + l] * Q[j * L + g + l];
+          QQ[ij * L + g + l] = v;
+          Z[fill * L + g + l] = v;
+        }
+      }
+      if (++fill == 4) flush();
+    }
+  if (fill) flush();
+  ij = 0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j, ++ij) {
+      for (std::size_t k = j; k < r; ++k) {
+        for (std::size_t gi = 0; gi < ng; ++gi) {
+          const std::size_t g = groups[gi] * kGroup;
+          for (std::size_t l = 0; l < kGroup; ++l) Z[fill * L + g + l] = QQ[ij * L + g + l] * Q[k * L + g + l];
+        }
+        if (++fill == 4) flush();
+      }
+    }
+  if (fill) flush();
+}
+
+struct Lane {
+  bool busy = false;
+  SpeedResult res;
+  std::unique_ptr<ContactSettings> cs;
+  std::unique_ptr<detail::ContactSolver> contact;
+  long n = 0, n_steps = 0, half = 0, sample_every = 1;
+  double sum = 0.0, sum2 = 0.0;
+  long count = 0;
+  std::vector<double> samples;
+  std::chrono::steady_clock::time_point start;
+};
+
+// The lanes of one rank.
+class Batch {
+ public:
+  Batch(const nlrom::ReducedModel& m, const SweepSettings& s) : m_(m), s_(s), r_(static_cast<std::size_t>(m.r)) {
+    const std::size_t want = static_cast<std::size_t>(std::max(1, s.batch));
+    L_ = (want + kGroup - 1) / kGroup * kGroup;
+    detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
+    if (!s.base.linear) {
+      CubicKernel k(m.g, P3_, KernelLayout::Folded);
+      W_ = k.folded();
+    }
+    Q_.assign(r_ * L_, 0.0), Qm_.assign(r_ * L_, 0.0), Qp_.assign(r_ * L_, 0.0), Y_.assign(r_ * L_, 0.0);
+    Z_.assign(4 * L_, 0.0), QQ_.assign(r_ * (r_ + 1) / 2 * L_, 0.0);
+    lanes_.resize(want);
+    col_.resize(r_), colm_.resize(r_);
+    freqs_ = s.frequencies();
+  }
+  std::size_t free_slots() const {
+    std::size_t n = 0;
+    for (const auto& l : lanes_) n += !l.busy;
+    return n;
+  }
+  bool any_busy() const { return free_slots() < lanes_.size(); }
+
+  void start(const SpeedTask& task) {
+    std::size_t slot = 0;
+    while (lanes_[slot].busy) ++slot;
+    Lane& ln = lanes_[slot];
+    ln = Lane();
+    ln.busy = true;
+    ln.start = std::chrono::steady_clock::now();
+    ln.res.index = task.index;
+    ln.res.omega = task.omega;
+    const double h = s_.base.dt;
+    ln.res.t_final = s_.revolutions * 2.0 * M_PI / std::abs(task.omega);
+    ln.n_steps = static_cast<long>(std::ceil(ln.res.t_final / h - 1e-9));
+    ln.half = (ln.n_steps + 1) / 2;
+    if (!freqs_.empty()) ln.sample_every = std::max(1L, static_cast<long>(1.0 / (2.5 * s_.spectrum_fmax * h)));
+    if (!s_.base.contact.nodes.empty()) {
+      ln.cs = std::make_unique<ContactSettings>(s_.base.contact);
+      ln.cs->obstacle = Obstacle::Casing;
+      ln.cs->casing.omega = task.omega;
+      ln.contact = std::make_unique<detail::ContactSolver>(*ln.cs, P3_, r_, ln.res.t_final);
+    }
+    // At rest: q_0 = q_{-1} = 0.
+    for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
+  }
+
+  // One step of every busy lane; finished (or failed) lanes are appended to *done and freed.
+  void step(std::vector<SpeedResult>* done, SweepStats* st) {
+    groups_.clear();
+    for (std::size_t g = 0; g * kGroup < lanes_.size(); ++g) {
+      bool busy = false;
+      for (std::size_t l = g * kGroup; l < std::min(lanes_.size(), (g + 1) * kGroup); ++l) busy = busy || lanes_[l].busy;
+      if (busy) groups_.push_back(g);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    batch_linear(r_, L_, groups_.data(), groups_.size(), P1_.data(), P2_.data(), Q_.data(), Qm_.data(), Qp_.data());
+    if (!s_.base.linear) {
+      batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), Q_.data(), Y_.data(), Z_.data(), QQ_.data());
+      for (auto g : groups_)
+        for (std::size_t p = 0; p < r_; ++p)
+          for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
+    }
+    st->kernel_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++st->batch_steps;
+    const double h = s_.base.dt;
+    for (std::size_t slot = 0; slot < lanes_.size(); ++slot) {
+      Lane& ln = lanes_[slot];
+      if (!ln.busy) continue;
+      ++st->lane_steps;
+      const long n1 = ln.n + 1;  // the state computed now
+      const double t = static_cast<double>(n1) * h;
+      for (std::size_t j = 0; j < r_; ++j) col_[j] = Qp_[j * L_ + slot], colm_[j] = Qm_[j * L_ + slot];
+      bool fail = false;
+      try {
+        if (ln.contact) ln.contact->correct(col_.data(), colm_.data(), h, t);
+        for (std::size_t j = 0; j < r_ && !fail; ++j) fail = !std::isfinite(col_[j]);
+        if (fail)
+          ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
+      } catch (const std::exception& e) {
+        fail = true;
+        ln.res.error = e.what();
+      }
+      if (!fail) {
+        for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];
+        record(ln, n1, t);
+      }
+      ln.n = n1;
+      if (fail || n1 == ln.n_steps) {
+        finish(ln, fail);
+        done->push_back(std::move(ln.res));
+        ln.busy = false;
+        for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = Q_[j * L_ + slot] = 0.0;
+      }
+    }
+    std::swap(Qm_, Q_);
+    std::swap(Q_, Qp_);
+  }
+
+ private:
+  void record(Lane& ln, long n1, double t) {
+    double u = 0.0;
+    for (std::size_t j = 0; j < r_; ++j) u += s_.monitor[j] * col_[j];
+    SpeedResult& R = ln.res;
+    R.steps = n1;
+    if (std::abs(u) > R.max_displacement) R.max_displacement = std::abs(u), R.time_of_max = t;
+    if (n1 >= ln.half) {
+      ln.sum += u, ln.sum2 += u * u, ++ln.count;
+      if (!freqs_.empty() && (n1 - ln.half) % ln.sample_every == 0) ln.samples.push_back(u);
+    }
+    if (ln.contact) {
+      double total = 0.0;
+      const std::size_t nc = ln.cs->nodes.size();
+      const double* lam = ln.contact->normal();
+      for (std::size_t k = 0; k < nc; ++k) total += lam[k], R.max_node_force = std::max(R.max_node_force, lam[k]);
+      if (total > R.max_force) R.max_force = total, R.time_of_max_force = t;
+      R.max_active = std::max(R.max_active, ln.contact->active());
+    }
+  }
+  void finish(Lane& ln, bool fail) {
+    SpeedResult& R = ln.res;
+    R.status = fail ? 1 : 0;
+    if (ln.count > 0) {
+      R.mean = ln.sum / static_cast<double>(ln.count);
+      R.rms = std::sqrt(ln.sum2 / static_cast<double>(ln.count));
+    }
+    if (!freqs_.empty())
+      R.spectrum = fail ? std::vector<double>(freqs_.size(), 0.0)
+                        : amplitude_spectrum(std::move(ln.samples), static_cast<double>(ln.sample_every) * s_.base.dt,
+                                             freqs_);
+    R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - ln.start).count();
+  }
+
+  const nlrom::ReducedModel& m_;
+  const SweepSettings& s_;
+  std::size_t r_, L_;
+  std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, QQ_, col_, colm_, freqs_;
+  std::vector<std::size_t> groups_;
+  std::vector<Lane> lanes_;
+};
+
+void pack(morse::detail::Packer* pk, const SpeedResult& R) {
+  pk->put(R.index), pk->put(R.omega), pk->put(R.status), pk->put_str(R.error), pk->put(R.steps);
+  pk->put(R.t_final), pk->put(R.rms), pk->put(R.mean), pk->put(R.max_displacement), pk->put(R.time_of_max);
+  pk->put(R.max_force), pk->put(R.time_of_max_force), pk->put(R.max_node_force), pk->put(R.max_active);
+  pk->put(R.seconds), pk->put_vec(R.spectrum);
+}
+
+SpeedResult unpack(morse::detail::Unpacker* up) {
+  SpeedResult R;
+  R.index = up->get<long>(), R.omega = up->get<double>(), R.status = up->get<int>(), R.error = up->get_str();
+  R.steps = up->get<long>(), R.t_final = up->get<double>(), R.rms = up->get<double>(), R.mean = up->get<double>();
+  R.max_displacement = up->get<double>(), R.time_of_max = up->get<double>(), R.max_force = up->get<double>();
+  R.time_of_max_force = up->get<double>(), R.max_node_force = up->get<double>(), R.max_active = up->get<int>();
+  R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>();
+  return R;
+}
+
+constexpr int kTagMsg = 7301, kTagTask = 7302;
+constexpr int kResult = 1, kRequest = 2, kBye = 4;
+
+}  // namespace
+
+SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
+                 const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  MORSE_CHECK(s.monitor.size() == r, "sweep: the monitor has ", s.monitor.size(), " entries, not r = ", r);
+  MORSE_CHECK(s.base.dt > 0 && std::isfinite(s.base.dt), "sweep: the time step must be positive (got ", s.base.dt, ")");
+  MORSE_CHECK(s.revolutions > 0, "sweep: the number of revolutions must be positive (got ", s.revolutions, ")");
+  MORSE_CHECK(s.base.linear || m.g.r == r, "sweep: the reduced model has no nonlinear force of size ", r);
+  const double hc = critical_step(m);
+  MORSE_CHECK(s.base.dt <= hc, "sweep: -sim_dt ", s.base.dt, " s is above the critical step of central differences, ",
+              hc, " s; use -sim_dt <= ", hc);
+  for (const auto& t : todo) MORSE_CHECK(t.omega != 0.0 && std::isfinite(t.omega), "sweep: speed ", t.index, " is zero");
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  SweepStats st;
+  const auto t0 = std::chrono::steady_clock::now();
+  Batch batch(m, s);
+  std::vector<SpeedResult> done;
+  if (rank == 0) {
+    double total = 0.0, progress = 0.0;
+    for (const auto& t : todo) total += s.revolutions * 2.0 * M_PI / std::abs(t.omega) / s.base.dt;
+    Progress prog(comm, cat("sweep (", todo.size(), " speeds on ", size, " rank(s))"), std::max(total, 1.0));
+    std::size_t next = 0, received = 0;
+    int byes = 0;
+    auto accept = [&](const SpeedResult& R) {
+      ++received;
+      progress += R.t_final / s.base.dt;
+      prog.update(progress);
+      on_result(R);
+    };
+    auto handle = [&](const MPI_Status& status) {
+      int len = 0;
+      MPI_Get_count(&status, MPI_CHAR, &len);
+      std::vector<char> buf(static_cast<std::size_t>(len));
+      MPI_Recv(buf.data(), len, MPI_CHAR, status.MPI_SOURCE, kTagMsg, comm, MPI_STATUS_IGNORE);
+      morse::detail::Unpacker up(buf);
+      const int flags = up.get<int>();
+      if (flags & kResult) accept(unpack(&up));
+      if (flags & kRequest) {
+        long idx = -1;
+        if (next < todo.size()) idx = static_cast<long>(next++);
+        MPI_Send(&idx, 1, MPI_LONG, status.MPI_SOURCE, kTagTask, comm);
+      }
+      if (flags & kBye) ++byes;
+    };
+    for (;;) {
+      int flag = 1;
+      while (size > 1 && flag) {
+        MPI_Status status;
+        MPI_Iprobe(MPI_ANY_SOURCE, kTagMsg, comm, &flag, &status);
+        if (flag) handle(status);
+      }
+      while (batch.free_slots() > 0 && next < todo.size()) batch.start(todo[next++]);
+      if (batch.any_busy()) {
+        done.clear();
+        batch.step(&done, &st);
+        for (const auto& R : done) accept(R);
+        continue;
+      }
+      if (received == todo.size() && byes == size - 1) break;
+      MPI_Status status;
+      MPI_Probe(MPI_ANY_SOURCE, kTagMsg, comm, &status);
+      handle(status);
+    }
+  } else {
+    long reply = -1;
+    MPI_Request req = MPI_REQUEST_NULL;
+    int outstanding = 0;
+    bool exhausted = false;
+    auto send = [&](int flags, const SpeedResult* R) {
+      morse::detail::Packer pk;
+      pk.put(flags);
+      if (R) pack(&pk, *R);
+      auto& buf = pk.buffer();
+      MPI_Send(buf.data(), static_cast<int>(buf.size()), MPI_CHAR, 0, kTagMsg, comm);
+      if (flags & kRequest)
+        if (outstanding++ == 0) MPI_Irecv(&reply, 1, MPI_LONG, 0, kTagTask, comm, &req);
+    };
+    auto got_reply = [&]() {
+      --outstanding;
+      if (reply < 0) exhausted = true;
+      else batch.start(todo[static_cast<std::size_t>(reply)]);
+      if (outstanding > 0) MPI_Irecv(&reply, 1, MPI_LONG, 0, kTagTask, comm, &req);
+    };
+    for (std::size_t k = batch.free_slots(); k > 0; --k) send(kRequest, nullptr);
+    for (;;) {
+      int flag = 1;
+      while (outstanding > 0 && flag) {
+        MPI_Test(&req, &flag, MPI_STATUS_IGNORE);
+        if (flag) got_reply();
+      }
+      if (batch.any_busy()) {
+        done.clear();
+        batch.step(&done, &st);
+        for (const auto& R : done) send(kResult | (exhausted ? 0 : kRequest), &R);
+        continue;
+      }
+      if (outstanding > 0) {
+        MPI_Wait(&req, MPI_STATUS_IGNORE);
+        got_reply();
+        continue;
+      }
+      send(kBye, nullptr);
+      break;
+    }
+  }
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+}  // namespace morse::sim
