@@ -472,7 +472,7 @@ TEST(Sim, AmplitudeSpectrumOfSinusoid) {
 
 // A speed sweep of the clamped box rubbing its free face on the growing two-lobe casing. Each
 // speed's result is checked against a single run of sim::integrate (the unbatched scheme and
-// kernel) post-processed here, and the sweep on all ranks with 3 lanes per rank (dynamic load
+// kernel) post-processed here, and the sweep on all ranks with 6 lanes per rank (dynamic load
 // balancing) gives bitwise the same results as one rank running the speeds one at a time.
 TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
   auto m = box(ElementType::Hex8, 4);
@@ -521,7 +521,7 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
     sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) { out[static_cast<std::size_t>(R.index)] = R; });
     return out;
   };
-  const auto all = run(PETSC_COMM_WORLD, 3);    // rank 0 holds the results
+  const auto all = run(PETSC_COMM_WORLD, 6);    // two lane groups per pass; rank 0 holds the results
   const auto one = run(PETSC_COMM_SELF, 1);     // every rank alone, one lane
   // Bitwise agreement, decided on rank 0 and shared.
   int same = 1;

@@ -28,7 +28,9 @@ struct SimOptions {
   PetscBool linear = PETSC_FALSE;
   PetscInt every = 1;
   std::vector<std::string> monitor, cases;
-  std::string error;
+  ContactOptions contact;
+  std::vector<double> v0_uniform;  ///< 3 values, or empty
+  bool tfinal_set = false;
 };
 
 PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
@@ -48,7 +50,8 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   if (set) o->out = buf;
   PetscCall(PetscOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
                              nullptr));
-  PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
+  PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
+  o->tfinal_set = set;
   const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
   PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
   PetscCall(PetscOptionsEnum("-sim_scheme",
@@ -88,7 +91,18 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
     PetscCall(PetscOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
     if (set) dest[i]->assign(v.begin(), v.begin() + n);
   }
+  PetscInt n3 = 3;
+  PetscReal u3[3] = {0, 0, 0};
+  PetscCall(PetscOptionsRealArray("-sim_v0_uniform",
+                                  "Initial velocity vx,vy,vz of every node [m/s], fitted on the basis by least squares "
+                                  "(for impact tests; the fit residual is printed)",
+                                  "", u3, &n3, &set));
+  if (set) {
+    if (n3 != 3 && o->contact.error.empty()) o->contact.error = "-sim_v0_uniform needs 3 values vx,vy,vz";
+    o->v0_uniform.assign(u3, u3 + 3);
+  }
   PetscOptionsEnd();
+  PetscCall(get_contact_options(comm, &o->contact));
   o->s.linear = o->linear;
   return PETSC_SUCCESS;
 }
@@ -135,6 +149,16 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     if (t <= so.s.t_final * (1 + 1e-12)) snap_step.push_back(std::lround(t / so.s.dt));
   std::vector<double> time, energy, qh, su, sv, st, qf, vf;
   std::map<std::string, std::vector<double>> hist;
+  // Contact at the output steps: normal force, friction vector, gap, radial displacement e_r . u.
+  const auto& cn = so.s.contact.nodes;
+  const std::size_t nc = cn.size();
+  std::vector<double> c_n, c_t, c_g, c_ur, e_r(3 * nc, 0.0);
+  std::vector<std::int64_t> c_act;
+  double c_max = 0.0, c_tmax = 0.0;
+  for (std::size_t k = 0; k < nc; ++k) {
+    const double rho = std::hypot(cn[k].x[0], cn[k].x[1]);
+    if (rho > 0) e_r[3 * k] = cn[k].x[0] / rho, e_r[3 * k + 1] = cn[k].x[1] / rho;
+  }
   std::size_t next_snap = 0;
   double tf = 0.0;
   auto stats = sim::integrate(sm.model, loads, so.s, [&](const sim::StepState& x) {
@@ -147,7 +171,19 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     qf.assign(x.q, x.q + r);
     vf.assign(x.v, x.v + r);
     tf = x.t;
+    for (std::size_t k = 0; k < nc; ++k)
+      if (x.contact_normal[k] > c_max) c_max = x.contact_normal[k], c_tmax = x.t;
     if (x.step % so.every != 0) return;
+    if (nc) {
+      c_n.insert(c_n.end(), x.contact_normal, x.contact_normal + nc);
+      c_t.insert(c_t.end(), x.contact_friction, x.contact_friction + 3 * nc);
+      c_g.insert(c_g.end(), x.gap, x.gap + nc);
+      c_act.push_back(x.active);
+      for (std::size_t k = 0; k < nc; ++k) {
+        const double* u = x.q + cn[k].dof;
+        c_ur.push_back(e_r[3 * k] * u[0] + e_r[3 * k + 1] * u[1]);
+      }
+    }
     time.push_back(x.t);
     energy.push_back(x.energy());
     qh.insert(qh.end(), x.q, x.q + r);
@@ -188,6 +224,36 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     out.write("/sim/snapshots/dof_components", plan.comps);
     out.attribute("/sim/snapshots", "fom", so.snapshots);
   }
+  if (nc) {
+    const auto nt = static_cast<hsize_t>(time.size()), nn = static_cast<hsize_t>(nc);
+    std::vector<std::int64_t> ids;
+    for (auto k : sm.sets.at(so.contact.set)) ids.push_back(sm.node_ids[k]);
+    out.write("/sim/contact/node_ids", ids);
+    out.write("/sim/contact/normal", c_n, {nt, nn});
+    out.attribute("/sim/contact/normal", "description", "[time][node] normal contact force lambda >= 0 [N]");
+    out.write("/sim/contact/tangential", c_t, {nt, nn, 3});
+    out.attribute("/sim/contact/tangential", "description", "[time][node][x,y,z] Coulomb friction force [N]");
+    out.write("/sim/contact/gap", c_g, {nt, nn});
+    out.attribute("/sim/contact/gap", "description", "[time][node] gap after the correction [m] (>= 0)");
+    out.write("/sim/contact/active", c_act);
+    out.write("/sim/contact/radial_displacement", c_ur, {nt, nn});
+    out.attribute("/sim/contact/radial_displacement", "description",
+                  "[time][node] e_r . u, e_r = (x, y, 0) / |(x, y)| of the node's reference position [m]");
+    out.attribute("/sim/contact", "obstacle", so.contact.obstacle == sim::Obstacle::Casing ? "casing" : "plane");
+    out.attribute("/sim/contact", "mu", so.s.contact.mu);
+    out.attribute("/sim/contact", "max_normal_force", c_max);
+    out.attribute("/sim/contact", "time_of_max_normal_force", c_tmax);
+    if (so.contact.obstacle == sim::Obstacle::Casing) {
+      const auto& cs = so.s.contact.casing;
+      out.attribute("/sim/contact", "omega", cs.omega);
+      out.attribute("/sim/contact", "clearance", cs.clearance);
+      out.attribute("/sim/contact", "bump_height", cs.bump_height);
+      out.attribute_int("/sim/contact", "lobes", cs.lobes);
+      out.attribute("/sim/contact", "width", cs.width);
+      out.attribute("/sim/contact", "alpha", cs.alpha > 0 ? cs.alpha : std::log(100.0) / (0.2 * so.s.t_final));
+    }
+    print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", nc, c_max, c_tmax);
+  }
   out.attribute("/sim", "rom", so.rom);
   if (!c.name.empty()) out.attribute("/sim", "case", c.name);
   out.attribute_int("/sim", "linear", so.s.linear ? 1 : 0);
@@ -222,13 +288,38 @@ void run_simulate(MPI_Comm comm) {
   if (help_requested()) return;
   check_options(comm, true);
   collective_check(comm, load_error);
+  collective_check(comm, so.contact.error);
   MORSE_CHECK(!so.rom.empty(), "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
   std::vector<std::string> sets(so.monitor);
   for (const auto& c : cases)
     for (const auto& l : c.loads) sets.push_back(l.set);
+  if (!so.contact.set.empty()) sets.push_back(so.contact.set);
   const auto sm = nlrom::read_stored_model(comm, so.rom, sets);
   const std::size_t r = sm.r();
+  if (!so.contact.set.empty()) {
+    auto& c = so.s.contact;
+    c.nodes = sim::contact_nodes(sm, so.contact.set);  // throws on every rank alike (same model)
+    c.obstacle = so.contact.obstacle, c.plane = so.contact.plane, c.casing = so.contact.casing, c.mu = so.contact.mu;
+    MORSE_CHECK(so.s.scheme == sim::Scheme::Central,
+                "morse simulate: contact (-contact_set) needs -sim_scheme central (forward-increment Lagrange "
+                "multipliers are explicit)");
+  }
+  if (so.contact.revolutions > 0) {
+    const double w = so.contact.casing.omega;
+    MORSE_CHECK(w != 0.0, "-sim_revolutions needs a rotation speed: give -sim_omega (rad/s)");
+    MORSE_CHECK(!so.tfinal_set, "give either -sim_tfinal or -sim_revolutions, not both");
+    so.s.t_final = so.contact.revolutions * 2.0 * M_PI / std::abs(w);
+  }
+  if (!so.v0_uniform.empty()) {
+    MORSE_CHECK(so.s.v0.empty(), "give either -sim_v0 or -sim_v0_uniform, not both");
+    std::vector<double> u(sm.node_ids.size() * 3);
+    for (std::size_t k = 0; k < u.size(); ++k) u[k] = so.v0_uniform[k % 3];
+    double res = 0.0;
+    so.s.v0 = sm.fit(u, &res);
+    print0(comm, "morse simulate: uniform initial velocity (%g, %g, %g) m/s fitted on the basis, relative residual %.2e\n",
+           u[0], u[1], u[2], res);
+  }
   MORSE_CHECK(so.s.q0.empty() || so.s.q0.size() == r, "-sim_q0 has ", so.s.q0.size(), " values; the model has r = ", r);
   MORSE_CHECK(so.s.v0.empty() || so.s.v0.size() == r, "-sim_v0 has ", so.s.v0.size(), " values; the model has r = ", r);
   SnapshotPlan plan;

@@ -327,3 +327,70 @@ cb::CBSettings cb_settings(const ReduceOptions& r) {
 }
 
 }  // namespace morse::app::detail
+
+namespace morse::app::detail {
+
+PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE, bump_set = PETSC_FALSE;
+  auto bad = [&](const std::string& e) {
+    if (o->error.empty()) o->error = e;
+  };
+  auto& c = o->casing;
+  PetscOptionsBegin(comm, nullptr, "morse contact (seed 003 §3.4: blade tip against a rigid obstacle)", "");
+  PetscCall(PetscOptionsString("-contact_set",
+                               "Node set in contact (physical boundary nodes of the reduced model: its -boundary set "
+                               "or a subset); no contact if not given",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->set = buf;
+  const char* obstacles[] = {"plane", "casing", "Obstacle", "", nullptr};
+  PetscEnum ob = static_cast<PetscEnum>(o->obstacle);
+  PetscCall(PetscOptionsEnum("-contact_obstacle",
+                             "casing (rigid, of revolution about z, two-lobe distortion growing in time: eq. 52-53) or "
+                             "plane (-contact_plane_point, -contact_plane_normal)",
+                             "", obstacles, ob, &ob, nullptr));
+  o->obstacle = static_cast<sim::Obstacle>(ob);
+  PetscCall(PetscOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
+  if (!(o->mu >= 0)) bad(cat("-contact_mu must be >= 0 (got ", o->mu, ")"));
+  PetscInt n = 3;
+  PetscCall(PetscOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
+  if (set && n != 3) bad("-contact_plane_point needs 3 values x,y,z");
+  n = 3;
+  PetscCall(PetscOptionsRealArray("-contact_plane_normal", "Normal of the plane x,y,z, pointing to the free side", "",
+                                  o->plane.normal, &n, &set));
+  if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
+  const double nn = std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
+                              o->plane.normal[2] * o->plane.normal[2]);
+  if (!(nn > 0)) bad("-contact_plane_normal must not be zero");
+  else
+    for (double& x : o->plane.normal) x /= nn;
+  PetscCall(PetscOptionsReal("-casing_clearance", "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
+                             c.clearance, &c.clearance, nullptr));
+  c.bump_height = 2.0 * c.clearance;
+  PetscCall(PetscOptionsReal("-casing_bump_height", "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)", "",
+                             c.bump_height, &c.bump_height, &bump_set));
+  if (!bump_set) c.bump_height = 2.0 * c.clearance;
+  PetscInt lobes = c.lobes;
+  PetscCall(PetscOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)", "", lobes, &lobes,
+                            nullptr));
+  c.lobes = static_cast<int>(lobes);
+  PetscCall(PetscOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)", "", c.width, &c.width,
+                             nullptr));
+  PetscCall(PetscOptionsReal("-casing_alpha",
+                             "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "",
+                             c.alpha, &c.alpha, nullptr));
+  PetscCall(PetscOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)", "", c.omega, &c.omega,
+                             nullptr));
+  PetscCall(PetscOptionsReal("-sim_revolutions", "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
+                             o->revolutions, &o->revolutions, &set));
+  if (set && !(o->revolutions > 0)) bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
+  PetscOptionsEnd();
+  if (!(c.clearance > 0)) bad(cat("-casing_clearance must be positive (got ", c.clearance, " m)"));
+  if (!(c.bump_height >= 0)) bad(cat("-casing_bump_height must be >= 0 (got ", c.bump_height, " m)"));
+  if (c.lobes < 1) bad(cat("-casing_lobes must be >= 1 (got ", c.lobes, ")"));
+  if (!(c.width > 0)) bad(cat("-casing_width must be positive (got ", c.width, " rad)"));
+  if (!(c.alpha >= 0)) bad(cat("-casing_alpha must be >= 0 (got ", c.alpha, " 1/s)"));
+  return PETSC_SUCCESS;
+}
+
+}  // namespace morse::app::detail

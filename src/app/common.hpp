@@ -21,6 +21,7 @@
 #include "morse/io/h5.hpp"
 #include "morse/mesh/mesh.hpp"
 #include "morse/mesh/partition.hpp"
+#include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
 
@@ -102,6 +103,21 @@ PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std:
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
                             const char* prefix = nullptr);
 
+/// Contact and rotation options shared by simulate and sweep (docs/user-guide.md):
+/// -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point x,y,z,
+/// -contact_plane_normal x,y,z (normalized here), -casing_clearance, -casing_bump_height (default
+/// 2 x clearance), -casing_lobes, -casing_width, -casing_alpha, -sim_omega, -sim_revolutions.
+struct ContactOptions {
+  std::string set;
+  sim::Obstacle obstacle = sim::Obstacle::Casing;
+  sim::Plane plane;
+  sim::Casing casing;
+  double mu = 0.15;
+  double revolutions = 0.0;  ///< 0: not given
+  std::string error;         ///< a bad value, naming the option
+};
+PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o);
+
 // The commands, one file each (cmd_<name>.cpp).
 void run_modes(MPI_Comm comm);
 void run_reduce(MPI_Comm comm);
@@ -112,5 +128,6 @@ void run_fom(MPI_Comm comm);
 void run_nlrom(MPI_Comm comm);
 void run_simulate(MPI_Comm comm);
 void run_compare(MPI_Comm comm, const std::vector<std::string>& args);
+void run_sweep(MPI_Comm comm);
 
 }  // namespace morse::app::detail

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <memory>
 
 #include "core/detail/pack.hpp"
@@ -86,80 +87,69 @@ void batch_linear(std::size_t r, std::size_t L, const std::size_t* groups, std::
   }
 }
 
-// Y(:, g) += sum over the 4 (or fewer) monomial rows in Z (lane-inner, 4 x L) of W(m, :)^T z_m.
-inline __attribute__((always_inline)) void apply_rows(std::size_t r, std::size_t L, const std::size_t* groups,
-                                                      std::size_t ng, const double* __restrict W, std::size_t nrows,
-                                                      const double* __restrict Z, double* __restrict Y) {
-  if (nrows == 4) {
-    const double* __restrict w0 = W;
-    const double* __restrict w1 = W + r;
-    const double* __restrict w2 = W + 2 * r;
-    const double* __restrict w3 = W + 3 * r;
-    for (std::size_t gi = 0; gi < ng; ++gi) {
-      const std::size_t g = groups[gi] * kGroup;
-      const double* __restrict z0 = Z + g;
-      const double* __restrict z1 = Z + L + g;
-      const double* __restrict z2 = Z + 2 * L + g;
-      const double* __restrict z3 = Z + 3 * L + g;
-      for (std::size_t p = 0; p < r; ++p) {
-        double* __restrict y = Y + p * L + g;
-        for (std::size_t l = 0; l < kGroup; ++l) y[l] += w0[p] * z0[l] + w1[p] * z1[l] + w2[p] * z2[l] + w3[p] * z3[l];
-      }
+// Y(:, g) = W^T z(Q(:, g)), z = [q_i q_j (i <= j); q_i q_j q_k (i <= j <= k)] as in CubicKernel: a
+// matrix-matrix product (r x n) (n x L) with W in panels of 4 outputs (Wp[pb][m][4], padded with
+// zeros to rp = 4 ceil(r / 4)), blocked by kChunk monomial rows so that the chunk of Z stays in L1
+// across the panels. Register block: 4 outputs x 2 groups of 4 lanes. Each output of each lane
+// is one sum over m in increasing order, whichever groups share the pass.
+constexpr std::size_t kChunk = 256;
+
+template <int NG>
+inline __attribute__((always_inline)) void panel_chunk(std::size_t L, const std::size_t* g, const double* __restrict w,
+                                                       const double* __restrict Z, std::size_t m0, std::size_t m1,
+                                                       double* __restrict Y, std::size_t p0) {
+  double acc[4][NG][kGroup];
+  for (int k = 0; k < 4; ++k)
+    for (int a = 0; a < NG; ++a)
+      for (std::size_t l = 0; l < kGroup; ++l) acc[k][a][l] = Y[(p0 + k) * L + g[a] + l];
+  for (std::size_t m = m0; m < m1; ++m) {
+    const double* __restrict wm = w + 4 * m;
+    for (int a = 0; a < NG; ++a) {
+      const double* __restrict z = Z + m * L + g[a];
+      for (int k = 0; k < 4; ++k)
+        for (std::size_t l = 0; l < kGroup; ++l) acc[k][a][l] += wm[k] * z[l];
     }
-    return;
   }
-  for (std::size_t t = 0; t < nrows; ++t)
-    for (std::size_t gi = 0; gi < ng; ++gi) {
-      const std::size_t g = groups[gi] * kGroup;
-      const double* __restrict z = Z + t * L + g;
-      const double* __restrict w = W + t * r;
-      for (std::size_t p = 0; p < r; ++p) {
-        double* __restrict y = Y + p * L + g;
-        for (std::size_t l = 0; l < kGroup; ++l) y[l] += w[p] * z[l];
-      }
-    }
+  for (int k = 0; k < 4; ++k)
+    for (int a = 0; a < NG; ++a)
+      for (std::size_t l = 0; l < kGroup; ++l) Y[(p0 + k) * L + g[a] + l] = acc[k][a][l];
 }
 
-// Y(:, g) = W^T z(Q(:, g)), z = [q_i q_j (i <= j); q_i q_j q_k (i <= j <= k)] as in CubicKernel.
 MORSE_BATCH_CLONES
-void batch_cubic(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict W,
-                 const double* __restrict Q, double* __restrict Y, double* __restrict Z, double* __restrict QQ) {
-  for (std::size_t gi = 0; gi < ng; ++gi)
-    for (std::size_t p = 0; p < r; ++p)
-      for (std::size_t l = 0; l < kGroup; ++l) Y[p * L + groups[gi] * kGroup + l] = 0.0;
-  std::size_t fill = 0, m = 0;  // rows buffered in Z, first row of the buffer
-  auto flush = [&]() {
-    apply_rows(r, L, groups, ng, W + m * r, fill, Z, Y);
-    m += fill;
-    fill = 0;
-  };
-  // Quadratic monomials; QQ(ij, l) keeps q_i q_j for the cubic ones (r(r+1)/2 x L).
-  std::size_t ij = 0;
-  for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = i; j < r; ++j, ++ij) {
-      for (std::size_t gi = 0; gi < ng; ++gi) {
-        const std::size_t g = groups[gi] * kGroup;
-        for (std::size_t l = 0; l < kGroup; ++l) {
-          const double v = Q[i * L + g + l] * Q[j * L + g + l];
-          QQ[ij * L + g + l] = v;
-          Z[fill * L + g + l] = v;
-        }
+void batch_cubic(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict Wp,
+                 std::size_t n, const double* __restrict Q, double* __restrict Y, double* __restrict Z) {
+  const std::size_t rp = (r + 3) / 4 * 4;
+  // Monomials of every active lane, in the rows of W: quadratic (i <= j), then cubic (i <= j <= k).
+  for (std::size_t gi = 0; gi < ng; ++gi) {
+    const std::size_t g = groups[gi] * kGroup;
+    double* __restrict z2 = Z + g;
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t j = i; j < r; ++j, z2 += L)
+        for (std::size_t l = 0; l < kGroup; ++l) z2[l] = Q[i * L + g + l] * Q[j * L + g + l];
+    const double* qq = Z + g;  // row (i, i) of the quadratic monomials
+    double* __restrict z3 = z2;
+    for (std::size_t i = 0; i < r; ++i) {
+      for (std::size_t j = i; j < r; ++j) {
+        const double* a = qq + (j - i) * L;
+        for (std::size_t k = j; k < r; ++k, z3 += L)
+          for (std::size_t l = 0; l < kGroup; ++l) z3[l] = a[l] * Q[k * L + g + l];
       }
-      if (++fill == 4) flush();
+      qq += (r - i) * L;
     }
-  if (fill) flush();
-  ij = 0;
-  for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = i; j < r; ++j, ++ij) {
-      for (std::size_t k = j; k < r; ++k) {
-        for (std::size_t gi = 0; gi < ng; ++gi) {
-          const std::size_t g = groups[gi] * kGroup;
-          for (std::size_t l = 0; l < kGroup; ++l) Z[fill * L + g + l] = QQ[ij * L + g + l] * Q[k * L + g + l];
-        }
-        if (++fill == 4) flush();
+    for (std::size_t p = 0; p < rp; ++p)
+      for (std::size_t l = 0; l < kGroup; ++l) Y[p * L + g + l] = 0.0;
+  }
+  for (std::size_t gi = 0; gi < ng; gi += 2) {
+    const std::size_t g[2] = {groups[gi] * kGroup, gi + 1 < ng ? groups[gi + 1] * kGroup : 0};
+    for (std::size_t m0 = 0; m0 < n; m0 += kChunk) {
+      const std::size_t m1 = std::min(n, m0 + kChunk);
+      for (std::size_t pb = 0; pb < rp / 4; ++pb) {
+        const double* w = Wp + pb * 4 * n;
+        if (gi + 1 < ng) panel_chunk<2>(L, g, w, Z, m0, m1, Y, 4 * pb);
+        else panel_chunk<1>(L, g, w, Z, m0, m1, Y, 4 * pb);
       }
     }
-  if (fill) flush();
+  }
 }
 
 struct Lane {
@@ -181,12 +171,17 @@ class Batch {
     const std::size_t want = static_cast<std::size_t>(std::max(1, s.batch));
     L_ = (want + kGroup - 1) / kGroup * kGroup;
     detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
+    const std::size_t rp = (r_ + 3) / 4 * 4;
     if (!s.base.linear) {
       CubicKernel k(m.g, P3_, KernelLayout::Folded);
-      W_ = k.folded();
+      const auto& W = k.folded();
+      n_ = W.size() / r_;
+      W_.assign(rp * n_, 0.0);  // panels Wp[pb][m][4]
+      for (std::size_t m = 0; m < n_; ++m)
+        for (std::size_t p = 0; p < r_; ++p) W_[(p / 4) * 4 * n_ + 4 * m + p % 4] = W[m * r_ + p];
+      Z_.assign(n_ * L_, 0.0);
     }
-    Q_.assign(r_ * L_, 0.0), Qm_.assign(r_ * L_, 0.0), Qp_.assign(r_ * L_, 0.0), Y_.assign(r_ * L_, 0.0);
-    Z_.assign(4 * L_, 0.0), QQ_.assign(r_ * (r_ + 1) / 2 * L_, 0.0);
+    Q_.assign(r_ * L_, 0.0), Qm_.assign(r_ * L_, 0.0), Qp_.assign(r_ * L_, 0.0), Y_.assign(rp * L_, 0.0);
     lanes_.resize(want);
     col_.resize(r_), colm_.resize(r_);
     freqs_ = s.frequencies();
@@ -233,7 +228,7 @@ class Batch {
     const auto t0 = std::chrono::steady_clock::now();
     batch_linear(r_, L_, groups_.data(), groups_.size(), P1_.data(), P2_.data(), Q_.data(), Qm_.data(), Qp_.data());
     if (!s_.base.linear) {
-      batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), Q_.data(), Y_.data(), Z_.data(), QQ_.data());
+      batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), n_, Q_.data(), Y_.data(), Z_.data());
       for (auto g : groups_)
         for (std::size_t p = 0; p < r_; ++p)
           for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
@@ -310,8 +305,8 @@ class Batch {
 
   const nlrom::ReducedModel& m_;
   const SweepSettings& s_;
-  std::size_t r_, L_;
-  std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, QQ_, col_, colm_, freqs_;
+  std::size_t r_, L_, n_ = 0;
+  std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, col_, colm_, freqs_;
   std::vector<std::size_t> groups_;
   std::vector<Lane> lanes_;
 };

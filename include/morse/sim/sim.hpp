@@ -74,6 +74,11 @@ struct ContactSettings {
   double mu = 0.15;                ///< Coulomb friction coefficient
 };
 
+/// The contact nodes of node set `set` of a stored model: each node's u_x index in q (it must be
+/// a physical boundary node of the basis; throws naming the first that is not) and its reference
+/// position from /mesh/coordinates.
+std::vector<ContactNode> contact_nodes(const nlrom::StoredModel& sm, const std::string& set);
+
 /// Time scheme of the reduced model.
 ///  - Central: explicit central differences (eq. 40–41), conditionally stable (critical_step()).
 ///  - Trapezoidal: the implicit scheme of `morse fom` (trapezoidal rule, Newton with the exact
@@ -234,5 +239,21 @@ struct SweepStats {
 /// on_result runs on rank 0 for each finished speed. Collective. Returns this rank's counters.
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
+
+/// A sweep file (docs/hdf5-schema.md, /sweep): the settings that define the sweep, the frequency
+/// grid, the model's eigenfrequencies and the finished speeds sorted by index.
+struct SweepRecord {
+  std::string settings;  ///< "key=value" lines; a resumed sweep must match them exactly
+  std::string units = "SI", rom;
+  std::vector<double> frequencies, eigenfrequencies_hz;
+  std::vector<SpeedResult> results;
+  long n_speeds = 0;     ///< size of the whole speed grid
+};
+/// Writes the record atomically (temporary file renamed into place), results sorted by index.
+/// Serial: call on one rank. Throws naming the file if it cannot be written.
+void write_sweep(const std::string& path, SweepRecord rec);
+/// Reads a sweep file written by write_sweep. Returns false (and sets *error) if the file does
+/// not exist or is not a sweep file. Serial.
+bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error);
 
 }  // namespace morse::sim
