@@ -28,3 +28,13 @@ foreach(np 1 2)
   set_tests_properties(case_nlrom_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box FAIL_REGULAR_EXPRESSION "morse: error")
 endforeach()
+
+# Contact and sweeps: simulate against the casing, a sweep killed and resumed (bitwise the same
+# file as an uninterrupted one-rank sweep), and the bad-input refusals.
+foreach(np 1 2)
+  add_test(NAME case_contact_chain_np${np}
+           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_contact_chain.sh ${MORSE_CASE_DIR}/contact_chain_np${np}
+                   $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX} ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
+  set_tests_properties(case_contact_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box)
+endforeach()

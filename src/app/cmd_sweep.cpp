@@ -113,8 +113,10 @@ void run_sweep(MPI_Comm comm) {
     for (std::size_t j = 0; j < r; ++j)
       s.monitor[j] = (x[0] * sm.basis[(j * nn + k) * 3] + x[1] * sm.basis[(j * nn + k) * 3 + 1]) / rho;
   }
-  MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", sim::critical_step(sm.model),
-              " s)");
+  const double hc = sim::critical_step(sm.model);
+  MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", hc, " s)");
+  MORSE_CHECK(so.dt <= hc, "morse sweep: -sim_dt ", so.dt, " s is above the critical step of central differences, ", hc,
+              " s (2 / omega_max of the reduced model); use -sim_dt <= ", hc);
   const long n_speeds =
       so.omega_max == so.omega_min ? 1 : static_cast<long>(std::floor((so.omega_max - so.omega_min) / so.omega_step + 1e-9)) + 1;
   sim::SweepRecord rec;
@@ -166,7 +168,7 @@ void run_sweep(MPI_Comm comm) {
          "morse sweep: %ld speeds %.6g..%.6g rad/s (%ld already in %s), %.6g revolutions each, dt %.4g s (critical %.4g s), "
          "r = %zu, %s, %d lanes per rank on %d rank(s)\n",
          n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step, nd, so.out.c_str(), revolutions, so.dt,
-         sim::critical_step(sm.model), r, so.linear ? "linear" : "nonlinear", s.batch, size);
+         hc, r, so.linear ? "linear" : "nonlinear", s.batch, size);
   sim::SweepStats st;
   {
     StageTimer timer(comm, "Sweep");

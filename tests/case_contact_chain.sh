@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# Case chain of contact and speed sweeps on the generated box (clamped at x0, its free face x1
+# rubbing on the rotating two-lobe casing): nlrom (boundary x1) -> simulate with casing contact
+# (/sim/contact: no penetration, compressive forces) -> sweep. On several ranks the sweep is
+# killed (kill -9) after a few speeds and run again: the resumed file holds bitwise the results
+# of an uninterrupted sweep on one rank. Bad input: a contact set outside the basis, a negative
+# clearance, a step above critical, an unwritable output, a sweep file with other settings.
+# usage: case_contact_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
+set -euo pipefail
+d=$1 morse=$2 np=$3 box=$4 mpiexec=$5
+shift 5
+flags=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do flags+=("$1"); shift; done
+shift
+material=("$@")
+run() { "$mpiexec" "${flags[@]}" -n "$np" "$morse" "$@"; }
+rm -rf "$d" && mkdir -p "$d"
+model=(-mesh "$box" -clamp x0 "${material[@]}")
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
+  -nlrom_damping_modal 0.01 -nlrom_damping_modes 15 -out "$d/cb.h5"
+casing=(-contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3 -contact_mu 0.15)
+run simulate -rom "$d/cb.h5" "${casing[@]}" -sim_omega 1200 -sim_revolutions 2 -sim_dt 4e-6 -out "$d/sim.h5"
+/usr/bin/python3 - "$d/sim.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+c = f["/sim/contact"]
+n, g, act = c["normal"][:], c["gap"][:], c["active"][:]
+assert n.shape == g.shape == (len(f["/sim/time"]), 4) and c["tangential"].shape == n.shape + (3,)
+assert act.max() > 0 and n.max() > 0, "no contact"
+assert n.min() >= 0 and g.min() > -1e-12 * 2e-4, (n.min(), g.min())
+# Coulomb: |friction| = mu lambda on every contact node
+t = np.linalg.norm(c["tangential"][:], axis=2)
+assert np.allclose(t, 0.15 * n, rtol=1e-9, atol=1e-9 * n.max())
+assert abs(f["/sim/time"][-1] - 2 * 2 * np.pi / 1200) < 4e-6
+PY
+sweep=(sweep -rom "$d/cb.h5" "${casing[@]}" -sim_dt 4e-6 -sim_revolutions 150 -sweep_omega_min 800
+       -sweep_omega_max 2000 -sweep_omega_step 100 -sweep_monitor x1 -sweep_spectrum_fmax 3000
+       -sweep_spectrum_bins 60 -sweep_batch 3)
+# The monitor must be one node: the box has no one-node set, so -sweep_monitor x1 must be refused.
+expect_error() {
+  local pattern=$1 file=$2
+  shift 2
+  set +e
+  out=$(run "$@" -out "$file" 2>&1)
+  rc=$?
+  set -e
+  test $rc -ne 0
+  echo "$out" | grep -q -- "$pattern" || { echo "missing '$pattern' in: $out"; exit 1; }
+  test ! -e "$file"
+}
+expect_error '-sweep_monitor x1 has 4 nodes' "$d/bad_monitor.h5" "${sweep[@]}"
+sweep+=(-mesh_node_sets m1)
+# A one-node monitor set cannot be added after nlrom: rebuild with one.
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
+  -nlrom_damping_modal 0.01 -nlrom_damping_modes 15 -mesh_node_sets tipnode \
+  -mesh_node_set_tipnode "$(/usr/bin/python3 -c "import h5py; print(h5py.File('$d/cb.h5','r')['/nlrom/node_sets/x1'][0])")" \
+  -out "$d/cb.h5"
+sweep=(sweep -rom "$d/cb.h5" "${casing[@]}" -sim_dt 4e-6 -sim_revolutions 150 -sweep_omega_min 800
+       -sweep_omega_max 2000 -sweep_omega_step 100 -sweep_monitor tipnode -sweep_spectrum_fmax 3000
+       -sweep_spectrum_bins 60 -sweep_batch 3)
+"$mpiexec" "${flags[@]}" -n 1 "$morse" "${sweep[@]}" -out "$d/full.h5"
+if [ "$np" -gt 1 ]; then
+  # Killed after at least 3 finished speeds, then resumed.
+  "$mpiexec" "${flags[@]}" -n "$np" "$morse" "${sweep[@]}" -out "$d/resumed.h5" > "$d/killed.log" 2>&1 &
+  pid=$!
+  /usr/bin/python3 - "$d/resumed.h5" <<'PY'
+import sys, time, os, h5py
+for _ in range(1200):
+    try:
+        if os.path.exists(sys.argv[1]) and h5py.File(sys.argv[1], "r")["/sweep"].attrs["n_done"] >= 3:
+            break
+    except Exception:
+        pass
+    time.sleep(0.05)
+PY
+  kill -9 -- "$pid" 2>/dev/null || true
+  pkill -9 -f -- "-out $d/resumed.h5" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  done_before=$(/usr/bin/python3 -c "import h5py; print(h5py.File('$d/resumed.h5','r')['/sweep'].attrs['n_done'])")
+  echo "sweep killed with $done_before of 13 speeds in the file"
+  out=$(run "${sweep[@]}" -out "$d/resumed.h5" 2>&1)
+  echo "$out" | grep -q "($done_before already in" || { echo "no resume in: $out"; exit 1; }
+  cmp_file="$d/resumed.h5"
+else
+  cmp_file="$d/full.h5"
+fi
+/usr/bin/python3 - "$d/full.h5" "$cmp_file" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+a, b = (h5py.File(f, "r")["/sweep"] for f in sys.argv[1:3])
+assert a.attrs["n_done"] == b.attrs["n_done"] == 13
+for k in a:
+    if k in ("seconds",):
+        continue
+    x, y = a[k][()], b[k][()]
+    assert np.array_equal(x, y), k
+assert (a["status"][:] == 0).all() and (a["max_active"][:] > 0).sum() >= 5
+assert a["spectrum"].shape == (13, 61) and np.all(np.diff(a["omega"][:]) > 0)
+print("sweep: 13 speeds, bitwise equal to the uninterrupted one-rank sweep")
+PY
+# Bad input: each names the option or file and leaves no file.
+expect_error 'not a physical boundary node' "$d/bad_set.h5" sweep -rom "$d/cb.h5" -contact_set x0 -sim_dt 4e-6 \
+  -sweep_omega_min 800 -sweep_omega_max 900 -sweep_omega_step 100 -sweep_monitor tipnode
+expect_error '-casing_clearance must be positive' "$d/bad_c0.h5" "${sweep[@]}" -casing_clearance -1e-3
+expect_error 'above the critical step' "$d/bad_dt.h5" "${sweep[@]}" -sim_dt 1
+expect_error 'cannot write' "$d/no_such_dir/sw.h5" "${sweep[@]}"
+set +e
+out=$(run "${sweep[@]}" -sim_revolutions 10 -out "$d/full.h5" 2>&1)
+rc=$?
+set -e
+test $rc -ne 0 && echo "$out" | grep -q "other settings"
+expect_error 'not a physical boundary node' "$d/bad_sim.h5" simulate -rom "$d/cb.h5" -contact_set x0 -sim_dt 4e-6 \
+  -sim_tfinal 1e-3
+expect_error '-sim_revolutions needs a rotation speed' "$d/bad_rev.h5" simulate -rom "$d/cb.h5" -contact_set x1 \
+  -sim_dt 4e-6 -sim_revolutions 2
+echo "case: ok: contact chain"
