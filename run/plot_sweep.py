@@ -81,7 +81,10 @@ def crossings(eig, lobes, max_eo, wmin, wmax):
 
 
 def plot_map(runs, prefix, title, max_eo, fmax):
-    runs = [r for r in runs if len(r["omega"]) >= 2 or print(f"{r['path']}: {len(r['omega'])} speed(s), no map")]
+    for r in runs:
+        if len(r["omega"]) < 2:
+            print(f"{r['path']}: {len(r['omega'])} speed(s), no map")
+    runs = [r for r in runs if len(r["omega"]) >= 2]
     if not runs:
         return
     ok = [(r["spectrum"][r["status"] == 0][:, r["frequency"] <= fmax]) for r in runs]
@@ -112,7 +115,7 @@ def plot_map(runs, prefix, title, max_eo, fmax):
             ax.plot(xx, k * xx / (2 * np.pi), color="0.75", lw=0.6)
             fe = k * x1 / (2 * np.pi)
             if fe < 0.98 * fmax:
-                ax.text(x1 - 0.005 * (x1 - x0), fe, f"eo {k}", color="0.85", fontsize=6, ha="right", va="bottom")
+                ax.text(x1 - 0.005 * (x1 - x0), fe, f"eo {k}", color="w", fontsize=6.5, ha="right", va="bottom")
         ax.set_xlim(x0, x1)
         ax.set_xlabel(r"rotation speed $\Omega$ [rad/s]")
         ax.set_title(f"{r['name']} ({os.path.basename(r['path'])})")
@@ -128,9 +131,9 @@ def plot_map(runs, prefix, title, max_eo, fmax):
 def plot_rms(runs, prefix, title, max_eo):
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     failed_label = "failed"
-    for r in runs:
+    for i, r in enumerate(runs):
         w, y, bad = r["omega"], r["rms"] * 1e3, r["status"] != 0
-        ax.plot(w[~bad], y[~bad], "o-", ms=4, label=r["name"])
+        ax.plot(w[~bad], y[~bad], ["o-", "s--"][i], ms=4, label=r["name"])
         for wi, yi in zip(w[bad], y[bad]):
             fin = np.isfinite(yi)  # a failed speed without an RMS goes to the bottom of the axes
             ax.plot(wi, yi if fin else 0.02, "rx", ms=8, mew=2, label=failed_label,
@@ -139,10 +142,18 @@ def plot_rms(runs, prefix, title, max_eo):
     ws = np.concatenate([r["omega"] for r in runs])
     if ws.size:
         lobes = int(runs[0]["settings"].get("lobes", 2))
-        for w, m, k in crossings(runs[0]["eigenfrequencies"], lobes, max_eo, ws.min(), ws.max()):
+        groups = []  # lines closer than 1.5% of the speed range share one label
+        for w, m, k in sorted(crossings(runs[0]["eigenfrequencies"], lobes, max_eo, ws.min(), ws.max())):
             ax.axvline(w, color="0.5", ls=":", lw=1)
-            ax.text(w, 0.98, f"mode {m} / eo {k}", transform=ax.get_xaxis_transform(), rotation=90, fontsize=7,
+            if groups and w - groups[-1][0] < 0.015 * (np.ptp(ws) or 1):
+                groups[-1][1].append(f"mode {m} / eo {k}")
+            else:
+                groups.append((w, [f"mode {m} / eo {k}"]))
+        for w, labels in groups:
+            ax.text(w, 0.98, ", ".join(sorted(labels)), transform=ax.get_xaxis_transform(), rotation=90, fontsize=7,
                     ha="right", va="top", color="0.3")
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo, hi + 0.3 * (hi - lo))  # room for the labels above the curves
     ax.set_xlabel(r"rotation speed $\Omega$ [rad/s]")
     ax.set_ylabel(f"RMS of {runs[0]['settings'].get('monitor', 'monitored')} radial displacement [mm]")
     ax.grid(alpha=0.3)
@@ -157,7 +168,7 @@ def plot_rms(runs, prefix, title, max_eo):
 def summary(r):
     ok = r["status"] == 0
     w, y = r["omega"][ok], r["rms"][ok] * 1e3
-    head = f"{r['name']} ({r['path']}): {len(r['omega'])} speeds, {int((~ok).sum())} failed"
+    head = f"{r['name']} ({r['path']}): {len(r['omega'])} speed(s), {int((~ok).sum())} failed"
     if not len(w):
         print(head + ", no finished speed")
         return
@@ -169,16 +180,20 @@ def summary(r):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("files", nargs="+", metavar="SWEEP.h5")
-    p.add_argument("--out-prefix")
-    p.add_argument("--title")
-    p.add_argument("--max-eo", type=int, default=20)
-    p.add_argument("--fmax", type=float)
+    p = argparse.ArgumentParser(usage="%(prog)s SWEEP.h5 [SWEEP_LINEAR.h5] [options]",
+                                description=__doc__.split("\n\n")[0])
+    p.add_argument("files", nargs="+", metavar="SWEEP.h5", help="one or two morse sweep files")
+    p.add_argument("--out-prefix", help="output prefix (default: first file without .h5)")
+    p.add_argument("--title", help="figure title")
+    p.add_argument("--max-eo", type=int, default=20, help="highest engine order drawn (default 20)")
+    p.add_argument("--fmax", type=float, help="top of the frequency axis [Hz] (default: the top bin)")
     a = p.parse_args()
     if len(a.files) > 2:
         p.error("at most two sweep files")
     runs = [load(f) for f in a.files]
+    if len(runs) == 2 and runs[0]["name"] == runs[1]["name"]:
+        for i, r in enumerate(runs):
+            r["name"] += f" [{i + 1}]"
     prefix = a.out_prefix or (a.files[0][:-3] if a.files[0].endswith(".h5") else a.files[0])
     fmax = a.fmax or max(r["frequency"].max() for r in runs)
     plot_map(runs, prefix, a.title, a.max_eo, fmax)

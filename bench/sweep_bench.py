@@ -1,0 +1,139 @@
+#!/usr/bin/python3
+"""Benchmark of contact runs and speed sweeps (issue 10, seed 003 §5).
+
+usage:
+    /usr/bin/python3 bench/sweep_bench.py                 # meshes/blade_coarse.msh, tip basis, 3 runs
+    /usr/bin/python3 bench/sweep_bench.py --runs 1 --derivatives 20 --mesh meshes/blade.msh
+
+The model: `morse nlrom` with boundary `tip` (8 contact nodes, 24 physical DOFs), --fixed
+fixed-interface modes and --derivatives modal derivatives, exact tensors (r = 24 + fixed + derivatives).
+Parts, each --runs times (medians):
+  - single: `morse simulate` on one core with casing contact at 1,450 rad/s (the unbatched
+    kernel that `auto` picks: potential above r = 56): steps/s;
+  - batch: `morse sweep` on one core with L speeds and -sweep_batch L, L = 1, 4, 8, 16, 32:
+    lane-steps/s and the gain over L = 1 and over the single run; per lane-step the folded
+    product does 2 (n2 + n3) r flops, so the achieved GFLOP/s;
+  - scaling: the same 16-speed sweep (batch 8) on 1 and 2 ranks: efficiency t1 / (2 t2).
+Writes bench/results/sweep_<UTC>_<mesh>_r<r>.json (summary, runs, git, blas).
+Exit status 0 on success, 2 if morse failed.
+"""
+
+import argparse
+import datetime
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+
+from benchlib import RESULTS, ROOT, blas_info, git_info, med, run_mpi
+
+
+def rate(stdout, pattern):
+    m = re.search(pattern, stdout)
+    return float(m.group(1)) if m else None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mesh", default=os.path.join(ROOT, "meshes", "blade_coarse.msh"))
+    ap.add_argument("--fixed", type=int, default=10)
+    ap.add_argument("--derivatives", type=int, default=20)
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--dt", type=float, default=1e-7)
+    ap.add_argument("--revolutions", type=float, default=0.1, help="per speed in the batch part")
+    ap.add_argument("--lanes", default="1,4,8,16,32")
+    args = ap.parse_args()
+    morse = os.path.join(ROOT, "build", "morse")
+    if not os.path.exists(morse):
+        sys.exit("sweep_bench: build morse first (run/test or cmake --build build)")
+    work = tempfile.mkdtemp(prefix="sweep_bench_")
+    rom = os.path.join(work, "rom.h5")
+    res, _ = run_mpi("nlrom", [morse, "nlrom", "-mesh", args.mesh, "-clamp", "root", "-boundary", "tip",
+                               "-nlrom_basis", "cbmd", "-nlrom_num_fixed_modes", str(args.fixed),
+                               "-nlrom_num_derivatives", str(args.derivatives), "-nlrom_training_tfinal", "0.0314",
+                               "-nlrom_damping_modal", "5e-4", "-nlrom_damping_modes", "10", "-nlrom_forces", "exact",
+                               "-load_sets", "LE", "-load_LE_dir", "y", "-load_LE_amplitude", "300",
+                               "-load_LE_omega", "2000", "-out", rom], 2, work, 1)
+    if res is None:
+        return 2
+    casing = ["-contact_set", "tip", "-sim_dt", str(args.dt)]
+    runs = {"single": [], "batch": {}, "scaling": {"1": [], "2": []}}
+    r_size = None
+    # Single runs (unbatched kernel) at 1,450 rad/s.
+    for _ in range(args.runs):
+        res, _ = run_mpi("simulate", [morse, "simulate", "-rom", rom, "-sim_omega", "1450", "-sim_revolutions",
+                                      str(args.revolutions), "-sim_output_every", "1000",
+                                      "-out", os.path.join(work, "sim.h5")] + casing, 1, work, 1)
+        if res is None:
+            return 2
+        r_size = int(rate(res["stdout"], r"r = (\d+)"))
+        runs["single"].append({"steps_per_s": rate(res["stdout"], r"steps in [\d.]+ s \(([\d.e+]+) steps/s"),
+                               "kernel": re.search(r"kernel: (\w+)", res["stdout"]).group(1)
+                               if "kernel:" in res["stdout"] else "linear"})
+    lanes = [int(x) for x in args.lanes.split(",")]
+
+    def sweep(n_speeds, batch, ranks, revolutions):
+        res, _ = run_mpi("sweep", [morse, "sweep", "-rom", rom, "-sweep_omega_min", "1000", "-sweep_omega_max",
+                                   str(1000 + n_speeds - 1), "-sweep_omega_step", "1", "-sim_revolutions",
+                                   str(revolutions), "-sweep_batch", str(batch), "-sweep_monitor", "LE",
+                                   "-sweep_spectrum_bins", "50", "-sweep_restart",
+                                   "-out", os.path.join(work, "sweep.h5")] + casing, ranks, work, 1)
+        if res is None:
+            return None
+        return {"lane_steps_per_s": rate(res["stdout"], r"s, ([\d.e+]+) steps/s over all ranks"),
+                "seconds": rate(res["stdout"], r"speeds in ([\d.]+) s"),
+                "kernel_percent": rate(res["stdout"], r"([\d.]+)% in the batched kernel"),
+                "max_rss_mb": res.get("rank_max_rss_mb")}
+
+    for L in lanes:
+        runs["batch"][str(L)] = []
+        for _ in range(args.runs):
+            x = sweep(L, L, 1, args.revolutions)
+            if x is None:
+                return 2
+            runs["batch"][str(L)].append(x)
+    for ranks in (1, 2):
+        for _ in range(args.runs):
+            x = sweep(16, 8, ranks, args.revolutions)
+            if x is None:
+                return 2
+            runs["scaling"][str(ranks)].append(x)
+    n2 = r_size * (r_size + 1) // 2
+    n3 = r_size * (r_size + 1) * (r_size + 2) // 6
+    flops = 2.0 * (n2 + n3) * r_size + 4.0 * r_size * r_size
+    single = med([x["steps_per_s"] for x in runs["single"]])
+    batch = {L: med([x["lane_steps_per_s"] for x in runs["batch"][str(L)]]) for L in lanes}
+    t1 = med([x["seconds"] for x in runs["scaling"]["1"]])
+    t2 = med([x["seconds"] for x in runs["scaling"]["2"]])
+    summary = {
+        "r": r_size, "dt": args.dt, "flops_per_lane_step_folded": flops,
+        "single_steps_per_s": single, "single_kernel": runs["single"][0]["kernel"],
+        "batch_lane_steps_per_s": {str(L): batch[L] for L in lanes},
+        "batch_gain_over_one_lane": {str(L): batch[L] / batch[lanes[0]] for L in lanes},
+        "batch_gain_over_single_run": {str(L): batch[L] / single for L in lanes},
+        "batch_gflops": {str(L): batch[L] * flops * 1e-9 for L in lanes},
+        "sweep16_seconds_1_rank": t1, "sweep16_seconds_2_ranks": t2, "scaling_efficiency_2_ranks": t1 / (2 * t2),
+    }
+    print("sweep_bench: r = %d, dt = %g s, %d run(s) per point (medians)" % (r_size, args.dt, args.runs))
+    print("  single run (unbatched %s kernel, contact): %.0f steps/s" % (summary["single_kernel"], single))
+    for L in lanes:
+        print("  batch %2d lanes: %8.0f lane-steps/s, x%.2f over 1 lane, x%.2f over the single run, %.1f GFLOP/s"
+              % (L, batch[L], summary["batch_gain_over_one_lane"][str(L)], summary["batch_gain_over_single_run"][str(L)],
+                 summary["batch_gflops"][str(L)]))
+    print("  16-speed sweep: %.2f s on 1 rank, %.2f s on 2 ranks: efficiency %.1f %%" % (t1, t2, 100 * t1 / (2 * t2)))
+    stamp = datetime.datetime.utcnow().strftime("%Y-%m-%dT%H%M%SZ")
+    name = os.path.splitext(os.path.basename(args.mesh))[0]
+    os.makedirs(RESULTS, exist_ok=True)
+    path = os.path.join(RESULTS, "sweep_%s_%s_r%d.json" % (stamp, name, r_size))
+    with open(path, "w") as f:
+        json.dump({"summary": summary, "runs": runs, "args": vars(args), "git": git_info(), "blas": blas_info(morse)},
+                  f, indent=1)
+    print("sweep_bench: wrote %s" % path)
+    shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
