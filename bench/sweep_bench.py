@@ -10,10 +10,11 @@ fixed-interface modes and --derivatives modal derivatives, exact tensors (r = 24
 Parts, each --runs times (medians):
   - single: `morse simulate` on one core with casing contact at 1,450 rad/s (the unbatched
     kernel that `auto` picks: potential above r = 56): steps/s;
-  - batch: `morse sweep` on one core with L speeds and -sweep_batch L, L = 1, 4, 8, 16, 32:
+  - batch: `morse sweep -sweep_batched` on one core with L speeds and -sweep_batch L, L = 1, 4, 8, 16, 32:
     lane-steps/s and the gain over L = 1 and over the single run; per lane-step the folded
     product does 2 (n2 + n3) r flops, so the achieved GFLOP/s;
-  - scaling: the same 16-speed sweep (batch 8) on 1 and 2 ranks: efficiency t1 / (2 t2).
+  - scaling: the same 16-speed sweep (batch 8, the default per-lane kernel) on 1 and 2 ranks:
+    efficiency t1 / (2 t2).
 Writes bench/results/sweep_<UTC>_<mesh>_r<r>.json (summary, runs, git, blas).
 Exit status 0 on success, 2 if morse failed.
 """
@@ -74,12 +75,13 @@ def main():
                                if "kernel:" in res["stdout"] else "linear"})
     lanes = [int(x) for x in args.lanes.split(",")]
 
-    def sweep(n_speeds, batch, ranks, revolutions):
+    def sweep(n_speeds, batch, ranks, revolutions, batched):
         res, _ = run_mpi("sweep", [morse, "sweep", "-rom", rom, "-sweep_omega_min", "1000", "-sweep_omega_max",
                                    str(1000 + n_speeds - 1), "-sweep_omega_step", "1", "-sim_revolutions",
                                    str(revolutions), "-sweep_batch", str(batch), "-sweep_monitor", "LE",
                                    "-sweep_spectrum_bins", "50", "-sweep_restart",
-                                   "-out", os.path.join(work, "sweep.h5")] + casing, ranks, work, 1)
+                                   "-out", os.path.join(work, "sweep.h5")] + casing +
+                                  (["-sweep_batched"] if batched else []), ranks, work, 1)
         if res is None:
             return None
         return {"lane_steps_per_s": rate(res["stdout"], r"s, ([\d.e+]+) steps/s over all ranks"),
@@ -90,13 +92,13 @@ def main():
     for L in lanes:
         runs["batch"][str(L)] = []
         for _ in range(args.runs):
-            x = sweep(L, L, 1, args.revolutions)
+            x = sweep(L, L, 1, args.revolutions, True)
             if x is None:
                 return 2
             runs["batch"][str(L)].append(x)
     for ranks in (1, 2):
         for _ in range(args.runs):
-            x = sweep(16, 8, ranks, args.revolutions)
+            x = sweep(16, 8, ranks, args.revolutions, False)
             if x is None:
                 return 2
             runs["scaling"][str(ranks)].append(x)

@@ -514,26 +514,33 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
   s.spectrum_bins = 40;
   std::vector<sim::SpeedTask> tasks;
   for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
-  auto run = [&](MPI_Comm comm, int batch) {
+  auto run = [&](MPI_Comm comm, int batch, bool batched) {
     std::vector<sim::SpeedResult> out(tasks.size());
     sim::SweepSettings sb = s;
     sb.batch = batch;
+    sb.batched = batched;
     sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) { out[static_cast<std::size_t>(R.index)] = R; });
     return out;
   };
-  const auto all = run(PETSC_COMM_WORLD, 6);    // two lane groups per pass; rank 0 holds the results
-  const auto one = run(PETSC_COMM_SELF, 1);     // every rank alone, one lane
-  // Bitwise agreement, decided on rank 0 and shared.
-  int same = 1;
-  if (rank == 0)
-    for (std::size_t i = 0; i < tasks.size(); ++i) {
-      const auto &a = all[i], &b = one[i];
-      same &= a.status == 0 && b.status == 0 && a.steps == b.steps && a.rms == b.rms && a.mean == b.mean &&
-              a.max_displacement == b.max_displacement && a.time_of_max == b.time_of_max && a.max_force == b.max_force &&
-              a.max_node_force == b.max_node_force && a.max_active == b.max_active && a.spectrum == b.spectrum;
-    }
-  MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
-  EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch";
+  // Both kernels: the batched pass and the auto kernel lane by lane.
+  std::vector<sim::SpeedResult> one, lane;
+  for (bool batched : {true, false}) {
+    const auto all = run(PETSC_COMM_WORLD, 6, batched);  // two lane groups per pass; rank 0 holds the results
+    auto alone = run(PETSC_COMM_SELF, 1, batched);       // every rank alone, one lane
+    // Bitwise agreement, decided on rank 0 and shared.
+    int same = 1;
+    if (rank == 0)
+      for (std::size_t i = 0; i < tasks.size(); ++i) {
+        const auto &a = all[i], &b = alone[i];
+        same &= a.status == 0 && b.status == 0 && a.steps == b.steps && a.rms == b.rms && a.mean == b.mean &&
+                a.max_displacement == b.max_displacement && a.time_of_max == b.time_of_max &&
+                a.max_force == b.max_force && a.max_node_force == b.max_node_force && a.max_active == b.max_active &&
+                a.spectrum == b.spectrum;
+      }
+    MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+    EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (batched " << batched << ")";
+    (batched ? one : lane) = std::move(alone);
+  }
   // Against sim::integrate, speed by speed (on every rank, from `one`).
   int touched = 0;
   for (std::size_t i = 0; i < tasks.size(); ++i) {
@@ -559,6 +566,7 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
       act = std::max(act, x.active);
     });
     const auto& R = one[i];
+    EXPECT_NEAR(lane[i].rms, R.rms, 1e-9 * R.rms) << "per-lane vs batched kernel";
     EXPECT_EQ(R.steps, n_steps);
     EXPECT_NEAR(R.rms, std::sqrt(sum2 / cnt), 1e-9 * R.rms) << "omega " << tasks[i].omega;
     EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);

@@ -24,7 +24,7 @@ struct SweepOptions {
   std::string rom, out = "sweep.h5", monitor = "LE";
   double omega_min = 0, omega_max = 0, omega_step = 0, dt = 0, fmax = 10000.0;
   PetscInt bins = 500, batch = 8;
-  PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE;
+  PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, batched = PETSC_FALSE;
   ContactOptions contact;
 };
 
@@ -53,6 +53,10 @@ PetscErrorCode get_sweep_options(MPI_Comm comm, SweepOptions* o) {
                             o->bins, &o->bins, nullptr));
   PetscCall(PetscOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
                             o->batch, &o->batch, nullptr));
+  PetscCall(PetscOptionsBool("-sweep_batched",
+                             "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
+                             "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
+                             "", o->batched, &o->batched, nullptr));
   PetscCall(PetscOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
   PetscOptionsEnd();
@@ -65,10 +69,10 @@ std::string settings_text(const SweepOptions& o, const sim::SweepSettings& s, st
   std::snprintf(b, sizeof b,
                 "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
-                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\n",
+                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n",
                 o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
                 s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes, c.width,
-                c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins);
+                c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
   return b;
 }
 
@@ -102,6 +106,7 @@ void run_sweep(MPI_Comm comm) {
   s.spectrum_fmax = so.fmax;
   s.spectrum_bins = static_cast<int>(so.bins);
   s.batch = static_cast<int>(so.batch);
+  s.batched = so.batched;
   {
     const auto& rows = sm.sets.at(so.monitor);
     MORSE_CHECK(rows.size() == 1, "-sweep_monitor ", so.monitor, " has ", rows.size(), " nodes; give a set of one node");
@@ -166,9 +171,9 @@ void run_sweep(MPI_Comm comm) {
   MPI_Comm_size(comm, &size);
   print0(comm,
          "morse sweep: %ld speeds %.6g..%.6g rad/s (%ld already in %s), %.6g revolutions each, dt %.4g s (critical %.4g s), "
-         "r = %zu, %s, %d lanes per rank on %d rank(s)\n",
+         "r = %zu, %s, %d lanes per rank (%s kernel) on %d rank(s)\n",
          n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step, nd, so.out.c_str(), revolutions, so.dt,
-         hc, r, so.linear ? "linear" : "nonlinear", s.batch, size);
+         hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane", size);
   sim::SweepStats st;
   {
     StageTimer timer(comm, "Sweep");
@@ -181,7 +186,7 @@ void run_sweep(MPI_Comm comm) {
   MPI_Allreduce(MPI_IN_PLACE, &lane_steps, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &kernel, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
-  print0(comm, "morse sweep: %zu speeds in %.2f s, %.4g steps/s over all ranks (%.4g per rank), %.0f%% in the batched kernel\n",
+  print0(comm, "morse sweep: %zu speeds in %.2f s, %.4g steps/s over all ranks (%.4g per rank), %.0f%% in the force kernels\n",
          todo.size(), wall, wall > 0 ? lane_steps / wall : 0.0, wall > 0 ? lane_steps / wall / size : 0.0,
          wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
   std::string failed;

@@ -172,7 +172,10 @@ class Batch {
     L_ = (want + kGroup - 1) / kGroup * kGroup;
     detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
     const std::size_t rp = (r_ + 3) / 4 * 4;
-    if (!s.base.linear) {
+    if (!s.base.linear && !s.batched) {
+      lane_kernel_ = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Auto);
+      y_.assign(r_, 0.0);
+    } else if (!s.base.linear) {
       CubicKernel k(m.g, P3_, KernelLayout::Folded);
       const auto& W = k.folded();
       n_ = W.size() / r_;
@@ -227,7 +230,14 @@ class Batch {
     }
     const auto t0 = std::chrono::steady_clock::now();
     batch_linear(r_, L_, groups_.data(), groups_.size(), P1_.data(), P2_.data(), Q_.data(), Qm_.data(), Qp_.data());
-    if (!s_.base.linear) {
+    if (lane_kernel_) {
+      for (std::size_t slot = 0; slot < lanes_.size(); ++slot) {
+        if (!lanes_[slot].busy) continue;
+        for (std::size_t j = 0; j < r_; ++j) col_[j] = Q_[j * L_ + slot];
+        lane_kernel_->apply(col_.data(), y_.data());
+        for (std::size_t p = 0; p < r_; ++p) Qp_[p * L_ + slot] -= y_[p];
+      }
+    } else if (!s_.base.linear) {
       batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), n_, Q_.data(), Y_.data(), Z_.data());
       for (auto g : groups_)
         for (std::size_t p = 0; p < r_; ++p)
@@ -309,6 +319,8 @@ class Batch {
   std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, col_, colm_, freqs_;
   std::vector<std::size_t> groups_;
   std::vector<Lane> lanes_;
+  std::unique_ptr<CubicKernel> lane_kernel_;  // !batched
+  std::vector<double> y_;
 };
 
 void pack(morse::detail::Packer* pk, const SpeedResult& R) {
