@@ -28,6 +28,22 @@ Model box(ElementType t, int nx) {
   return test::assembled_box(PETSC_COMM_WORLD, test::box_spec(t, 1.0, 0.2, 0.2, nx, 1, 1));
 }
 
+// Reference positions of the CB boundary nodes (x y z, in the order of the boundary DOFs), on
+// every rank.
+std::vector<double> boundary_positions(const Model& m, const cb::CBResult& c) {
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  const std::size_t nb = static_cast<std::size_t>(c.n_b) / 3;
+  std::vector<double> X(3 * nb, 0.0);
+  for (std::size_t k = 0; k < nb; ++k) {
+    const auto loc = m.lm.local_of_global(c.boundary_global_nodes[k]);
+    if (loc >= 0 && m.lm.node_owner[loc] == rank)
+      for (int d = 0; d < 3; ++d) X[3 * k + d] = m.lm.mesh.coords[3 * loc + d];
+  }
+  MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  return X;
+}
+
 }  // namespace
 
 TEST(Sim, LinearSuperelementMatchesModalClosedForm) {
@@ -409,13 +425,7 @@ TEST(Sim, ContactWithGrowingCasing) {
   // Reference positions of the boundary nodes (in the order of the boundary DOFs), from every rank.
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
-  std::vector<double> X(3 * nb, 0.0);
-  for (std::size_t k = 0; k < nb; ++k) {
-    const auto loc = m.lm.local_of_global(c.boundary_global_nodes[k]);
-    if (loc >= 0 && m.lm.node_owner[loc] == rank)
-      for (int d = 0; d < 3; ++d) X[3 * k + d] = m.lm.mesh.coords[3 * loc + d];
-  }
-  MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  const auto X = boundary_positions(m, c);
   sim::Settings s;
   s.linear = true;
   s.dt = 0.5 * sim::critical_step(rm);
@@ -484,13 +494,7 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
   rm.g = nlrom::exact_forces(svk, c.T.get());
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
-  std::vector<double> X(3 * nb, 0.0);
-  for (std::size_t k = 0; k < nb; ++k) {
-    const auto loc = m.lm.local_of_global(c.boundary_global_nodes[k]);
-    if (loc >= 0 && m.lm.node_owner[loc] == rank)
-      for (int d = 0; d < 3; ++d) X[3 * k + d] = m.lm.mesh.coords[3 * loc + d];
-  }
-  MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  const auto X = boundary_positions(m, c);
   sim::SweepSettings s;
   s.base.dt = 0.5 * sim::critical_step(rm);
   s.base.contact.obstacle = sim::Obstacle::Casing;
