@@ -28,6 +28,19 @@ Model box(ElementType t, int nx) {
   return test::assembled_box(PETSC_COMM_WORLD, test::box_spec(t, 1.0, 0.2, 0.2, nx, 1, 1));
 }
 
+// The basis that spans the whole space: the identity on the free DOFs (n x n, K's row layout).
+UMat identity_basis(const Model& b) {
+  const PetscInt n = b.dofs.n_global;
+  PetscInt first = 0, last = 0;
+  MORSE_CALL(MatGetOwnershipRange(b.ops.K.get(), &first, &last));
+  UMat V;
+  MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, last - first, PETSC_DECIDE, n, n, nullptr, V.ptr()));
+  for (PetscInt i = first; i < last; ++i) MORSE_CALL(MatSetValue(V.get(), i, i, 1.0, INSERT_VALUES));
+  MORSE_CALL(MatAssemblyBegin(V.get(), MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(V.get(), MAT_FINAL_ASSEMBLY));
+  return V;
+}
+
 // Reference positions of the CB boundary nodes (x y z, in the order of the boundary DOFs), on
 // every rank.
 std::vector<double> boundary_positions(const Model& m, const cb::CBResult& c) {
@@ -169,14 +182,9 @@ TEST(Sim, NonlinearEnergyBoundedOverMillionSteps) {
 TEST(Sim, FullBasisReproducesFullModel) {
   auto b = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.05, 0.05, 4, 1, 1));
   fe::Svk svk(b.lm, b.dofs, test::steel(), b.ops.K.get());
-  const PetscInt n = b.dofs.n_global;
   PetscInt first = 0, last = 0;
   MORSE_CALL(MatGetOwnershipRange(b.ops.K.get(), &first, &last));
-  UMat V;
-  MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, last - first, PETSC_DECIDE, n, n, nullptr, V.ptr()));
-  for (PetscInt i = first; i < last; ++i) MORSE_CALL(MatSetValue(V.get(), i, i, 1.0, INSERT_VALUES));
-  MORSE_CALL(MatAssemblyBegin(V.get(), MAT_FINAL_ASSEMBLY));
-  MORSE_CALL(MatAssemblyEnd(V.get(), MAT_FINAL_ASSEMBLY));
+  UMat V = identity_basis(b);
   auto rm = nlrom::project_model(PETSC_COMM_WORLD, V.get(), b.ops.K.get(), b.ops.M.get(), 0.0, 0);
   rm.g = nlrom::exact_forces(svk, V.get());
   const double E = test::steel().E, EI = E * std::pow(0.05, 4) / 12.0;
@@ -597,13 +605,7 @@ TEST(Sim, BarImpactOnRigidWallMatchesWaveSolution) {
   auto impact = [&](int nx, double* duration, double* rebound, double* energy_ratio, double* depth) {
     auto b = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, L, 0.05, 0.05, nx, 1, 1), {}, mat);
     const PetscInt n = b.dofs.n_global;
-    PetscInt first = 0, last = 0;
-    MORSE_CALL(MatGetOwnershipRange(b.ops.K.get(), &first, &last));
-    UMat V;
-    MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, last - first, PETSC_DECIDE, n, n, nullptr, V.ptr()));
-    for (PetscInt i = first; i < last; ++i) MORSE_CALL(MatSetValue(V.get(), i, i, 1.0, INSERT_VALUES));
-    MORSE_CALL(MatAssemblyBegin(V.get(), MAT_FINAL_ASSEMBLY));
-    MORSE_CALL(MatAssemblyEnd(V.get(), MAT_FINAL_ASSEMBLY));
+    UMat V = identity_basis(b);
     auto rm = nlrom::project_model(PETSC_COMM_WORLD, V.get(), b.ops.K.get(), b.ops.M.get(), 0.0, 0);
     const std::size_t r = static_cast<std::size_t>(n);
     // The x = 0 face: global DOF of u_x and the position of each node, from every rank.

@@ -378,7 +378,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       for (std::size_t i = 0; i < r; ++i) f0[i] += l.factor(0.0) * l.p[i];
     detail::previous_state(m, h, nonlinear, f0, q, v, &qm);
   }
-  const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
+  const long n_steps = detail::step_count(s.t_final, h);
   // Contact: P = (M/h^2 + C/2h)^-1 = P3. The forces of state n are reported with state n, one
   // step after they are computed, so they are kept one step.
   std::optional<detail::ContactSolver> contact;

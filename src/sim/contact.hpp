@@ -6,11 +6,16 @@
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
+#include <cmath>
 #include <vector>
 
 #include "morse/sim/sim.hpp"
 
 namespace morse::sim::detail {
+
+/// Steps of length h that reach t_final (the last one may end just past it), as every integrator
+/// of src/sim counts them.
+inline long step_count(double t_final, double h) { return static_cast<long>(std::ceil(t_final / h - 1e-9)); }
 
 /// The folded central-difference operators of step h: q_{n+1} = P1 q_n + P2 q_{n-1} + P3 (f - g)
 /// with P3 = 2 h^2 (2M + hC)^-1 (r x r, row-major).

@@ -17,6 +17,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/sim/sim.hpp"
+#include "sim/contact.hpp"
 
 namespace morse::sim {
 
@@ -65,7 +66,7 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   ss.q = q0.data();
   ss.v = v0.data();
   callback(ss);
-  const long n_steps = static_cast<long>(std::ceil(s.t_final / h - 1e-9));
+  const long n_steps = detail::step_count(s.t_final, h);
   std::vector<PetscBLASInt> piv(r);
   const auto t_start = std::chrono::steady_clock::now();
   for (long n = 1; n <= n_steps; ++n) {

@@ -167,7 +167,7 @@ struct Lane {
 // The lanes of one rank.
 class Batch {
  public:
-  Batch(const nlrom::ReducedModel& m, const SweepSettings& s) : m_(m), s_(s), r_(static_cast<std::size_t>(m.r)) {
+  Batch(const nlrom::ReducedModel& m, const SweepSettings& s) : s_(s), r_(static_cast<std::size_t>(m.r)) {
     const std::size_t want = static_cast<std::size_t>(std::max(1, s.batch));
     L_ = (want + kGroup - 1) / kGroup * kGroup;
     detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
@@ -207,7 +207,7 @@ class Batch {
     ln.res.omega = task.omega;
     const double h = s_.base.dt;
     ln.res.t_final = s_.revolutions * 2.0 * M_PI / std::abs(task.omega);
-    ln.n_steps = static_cast<long>(std::ceil(ln.res.t_final / h - 1e-9));
+    ln.n_steps = detail::step_count(ln.res.t_final, h);
     ln.half = (ln.n_steps + 1) / 2;
     if (!freqs_.empty()) ln.sample_every = std::max(1L, static_cast<long>(1.0 / (2.5 * s_.spectrum_fmax * h)));
     if (!s_.base.contact.nodes.empty()) {
@@ -244,7 +244,6 @@ class Batch {
           for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
     }
     st->kernel_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ++st->batch_steps;
     const double h = s_.base.dt;
     for (std::size_t slot = 0; slot < lanes_.size(); ++slot) {
       Lane& ln = lanes_[slot];
@@ -313,7 +312,6 @@ class Batch {
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - ln.start).count();
   }
 
-  const nlrom::ReducedModel& m_;
   const SweepSettings& s_;
   std::size_t r_, L_, n_ = 0;
   std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, col_, colm_, freqs_;

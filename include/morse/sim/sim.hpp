@@ -216,8 +216,7 @@ struct SweepSettings {
   /// the 2-core EPYC at r = 54 (bench/sweep_bench.py): 2,200 lane-steps/s batched (16 lanes, 7
   /// GFLOP/s) against 4,100 steps/s for the potential kernel lane by lane, hence the default.
   bool batched = false;
-  /// Progress is printed by rank 0 as results arrive; every finished speed is passed to on_result
-  /// on rank 0 (the checkpoint), in the order they finish.
+  /// The frequency grid of the spectrum (empty without one).
   std::vector<double> frequencies() const;
 };
 
@@ -229,7 +228,6 @@ std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const s
 /// Throughput counters of one rank's part of a sweep.
 struct SweepStats {
   long lane_steps = 0;     ///< sum over speeds of their steps
-  long batch_steps = 0;    ///< passes of the batched kernel
   double seconds = 0.0;
   double kernel_seconds = 0.0;  ///< in the batched linear + cubic product
 };
@@ -241,7 +239,8 @@ struct SweepStats {
 /// per lane). The arithmetic of a speed does not depend on which other speeds share its pass, so a speed's
 /// result is bitwise the same on any number of ranks and with any batch. A speed that fails
 /// (NaN, contact that does not settle) is returned with status 1 and does not stop the others.
-/// on_result runs on rank 0 for each finished speed. Collective. Returns this rank's counters.
+/// on_result runs on rank 0 for each finished speed, in the order they finish (the checkpoint);
+/// rank 0 prints the progress as results arrive. Collective. Returns this rank's counters.
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
 
