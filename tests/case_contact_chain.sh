@@ -5,6 +5,9 @@
 # killed (kill -9) after a few speeds and run again: the resumed file holds bitwise the results
 # of an uninterrupted sweep on one rank. Bad input: a contact set outside the basis, a negative
 # clearance, a step above critical, an unwritable output, a sweep file with other settings.
+# morse stress at the time of the largest radial displacement of one tip node: the time and u = Phi q
+# there agree with the simulation's record, np ranks give bitwise the one-rank file, and its bad
+# input (a time outside the run, an unknown measure, no -sim, a monitor of 4 nodes) is refused.
 # usage: case_contact_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
 d=$1 morse=$2 np=$3 box=$4 mpiexec=$5
@@ -58,6 +61,40 @@ run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -n
 sweep=(sweep -rom "$d/cb.h5" "${casing[@]}" -sim_dt 4e-6 -sim_revolutions 150 -sweep_omega_min 800
        -sweep_omega_max 2000 -sweep_omega_step 100 -sweep_monitor tipnode -sweep_spectrum_fmax 3000
        -sweep_spectrum_bins 60 -sweep_batch 3)
+# Stress at the time of the largest |u_r| at tipnode (morse stress): the time and the displacement
+# agree with the simulation's own record, and np ranks write bitwise the one-rank file.
+run simulate -rom "$d/cb.h5" "${casing[@]}" -sim_omega 1200 -sim_revolutions 2 -sim_dt 4e-6 -out "$d/sim2.h5"
+run stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" -stress_monitor tipnode -out "$d/stress.h5"
+"$mpiexec" "${flags[@]}" -n 1 "$morse" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" -stress_monitor tipnode \
+  -out "$d/stress1.h5"
+/usr/bin/python3 - "$d/sim2.h5" "$d/stress.h5" "$d/stress1.h5" "$d/cb.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+sim, st, st1, rom = (h5py.File(f, "r") for f in sys.argv[1:5])
+tip = rom["/nlrom/node_sets/tipnode"][0]
+k = list(sim["/sim/contact/node_ids"][:]).index(tip)
+ur = sim["/sim/contact/radial_displacement"][:, k]
+i = int(np.argmax(np.abs(ur)))
+s = st["/stress"]
+assert s.attrs["step"] == i and s.attrs["time"] == sim["/sim/time"][i], (s.attrs["step"], i)
+assert s.attrs["measure"] in (b"nonlinear", "nonlinear")
+n = list(st["/mesh/node_ids"][:]).index(tip)
+X = st["/mesh/coordinates"][n]
+u = st["/stress/displacement"][0, n]
+assert abs((u[0] * X[0] + u[1] * X[1]) / np.hypot(X[0], X[1]) - ur[i]) <= 1e-12 * abs(ur[i]), "u = Phi q at the monitor"
+vm = st["/stress/von_mises"][0]
+assert vm.max() > 0 and abs(vm.max() - s.attrs["max_nodal_von_mises"]) == 0
+for key in ("displacement", "von_mises", "stress", "von_mises_element", "von_mises_element_max"):
+    assert np.array_equal(st["/stress/" + key][()], st1["/stress/" + key][()]), key
+print("stress: t_max %.6g s, max von Mises %.4g MPa, bitwise equal on 1 rank" % (s.attrs["time"], vm.max() / 1e6))
+PY
+grep -q 'Attribute Name="von_mises_1" AttributeType="Scalar" Center="Node"' "$d/stress.xdmf"
+expect_error 'lies outside the simulation' "$d/bad_t.h5" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
+  -stress_time 1
+expect_error '-stress_measure plastic: unknown' "$d/bad_m.h5" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
+  -stress_measure plastic
+expect_error 'no simulation given' "$d/bad_sim2.h5" stress "${model[@]}" -rom "$d/cb.h5"
+expect_error 'has 4 nodes; one is expected' "$d/bad_mon.h5" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
+  -stress_monitor x1
 "$mpiexec" "${flags[@]}" -n 1 "$morse" "${sweep[@]}" -out "$d/full.h5"
 if [ "$np" -gt 1 ]; then
   # Killed after at least 3 finished speeds, then resumed.

@@ -681,3 +681,76 @@ TEST(Sim, BarImpactOnRigidWallMatchesWaveSolution) {
   EXPECT_LT(std::abs(v[1] - v0), 0.8 * std::abs(v[0] - v0)) << "the rebound error does not fall with h";
   EXPECT_LT(1.0 - e[1], 0.8 * (1.0 - e[0])) << "the energy loss does not fall with h";
 }
+
+// Stress recovery (sim::recover_stress) against closed forms, on quadratic hex, tet and wedge
+// boxes: (1) the linear pure-bending field u_x = k x z, u_y = -nu k y z,
+// u_z = -k/2 (x^2 + nu (z^2 - y^2)) (z from mid-height) has sigma_xx = E k z and no other
+// component, which quadratic elements recover exactly at every node; (2) the nonlinear (Cauchy)
+// measure under a uniaxial stretch u = (a x, 0, 0): E11 = a + a^2/2, S11 = (lambda + 2 mu) E11,
+// S22 = S33 = lambda E11, sigma11 = (1 + a) S11, sigma22 = sigma33 = S22 / (1 + a), uniform, so
+// the element means equal it too; (3) a finite rigid rotation plus translation gives zero
+// nonlinear stress to round-off, while the linear measure does not. The distributed result is
+// bitwise the one computed on each rank alone.
+TEST(Sim, StressRecoveryMatchesClosedForms) {
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  const auto mat = test::steel();
+  const double E = mat.E, nu = mat.nu, lambda = E * nu / ((1 + nu) * (1 - 2 * nu)), mu = E / (2 * (1 + nu));
+  for (auto t : {ElementType::Hex20, ElementType::Tet10, ElementType::Wedge15}) {
+    const auto spec = test::box_spec(t, 1.0, 0.2, 0.2, 4, 2, 2);
+    auto lm = test::box_mesh(PETSC_COMM_WORLD, spec);
+    auto self = test::box_mesh(PETSC_COMM_SELF, spec);
+    // A nodal field of the local nodes of a mesh, from a function of the position.
+    auto field = [](const mesh::LocalMesh& l, auto fn) {
+      std::vector<double> u(l.mesh.coords.size());
+      for (std::size_t k = 0; k < u.size() / 3; ++k) fn(&l.mesh.coords[3 * k], &u[3 * k]);
+      return u;
+    };
+    auto solve = [&](const mesh::LocalMesh& l, auto fn, sim::StressMeasure m) {
+      return sim::recover_stress(l, mat, l.mesh.node_ids, field(l, fn), m);
+    };
+    const double k = 1e-3, z0 = 0.1;
+    auto bending = [&](const double* X, double* u) {
+      const double x = X[0], y = X[1], z = X[2] - z0;
+      u[0] = k * x * z, u[1] = -nu * k * y * z, u[2] = -0.5 * k * (x * x + nu * (z * z - y * y));
+    };
+    auto fb = solve(lm, bending, sim::StressMeasure::Linear);
+    auto fb1 = solve(self, bending, sim::StressMeasure::Linear);
+    const double a = 0.1, E11 = a + a * a / 2, s11 = (1 + a) * (lambda + 2 * mu) * E11, s22 = lambda * E11 / (1 + a);
+    auto stretch = [&](const double* X, double* u) { u[0] = a * X[0], u[1] = u[2] = 0.0; };
+    auto fs = solve(lm, stretch, sim::StressMeasure::Nonlinear);
+    const double th = 0.5, c = std::cos(th), s = std::sin(th);
+    auto rotation = [&](const double* X, double* u) {  // about e_z, then a translation
+      u[0] = (c - 1) * X[0] - s * X[1] + 0.3, u[1] = s * X[0] + (c - 1) * X[1] - 0.1, u[2] = 0.2;
+    };
+    auto fr = solve(lm, rotation, sim::StressMeasure::Nonlinear);
+    auto fr_lin = solve(lm, rotation, sim::StressMeasure::Linear);
+    EXPECT_NEAR(fs.max_mises, s11 - s22, 1e-12 * s11);
+    EXPECT_LT(fr.max_mises, 1e-6 * E) << "rigid rotation under the nonlinear measure";
+    EXPECT_GT(fr_lin.max_mises, 0.1 * E * (1 - c)) << "the linear measure is not objective";
+    if (rank != 0) continue;
+    const auto gm = mesh::generate_box(spec);  // global node order = generation order here
+    ASSERT_EQ(fb.nodal_mises.size(), static_cast<std::size_t>(gm.num_nodes()));
+    double eb = 0.0, es = 0.0, er = 0.0, emean = 0.0;
+    for (std::int64_t n = 0; n < gm.num_nodes(); ++n) {
+      const double z = gm.coords[3 * n + 2] - z0;
+      const double* sb = &fb.nodal_stress[6 * n];
+      eb = std::max(eb, std::abs(sb[0] - E * k * z));
+      for (int q = 1; q < 6; ++q) eb = std::max(eb, std::abs(sb[q]));
+      eb = std::max(eb, std::abs(fb.nodal_mises[n] - E * k * std::abs(z)));
+      const double* ss = &fs.nodal_stress[6 * n];
+      es = std::max({es, std::abs(ss[0] - s11), std::abs(ss[1] - s22), std::abs(ss[2] - s22)});
+      er = std::max(er, fr.nodal_mises[n]);
+    }
+    for (double v : fs.element_mises) emean = std::max(emean, std::abs(v - (s11 - s22)));
+    print0(PETSC_COMM_SELF, "  stress %s: bending %.1e, stretch %.1e, element mean %.1e, rotation %.1e (of E k z %.2e, %.2e)\n",
+           mesh::element_name(t), eb / (E * k * 0.1), es / s11, emean / s11, er / E, E * k * 0.1, s11);
+    EXPECT_LT(eb, 1e-9 * E * k * 0.1) << mesh::element_name(t) << ": pure bending";
+    EXPECT_LT(es, 1e-12 * s11) << mesh::element_name(t) << ": uniaxial stretch";
+    EXPECT_LT(emean, 1e-12 * s11) << mesh::element_name(t) << ": element means";
+    EXPECT_LT(er, 1e-9 * E * (1 - c)) << mesh::element_name(t) << ": rigid rotation";
+    EXPECT_EQ(fb.nodal_stress, fb1.nodal_stress) << "1 rank against all ranks";
+    EXPECT_EQ(fb.element_mises, fb1.element_mises);
+    EXPECT_EQ(fb.element_mises_max, fb1.element_mises_max);
+  }
+}

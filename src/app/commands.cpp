@@ -36,7 +36,7 @@ void print_stage_table(MPI_Comm comm) {
 }  // namespace
 
 const std::vector<std::string>& command_names() {
-  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "sweep", "compare", "mesh"};
+  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "sweep", "stress", "compare", "mesh"};
   return names;
 }
 
@@ -59,12 +59,14 @@ void run_command(MPI_Comm comm, const std::string& command, const std::vector<st
     detail::run_simulate(comm);
   else if (command == "sweep")
     detail::run_sweep(comm);
+  else if (command == "stress")
+    detail::run_stress(comm);
   else if (command == "compare")
     detail::run_compare(comm, args);
   else if (command == "mesh")
     detail::run_mesh(comm, args);
   else
-    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, compare, mesh)"));
+    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, mesh)"));
   if ((command != "mesh" || (!args.empty() && args[0] == "info")) && !detail::help_requested()) print_stage_table(comm);
 }
 

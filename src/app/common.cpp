@@ -149,7 +149,7 @@ void check_options(MPI_Comm comm, bool early) {
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
   std::string bad;
   static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
-                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_",
+                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_", "stress_",
                                          "load_", "static_", "fom_krylov_", "fom_"};
   for (PetscInt i = 0; i < n; ++i) {
     std::string name = names[i];

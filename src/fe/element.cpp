@@ -612,12 +612,17 @@ double element_mass(ElementType t, const double* xyz, double rho, double* Me) {
   return min_det;
 }
 
+double shape_gradients(ElementType t, const double* xyz, const double xi[3], double* g) {
+  double N[kMaxNodes], dN[3 * kMaxNodes];
+  eval_shape(t, xi, N, dN);
+  return physical_gradients(mesh::nodes_per_element(t), dN, xyz, g);
+}
+
 double strain_displacement(ElementType t, const double* xyz, const double xi[3], double* B) {
   const int n = mesh::nodes_per_element(t), nd = 3 * n;
-  double N[kMaxNodes], dN[3 * kMaxNodes], g[3 * kMaxNodes];
-  eval_shape(t, xi, N, dN);
+  double g[3 * kMaxNodes];
   std::fill(B, B + 6 * nd, 0.0);
-  const double det = physical_gradients(n, dN, xyz, g);
+  const double det = shape_gradients(t, xyz, xi, g);
   if (det == 0.0) return det;
   for (int a = 0; a < n; ++a) {
     const double gx = g[3 * a], gy = g[3 * a + 1], gz = g[3 * a + 2];

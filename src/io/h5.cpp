@@ -397,6 +397,30 @@ bool read_ints(const std::string& file, const std::string& name, std::vector<std
   return read_any(file, name, H5T_NATIVE_INT64, out, dims, error);
 }
 
+bool read_attribute(const std::string& file, const std::string& object, const std::string& name, double* out,
+                    std::string* error) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) {
+    *error = cat(file, ": cannot open as HDF5");
+    return false;
+  }
+  bool ok = false;
+  if (H5Lexists(f, object.c_str(), H5P_DEFAULT) > 0 && H5Aexists_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
+    hid_t a = H5Aopen_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+    hid_t sp = H5Aget_space(a);
+    hid_t t = H5Aget_type(a);
+    ok = H5Sget_simple_extent_npoints(sp) == 1 && (H5Tget_class(t) == H5T_INTEGER || H5Tget_class(t) == H5T_FLOAT) &&
+         H5Aread(a, H5T_NATIVE_DOUBLE, out) >= 0;
+    H5Tclose(t);
+    H5Sclose(sp);
+    H5Aclose(a);
+  }
+  H5Fclose(f);
+  if (!ok) *error = cat(file, ": no numeric attribute ", name, " on ", object);
+  return ok;
+}
+
 bool read_string(const std::string& file, const std::string& name, std::string* out, std::string* error) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -642,17 +666,24 @@ void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const 
     f << "<Geometry GeometryType=\"XYZ\">\n<DataItem Dimensions=\"" << m.num_nodes()
       << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
       << ":/mesh/coordinates</DataItem>\n</Geometry>\n";
-    for (const auto& fld : fields)
+    for (const auto& fld : fields) {
+      const std::int64_t n = fld.cell ? m.num_elements() : m.num_nodes();
+      const int c = fld.components;
+      const char* type = c == 1 ? "Scalar" : c == 3 ? "Vector" : "Tensor6";
+      MORSE_CHECK(c == 1 || c == 3 || c == 6, "XDMF field ", fld.dataset, ": ", c, " components (1, 3 or 6)");
+      // Scalars are stored [count][n], the others [count][n][c]: the hyperslab has that rank.
+      const std::string cs = c == 1 ? "" : " " + std::to_string(c);
       for (int k = 0; k < fld.count; ++k) {
-        f << "<Attribute Name=\"" << fld.label << "_" << k + 1
-          << "\" AttributeType=\"Vector\" Center=\"Node\">\n"
-          << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << m.num_nodes() << " 3\">\n"
-          << "<DataItem Dimensions=\"3 3\" Format=\"XML\">" << k << " 0 0 1 1 1 1 " << m.num_nodes()
-          << " 3</DataItem>\n"
-          << "<DataItem Dimensions=\"" << fld.count << " " << m.num_nodes()
-          << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":"
-          << fld.dataset << "</DataItem>\n</DataItem>\n</Attribute>\n";
+        f << "<Attribute Name=\"" << fld.label << "_" << k + 1 << "\" AttributeType=\"" << type << "\" Center=\""
+          << (fld.cell ? "Cell" : "Node") << "\">\n"
+          << "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" << n << cs << "\">\n"
+          << "<DataItem Dimensions=\"3 " << (c == 1 ? 2 : 3) << "\" Format=\"XML\">" << k
+          << (c == 1 ? " 0 1 1 1 " : " 0 0 1 1 1 1 ") << n << cs << "</DataItem>\n"
+          << "<DataItem Dimensions=\"" << fld.count << " " << n << cs
+          << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name << ":" << fld.dataset
+          << "</DataItem>\n</DataItem>\n</Attribute>\n";
       }
+    }
     f << "</Grid>\n</Domain>\n</Xdmf>\n";
     MORSE_CHECK(f.good(), "error writing ", tmp);
   }

@@ -32,6 +32,16 @@ void StoredModel::displacements(const std::string& set, const double* q, std::ve
     }
 }
 
+std::vector<double> StoredModel::field(const double* q) const {
+  const std::size_t n = node_ids.size() * 3;
+  std::vector<double> u(n, 0.0);
+  for (std::size_t j = 0; j < r(); ++j) {
+    const double* b = &basis[j * n];
+    for (std::size_t i = 0; i < n; ++i) u[i] += b[i] * q[j];
+  }
+  return u;
+}
+
 std::vector<std::size_t> StoredModel::dof_rows(const std::vector<std::int64_t>& ids,
                                                const std::vector<std::int64_t>& comps) const {
   MORSE_CHECK(ids.size() == comps.size(), "DOF map: ", ids.size(), " node ids but ", comps.size(), " components");

@@ -84,6 +84,10 @@ std::array<double, 36> isotropic_elasticity(double E, double nu);
 /// exactly the linear stiffness quadrature.
 double stiffness_gradients(ElementType t, const double* xyz, double* g, double* wdet);
 
+/// Physical shape-function gradients at xi: g (n x 3, row-major, dN_a/dx_k at g[3a + k]).
+/// Returns det J (<= 0: inverted or degenerate element; g is then meaningless).
+double shape_gradients(ElementType t, const double* xyz, const double xi[3], double* g);
+
 /// Strain-displacement evaluation: given xyz and xi, fills B (6 x 3n, row-major) and returns
 /// det J. Used for stress recovery and patch tests.
 double strain_displacement(ElementType t, const double* xyz, const double xi[3], double* B);

@@ -121,6 +121,9 @@ bool read_ints(const std::string& file, const std::string& name, std::vector<std
                std::vector<hsize_t>* dims, std::string* error);
 /// A scalar string dataset (as written by H5Output::write_string, e.g. /meta/units).
 bool read_string(const std::string& file, const std::string& name, std::string* out, std::string* error);
+/// A scalar numeric attribute `name` of `object` (a group or dataset), as a double.
+bool read_attribute(const std::string& file, const std::string& object, const std::string& name, double* out,
+                    std::string* error);
 /// Row `row` of a 2-D dataset of doubles (one hyperslab, not the whole dataset).
 bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
                      std::string* error);
@@ -138,11 +141,15 @@ void write_provenance(H5Output& out, const std::string& command, const std::stri
 void write_mesh(H5Output& out, const mesh::Mesh& m);
 
 /// Writes an XDMF file next to the HDF5 file that shows the mesh and, for each listed dataset
-/// (shape [n_fields][n_nodes][3]), one vector field per entry, named label_k. Rank 0 only.
+/// (shape [count][n][components], n = nodes or, with cell, elements), one field per entry, named
+/// label_k: a vector (3 components), a scalar (1; the dataset is then [count][n]) or a symmetric
+/// tensor (6, xx yy zz yz xz xy, shown as XDMF Tensor6). Rank 0 only.
 struct XdmfField {
   std::string dataset;
   std::string label;
   int count = 0;
+  int components = 3;
+  bool cell = false;
 };
 void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const mesh::Mesh& m,
                 const std::vector<XdmfField>& fields);

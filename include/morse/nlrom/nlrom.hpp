@@ -156,6 +156,8 @@ struct StoredModel {
   std::vector<double> nodal_pattern(const std::string& set, const double dir[3]) const;
   /// Appends u = Phi q at the nodes of `set` (node-major, x y z).
   void displacements(const std::string& set, const double* q, std::vector<double>* out) const;
+  /// u = Phi q at every node ([node][3], nodes as node_ids).
+  std::vector<double> field(const double* q) const;
   /// Basis rows of (node id, component) pairs (a fom file's DOF map); throws naming the first
   /// node that the model lacks.
   std::vector<std::size_t> dof_rows(const std::vector<std::int64_t>& node_ids,

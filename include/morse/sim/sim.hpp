@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/mesh/partition.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
 namespace morse::sim {
@@ -259,5 +260,42 @@ void write_sweep(const std::string& path, SweepRecord rec);
 /// Reads a sweep file written by write_sweep. Returns false (and sets *error) if the file does
 /// not exist or is not a sweep file. Serial.
 bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error);
+
+// ------------------------------------------------------------------------------------------
+// Stress recovery (seed 003 Figs. 11 and 25): the stress of a displacement field u = Phi q.
+
+/// Linear: the small-strain stress sigma = lambda tr(eps) I + 2 mu eps, eps = (H + H^T) / 2.
+/// Nonlinear: the Cauchy stress of St Venant-Kirchhoff, sigma = F S F^T / det F with
+/// S = lambda tr(E) I + 2 mu E, E = (H + H^T + H^T H) / 2, F = I + H (zero under any rigid motion).
+enum class StressMeasure { Linear, Nonlinear };
+
+/// Von Mises stress of s = (xx, yy, zz, yz, xz, xy).
+double von_mises(const double s[6]);
+
+/// Stress at one point of a solid from its displacement gradient H (row-major, H[3i + j] =
+/// du_i/dX_j): s = (xx, yy, zz, yz, xz, xy).
+void stress_from_gradient(StressMeasure m, double E, double nu, const double H[9], double s[6]);
+
+/// A recovered stress field. Element and nodal arrays are on rank 0 only (empty elsewhere), in
+/// global element / node order (that of mesh::gather_to_rank0 and io::write_mesh).
+struct StressField {
+  std::vector<double> element_mises;      ///< [element] volume mean over the stiffness quadrature points
+  std::vector<double> element_mises_max;  ///< [element] max over the stiffness quadrature points
+  std::vector<double> nodal_stress;       ///< [node][6] mean over the elements around the node of the
+                                          ///< stress each evaluates at the node
+  std::vector<double> nodal_mises;        ///< [node] von Mises of nodal_stress
+  /// Every rank: the largest quadrature-point von Mises and its element's id (the mesh's label).
+  double max_mises = 0.0;
+  std::int64_t max_element_id = -1;
+};
+
+/// Stress of the displacement field u ([k][3] at the nodes with external ids node_ids, e.g. a
+/// StoredModel's rows) over every element of the distributed mesh. Materials as in fe::assemble
+/// (the element's, else `fallback`). Each rank evaluates its own elements; rank 0 sums the nodal
+/// contributions in (node, global element) order, so the result is bitwise the same on any
+/// number of ranks. Throws (collectively) naming a mesh node that u lacks, or a missing/invalid
+/// material. Collective.
+StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fallback,
+                           const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, StressMeasure m);
 
 }  // namespace morse::sim

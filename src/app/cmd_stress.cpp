@@ -1,0 +1,179 @@
+// app/cmd_stress.cpp: `morse stress`, stress recovery from a reduced simulation (seed 003 Figs. 11
+// and 25): u = Phi q at one stored time of a `morse simulate` file (by default the time of the
+// largest radial displacement at the monitor node), then the von Mises stress of every element
+// (sim::recover_stress), written as HDF5 + XDMF for ParaView.
+#include <petscsys.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "app/common.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/sim/sim.hpp"
+
+namespace morse::app::detail {
+
+namespace {
+
+struct StressOptions {
+  std::string rom, sim, monitor = "LE", measure;
+  double time = -1.0;
+  PetscBool time_set = PETSC_FALSE, xdmf = PETSC_TRUE;
+};
+
+PetscErrorCode get_stress_options(MPI_Comm comm, StressOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse stress options", "");
+  PetscCall(PetscOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "", buf, buf, sizeof buf,
+                               &set));
+  if (set) o->rom = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf, sizeof buf, &set));
+  if (set) o->sim = buf;
+  PetscCall(PetscOptionsReal("-stress_time", "Time [s] of the stress (the nearest stored step); default: the time of "
+                             "the largest |radial displacement| at -stress_monitor",
+                             "", o->time, &o->time, &o->time_set));
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-stress_monitor", "Node set of one node whose largest radial displacement picks the time",
+                               "", o->monitor.c_str(), buf, sizeof buf, &set));
+  if (set) o->monitor = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-stress_measure",
+                               "linear (small strain) | nonlinear (Cauchy stress of St Venant-Kirchhoff); default: "
+                               "as the simulation (its /sim attribute linear)",
+                               "", "", buf, sizeof buf, &set));
+  if (set) o->measure = buf;
+  PetscCall(PetscOptionsBool("-stress_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+                             &o->xdmf, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+}  // namespace
+
+void run_stress(MPI_Comm comm) {
+  CommonOptions o;
+  MORSE_CALL(get_common(comm, "stress.h5", &o));
+  StressOptions so;
+  MORSE_CALL(get_stress_options(comm, &so));
+  if (help_requested()) return;
+  check_options(comm, true);
+  MORSE_CHECK(!so.rom.empty(), "morse stress: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
+  MORSE_CHECK(!so.sim.empty(), "morse stress: no simulation given: use -sim FILE.h5 (a morse simulate file)");
+  MORSE_CHECK(so.measure.empty() || so.measure == "linear" || so.measure == "nonlinear",
+              "-stress_measure ", so.measure, ": unknown (linear or nonlinear)");
+
+  // The simulation: times, coordinates and whether it was linear (every rank reads; serial HDF5).
+  std::vector<double> time, q;
+  std::vector<hsize_t> dt, dq;
+  std::string err;
+  double linear = 0.0;
+  if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) && io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) &&
+      so.measure.empty() && !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
+    err = cat(err, " (give -stress_measure)");
+  if (err.empty() && (dq.size() != 2 || dq[0] != time.size() || time.empty()))
+    err = cat(so.sim, ": /sim/q and /sim/time disagree (a morse simulate file is expected)");
+  collective_check(comm, err);
+  const auto measure = so.measure.empty() ? (linear != 0.0 ? sim::StressMeasure::Linear : sim::StressMeasure::Nonlinear)
+                       : so.measure == "linear" ? sim::StressMeasure::Linear
+                                                : sim::StressMeasure::Nonlinear;
+  const auto sm = nlrom::read_stored_model(comm, so.rom, so.time_set ? std::vector<std::string>{}
+                                                                     : std::vector<std::string>{so.monitor});
+  const std::size_t r = sm.r(), nt = time.size();
+  MORSE_CHECK(dq[1] == r, so.sim, " has ", dq[1], " reduced coordinates; ", so.rom, " has r = ", r,
+              " (not the model of this simulation)");
+
+  // The step: the nearest stored time, or the largest |e_r . u| at the monitor node.
+  std::size_t step = 0;
+  double ur = 0.0;
+  if (so.time_set) {
+    MORSE_CHECK(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12, "-stress_time ", so.time,
+                " s lies outside the simulation [", time.front(), ", ", time.back(), "] s");
+    for (std::size_t i = 1; i < nt; ++i)
+      if (std::abs(time[i] - so.time) < std::abs(time[step] - so.time)) step = i;
+  } else {
+    const auto& rows = sm.sets.at(so.monitor);
+    MORSE_CHECK(rows.size() == 1, "-stress_monitor ", so.monitor, " has ", rows.size(), " nodes; one is expected");
+    const double* X = &sm.coords[3 * rows[0]];
+    const double rho = std::hypot(X[0], X[1]);
+    MORSE_CHECK(rho > 0, "-stress_monitor ", so.monitor, ": the node lies on the rotation axis (no radial direction)");
+    std::vector<double> u;
+    for (std::size_t i = 0; i < nt; ++i) {
+      u.clear();
+      sm.displacements(so.monitor, &q[i * r], &u);
+      const double v = (u[0] * X[0] + u[1] * X[1]) / rho;
+      if (std::abs(v) > std::abs(ur)) ur = v, step = i;
+    }
+  }
+  Model md = build_model(comm, o);
+  io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
+  const auto u = sm.field(&q[step * r]);
+  sim::StressField f;
+  {
+    StageTimer t(comm, "Stress");
+    f = sim::recover_stress(md.lm, o.material, sm.node_ids, u, measure);
+  }
+  check_options(comm, false);
+  const char* mname = measure == sim::StressMeasure::Linear ? "linear" : "nonlinear";
+  print0(comm, "\nmorse stress: %s stress at t = %.9g s (step %zu of %zu)%s\n", mname, time[step], step, nt,
+         so.time_set ? "" : cat(", largest |u_r| at ", so.monitor, ": ", ur, " m").c_str());
+
+  StageTimer t(comm, "Write");
+  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_provenance(out, "stress", md.lm.mesh.units);
+  io::write_mesh(out, gm);
+  const auto nn = static_cast<hsize_t>(md.lm.n_global_nodes), ne = static_cast<hsize_t>(md.lm.n_global_elements);
+  std::vector<double> ug;  // u in the mesh's global node order (rank 0)
+  std::int64_t max_node = -1;
+  double max_nodal = 0.0;
+  if (rank_of(comm) == 0) {
+    std::map<std::int64_t, std::size_t> row;
+    for (std::size_t k = 0; k < sm.node_ids.size(); ++k) row[sm.node_ids[k]] = k;
+    ug.resize(3 * nn);
+    for (hsize_t g = 0; g < nn; ++g) {
+      const std::size_t k = row.at(gm.node_ids[g]);  // recover_stress checked every node
+      for (int c = 0; c < 3; ++c) ug[3 * g + c] = u[3 * k + c];
+      if (f.nodal_mises[g] > max_nodal) max_nodal = f.nodal_mises[g], max_node = gm.node_ids[g];
+    }
+    print0(PETSC_COMM_SELF, "  max von Mises %.4g MPa (quadrature point, element %lld), %.4g MPa at nodes (node %lld)\n",
+           f.max_mises / 1e6, (long long)f.max_element_id, max_nodal / 1e6, (long long)max_node);
+  }
+  out.write("/stress/displacement", ug, {1, nn, 3});
+  out.attribute("/stress/displacement", "description", "[1][node][x,y,z] u = Phi q [m], nodes as /mesh/node_ids");
+  out.write("/stress/von_mises", f.nodal_mises, {1, nn});
+  out.attribute("/stress/von_mises", "description", "[1][node] von Mises stress of /stress/stress [Pa]");
+  out.write("/stress/stress", f.nodal_stress, {1, nn, 6});
+  out.attribute("/stress/stress", "description",
+                "[1][node][xx,yy,zz,yz,xz,xy] stress at the node, mean over its elements [Pa]");
+  out.write("/stress/von_mises_element", f.element_mises, {1, ne});
+  out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
+  out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});
+  out.attribute("/stress/von_mises_element_max", "description", "[1][element] max of von Mises at its quadrature points [Pa]");
+  out.attribute("/stress", "time", time[step]);
+  out.attribute_int("/stress", "step", static_cast<std::int64_t>(step));
+  out.attribute("/stress", "measure", mname);
+  out.attribute("/stress", "max_von_mises", f.max_mises);
+  out.attribute_int("/stress", "max_element_id", f.max_element_id);
+  out.attribute("/stress", "max_nodal_von_mises", max_nodal);
+  out.attribute_int("/stress", "max_node_id", max_node);
+  out.attribute("/stress", "rom", so.rom);
+  out.attribute("/stress", "sim", so.sim);
+  if (!so.time_set) {
+    out.attribute("/stress", "monitor", so.monitor);
+    out.attribute("/stress", "monitor_radial_displacement", ur);
+  }
+  out.commit();
+  if (so.xdmf)
+    write_xdmf_collective(comm, o.out, gm,
+                          {{"/stress/displacement", "displacement", 1, 3, false},
+                           {"/stress/von_mises", "von_mises", 1, 1, false},
+                           {"/stress/stress", "stress", 1, 6, false},
+                           {"/stress/von_mises_element", "von_mises_element", 1, 1, true}});
+  print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
+}
+
+}  // namespace morse::app::detail
