@@ -52,7 +52,6 @@ expect_error() {
   test ! -e "$file"
 }
 expect_error '-sweep_monitor x1 has 4 nodes' "$d/bad_monitor.h5" "${sweep[@]}"
-sweep+=(-mesh_node_sets m1)
 # A one-node monitor set cannot be added after nlrom: rebuild with one.
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
   -nlrom_damping_modal 0.01 -nlrom_damping_modes 15 -mesh_node_sets tipnode \

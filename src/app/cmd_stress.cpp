@@ -146,9 +146,16 @@ void run_stress(MPI_Comm comm) {
   out.attribute("/stress/displacement", "description", "[1][node][x,y,z] u = Phi q [m], nodes as /mesh/node_ids");
   out.write("/stress/von_mises", f.nodal_mises, {1, nn});
   out.attribute("/stress/von_mises", "description", "[1][node] von Mises stress of /stress/stress [Pa]");
-  out.write("/stress/stress", f.nodal_stress, {1, nn, 6});
+  // In the component order of XDMF's Tensor6 as ParaView reads it (xx, xy, xz, yy, yz, zz).
+  std::vector<double> t6(f.nodal_stress.size());
+  for (std::size_t k = 0; k < t6.size(); k += 6) {
+    const double* s = &f.nodal_stress[k];
+    const double v[6] = {s[0], s[5], s[4], s[1], s[3], s[2]};
+    std::copy(v, v + 6, &t6[k]);
+  }
+  out.write("/stress/stress", t6, {1, nn, 6});
   out.attribute("/stress/stress", "description",
-                "[1][node][xx,yy,zz,yz,xz,xy] stress at the node, mean over its elements [Pa]");
+                "[1][node][xx,xy,xz,yy,yz,zz] stress at the node, mean over its elements [Pa]");
   out.write("/stress/von_mises_element", f.element_mises, {1, ne});
   out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
   out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});

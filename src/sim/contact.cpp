@@ -5,7 +5,8 @@
 // force direction d_k = n - mu t_k (t_k: unit sliding direction of the predictor), the corrected
 // gap of node c is  g*_c + sum_k n^T P_ck d_k lambda_k, and W lambda = -g*_A makes every gap of A
 // zero. Nodes with lambda < 0 (adhesion) leave A, one at a time (the most negative first), and
-// the system is solved again; nodes without penetration never enter.
+// the system is solved again; a node that the correction itself pushes into the obstacle joins A
+// (the deepest first), until neither kind of node is left.
 #include "sim/contact.hpp"
 
 #include <petscsys.h>

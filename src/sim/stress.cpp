@@ -127,7 +127,9 @@ StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fall
       NodalPart p;
       p.node = lm.global_node[nodes[a]];
       p.elem = lm.global_elem[e];
-      fe::shape_gradients(t, xyz, ref[a].data(), g);
+      const double det = fe::shape_gradients(t, xyz, ref[a].data(), g);
+      MORSE_CHECK(det > 0, "stress: element ", mm.elem_ids[e], " is inverted at its node ", mm.node_ids[nodes[a]],
+                  " (det J = ", det, ")");
       gradient(n, g, ue, H);
       stress_from_gradient(m, mat.E, mat.nu, H, p.s);
       parts.push_back(p);
@@ -135,17 +137,21 @@ StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fall
   }
 
   StressField f;
-  // The largest quadrature-point value and its element (the lowest global element on ties).
+  // The largest quadrature-point value and its element (the lowest global element on ties, so
+  // that the answer does not depend on the partition).
   struct {
     double v;
-    int who;
-  } loc{0.0, rank}, glob{};
-  std::size_t arg = 0;
-  for (std::size_t e = 0; e < ne; ++e)
-    if (emax[e] > loc.v || (emax[e] == loc.v && e < arg)) loc.v = emax[e], arg = e;
+    int elem;
+  } loc{-1.0, 0}, glob{};
+  for (std::size_t e = 0; e < ne; ++e) {
+    const int ge = static_cast<int>(lm.global_elem[e]);
+    if (emax[e] > loc.v || (emax[e] == loc.v && ge < loc.elem)) loc.v = emax[e], loc.elem = ge;
+  }
   MPI_Allreduce(&loc, &glob, 1, MPI_DOUBLE_INT, MPI_MAXLOC, comm);
-  std::int64_t id = (rank == glob.who && ne > 0) ? mm.elem_ids[arg] : -1;
-  MPI_Bcast(&id, 1, MPI_INT64_T, glob.who, comm);
+  std::int64_t id = -1;
+  for (std::size_t e = 0; e < ne; ++e)
+    if (lm.global_elem[e] == glob.elem) id = mm.elem_ids[e];
+  MPI_Allreduce(MPI_IN_PLACE, &id, 1, MPI_INT64_T, MPI_MAX, comm);
   f.max_mises = glob.v;
   f.max_element_id = id;
 

@@ -143,7 +143,7 @@ void write_mesh(H5Output& out, const mesh::Mesh& m);
 /// Writes an XDMF file next to the HDF5 file that shows the mesh and, for each listed dataset
 /// (shape [count][n][components], n = nodes or, with cell, elements), one field per entry, named
 /// label_k: a vector (3 components), a scalar (1; the dataset is then [count][n]) or a symmetric
-/// tensor (6, xx yy zz yz xz xy, shown as XDMF Tensor6). Rank 0 only.
+/// tensor (6, XDMF Tensor6, which ParaView reads in the order xx xy xz yy yz zz). Rank 0 only.
 struct XdmfField {
   std::string dataset;
   std::string label;

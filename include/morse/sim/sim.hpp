@@ -204,8 +204,8 @@ struct SpeedResult {
 };
 
 struct SweepSettings {
-  /// dt, linear, contact (nodes, casing, mu); t_final and casing.omega are set per speed, the
-  /// kernel is the batched folded product. The run starts at rest (no q0, v0, loads).
+  /// dt, linear, kernel, contact (nodes, casing, mu); t_final and casing.omega are set per
+  /// speed. The run starts at rest (no q0, v0, loads).
   Settings base;
   double revolutions = 200.0;
   std::vector<double> monitor;   ///< r: the recorded displacement is monitor . q (e.g. e_r . u at LE)
