@@ -4,12 +4,14 @@
 usage:
     /usr/bin/python3 bench/sweep_bench.py                 # meshes/blade_coarse.msh, tip basis, 3 runs
     /usr/bin/python3 bench/sweep_bench.py --runs 1 --derivatives 20 --mesh meshes/blade.msh
+    /usr/bin/python3 bench/sweep_bench.py --fixed 15 --derivatives 40 --lanes 1,8 --limits   # r = 79, the seed's
 
 The model: `morse nlrom` with boundary `tip` (8 contact nodes, 24 physical DOFs), --fixed
 fixed-interface modes and --derivatives modal derivatives, exact tensors (r = 24 + fixed + derivatives).
 Parts, each --runs times (medians):
   - single: `morse simulate` on one core with casing contact at 1,450 rad/s (the unbatched
-    kernel that `auto` picks: potential above r = 56): steps/s;
+    kernel that `auto` picks: potential above r = 56): steps/s, and with --limits its GFLOP/s and
+    coefficient GB/s against the FMA peak and read bandwidth measured by bench/machine_limits.cpp;
   - batch: `morse sweep -sweep_batched` on one core with L speeds and -sweep_batch L, L = 1, 4, 8, 16, 32:
     lane-steps/s and the gain over L = 1 and over the single run; per lane-step the folded
     product does 2 (n2 + n3) r flops, so the achieved GFLOP/s;
@@ -29,6 +31,7 @@ import sys
 import tempfile
 
 from benchlib import RESULTS, ROOT, blas_info, git_info, med, run_mpi
+from nlrom_bench import machine_limits
 
 
 def rate(stdout, pattern):
@@ -45,6 +48,9 @@ def main():
     ap.add_argument("--dt", type=float, default=1e-7)
     ap.add_argument("--revolutions", type=float, default=0.1, help="per speed in the batch part")
     ap.add_argument("--lanes", default="1,4,8,16,32")
+    ap.add_argument("--limits", action="store_true",
+                    help="measure the machine's FMA peak and read bandwidth (bench/machine_limits.cpp) and give the "
+                         "single run's ratio to them")
     args = ap.parse_args()
     morse = os.path.join(ROOT, "build", "morse")
     if not os.path.exists(morse):
@@ -70,9 +76,11 @@ def main():
         if res is None:
             return 2
         r_size = int(rate(res["stdout"], r"r = (\d+)"))
+        k = re.search(r"nonlinear force kernel: (\w+), ([0-9.eE+-]+) flop and ([0-9.eE+-]+) MB per step", res["stdout"])
         runs["single"].append({"steps_per_s": rate(res["stdout"], r"steps in [\d.]+ s \(([\d.e+]+) steps/s"),
-                               "kernel": re.search(r"kernel: (\w+)", res["stdout"]).group(1)
-                               if "kernel:" in res["stdout"] else "linear"})
+                               "kernel": k.group(1) if k else "linear",
+                               "kernel_flops_per_step": float(k.group(2)) if k else None,
+                               "kernel_mb_per_step": float(k.group(3)) if k else None})
     lanes = [int(x) for x in args.lanes.split(",")]
 
     def sweep(n_speeds, batch, ranks, revolutions, batched):
@@ -118,7 +126,25 @@ def main():
         "batch_gflops": {str(L): batch[L] * flops * 1e-9 for L in lanes},
         "sweep16_seconds_1_rank": t1, "sweep16_seconds_2_ranks": t2, "scaling_efficiency_2_ranks": t1 / (2 * t2),
     }
+    # The single run against the machine: the kernel streams its coefficients once per step.
+    k0 = runs["single"][0]
+    if k0["kernel_flops_per_step"]:
+        gflops = single * (k0["kernel_flops_per_step"] + 4.0 * r_size * r_size) * 1e-9
+        gbs = single * k0["kernel_mb_per_step"] * 1e6 * 1e-9
+        summary.update({"single_gflops": gflops, "single_gbs": gbs})
+        if args.limits:
+            lim, why = machine_limits(40_000_000)
+            summary["machine_limits"] = lim if lim else {"missing_reason": why}
+            if lim:
+                summary["single_ratio_over_fma_peak"] = gflops / lim["fma_peak_gflops"]
+                summary["single_ratio_over_read_bandwidth"] = gbs / lim["read_gbs"]
     print("sweep_bench: r = %d, dt = %g s, %d run(s) per point (medians)" % (r_size, args.dt, args.runs))
+    if "single_gflops" in summary:
+        print("  single run: %.1f GFLOP/s, %.1f GB/s of coefficients%s" % (
+            summary["single_gflops"], summary["single_gbs"],
+            ", %.0f %% of the FMA peak, %.0f %% of the read bandwidth" % (
+                100 * summary["single_ratio_over_fma_peak"], 100 * summary["single_ratio_over_read_bandwidth"])
+            if "single_ratio_over_fma_peak" in summary else ""))
     print("  single run (unbatched %s kernel, contact): %.0f steps/s" % (summary["single_kernel"], single))
     for L in lanes:
         print("  batch %2d lanes: %8.0f lane-steps/s, x%.2f over 1 lane, x%.2f over the single run, %.1f GFLOP/s"

@@ -137,9 +137,10 @@ def summary(r, label):
           f"({x[0]:.6g}, {x[1]:.6g}, {x[2]:.6g}) m; max_von_mises (quadrature points) {q}")
 
 
-def plot(runs, labels, out, title, view, field, scale):
+def plot(runs, labels, out, title, view, field, scale, vmax):
     fig = plt.figure(figsize=(6 * len(runs) + 1, 5.5))
-    norm = Normalize(0, max(max(r["values"].max(), r["von_mises"].max()) for r in runs) / 1e6)
+    top = max(max(r["values"].max(), r["von_mises"].max()) for r in runs) / 1e6
+    norm = Normalize(0, vmax if vmax else top)
     sm = ScalarMappable(norm, CMAP)
     axes = []
     for k, (r, label) in enumerate(zip(runs, labels)):
@@ -164,7 +165,8 @@ def plot(runs, labels, out, title, view, field, scale):
         ax.set_title(f"{label}\nmax {r['von_mises'][i] / 1e6:.4g} MPa at node {r['node_ids'][i]} (\u2605)\n"
                      f"displacement \u00d7 {scale:.4g}, {field} values", fontsize=10)
         axes.append(ax)
-    fig.colorbar(sm, ax=axes, shrink=0.6, pad=0.2 / len(runs), label="von Mises stress [MPa]")
+    fig.colorbar(sm, ax=axes, shrink=0.6, pad=0.2 / len(runs), extend="max" if vmax and vmax < top else "neither",
+                 label="von Mises stress [MPa]" + (f" (clipped at {vmax:g})" if vmax and vmax < top else ""))
     if title:
         fig.suptitle(title)
     fig.savefig(out, dpi=150, bbox_inches="tight")
@@ -184,6 +186,8 @@ def main():
                    help="colour faces by the mean of their corner nodes (default) or by their element")
     p.add_argument("--scale", type=float, help="displacement scale factor (default: max displacement at 5%% "
                                                "of the bounding-box diagonal)")
+    p.add_argument("--vmax", type=float, help="top of the colour scale [MPa] (default: the largest value); "
+                   "larger values are drawn in the top colour, e.g. to see past a singular node")
     a = p.parse_args()
     if len(a.files) > 2:
         p.error("at most two stress files")
@@ -208,7 +212,7 @@ def main():
         umax = max(np.linalg.norm(r["displacement"], axis=1).max() for r in runs)
         scale = DEFORM_FRACTION * diag / umax if umax > 0 else 0.0
     out = a.out or (a.files[0][:-3] if a.files[0].endswith(".h5") else a.files[0]) + ".png"
-    plot(runs, labels, out, a.title, view, a.field, scale)
+    plot(runs, labels, out, a.title, view, a.field, scale, a.vmax)
     for r, label in zip(runs, labels):
         summary(r, label)
 

@@ -139,6 +139,8 @@ expect_error 'not a physical boundary node' "$d/bad_set.h5" sweep -rom "$d/cb.h5
 expect_error '-casing_clearance must be positive' "$d/bad_c0.h5" "${sweep[@]}" -casing_clearance -1e-3
 expect_error 'above the critical step' "$d/bad_dt.h5" "${sweep[@]}" -sim_dt 1
 expect_error 'cannot write' "$d/no_such_dir/sw.h5" "${sweep[@]}"
+expect_error '-sim_omega does not apply' "$d/bad_omega.h5" "${sweep[@]}" -sim_omega 1000
+expect_error '-contact_plane_\* do not apply' "$d/bad_plane.h5" "${sweep[@]}" -contact_plane_normal 1,0,0
 set +e
 out=$(run "${sweep[@]}" -sim_revolutions 10 -out "$d/full.h5" 2>&1)
 rc=$?

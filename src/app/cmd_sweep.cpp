@@ -86,7 +86,9 @@ void run_sweep(MPI_Comm comm) {
   collective_check(comm, so.contact.error);
   MORSE_CHECK(!so.rom.empty(), "morse sweep: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(!so.contact.set.empty(), "morse sweep: give the contact nodes with -contact_set SET");
-  MORSE_CHECK(so.contact.obstacle == sim::Obstacle::Casing, "morse sweep: the obstacle is the casing (-contact_obstacle casing)");
+  MORSE_CHECK(so.contact.obstacle == sim::Obstacle::Casing && !so.contact.plane_given,
+              "morse sweep: the obstacle is the casing (-contact_obstacle casing; -contact_plane_* do not apply)");
+  MORSE_CHECK(!so.contact.omega_given, "morse sweep: the speeds are -sweep_omega_min/_max/_step; -sim_omega does not apply");
   MORSE_CHECK(so.omega_min > 0 && so.omega_max >= so.omega_min,
               "morse sweep: give 0 < -sweep_omega_min <= -sweep_omega_max (got ", so.omega_min, ", ", so.omega_max, ")");
   MORSE_CHECK(so.omega_step > 0 || so.omega_max == so.omega_min, "morse sweep: -sweep_omega_step must be positive");

@@ -355,10 +355,12 @@ PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o) {
   PetscInt n = 3;
   PetscCall(PetscOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
   if (set && n != 3) bad("-contact_plane_point needs 3 values x,y,z");
+  o->plane_given = set;
   n = 3;
   PetscCall(PetscOptionsRealArray("-contact_plane_normal", "Normal of the plane x,y,z, pointing to the free side", "",
                                   o->plane.normal, &n, &set));
   if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
+  o->plane_given = o->plane_given || set;
   const double nn = std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
                               o->plane.normal[2] * o->plane.normal[2]);
   if (!(nn > 0)) bad("-contact_plane_normal must not be zero");
@@ -379,8 +381,10 @@ PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o) {
   PetscCall(PetscOptionsReal("-casing_alpha",
                              "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "",
                              c.alpha, &c.alpha, nullptr));
+  PetscBool omega_set = PETSC_FALSE;
   PetscCall(PetscOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)", "", c.omega, &c.omega,
-                             nullptr));
+                             &omega_set));
+  o->omega_given = omega_set;
   PetscCall(PetscOptionsReal("-sim_revolutions", "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
                              o->revolutions, &o->revolutions, &set));
   if (set && !(o->revolutions > 0)) bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));

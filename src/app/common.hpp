@@ -114,6 +114,8 @@ struct ContactOptions {
   sim::Casing casing;
   double mu = 0.15;
   double revolutions = 0.0;  ///< 0: not given
+  bool plane_given = false;  ///< -contact_plane_point or -contact_plane_normal given
+  bool omega_given = false;  ///< -sim_omega given
   std::string error;         ///< a bad value, naming the option
 };
 PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o);
