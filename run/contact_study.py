@@ -41,20 +41,14 @@ import time
 import h5py
 import numpy as np
 
+from nlrom_study import env  # MPI settings for running as root, one thread per rank
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MORSE = os.path.join(ROOT, "build", "morse")
 DT = 5e-8
 OMEGA = 1450.0
 CASING = ["-contact_set", "tip", "-contact_mu", "0.15", "-casing_clearance", "3.56e-4", "-casing_lobes", "2"]
 ROMS = {"r79": (15, 40), "r89": (20, 45), "r54": (10, 20)}
-
-
-def env():
-    e = dict(os.environ)
-    e.update({"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-              "OMPI_MCA_rmaps_base_oversubscribe": "1", "OMPI_MCA_btl_vader_single_copy_mechanism": "none",
-              "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"})
-    return e
 
 
 class Study:
