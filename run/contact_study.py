@@ -85,7 +85,10 @@ class Study:
         if os.path.exists(out_file) and key in self.rec:
             print("  %-44s (done)" % label, flush=True)
             return True
-        cmd = ["mpiexec", "--allow-run-as-root", "-n", str(nranks), self.binary] + [str(a) for a in args]
+        # --bind-to none: OpenMPI binds a 1-rank job to core 0, so two stages run side by side
+        # would share one core.
+        cmd = ["mpiexec", "--allow-run-as-root", "--bind-to", "none", "-n", str(nranks), self.binary] + \
+            [str(a) for a in args]
         t0 = time.time()
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env())
         secs = time.time() - t0
@@ -98,7 +101,7 @@ class Study:
             self.save()
             return False
         print("  %-44s %8.1f s" % (label, secs), flush=True)
-        self.rec[key] = {"label": label, "seconds": secs, "file": out_file, "ranks": nranks, "args": cmd[4:]}
+        self.rec[key] = {"label": label, "seconds": secs, "file": out_file, "ranks": nranks, "args": cmd[6:]}
         self.save()
         return True
 
@@ -220,10 +223,8 @@ def main():
             sim = simulate(st, rom, w, args.sweep_revs, DT, lin, name + "_sim", every)
             if sim is None:
                 continue
-            xdmf = st.file(name + ".xdmf")
             st.run(1, ["stress", "-rom", st.file("rom_%s.h5" % rom), "-sim", sim, "-mesh", mesh, "-out",
-                       st.file(name + ".h5"), "-stress_xdmf", xdmf], "stress %s at %g rad/s" % (tag, w),
-                   st.file(name + ".h5"), name)
+                       st.file(name + ".h5")], "stress %s at %g rad/s" % (tag, w), st.file(name + ".h5"), name)
     st.save()
 
 

@@ -475,7 +475,7 @@ TEST(Sim, ContactWithGrowingCasing) {
 }
 
 // The amplitude spectrum of a sampled sinusoid (Hann window): a at its frequency, and a constant
-// offset removed.
+// offset removed; decimation by block means (the sweep's) against plain decimation.
 TEST(Sim, AmplitudeSpectrumOfSinusoid) {
   const double dt = 1e-4, f0 = 250.0, a = 3e-4;
   std::vector<double> x(20000);
@@ -486,6 +486,29 @@ TEST(Sim, AmplitudeSpectrumOfSinusoid) {
   EXPECT_LT(A[0], 1e-6 * a);
   EXPECT_LT(A[1], 1e-4 * a);
   EXPECT_LT(A[3], 1e-4 * a);
+  // Decimation by 40 (Nyquist 12.5 kHz) of 3 kHz plus a tone at 24 kHz, which plain decimation
+  // folds onto 1 kHz at full amplitude: block means keep the 3 kHz amplitude (after the gain
+  // correction) and attenuate the folded tone by |sin(pi f' s h) / (s sin(pi f' h))| = 0.042.
+  const double h = 1e-6, b = 2e-4;
+  const long s = 40;
+  std::vector<double> y(400000), means, plain;
+  for (std::size_t k = 0; k < y.size(); ++k)
+    y[k] = a * std::sin(2 * M_PI * 3000.0 * k * h + 0.3) + b * std::sin(2 * M_PI * 24000.0 * k * h + 1.1);
+  for (std::size_t j = 0; j + s <= y.size(); j += s) {
+    double m = 0;
+    for (long k = 0; k < s; ++k) m += y[j + k];
+    means.push_back(m / s);
+    plain.push_back(y[j]);
+  }
+  const std::vector<double> fd = {1000.0, 3000.0};
+  const auto D = sim::decimated_spectrum(means, h, s, fd);
+  const auto P = sim::amplitude_spectrum(plain, s * h, fd);
+  EXPECT_NEAR(P[0], b, 1e-3 * b) << "plain decimation folds 24 kHz onto 1 kHz";
+  EXPECT_NEAR(D[1], a, 1e-3 * a);
+  const double gain = std::abs(std::sin(M_PI * 24000.0 * s * h) / (s * std::sin(M_PI * 24000.0 * h)));
+  const double gain1 = std::abs(std::sin(M_PI * 1000.0 * s * h) / (s * std::sin(M_PI * 1000.0 * h)));
+  EXPECT_NEAR(D[0], b * gain / gain1, 1e-3 * b);
+  EXPECT_LT(D[0], 0.05 * b);
 }
 
 // A speed sweep of the clamped box rubbing its free face on the growing two-lobe casing. Each

@@ -57,7 +57,17 @@ std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const s
       z *= rot;
       if ((k & 1023) == 1023) z /= std::abs(z);  // keep the phasor on the unit circle
     }
-    a[b] = (b == 0 ? 1.0 : 2.0) * std::abs(acc) / wsum;
+    a[b] = (f[b] == 0.0 ? 1.0 : 2.0) * std::abs(acc) / wsum;
+  }
+  return a;
+}
+
+std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f) {
+  const double T = static_cast<double>(s) * h;
+  auto a = amplitude_spectrum(std::move(block_means), T, f);
+  for (std::size_t b = 0; b < f.size(); ++b) {  // the gain of a mean of s samples (Dirichlet kernel)
+    const double y = M_PI * f[b] * h;
+    if (s > 1 && std::sin(y) != 0.0) a[b] /= std::abs(std::sin(s * y) / (static_cast<double>(s) * std::sin(y)));
   }
   return a;
 }
@@ -157,8 +167,8 @@ struct Lane {
   SpeedResult res;
   std::unique_ptr<ContactSettings> cs;
   std::unique_ptr<detail::ContactSolver> contact;
-  long n = 0, n_steps = 0, half = 0, sample_every = 1;
-  double sum = 0.0, sum2 = 0.0;
+  long n = 0, n_steps = 0, half = 0, sample_every = 1, in_block = 0;
+  double sum = 0.0, sum2 = 0.0, block = 0.0;
   long count = 0;
   std::vector<double> samples;
   std::chrono::steady_clock::time_point start;
@@ -287,7 +297,11 @@ class Batch {
     if (std::abs(u) > R.max_displacement) R.max_displacement = std::abs(u), R.time_of_max = t;
     if (n1 >= ln.half) {
       ln.sum += u, ln.sum2 += u * u, ++ln.count;
-      if (!freqs_.empty() && (n1 - ln.half) % ln.sample_every == 0) ln.samples.push_back(u);
+      if (!freqs_.empty()) {  // block means of sample_every steps (decimated_spectrum)
+        ln.block += u;
+        if (++ln.in_block == ln.sample_every)
+          ln.samples.push_back(ln.block / static_cast<double>(ln.sample_every)), ln.block = 0.0, ln.in_block = 0;
+      }
     }
     if (ln.contact) {
       double total = 0.0;
@@ -307,8 +321,7 @@ class Batch {
     }
     if (!freqs_.empty())
       R.spectrum = fail ? std::vector<double>(freqs_.size(), 0.0)
-                        : amplitude_spectrum(std::move(ln.samples), static_cast<double>(ln.sample_every) * s_.base.dt,
-                                             freqs_);
+                        : decimated_spectrum(std::move(ln.samples), s_.base.dt, ln.sample_every, freqs_);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - ln.start).count();
   }
 

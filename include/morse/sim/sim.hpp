@@ -226,6 +226,13 @@ struct SweepSettings {
 /// so that a sinusoid of amplitude a at a frequency of f gives a.
 std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const std::vector<double>& f);
 
+/// The amplitude spectrum of a signal sampled every h and decimated by s through block means
+/// (x_j = the mean of samples js .. js + s - 1): amplitude_spectrum(x, s h, f) divided by the block
+/// mean's gain |sin(pi f s h) / (s sin(pi f h))|, so a sinusoid below the decimated Nyquist frequency
+/// keeps its amplitude, while content at f' beyond it, which plain decimation folds onto
+/// |f' - k / (s h)| unchanged, is attenuated by the block mean (by about f / f' at low f).
+std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f);
+
 /// Throughput counters of one rank's part of a sweep.
 struct SweepStats {
   long lane_steps = 0;     ///< sum over speeds of their steps
