@@ -69,7 +69,8 @@ std::string settings_text(const SweepOptions& o, const sim::SweepSettings& s, st
   std::snprintf(b, sizeof b,
                 "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
-                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n",
+                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
+                "spectrum_decimation=block_mean\n",
                 o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
                 s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes, c.width,
                 c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
