@@ -200,7 +200,7 @@ def main():
             path = st.file(name + ".h5")
             sargs = ["sweep", "-rom", st.file("rom_%s.h5" % rom), "-out", path, "-sweep_omega_min", lo,
                      "-sweep_omega_max", hi, "-sweep_omega_step", step, "-sim_revolutions", args.sweep_revs,
-                     "-sim_dt", DT] + CASING + (["-sim_linear"] if lin else [])
+                     "-sim_dt", DT, "-sweep_batch", 1] + CASING + (["-sim_linear"] if lin else [])
             # A resumed sweep continues the file; the record is only rewritten when it ends.
             st.rec.pop(name, None) if not os.path.exists(path) else None
             st.run(args.ranks, sargs, "%s (%s, %s rad/s)" % (name, rom, rng), path + ".done", name)
