@@ -4,6 +4,7 @@
 // (sim::recover_stress), written as HDF5 + XDMF for ParaView.
 #include <petscsys.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
@@ -67,51 +68,59 @@ void run_stress(MPI_Comm comm) {
   MORSE_CHECK(so.measure.empty() || so.measure == "linear" || so.measure == "nonlinear",
               "-stress_measure ", so.measure, ": unknown (linear or nonlinear)");
 
-  // The simulation: times, coordinates and whether it was linear (every rank reads; serial HDF5).
-  std::vector<double> time, q;
-  std::vector<hsize_t> dt, dq;
+  const auto sm = nlrom::read_stored_model(comm, so.rom, so.time_set ? std::vector<std::string>{}
+                                                                     : std::vector<std::string>{so.monitor});
+  const std::size_t r = sm.r();
+  const std::vector<double> radial = so.time_set ? std::vector<double>{} : sm.radial_row(so.monitor, "-stress_monitor");
+
+  // Rank 0 reads the simulation and picks the state: the stored time nearest -stress_time, or the
+  // largest |u_r| at the monitor node. The others receive that state only.
   std::string err;
-  double linear = 0.0;
-  if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) && io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) &&
-      so.measure.empty() && !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
-    err = cat(err, " (give -stress_measure)");
-  if (err.empty() && (dq.size() != 2 || dq[0] != time.size() || time.empty()))
-    err = cat(so.sim, ": /sim/q and /sim/time disagree (a morse simulate file is expected)");
+  double linear = 0.0, ur = 0.0, t_step = 0.0;
+  std::int64_t step = 0, nt = 0;
+  std::vector<double> q_step(r);
+  if (rank_of(comm) == 0) {
+    std::vector<double> time, q;
+    std::vector<hsize_t> dt, dq;
+    if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) && io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) &&
+        so.measure.empty() && !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
+      err = cat(err, " (give -stress_measure)");
+    if (err.empty() && (dq.size() != 2 || dq[0] != time.size() || time.empty()))
+      err = cat(so.sim, ": /sim/q and /sim/time disagree (a morse simulate file is expected)");
+    else if (err.empty() && dq[1] != r)
+      err = cat(so.sim, " has ", dq[1], " reduced coordinates; ", so.rom, " has r = ", r,
+                " (not the model of this simulation)");
+    else if (err.empty() && so.time_set &&
+             !(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12))
+      err = cat("-stress_time ", so.time, " s lies outside the simulation [", time.front(), ", ", time.back(), "] s");
+    if (err.empty()) {
+      nt = static_cast<std::int64_t>(time.size());
+      for (std::int64_t i = 0; i < nt; ++i) {
+        if (so.time_set) {
+          if (std::abs(time[i] - so.time) < std::abs(time[step] - so.time)) step = i;
+          continue;
+        }
+        double v = 0.0;
+        for (std::size_t j = 0; j < r; ++j) v += radial[j] * q[static_cast<std::size_t>(i) * r + j];
+        if (std::abs(v) > std::abs(ur)) ur = v, step = i;
+      }
+      t_step = time[step];
+      std::copy_n(&q[static_cast<std::size_t>(step) * r], r, q_step.begin());
+    }
+  }
   collective_check(comm, err);
+  double scalars[3] = {linear, ur, t_step};
+  std::int64_t ints[2] = {step, nt};
+  MPI_Bcast(scalars, 3, MPI_DOUBLE, 0, comm);
+  MPI_Bcast(ints, 2, MPI_INT64_T, 0, comm);
+  MPI_Bcast(q_step.data(), static_cast<int>(r), MPI_DOUBLE, 0, comm);
+  linear = scalars[0], ur = scalars[1], t_step = scalars[2], step = ints[0], nt = ints[1];
   const auto measure = so.measure.empty() ? (linear != 0.0 ? sim::StressMeasure::Linear : sim::StressMeasure::Nonlinear)
                        : so.measure == "linear" ? sim::StressMeasure::Linear
                                                 : sim::StressMeasure::Nonlinear;
-  const auto sm = nlrom::read_stored_model(comm, so.rom, so.time_set ? std::vector<std::string>{}
-                                                                     : std::vector<std::string>{so.monitor});
-  const std::size_t r = sm.r(), nt = time.size();
-  MORSE_CHECK(dq[1] == r, so.sim, " has ", dq[1], " reduced coordinates; ", so.rom, " has r = ", r,
-              " (not the model of this simulation)");
-
-  // The step: the nearest stored time, or the largest |e_r . u| at the monitor node.
-  std::size_t step = 0;
-  double ur = 0.0;
-  if (so.time_set) {
-    MORSE_CHECK(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12, "-stress_time ", so.time,
-                " s lies outside the simulation [", time.front(), ", ", time.back(), "] s");
-    for (std::size_t i = 1; i < nt; ++i)
-      if (std::abs(time[i] - so.time) < std::abs(time[step] - so.time)) step = i;
-  } else {
-    const auto& rows = sm.sets.at(so.monitor);
-    MORSE_CHECK(rows.size() == 1, "-stress_monitor ", so.monitor, " has ", rows.size(), " nodes; one is expected");
-    const double* X = &sm.coords[3 * rows[0]];
-    const double rho = std::hypot(X[0], X[1]);
-    MORSE_CHECK(rho > 0, "-stress_monitor ", so.monitor, ": the node lies on the rotation axis (no radial direction)");
-    std::vector<double> u;
-    for (std::size_t i = 0; i < nt; ++i) {
-      u.clear();
-      sm.displacements(so.monitor, &q[i * r], &u);
-      const double v = (u[0] * X[0] + u[1] * X[1]) / rho;
-      if (std::abs(v) > std::abs(ur)) ur = v, step = i;
-    }
-  }
   Model md = build_model(comm, o);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
-  const auto u = sm.field(&q[step * r]);
+  const auto u = sm.field(q_step.data());
   sim::StressField f;
   {
     StageTimer t(comm, "Stress");
@@ -119,7 +128,8 @@ void run_stress(MPI_Comm comm) {
   }
   check_options(comm, false);
   const char* mname = measure == sim::StressMeasure::Linear ? "linear" : "nonlinear";
-  print0(comm, "\nmorse stress: %s stress at t = %.9g s (step %zu of %zu)%s\n", mname, time[step], step, nt,
+  print0(comm, "\nmorse stress: %s stress at t = %.9g s (step %lld of %lld)%s\n", mname, t_step, (long long)step,
+         (long long)nt,
          so.time_set ? "" : cat(", largest |u_r| at ", so.monitor, ": ", ur, " m").c_str());
 
   StageTimer t(comm, "Write");
@@ -160,8 +170,8 @@ void run_stress(MPI_Comm comm) {
   out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
   out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});
   out.attribute("/stress/von_mises_element_max", "description", "[1][element] max of von Mises at its quadrature points [Pa]");
-  out.attribute("/stress", "time", time[step]);
-  out.attribute_int("/stress", "step", static_cast<std::int64_t>(step));
+  out.attribute("/stress", "time", t_step);
+  out.attribute_int("/stress", "step", step);
   out.attribute("/stress", "measure", mname);
   out.attribute("/stress", "max_von_mises", f.max_mises);
   out.attribute_int("/stress", "max_element_id", f.max_element_id);

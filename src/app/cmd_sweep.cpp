@@ -110,17 +110,7 @@ void run_sweep(MPI_Comm comm) {
   s.spectrum_bins = static_cast<int>(so.bins);
   s.batch = static_cast<int>(so.batch);
   s.batched = so.batched;
-  {
-    const auto& rows = sm.sets.at(so.monitor);
-    MORSE_CHECK(rows.size() == 1, "-sweep_monitor ", so.monitor, " has ", rows.size(), " nodes; give a set of one node");
-    const std::size_t nn = sm.node_ids.size(), k = rows[0];
-    const double* x = &sm.coords[3 * k];
-    const double rho = std::hypot(x[0], x[1]);
-    MORSE_CHECK(rho > 0, "-sweep_monitor: node ", sm.node_ids[k], " lies on the rotation axis");
-    s.monitor.assign(r, 0.0);
-    for (std::size_t j = 0; j < r; ++j)
-      s.monitor[j] = (x[0] * sm.basis[(j * nn + k) * 3] + x[1] * sm.basis[(j * nn + k) * 3 + 1]) / rho;
-  }
+  s.monitor = sm.radial_row(so.monitor, "-sweep_monitor");
   const double hc = sim::critical_step(sm.model);
   MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", hc, " s)");
   MORSE_CHECK(so.dt <= hc, "morse sweep: -sim_dt ", so.dt, " s is above the critical step of central differences, ", hc,

@@ -42,6 +42,18 @@ std::vector<double> StoredModel::field(const double* q) const {
   return u;
 }
 
+std::vector<double> StoredModel::radial_row(const std::string& set, const std::string& option) const {
+  const auto& rows = sets.at(set);
+  MORSE_CHECK(rows.size() == 1, option, " ", set, " has ", rows.size(), " nodes; one is expected (a set of one node)");
+  const std::size_t nn = node_ids.size(), k = rows[0];
+  const double* x = &coords[3 * k];
+  const double rho = std::hypot(x[0], x[1]);
+  MORSE_CHECK(rho > 0, option, " ", set, ": node ", node_ids[k], " lies on the rotation axis (no radial direction)");
+  std::vector<double> m(r());
+  for (std::size_t j = 0; j < r(); ++j) m[j] = (x[0] * basis[(j * nn + k) * 3] + x[1] * basis[(j * nn + k) * 3 + 1]) / rho;
+  return m;
+}
+
 std::vector<std::size_t> StoredModel::dof_rows(const std::vector<std::int64_t>& ids,
                                                const std::vector<std::int64_t>& comps) const {
   MORSE_CHECK(ids.size() == comps.size(), "DOF map: ", ids.size(), " node ids but ", comps.size(), " components");

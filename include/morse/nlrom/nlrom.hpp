@@ -164,6 +164,10 @@ struct StoredModel {
                                     const std::vector<std::int64_t>& components) const;
   /// Appends (Phi q) at the DOF rows of dof_rows().
   void dof_values(const std::vector<std::size_t>& rows, const double* q, std::vector<double>* out) const;
+  /// The row m with u_r = m . q: the radial displacement e_r . (Phi q) of the one node of `set`,
+  /// e_r = (x, y, 0) / |(x, y)| of its reference position. Throws, naming `option` and the set,
+  /// if the set does not hold exactly one node or the node lies on the rotation axis.
+  std::vector<double> radial_row(const std::string& set, const std::string& option) const;
   /// Index k of each node of `set` in boundary_nodes (its u is q[3k..3k+2]), in the set's order.
   /// Throws naming the first node of the set that is not a physical boundary node of the basis.
   std::vector<std::size_t> boundary_positions(const std::string& set) const;
