@@ -10,15 +10,7 @@
 # input (a time outside the run, an unknown measure, no -sim, a monitor of 4 nodes) is refused.
 # usage: case_contact_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
-d=$1 morse=$2 np=$3 box=$4 mpiexec=$5
-shift 5
-flags=()
-while [ $# -gt 0 ] && [ "$1" != "--" ]; do flags+=("$1"); shift; done
-shift
-material=("$@")
-run() { "$mpiexec" "${flags[@]}" -n "$np" "$morse" "$@"; }
-rm -rf "$d" && mkdir -p "$d"
-model=(-mesh "$box" -clamp x0 "${material[@]}")
+. "$(dirname "$0")/case_common.sh" "$@"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
   -nlrom_damping_modal 0.01 -nlrom_damping_modes 15 -out "$d/cb.h5"
 casing=(-contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3 -contact_mu 0.15)
@@ -40,17 +32,6 @@ sweep=(sweep -rom "$d/cb.h5" "${casing[@]}" -sim_dt 4e-6 -sim_revolutions 150 -s
        -sweep_omega_max 2000 -sweep_omega_step 100 -sweep_monitor x1 -sweep_spectrum_fmax 3000
        -sweep_spectrum_bins 60 -sweep_batch 3)
 # The monitor must be one node: the box has no one-node set, so -sweep_monitor x1 must be refused.
-expect_error() {
-  local pattern=$1 file=$2
-  shift 2
-  set +e
-  out=$(run "$@" -out "$file" 2>&1)
-  rc=$?
-  set -e
-  test $rc -ne 0
-  echo "$out" | grep -q -- "$pattern" || { echo "missing '$pattern' in: $out"; exit 1; }
-  test ! -e "$file"
-}
 expect_error '-sweep_monitor x1 has 4 nodes' "$d/bad_monitor.h5" "${sweep[@]}"
 # A one-node monitor set cannot be added after nlrom: rebuild with one.
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \

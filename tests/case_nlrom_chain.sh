@@ -4,15 +4,7 @@
 # refused with the limit and leaves no file.
 # usage: case_nlrom_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
-d=$1 morse=$2 np=$3 box=$4 mpiexec=$5
-shift 5
-flags=()
-while [ $# -gt 0 ] && [ "$1" != "--" ]; do flags+=("$1"); shift; done
-shift
-material=("$@")
-run() { "$mpiexec" "${flags[@]}" -n "$np" "$morse" "$@"; }
-rm -rf "$d" && mkdir -p "$d"
-model=(-mesh "$box" -clamp x0 "${material[@]}")
+. "$(dirname "$0")/case_common.sh" "$@"
 load=(-load_sets x1 -load_x1_dir y -load_x1_amplitude 1e6 -load_x1_omega 300)
 run fom "${model[@]}" "${load[@]}" -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_snapshot_every 2 -fom_monitor x1 \
   -out "$d/fom.h5"
@@ -103,27 +95,10 @@ u = np.einsum("j,jn->n", a["/sim/final/q"][:], basis[:, rows, :].reshape(len(bas
 assert abs(a["/sim/final"].attrs["time"] - st[-1]) < 1e-9
 assert np.allclose(u, a["/sim/snapshots/u"][-1], rtol=1e-12, atol=1e-12 * abs(u).max())
 PY
-set +e
-out=$(run simulate -rom "$d/cb.h5" -sim_dt 1 -sim_tfinal 10 -out "$d/bad.h5" 2>&1)
-rc=$?
-set -e
-test $rc -ne 0
-echo "$out" | grep -q 'above the critical step'
-test ! -e "$d/bad.h5"
-# Bad input: an initial state of the wrong size, a missing snapshot file. Each names the option
-# and leaves no file.
-expect_error() {
-  local pattern=$1 file=$2
-  shift 2
-  set +e
-  out=$(run simulate "$@" -out "$file" 2>&1)
-  rc=$?
-  set -e
-  test $rc -ne 0
-  echo "$out" | grep -q -- "$pattern" || { echo "missing '$pattern' in: $out"; exit 1; }
-  test ! -e "$file"
-}
-expect_error '-sim_q0 has 2 values' "$d/bad_q0.h5" -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 -sim_q0 1,2
-expect_error '-sim_snapshots.*no_such_fom.h5' "$d/bad_snap.h5" -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 \
+# Bad input: a step above the critical one, an initial state of the wrong size, a missing
+# snapshot file. Each names the option or the limit and leaves no file.
+expect_error 'above the critical step' "$d/bad.h5" simulate -rom "$d/cb.h5" -sim_dt 1 -sim_tfinal 10
+expect_error '-sim_q0 has 2 values' "$d/bad_q0.h5" simulate -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 -sim_q0 1,2
+expect_error '-sim_snapshots.*no_such_fom.h5' "$d/bad_snap.h5" simulate -rom "$d/cb.h5" -sim_dt 1e-8 -sim_tfinal 1e-6 \
   -sim_snapshots "$d/no_such_fom.h5"
 echo "case: ok: nlrom chain"
