@@ -174,10 +174,13 @@ void run_select(MPI_Comm comm) {
   MORSE_CHECK(std::find(so.methods.begin(), so.methods.end(), rom_name) != so.methods.end(), "-select_rom_method ",
               rom_name, " is not one of -select_method");
 
-  Model md = build_model(comm, o);
+  Model md = build_model(comm, o, true);
+  MORSE_CHECK(!(md.from_matrices && !so.from.empty()),
+              "-select_from reads nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
+  MORSE_CHECK(!md.mm.C, "-matrices_C is a reduce option (select ranks undamped fixed-interface modes)");
   cb::CBSettings cs = cb_settings(r);
   cs.keep_basis = true;
-  auto res = so.from.empty() ? cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), cs)
+  auto res = so.from.empty() ? craig_bampton(md, cs)
                              : cb::load_basis(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), so.from, r.boundary,
                                               r.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
@@ -203,7 +206,7 @@ void run_select(MPI_Comm comm) {
       es.nev = so.fom_modes;
     else
       es.omega2_max = l_an;
-    auto w = cb::sign_reference(md.lm, md.dofs);
+    auto w = sign_reference(md);
     fom = cb::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
   }
   const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
@@ -359,8 +362,7 @@ void run_select(MPI_Comm comm) {
   StageTimer t(comm, "Write");
   io::H5Output out(comm, o.out);
   io::write_provenance(out, "select", md.lm.mesh.units);
-  auto gm = mesh::gather_to_rank0(md.lm);
-  io::write_mesh(out, gm);
+  write_model(out, md);
   const std::vector<double> fom_hz = hz(fom.omega2);
   out.write("/cb/fixed_interface/frequencies_hz", hz(res.fixed_omega2));
   out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
@@ -402,7 +404,7 @@ void run_select(MPI_Comm comm) {
     out.attribute(g, "worst_frequency_error", mr.worst_err);
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      write_rom(out, mr.M, mr.K, r.damping > 0 ? &C : nullptr, res.boundary_node_ids, mr.rom_f, nb, r.damping);
+      write_rom(out, mr.M, mr.K, r.damping > 0 ? &C : nullptr, res, mr.rom_f, r.damping);
       out.write("/rom/selected_modes", sel);
       out.attribute("/rom", "selection_method", mr.name);
     }

@@ -74,7 +74,7 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
   o->material.name = "options";
   o->material.E = o->material.nu = o->material.rho = -1;
   PetscOptionsBegin(comm, nullptr, "morse model options", "");
-  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII) or .inp (Abaqus/CalculiX)", "",
+  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->mesh = buf;
   buf[0] = 0;
@@ -133,6 +133,24 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
       if (!err.empty() && o->error.empty()) o->error = has ? cat(opt, ": ", err) : err;
       o->node_sets.emplace_back(name, std::move(ids));
     }
+  struct {
+    const char* name;
+    const char* help;
+    std::string* dest;
+  } files[] = {
+      {"-matrices_K", "Stiffness matrix instead of a mesh (reduce, select): .mtx/.mm MatrixMarket, .petsc/.bin PETSc binary, "
+                      ".op4[:NAME] Nastran OUTPUT4", &o->matrices.K},
+      {"-matrices_M", "Mass matrix (same formats as -matrices_K)", &o->matrices.M},
+      {"-matrices_C", "Viscous damping matrix, projected on the superelement (optional)", &o->matrices.C},
+      {"-matrices_dofmap", "DOF map of the matrices: text 'node component [set ...]' per row, or .h5 /dofmap", &o->matrices.dofmap},
+  };
+  for (auto& f : files) {
+    buf[0] = 0;
+    PetscCall(PetscOptionsString(f.name, f.help, "", buf, buf, sizeof buf, &set));
+    if (set) *f.dest = buf;
+  }
+  PetscCall(PetscOptionsReal("-matrices_symmetry_tol", "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)",
+                             "", o->matrices.symmetry_tol, &o->matrices.symmetry_tol, nullptr));
   PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
   PetscCall(PetscOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
   o->out = buf;
@@ -150,7 +168,7 @@ void check_options(MPI_Comm comm, bool early) {
   std::string bad;
   static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
                                          "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_", "stress_",
-                                         "load_", "static_", "fom_krylov_", "fom_"};
+                                         "load_", "static_", "fom_krylov_", "fom_", "matrices_", "nastran_"};
   for (PetscInt i = 0; i < n; ++i) {
     std::string name = names[i];
     if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
@@ -170,10 +188,47 @@ bool help_requested() {
   return h;
 }
 
-Model build_model(MPI_Comm comm, const CommonOptions& o) {
-  MORSE_CHECK(!o.mesh.empty(), "no mesh given: use -mesh FILE (.msh or .inp)");
+Model build_model(MPI_Comm comm, const CommonOptions& o, bool allow_matrices) {
   MORSE_CHECK(o.error.empty(), o.error);
+  MORSE_CHECK(allow_matrices || !o.matrices_given(),
+              "-matrices_K/-matrices_M/-matrices_C/-matrices_dofmap are read by reduce and select only; this command "
+              "needs a mesh (-mesh)");
+  MORSE_CHECK(!(o.matrices_given() && !o.mesh.empty()), "give either -mesh or -matrices_K/-matrices_M, not both");
   Model md;
+  if (o.matrices_given()) {
+    MORSE_CHECK(o.set_materials.empty() && o.material.E < 0 && o.material.nu < 0 && o.material.rho < 0,
+                "-material_* options need a mesh: the matrices already hold the material");
+    io::MatrixInput in = o.matrices;
+    in.clamp = o.clamp;
+    in.node_sets = o.node_sets;
+    {
+      StageTimer t(comm, "ReadMatrices");
+      md.mm = io::read_matrix_model(comm, in);
+    }
+    md.from_matrices = true;
+    md.ops.K = std::move(md.mm.K);
+    md.ops.M = std::move(md.mm.M);
+    md.dofs.comm = comm;
+    md.dofs.first = md.mm.first;
+    md.dofs.n_owned = md.mm.n_owned;
+    md.dofs.n_global = md.mm.n_global;
+    md.dofs.n_clamped_global = md.mm.n_rows_file - md.mm.n_global;
+    md.lm.comm = comm;
+    md.lm.mesh.units = o.units.empty() ? "unknown" : o.units;
+    md.lm.mesh.source = md.mm.source;
+    MatInfo ik, im;
+    MORSE_CALL(MatGetInfo(md.ops.K.get(), MAT_GLOBAL_SUM, &ik));
+    MORSE_CALL(MatGetInfo(md.ops.M.get(), MAT_GLOBAL_SUM, &im));
+    print0(comm, "morse: matrices K %s (%.0f entries), M %s (%.0f entries)%s%s: %lld rows, %lld clamped, %lld free\n",
+           o.matrices.K.c_str(), ik.nz_used, o.matrices.M.c_str(), im.nz_used, md.mm.C ? ", C " : "",
+           md.mm.C ? o.matrices.C.c_str() : "", (long long)md.mm.n_rows_file, (long long)md.dofs.n_clamped_global,
+           (long long)md.dofs.n_global);
+    print0(comm, "morse: symmetry: max|K - K^T| / max|K| = %.3g, max|M - M^T| / max|M| = %.3g (symmetrized)\n",
+           md.mm.asymmetry_K, md.mm.asymmetry_M);
+    return md;
+  }
+  MORSE_CHECK(!o.mesh.empty(), allow_matrices ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
+                                              : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
   {
     StageTimer t(comm, "ReadDistribute");
     md.lm = mesh::read_and_distribute(comm, o.mesh);
@@ -193,6 +248,31 @@ Model build_model(MPI_Comm comm, const CommonOptions& o) {
   print0(comm, "morse: %lld free DOFs, %lld clamped; volume %.6g, mass %.6g\n", (long long)md.dofs.n_global,
          (long long)md.dofs.n_clamped_global, md.ops.volume, md.ops.mass);
   return md;
+}
+
+cb::CBResult craig_bampton(const Model& md, const cb::CBSettings& s) {
+  if (!md.from_matrices) return cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), s);
+  return cb::craig_bampton(md.mm, md.ops.K.get(), md.ops.M.get(), s);
+}
+
+UVec sign_reference(const Model& md) {
+  return md.from_matrices ? cb::sign_reference(md.mm) : cb::sign_reference(md.lm, md.dofs);
+}
+
+void write_model(io::H5Output& out, const Model& md) {
+  if (!md.from_matrices) {
+    auto gm = mesh::gather_to_rank0(md.lm);
+    io::write_mesh(out, gm);
+    return;
+  }
+  std::vector<std::int64_t> node, comp;
+  io::gather_labels(md.mm, &node, &comp);
+  out.write("/dofs/node", node);
+  out.write("/dofs/component", comp);
+  out.attribute("/dofs", "description",
+                "matrix input: node id and component (1..6) of every free row of K and M, in row order");
+  out.attribute("/dofs", "source", md.mm.source);
+  out.attribute_int("/dofs", "n_rows_file", md.mm.n_rows_file);
 }
 
 void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
@@ -227,20 +307,28 @@ void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mes
 
 // /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
 void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
-               const std::vector<double>* C, const std::vector<std::int64_t>& boundary_nodes,
-               const std::vector<double>& freq_hz, PetscInt n_b, double damping) {
+               const std::vector<double>* C, const cb::CBResult& cb, const std::vector<double>& freq_hz,
+               double damping) {
   const auto n = static_cast<hsize_t>(freq_hz.size());
+  const PetscInt n_b = cb.n_b;
   out.write("/rom/M", M, {n, n});
   out.write("/rom/K", K, {n, n});
   if (C) out.write("/rom/C", *C, {n, n});
-  out.write("/rom/boundary_nodes", boundary_nodes);
-  out.write("/rom/frequencies_hz", freq_hz);
+  out.write("/rom/boundary_nodes", cb.boundary_node_ids);
+  std::vector<std::int64_t> labels;
+  for (PetscInt j = 0; j < n_b; ++j) {
+    labels.push_back(cb.boundary_dof_node[j]);
+    labels.push_back(cb.boundary_dof_component[j]);
+  }
+  out.write("/rom/boundary_dofs", labels, {static_cast<hsize_t>(n_b), 2});
+  out.attribute("/rom/boundary_dofs", "description",
+                "[boundary DOF][node id, component 1..6 (1..3 = x, y, z; 4..6 = rotations, matrix input only)]");  out.write("/rom/frequencies_hz", freq_hz);
   out.attribute_int("/rom", "n_boundary_dofs", n_b);
   out.attribute_int("/rom", "n_modes", static_cast<std::int64_t>(n) - n_b);
   out.attribute("/rom", "damping_ratio", damping);
   out.attribute("/rom", "dof_order",
-                "boundary DOFs first (nodes of /rom/boundary_nodes by ascending id, then x,y,z), then the "
-                "fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
+                "boundary DOFs first (those of /rom/boundary_dofs: nodes by ascending id, then components), then "
+                "the fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
 }
 
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
@@ -312,6 +400,16 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
                              r->write_basis, &r->write_basis, nullptr));
   PetscCall(PetscOptionsBool("-cb_xdmf", "Write an XDMF file for ParaView (with -cb_write_basis)", "", r->xdmf,
                              &r->xdmf, &r->xdmf_set));
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-matrices_write",
+                               "Also write the model's free-DOF K and M and its DOF map as PREFIX_K.EXT, PREFIX_M.EXT, "
+                               "PREFIX_dofmap.txt (mesh input)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) r->write_matrices = buf;
+  PetscCall(PetscStrncpy(buf, r->write_format.c_str(), sizeof buf));
+  PetscCall(PetscOptionsString("-matrices_write_format", "Format of -matrices_write: mtx (MatrixMarket) or petsc (binary)",
+                               "", buf, buf, sizeof buf, nullptr));
+  r->write_format = buf;
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }

@@ -19,6 +19,7 @@
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/io/matrices.hpp"
 #include "morse/mesh/mesh.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/sim/sim.hpp"
@@ -46,6 +47,10 @@ struct CommonOptions {
   std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
   std::string error;  ///< a bad option value, raised by build_model (after -help)
   std::string out;
+  /// Assembled operators instead of a mesh (-matrices_K, -matrices_M, -matrices_C,
+  /// -matrices_dofmap, -matrices_symmetry_tol); reduce and select only.
+  io::MatrixInput matrices;
+  bool matrices_given() const { return !matrices.K.empty() || !matrices.M.empty() || !matrices.C.empty() || !matrices.dofmap.empty(); }
 };
 
 PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o);
@@ -60,9 +65,22 @@ struct Model {
   mesh::LocalMesh lm;
   fe::DofMap dofs;
   fe::Operators ops;
+  /// Matrix input (-matrices_*): no mesh; K and M are moved to ops, lm is empty, dofs holds the
+  /// row layout only (node_dof empty), mm the row labels, sets and C.
+  bool from_matrices = false;
+  io::MatrixModel mm;
 };
 
-Model build_model(MPI_Comm comm, const CommonOptions& o);
+/// The model of a mesh (-mesh) or, if allow_matrices, of assembled operators (-matrices_*).
+Model build_model(MPI_Comm comm, const CommonOptions& o, bool allow_matrices = false);
+/// The Craig-Bampton superelement of either kind of model (boundary: a node set of the mesh, or a
+/// row set of the matrices). Collective.
+cb::CBResult craig_bampton(const Model& md, const cb::CBSettings& s);
+/// Sign-reference vector of the model's free DOFs (independent of the partition). Collective.
+UVec sign_reference(const Model& md);
+/// The model description of an output file: /mesh (mesh input) or /dofs (matrix input: the node
+/// id and component of every free row, and the matrix files). Collective.
+void write_model(io::H5Output& out, const Model& md);
 
 void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
                          PetscInt count);
@@ -74,8 +92,8 @@ void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mes
 
 // /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
 void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
-               const std::vector<double>* C, const std::vector<std::int64_t>& boundary_nodes,
-               const std::vector<double>& freq_hz, PetscInt n_b, double damping);
+               const std::vector<double>* C, const cb::CBResult& cb, const std::vector<double>& freq_hz,
+               double damping);
 
 struct ReduceOptions {
   std::string boundary;
@@ -85,6 +103,8 @@ struct ReduceOptions {
   PetscBool write_basis = PETSC_FALSE;
   PetscBool xdmf = PETSC_TRUE;
   PetscBool xdmf_set = PETSC_FALSE;  ///< -cb_xdmf given explicitly
+  std::string write_matrices;        ///< -matrices_write PREFIX: K, M and the DOF map of the model
+  std::string write_format = "mtx";  ///< -matrices_write_format mtx|petsc
 };
 
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);

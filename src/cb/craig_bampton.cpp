@@ -118,16 +118,49 @@ UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs) {
   return w;
 }
 
+UVec sign_reference(const io::MatrixModel& mm) {
+  UVec w;
+  MORSE_CALL(VecCreateMPI(mm.comm, mm.n_owned, mm.n_global, w.ptr()));
+  PetscScalar* a;
+  MORSE_CALL(VecGetArray(w.get(), &a));
+  for (PetscInt r = 0; r < mm.n_owned; ++r)
+    a[r] = 0.5 + std::fmod(0.6180339887498949 * static_cast<double>(mm.first + r + 1), 1.0);
+  MORSE_CALL(VecRestoreArray(w.get(), &a));
+  return w;
+}
+
+CBResult craig_bampton(const io::MatrixModel& mm, Mat K, Mat M, const CBSettings& s) {
+  std::string err = s.boundary_set.empty() ? "no boundary set given (-boundary SET)" : "";
+  collective_check(mm.comm, err);
+  auto rows = io::set_rows(mm, s.boundary_set, "boundary set");
+  CBResult b;
+  b.n_b = static_cast<PetscInt>(rows.size());
+  for (const auto& r : rows) {
+    b.boundary_dofs.push_back(r.row);
+    b.boundary_dof_node.push_back(r.node);
+    b.boundary_dof_component.push_back(r.component);
+    if (b.boundary_node_ids.empty() || b.boundary_node_ids.back() != r.node) b.boundary_node_ids.push_back(r.node);
+  }
+  UVec w = sign_reference(mm);
+  return craig_bampton(K, M, w.get(), s, std::move(b));
+}
+
 void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out) {
   auto boundary = gather_boundary(lm, dofs, set);
   out->n_b = static_cast<PetscInt>(3 * boundary.size());
   out->boundary_node_ids.clear();
   out->boundary_global_nodes.clear();
   out->boundary_dofs.clear();
+  out->boundary_dof_node.clear();
+  out->boundary_dof_component.clear();
   for (const auto& b : boundary) {
     out->boundary_node_ids.push_back(b.id);
     out->boundary_global_nodes.push_back(b.global);
     out->boundary_dofs.insert(out->boundary_dofs.end(), b.dof, b.dof + 3);
+    for (int d = 0; d < 3; ++d) {
+      out->boundary_dof_node.push_back(b.id);
+      out->boundary_dof_component.push_back(d + 1);
+    }
   }
 }
 
@@ -154,9 +187,23 @@ void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out) {
 
 CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
                        const CBSettings& s) {
-  MPI_Comm comm = lm.comm;
   CBResult out;
   set_boundary(lm, dofs, s.boundary_set, &out);
+  UVec w = sign_reference(lm, dofs);
+  return craig_bampton(K, M, w.get(), s, std::move(out));
+}
+
+CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  fe::DofMap dofs;  // the row layout of K
+  {
+    PetscInt rend = 0;
+    MORSE_CALL(MatGetOwnershipRange(K, &dofs.first, &rend));
+    MORSE_CALL(MatGetSize(K, &dofs.n_global, nullptr));
+    dofs.n_owned = rend - dofs.first;
+  }
+  MORSE_CHECK(static_cast<PetscInt>(out.boundary_dofs.size()) == out.n_b && out.n_b > 0,
+              "craig_bampton: the boundary layout is empty or inconsistent");
   std::unordered_map<PetscInt, PetscInt> pos;  // global DOF -> boundary position
   for (PetscInt j = 0; j < out.n_b; ++j) pos[out.boundary_dofs[j]] = j;
   // Interior / boundary index sets of the owned rows, ascending.
@@ -198,9 +245,8 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
   if (want_modes) {
     MORSE_CHECK(s.fmax_hz > 0 || s.n_fixed <= n_i, s.n_fixed, " fixed-interface modes requested but the model has only ",
                 n_i, " interior DOFs");
-    UVec w = sign_reference(lm, dofs);
     Vec wi;
-    MORSE_CALL(VecGetSubVector(w.get(), is_i.get(), &wi));
+    MORSE_CALL(VecGetSubVector(w, is_i.get(), &wi));
     EigenSettings es;
     es.prefix = s.prefix;
     es.what = "fixed-interface modes";
@@ -209,7 +255,7 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
     else
       es.nev = s.n_fixed;
     eig = solve_eigen(Kii.get(), Mii.get(), es, wi);
-    MORSE_CALL(VecRestoreSubVector(w.get(), is_i.get(), &wi));
+    MORSE_CALL(VecRestoreSubVector(w, is_i.get(), &wi));
     out.fixed_omega2 = eig.omega2;
     out.factor_seconds = eig.factor_seconds;
   }

@@ -272,6 +272,19 @@ Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Ma
     if ((e & 1023) == 0) progress.update(static_cast<double>(e));
   }
   collective_check(lm.comm, err);
+  // Point masses (CONM2) on the owned nodes: m on the three translational diagonal entries.
+  if (!m.point_mass.empty()) {
+    int rank = 0;
+    MPI_Comm_rank(lm.comm, &rank);
+    for (std::int64_t k = 0; k < m.num_nodes(); ++k) {
+      if (lm.node_owner[k] != rank || m.point_mass[k] == 0.0) continue;
+      mass += m.point_mass[k];
+      for (int d = 0; d < 3; ++d) {
+        PetscInt g = dofs.node_dof[3 * k + d];
+        if (g >= 0) MORSE_CALL(MatSetValue(ops.M.get(), g, g, m.point_mass[k], ADD_VALUES));
+      }
+    }
+  }
   for (Mat A : {ops.K.get(), ops.M.get()}) {
     MORSE_CALL(MatAssemblyBegin(A, MAT_FINAL_ASSEMBLY));
     MORSE_CALL(MatAssemblyEnd(A, MAT_FINAL_ASSEMBLY));

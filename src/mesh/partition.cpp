@@ -82,11 +82,13 @@ void drop_unused_nodes(Mesh* m) {
   std::vector<std::int64_t> ids(next);
   std::vector<double> xyz(3 * next);
   std::vector<std::uint8_t> fixed(m->fixed_dofs.empty() ? 0 : next);
+  std::vector<double> pmass(m->point_mass.empty() ? 0 : next);
   for (std::int64_t k = 0; k < n; ++k) {
     if (map[k] < 0) continue;
     ids[map[k]] = m->node_ids[k];
     std::copy_n(&m->coords[3 * k], 3, &xyz[3 * map[k]]);
     if (!fixed.empty()) fixed[map[k]] = m->fixed_dofs[k];
+    if (!pmass.empty()) pmass[map[k]] = m->point_mass[k];
   }
   for (auto& k : m->elem_nodes) k = map[k];
   for (auto& [name, v] : m->node_sets) {
@@ -98,6 +100,7 @@ void drop_unused_nodes(Mesh* m) {
   m->node_ids.swap(ids);
   m->coords.swap(xyz);
   m->fixed_dofs.swap(fixed);
+  m->point_mass.swap(pmass);
 }
 
 std::vector<int> partition_elements(const Mesh& m, int n_parts) {
@@ -149,11 +152,13 @@ void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<i
   std::vector<double> xyz(3 * nodes.size());
   std::vector<int> own(nodes.size());
   std::vector<std::uint8_t> fixed(m.fixed_dofs.empty() ? 0 : nodes.size());
+  std::vector<double> pmass(m.point_mass.empty() ? 0 : nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     ids[i] = m.node_ids[nodes[i]];
     std::copy_n(&m.coords[3 * nodes[i]], 3, &xyz[3 * i]);
     own[i] = owner[nodes[i]];
     if (!fixed.empty()) fixed[i] = m.fixed_dofs[nodes[i]];
+    if (!pmass.empty()) pmass[i] = m.point_mass[nodes[i]];
   }
   std::vector<int> types(elems.size()), mats(elems.size());
   std::vector<std::int64_t> offs(1, 0), conn, eids(elems.size());
@@ -170,6 +175,7 @@ void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<i
   p.put_vec(xyz);
   p.put_vec(own);
   p.put_vec(fixed);
+  p.put_vec(pmass);
   p.put_vec(elems);
   p.put_vec(types);
   p.put_vec(mats);
@@ -216,6 +222,7 @@ LocalMesh unpack_piece(MPI_Comm comm, const std::vector<char>& buf) {
   m.coords = u.get_vec<double>();
   lm.node_owner = u.get_vec<int>();
   m.fixed_dofs = u.get_vec<std::uint8_t>();
+  m.point_mass = u.get_vec<double>();
   lm.global_elem = u.get_vec<std::int64_t>();
   auto types = u.get_vec<int>();
   m.elem_types.resize(types.size());

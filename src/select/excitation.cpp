@@ -16,9 +16,9 @@ namespace {
 std::string parse_load_table(const std::string& path, const cb::CBResult& cb, Excitation* ex) {
   std::ifstream in(path);
   if (!in) return cat("-select_ebr_load ", path, ": cannot open the file");
-  std::map<std::int64_t, PetscInt> node_pos;  // boundary node id -> position
-  for (std::size_t j = 0; j < cb.boundary_node_ids.size(); ++j)
-    node_pos[cb.boundary_node_ids[j]] = static_cast<PetscInt>(j);
+  std::map<std::pair<std::int64_t, int>, PetscInt> dof_pos;  // (boundary node id, component) -> position
+  for (std::size_t j = 0; j < cb.boundary_dof_node.size(); ++j)
+    dof_pos[{cb.boundary_dof_node[j], cb.boundary_dof_component[j]}] = static_cast<PetscInt>(j);
   std::map<std::pair<std::size_t, PetscInt>, long> seen;  // (harmonic, dof) -> line
   std::string line;
   long ln = 0;
@@ -48,19 +48,21 @@ std::string parse_load_table(const std::string& path, const cb::CBResult& cb, Ex
     if (freq <= 0) return cat(where, "frequency ", f[0], " Hz must be > 0");
     const auto node = static_cast<std::int64_t>(node_d);
     if (static_cast<double>(node) != node_d) return cat(where, "node '", f[1], "' is not an integer node id");
-    auto it = node_pos.find(node);
-    if (it == node_pos.end()) return cat(where, "node ", node, " is not in the boundary set");
     std::string c = f[2];
     std::transform(c.begin(), c.end(), c.begin(), [](unsigned char ch) { return std::tolower(ch); });
-    int d = c == "x" || c == "1" ? 0 : c == "y" || c == "2" ? 1 : c == "z" || c == "3" ? 2 : -1;
-    if (d < 0) return cat(where, "component '", f[2], "': expected x, y, z or 1, 2, 3");
+    int d = c == "x" ? 1 : c == "y" ? 2 : c == "z" ? 3 : c.size() == 1 && c[0] >= '1' && c[0] <= '6' ? c[0] - '0' : 0;
+    if (d == 0) return cat(where, "component '", f[2], "': expected x, y, z or 1 to 6");
+    auto it = dof_pos.lower_bound({node, 0});
+    if (it == dof_pos.end() || it->first.first != node) return cat(where, "node ", node, " is not in the boundary set");
+    it = dof_pos.find({node, d});
+    if (it == dof_pos.end()) return cat(where, "node ", node, " has no boundary DOF of component ", f[2]);
     std::size_t k = 0;
     while (k < ex->freq_hz.size() && ex->freq_hz[k] != freq) ++k;
     if (k == ex->freq_hz.size()) {
       ex->freq_hz.push_back(freq);
       ex->load.emplace_back(cb.n_b, std::complex<double>(0.0, 0.0));
     }
-    const PetscInt dof = 3 * it->second + d;
+    const PetscInt dof = it->second;
     auto [pos, fresh] = seen.emplace(std::pair{k, dof}, ln);
     if (!fresh)
       return cat(where, "node ", node, " component ", f[2], " at ", f[0], " Hz is already loaded on line ",

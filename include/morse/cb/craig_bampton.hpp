@@ -18,6 +18,7 @@
 
 #include "morse/cb/eigen.hpp"
 #include "morse/fe/model.hpp"
+#include "morse/io/matrices.hpp"
 
 namespace morse::cb {
 
@@ -36,6 +37,10 @@ struct CBResult {
   std::vector<std::int64_t> boundary_node_ids;     ///< ascending
   std::vector<std::int64_t> boundary_global_nodes; ///< global node index, same order
   std::vector<PetscInt> boundary_dofs;  ///< free-DOF number of each boundary DOF (reduced order)
+  /// What each boundary DOF is, in reduced order: node (grid) id and component 1..6 (1..3 =
+  /// x, y, z translations; 4..6 rotations, only from matrix input).
+  std::vector<std::int64_t> boundary_dof_node;
+  std::vector<int> boundary_dof_component;
   std::vector<double> fixed_omega2;                ///< eigenvalues of eq. 4, ascending
   /// Reduced operators, dense row-major (n_b + n_phi)^2, identical on every rank.
   std::vector<double> M, K, C;
@@ -52,6 +57,21 @@ struct CBResult {
 /// Collective.
 CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
                        const CBSettings& s);
+
+/// The Craig–Bampton core on any operators: K and M are the free-DOF operators (MPIAIJ, same
+/// row layout), `boundary` holds the boundary layout (n_b, boundary_dofs in reduced order and
+/// their labels; the node-level fields may be empty), and w is the sign-reference vector (same
+/// layout as K; it must not depend on the partition). Collective.
+CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult boundary);
+
+/// The superelement of a model given by its matrices (io/matrices.hpp; K and M with mm's row
+/// layout): the boundary DOFs are the rows of row set s.boundary_set, ordered by node id then
+/// component (components 4..6 included). Collective.
+CBResult craig_bampton(const io::MatrixModel& mm, Mat K, Mat M, const CBSettings& s);
+
+/// Sign-reference vector of a matrix model: a weight per free row that depends on its global
+/// number only. Collective.
+UVec sign_reference(const io::MatrixModel& mm);
 
 /// Fills the boundary layout of out (n_b, boundary_node_ids, boundary_global_nodes,
 /// boundary_dofs) from a node set. Throws (collectively) for a missing or empty set or a clamped

@@ -64,6 +64,10 @@ struct Mesh {
   /// Empty when the deck fixes nothing.
   std::vector<std::uint8_t> fixed_dofs;
 
+  /// Lumped point masses (Nastran CONM2), added to the three translational diagonal entries of
+  /// M at node k. Empty when the deck has none.
+  std::vector<double> point_mass;
+
   /// Unit system, recorded in output files: "SI" (m, kg, s, N, Pa) or e.g. "mm-t-s".
   std::string units = "SI";
   /// Where the mesh came from (file name or generator description), for messages and output.
