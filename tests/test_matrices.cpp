@@ -267,7 +267,7 @@ TEST_F(MatricesTest, BadInputIsRefusedClearly) {
     in.dofmap = map;
     io::read_matrix_model(w, in);
   };
-  expect_error([&] { model(nonsym, good, ""); }, {"-matrices_K", "nonsym.mtx", "not symmetric", "row 2 (node 1 component 2)"});
+  expect_error([&] { model(nonsym, good, ""); }, {"-matrices_K", "nonsym.mtx", "not symmetric", "column 2 (node 1 component 2)"});
   expect_error([&] { model(good, big, ""); }, {"size mismatch", "good.mtx", "big.mtx", "3 x 3", "4 x 4"});
   expect_error([&] { model(good, good, map_long); }, {"long.txt:4", "row 4", "only 3 rows"});
   expect_error([&] { model(good, good, map_short); }, {"short.txt", "2 rows listed", "3"});

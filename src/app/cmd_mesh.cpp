@@ -3,6 +3,7 @@
 // quality.
 #include <petscsys.h>
 
+#include <cctype>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -16,6 +17,7 @@
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/mesh.hpp"
+#include "morse/mesh/nastran.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/mesh/stator.hpp"
 
@@ -36,7 +38,8 @@ PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_
   PetscCall(PetscOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
   PetscCall(PetscOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
                              &b->distortion, nullptr));
-  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
+  PetscCall(PetscOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
+                               out, out, len, nullptr));
   PetscOptionsEnd();
   *type_out = type;
   return PETSC_SUCCESS;
@@ -44,7 +47,8 @@ PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_
 
 PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
   PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
-  PetscCall(PetscOptionsString("-out", "Output mesh file (.msh, Gmsh 4.1)", "", out, out, len, nullptr));
+  PetscCall(PetscOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
+                               out, out, len, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }
@@ -53,7 +57,7 @@ PetscErrorCode get_mesh_in(MPI_Comm comm, std::string* path) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse mesh info options", "");
-  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII) or .inp (Abaqus/CalculiX)", "", buf,
+  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "", buf,
                                buf, sizeof buf, &set));
   PetscOptionsEnd();
   if (set) *path = buf;
@@ -115,6 +119,22 @@ void run_mesh_info(MPI_Comm comm) {
   if (fixed) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)fixed);
 }
 
+PetscErrorCode get_nastran_options(MPI_Comm comm, mesh::Material* mat, char* fmt, size_t lf, char* aset, size_t la,
+                                   char* spc, size_t ls) {
+  PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
+  PetscCall(PetscOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat->E, &mat->E, nullptr));
+  PetscCall(PetscOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat->nu, &mat->nu, nullptr));
+  PetscCall(PetscOptionsReal("-material_rho", "Density written to MAT1", "", mat->rho, &mat->rho, nullptr));
+  PetscCall(PetscOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
+                               lf, nullptr));
+  PetscCall(PetscOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset, aset,
+                               la, nullptr));
+  PetscCall(PetscOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
+                               "", spc, spc, ls, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
 }  // namespace
 
 void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
@@ -141,8 +161,29 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
     else
       MORSE_CALL(mesh::stator_spec_from_options(comm, &stator));
   }
+  // Nastran output: the material of the deck and its format.
+  mesh::Material mat;
+  mat.name = "options";
+  mat.E = mat.nu = mat.rho = -1;
+  mesh::NastranWriteOptions nw;
+  char fmt[32] = "large", aset[256] = "", spc[256] = "";
+  MORSE_CALL(get_nastran_options(comm, &mat, fmt, sizeof fmt, aset, sizeof aset, spc, sizeof spc));
   if (help_requested()) return;
   check_options(comm, false);
+  const std::string out_s = out;
+  auto dot = out_s.rfind('.');
+  std::string ext = dot == std::string::npos ? "" : out_s.substr(dot + 1);
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const bool nastran = ext == "bdf" || ext == "dat" || ext == "nas";
+  MORSE_CHECK(nastran || ext == "msh", "-out ", out_s, ": expected .msh (Gmsh) or .bdf/.dat/.nas (Nastran)");
+  MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0),
+              "-out ", out_s, ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
+  const std::string f = fmt;
+  MORSE_CHECK(f == "large" || f == "small" || f == "free", "-nastran_format ", f, ": expected large, small or free");
+  nw.format = f == "large" ? mesh::NastranWriteOptions::Format::Large
+              : f == "small" ? mesh::NastranWriteOptions::Format::Small
+                             : mesh::NastranWriteOptions::Format::Free;
+  nw.aset = aset;
   if (what == "box")
     MORSE_CHECK(box.nx > 0 && box.ny > 0 && box.nz > 0 && box.lx > 0 && box.ly > 0 && box.lz > 0,
                 "-box_n* and -box_l* must be positive");
@@ -150,7 +191,20 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   if (rank_of(comm) == 0) try {
       auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
                                                                           : mesh::generate_stator(stator);
-      mesh::write_gmsh(m, out);
+      if (nastran) {
+        m.materials.push_back(mat);
+        for (auto& em : m.elem_material)
+          if (em < 0) em = static_cast<int>(m.materials.size()) - 1;
+        if (spc[0]) {
+          auto it = m.node_sets.find(spc);
+          MORSE_CHECK(it != m.node_sets.end(), "-nastran_spc ", spc, ": the mesh has no such node set");
+          m.fixed_dofs.assign(m.num_nodes(), 0);
+          for (auto k : it->second) m.fixed_dofs[k] = 7;
+        }
+        mesh::write_nastran(m, out, nw);
+      } else {
+        mesh::write_gmsh(m, out);
+      }
       print0(comm, "morse: wrote %s: %lld nodes, %lld elements (%s)\n", out, (long long)m.num_nodes(),
              (long long)m.num_elements(), m.source.c_str());
     } catch (const Error& e) {

@@ -410,7 +410,7 @@ MaxEntry max_entry(Mat A) {
 
 // Row label for messages (rank 0, which holds the DOF map).
 std::string label(const DofMapFile& map, PetscInt row) {
-  return cat("row ", row + 1, " (node ", map.node[row], " component ", map.component[row], ")");
+  return cat(row + 1, " (node ", map.node[row], " component ", map.component[row], ")");
 }
 
 /// Measures max |A - A^T| / max |A|; above tol it is an error naming the worst entry, else A is
@@ -428,7 +428,7 @@ double symmetrize(UMat* A, double tol, const std::string& what, const DofMapFile
   if (rel > tol && comm_rank(comm) != 0) err = "not symmetric";  // rank 0 holds the DOF map and says where
   if (rel > tol && comm_rank(comm) == 0) {
     err = cat(what, " is not symmetric: |A(i,j) - A(j,i)| = ", d.value, " = ", rel, " x max|A| (tolerance ", tol,
-              ", -matrices_symmetry_tol) at ", label(map, d.i), ", column ", label(map, d.j));
+              ", -matrices_symmetry_tol) at row ", label(map, d.i), ", column ", label(map, d.j));
   }
   collective_check(comm, err);
   if (d.value > 0) {

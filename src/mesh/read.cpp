@@ -4,6 +4,7 @@
 #include "morse/core/error.hpp"
 #include "morse/mesh/abaqus.hpp"
 #include "morse/mesh/gmsh.hpp"
+#include "morse/mesh/nastran.hpp"
 #include "morse/mesh/partition.hpp"
 
 namespace morse::mesh {
@@ -22,8 +23,11 @@ LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path) {
         serial = read_gmsh(path);
       else if (ext == "inp")
         serial = read_abaqus(path, true);
+      else if (ext == "bdf" || ext == "dat" || ext == "nas" || ext == "blk")
+        serial = read_nastran(path, true);
       else
-        err = cat("mesh file ", path, ": unknown format (expected .msh for Gmsh or .inp for Abaqus/CalculiX)");
+        err = cat("mesh file ", path, ": unknown format (expected .msh for Gmsh, .inp for",
+                  " Abaqus/CalculiX or .bdf, .dat, .nas, .blk for Nastran bulk data)");
     } catch (const Error& e) {
       err = e.what();
     } catch (const std::exception& e) {

@@ -59,7 +59,7 @@ void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std:
 /// Collective. Throws morse::Error (on every rank) if the mesh has no solid element.
 LocalMesh distribute(MPI_Comm comm, Mesh* serial);
 
-/// Reads a mesh file on rank 0 by extension (.msh: Gmsh, .inp: Abaqus/CalculiX) and
+/// Reads a mesh on rank 0 by extension (.msh: Gmsh, .inp: Abaqus, .bdf/.dat/.nas/.blk: Nastran) and
 /// distributes it. Errors (missing/truncated file, ...) are thrown on every rank. Collective.
 LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path);
 
