@@ -4,6 +4,7 @@
 #    reduce and select from those matrices give the superelement of the mesh path: the same
 #    fixed-interface and superelement frequencies, the same boundary DOFs and Guyan block;
 #  - the unclamped matrices with -clamp of a DOF-map row set give it too;
+#  - -matrices_C is projected like M (C = M gives /rom/C = /rom/M);
 #  - a Nastran deck written by `morse mesh box -out box.bdf` gives the same frequencies;
 #  - bad input (nonsymmetric K, size mismatch, a DOF map with a row too many, a basis request
 #    without a mesh, matrices given to a mesh-only command) fails cleanly and leaves no file.
@@ -27,6 +28,11 @@ sel=(-boundary x1 -cb_num_fixed_modes 10 -select_method eim,lpf -select_num_mode
 run select "${model[@]}" "${sel[@]}" -out "$d/sel_mesh.h5"
 run select -matrices_K "$d/box_K.mtx" -matrices_M "$d/box_M.mtx" -matrices_dofmap "$d/box_dofmap.txt" "${sel[@]}" \
   -out "$d/sel_mtx.h5"
+# A damping matrix is projected like the others: with C = M, /rom/C is /rom/M (reduce and select).
+run reduce -matrices_K "$d/box_K.mtx" -matrices_M "$d/box_M.mtx" -matrices_C "$d/box_M.mtx" \
+  -matrices_dofmap "$d/box_dofmap.txt" "${cb[@]}" -out "$d/se_c.h5"
+run select -matrices_K "$d/box_K.mtx" -matrices_M "$d/box_M.mtx" -matrices_C "$d/box_M.mtx" \
+  -matrices_dofmap "$d/box_dofmap.txt" "${sel[@]}" -out "$d/sel_c.h5"
 # Nastran bulk data written by morse.
 run mesh box -box_type hex8 -box_lx 4 -box_ly 1 -box_lz 1 -box_nx 4 -box_ny 1 -box_nz 1 "${material[@]}" \
   -nastran_spc x0 -nastran_aset x1 -out "$d/box.bdf"
@@ -55,6 +61,9 @@ assert bd.shape == (12, 2) and set(bd[:, 1]) == {1, 2, 3}
 a, b = h5py.File(f"{d}/sel_mesh.h5", "r"), h5py.File(f"{d}/sel_mtx.h5", "r")
 close(b["/select/fom/frequencies_hz"][:], a["/select/fom/frequencies_hz"][:], 1e-10, "select fom")
 close(b["/rom/frequencies_hz"][:], a["/rom/frequencies_hz"][:], 1e-9, "select rom")
+for name in ["se_c", "sel_c"]:
+    f = h5py.File(f"{d}/{name}.h5", "r")
+    close(f["/rom/C"][:], f["/rom/M"][:], 1e-12, name + " C = M")
 PY
 # Bad input.
 /usr/bin/python3 - "$d" <<'PY'

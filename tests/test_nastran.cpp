@@ -119,8 +119,10 @@ void expect_midpoints(const Mesh& m) {
 
 TEST_F(NastranTest, FormatsDeck) {
   const std::string path = kData + "nastran_formats.bdf";
+  // The deck holds a CQUAD4: an error unless skipped knowingly.
+  expect_error(path, {"nastran_formats.bdf:", "card CQUAD4", "element type not supported", "-mesh_skip_unsupported"});
   ::testing::internal::CaptureStderr();
-  const Mesh m = read_nastran(path);
+  const Mesh m = read_nastran(path, true, true);
   const std::string log = ::testing::internal::GetCapturedStderr();
 
   EXPECT_EQ(m.source, path);
@@ -279,14 +281,14 @@ TEST_F(NastranTest, FormatsDeck) {
 
   // verbose = false: silent.
   ::testing::internal::CaptureStderr();
-  read_nastran(path, false);
+  read_nastran(path, false, true);
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
 }
 
 TEST_F(NastranTest, ReadAndDistributeDispatchesByExtension) {
   // .bdf goes to the Nastran reader; each rank reads its own copy on PETSC_COMM_SELF.
   ::testing::internal::CaptureStderr();
-  const auto lm = morse::mesh::read_and_distribute(PETSC_COMM_SELF, kData + "nastran_formats.bdf");
+  const auto lm = morse::mesh::read_and_distribute(PETSC_COMM_SELF, kData + "nastran_formats.bdf", true);
   ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(lm.n_global_nodes, 45);
   EXPECT_EQ(lm.n_global_elements, 3);
@@ -673,9 +675,12 @@ TEST_F(NastranTest, ErrorsGridsElementsAndFields) {
 }
 
 TEST_F(NastranTest, ErrorsUnsupportedCards) {
-  // An unsupported element stays a notice (with MISSING stiffness); RBE2 is an error.
+  // An unsupported element is an error naming it; skipped knowingly, a WARNING lists its
+  // MISSING stiffness. RBE2 is always an error.
+  const std::string quad = write("quad.bdf", cat(kTet, "CQUAD4,10,1,1,2,3,4\nCBAR,11,1,1,2\n"));
+  expect_error(quad, {"quad.bdf:8:", "card CQUAD4", "element type not supported", "stiffness and mass"});
   ::testing::internal::CaptureStderr();
-  const Mesh m = read_nastran(write("quad.bdf", cat(kTet, "CQUAD4,10,1,1,2,3,4\nCBAR,11,1,1,2\n")));
+  const Mesh m = read_nastran(quad, true, true);
   const std::string log = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(m.num_elements(), 1);
   EXPECT_EQ(count(log, "MISSING"), 1) << log;

@@ -177,13 +177,15 @@ void run_select(MPI_Comm comm) {
   Model md = build_model(comm, o, true);
   MORSE_CHECK(!(md.from_matrices && !so.from.empty()),
               "-select_from reads nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!md.mm.C, "-matrices_C is a reduce option (select ranks undamped fixed-interface modes)");
+  MORSE_CHECK(!(md.mm.C && r.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
+                                           "-cb_damping (modal damping of the fixed-interface modes), not both");
   cb::CBSettings cs = cb_settings(r);
   cs.keep_basis = true;
   auto res = so.from.empty() ? craig_bampton(md, cs)
                              : cb::load_basis(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), so.from, r.boundary,
                                               r.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
+  if (md.mm.C) res.C = cb::project_symmetric(comm, md.mm.C.get(), res.T.get());  // T^T C T, restricted below
   const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
   double f_an = so.fmax_analysis > 0 ? so.fmax_analysis
                 : r.fmax > 0       ? 0.5 * r.fmax
@@ -404,7 +406,7 @@ void run_select(MPI_Comm comm) {
     out.attribute(g, "worst_frequency_error", mr.worst_err);
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      write_rom(out, mr.M, mr.K, r.damping > 0 ? &C : nullptr, res, mr.rom_f, r.damping);
+      write_rom(out, mr.M, mr.K, r.damping > 0 || md.mm.C ? &C : nullptr, res, mr.rom_f, r.damping);
       out.write("/rom/selected_modes", sel);
       out.attribute("/rom", "selection_method", mr.name);
     }

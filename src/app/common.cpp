@@ -83,6 +83,10 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
                                "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->units = buf;
+  PetscCall(PetscOptionsBool("-mesh_skip_unsupported",
+                             "Nastran: skip element cards morse cannot represent (CQUAD4, CBAR, CELAS, ...) with a warning "
+                             "instead of an error (their stiffness and mass are then missing)",
+                             "", o->skip_unsupported, &o->skip_unsupported, nullptr));
   PetscCall(PetscOptionsStringArray("-clamp",
                                     "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
                                     "the DOFs fixed by *BOUNDARY in the deck",
@@ -231,7 +235,7 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, bool allow_matrices) {
                                               : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
   {
     StageTimer t(comm, "ReadDistribute");
-    md.lm = mesh::read_and_distribute(comm, o.mesh);
+    md.lm = mesh::read_and_distribute(comm, o.mesh, o.skip_unsupported);
     if (!o.units.empty()) md.lm.mesh.units = o.units;
     for (const auto& sm : o.set_materials) mesh::assign_set_material(&md.lm.mesh, sm);
     for (const auto& [name, ids] : o.node_sets) mesh::add_node_set(&md.lm, name, ids, "-mesh_node_set_" + name);

@@ -45,6 +45,7 @@ struct CommonOptions {
   std::vector<mesh::Material> set_materials;  ///< name = element set
   /// Node sets given on the command line (-mesh_node_sets): name, external node ids.
   std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
+  PetscBool skip_unsupported = PETSC_FALSE;  ///< -mesh_skip_unsupported (Nastran)
   std::string error;  ///< a bad option value, raised by build_model (after -help)
   std::string out;
   /// Assembled operators instead of a mesh (-matrices_K, -matrices_M, -matrices_C,

@@ -436,7 +436,7 @@ constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 class Reader {
  public:
-  explicit Reader(bool verbose) : verbose_(verbose) {}
+  Reader(bool verbose, bool skip_unsupported) : verbose_(verbose), skip_unsupported_(skip_unsupported) {}
 
   Mesh read(const std::string& path) {
     parse_file(path, nullptr, 0);
@@ -911,6 +911,10 @@ class Reader {
   }
 
   void skip_card() {
+    if (!skip_unsupported_ && structural_cards().count(card_.name))
+      card_fail("element type not supported: its stiffness and mass would be missing from the model. morse reads",
+                " CTETRA, CPENTA, CHEXA and CONM2; remove the card, give -mesh_skip_unsupported to drop such",
+                " cards knowingly, or export the assembled matrices (-matrices_K/-matrices_M)");
     ++skipped_[card_.name];
     // Remember other property and material ids for clearer messages about PSOLID and MAT1.
     int64_t id;
@@ -1617,6 +1621,7 @@ class Reader {
   };
 
   bool verbose_;
+  bool skip_unsupported_;
   bool stop_ = false;
   std::vector<std::string> files_;
   std::set<std::string> noticed_;
@@ -1811,7 +1816,9 @@ class CardWriter {
 
 }  // namespace
 
-Mesh read_nastran(const std::string& path, bool verbose) { return Reader(verbose).read(path); }
+Mesh read_nastran(const std::string& path, bool verbose, bool skip_unsupported) {
+  return Reader(verbose, skip_unsupported).read(path);
+}
 
 void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOptions& o) {
   const int64_t nn = m.num_nodes(), ne = m.num_elements();

@@ -9,7 +9,7 @@
 
 namespace morse::mesh {
 
-LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path) {
+LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path, bool skip_unsupported) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   Mesh serial;
@@ -24,7 +24,7 @@ LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path) {
       else if (ext == "inp")
         serial = read_abaqus(path, true);
       else if (ext == "bdf" || ext == "dat" || ext == "nas" || ext == "blk")
-        serial = read_nastran(path, true);
+        serial = read_nastran(path, true, skip_unsupported);
       else
         err = cat("mesh file ", path, ": unknown format (expected .msh for Gmsh, .inp for",
                   " Abaqus/CalculiX or .bdf, .dat, .nas, .blk for Nastran bulk data)");

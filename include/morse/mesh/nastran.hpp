@@ -79,8 +79,9 @@
 //   ENDDATA                           stops reading.
 // Errors: RBE1, RBE2, RBE3, RBAR, RBAR1, RROD, RTRPLT, RTRPLT1, RSPLINE, RSSCON, RJOINT, MPC
 // (rigid elements and MPCs are not supported). Every other card is skipped; the skipped cards are
-// listed once at the end with their counts, and elements or matrices that carry stiffness or mass
-// (CQUAD4, CBAR, CBUSH, CELASi, CONM1, CMASSi, DMIG, ...) are listed separately as MISSING.
+// listed once at the end with their counts. Elements or matrices that carry stiffness or mass
+// (CQUAD4, CBAR, CBUSH, CELASi, CONM1, CMASSi, DMIG, ...) are errors, unless skip_unsupported
+// (-mesh_skip_unsupported), which lists them separately as MISSING.
 //
 // Grid ids are 1..; grids and SPOINTs share one id space, solid elements and CONM2s another.
 // THRU ranges may have gaps (not every id need exist) but must contain at least one grid; an
@@ -124,9 +125,11 @@
 namespace morse::mesh {
 
 /// Reads the Nastran input file at path (serial, call on one rank) into a new Mesh owned by the
-/// caller. Notices (skipped sections and cards, mirrored elements, WTMASS, ...) go to stderr if
+/// caller. An element or matrix card that carries stiffness or mass but is not supported (CQUAD4,
+/// CBAR, CELASi, CONM1, DMIG, ...) is an error, unless skip_unsupported: then such cards are
+/// skipped and listed in a WARNING (their stiffness and mass are MISSING). Notices (skipped sections and cards, mirrored elements, WTMASS, ...) go to stderr if
 /// verbose. Throws morse::Error ("file:line: card NAME: what") on any input error.
-Mesh read_nastran(const std::string& path, bool verbose = true);
+Mesh read_nastran(const std::string& path, bool verbose = true, bool skip_unsupported = false);
 
 /// Options of write_nastran().
 struct NastranWriteOptions {

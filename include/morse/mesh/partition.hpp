@@ -61,7 +61,9 @@ LocalMesh distribute(MPI_Comm comm, Mesh* serial);
 
 /// Reads a mesh on rank 0 by extension (.msh: Gmsh, .inp: Abaqus, .bdf/.dat/.nas/.blk: Nastran) and
 /// distributes it. Errors (missing/truncated file, ...) are thrown on every rank. Collective.
-LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path);
+/// skip_unsupported: Nastran element cards that morse cannot represent are skipped with a
+/// warning instead of being an error (mesh/nastran.hpp).
+LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path, bool skip_unsupported = false);
 
 /// Gathers the local pieces back into one serial mesh on rank 0 (owned elements only, nodes in
 /// global order); other ranks get an empty Mesh. For output of small and medium meshes only:
