@@ -18,6 +18,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
+#include "scratch.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/abaqus.hpp"
 
@@ -29,38 +30,14 @@ using morse::mesh::ElementType;
 using morse::mesh::Mesh;
 using morse::mesh::read_abaqus;
 
-class AbaqusTest : public ::testing::Test {
+class AbaqusTest : public morse::test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path("/tmp") /
-           cat("morse_test_abaqus_r", morse::world_rank(), "_p", getpid(), "_", info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  /// Writes text to dir_/rel (creating subdirectories) and returns the path.
-  std::string write(const std::string& rel, const std::string& text) {
-    const fs::path p = dir_ / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
-  }
+  AbaqusTest() : ScratchDirTest("abaqus") {}
 
   /// Expects read_abaqus(path) to throw a morse::Error whose message contains every part.
   static void expect_error(const std::string& path, std::initializer_list<std::string> parts) {
-    try {
-      read_abaqus(path, false);
-      ADD_FAILURE() << "no error reading " << path;
-    } catch (const morse::Error& e) {
-      const std::string msg = e.what();
-      for (const std::string& part : parts)
-        EXPECT_NE(msg.find(part), std::string::npos) << "'" << part << "' not in: " << msg;
-    }
+    morse::test::expect_error_parts([&] { read_abaqus(path, false); }, parts, path);
   }
-
-  fs::path dir_;
 };
 
 std::int64_t index_of(const Mesh& m, std::int64_t id) {

@@ -17,6 +17,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
+#include "scratch.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/nastran.hpp"
@@ -34,38 +35,14 @@ using morse::mesh::write_nastran;
 
 const std::string kData = MORSE_SOURCE_DIR "/tests/data/";
 
-class NastranTest : public ::testing::Test {
+class NastranTest : public morse::test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path("/tmp") /
-           cat("morse_test_nastran_r", morse::world_rank(), "_p", getpid(), "_", info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  /// Writes text to dir_/rel (creating subdirectories) and returns the path.
-  std::string write(const std::string& rel, const std::string& text) {
-    const fs::path p = dir_ / rel;
-    fs::create_directories(p.parent_path());
-    std::ofstream(p) << text;
-    return p.string();
-  }
+  NastranTest() : ScratchDirTest("nastran") {}
 
   /// Expects read_nastran(path) to throw a morse::Error whose message contains every part.
   static void expect_error(const std::string& path, std::initializer_list<std::string> parts) {
-    try {
-      read_nastran(path, false);
-      ADD_FAILURE() << "no error reading " << path;
-    } catch (const morse::Error& e) {
-      const std::string msg = e.what();
-      for (const std::string& part : parts)
-        EXPECT_NE(msg.find(part), std::string::npos) << "'" << part << "' not in: " << msg;
-    }
+    morse::test::expect_error_parts([&] { read_nastran(path, false); }, parts, path);
   }
-
-  fs::path dir_;
 };
 
 std::vector<std::int64_t> ids_of(const Mesh& m, const std::vector<std::int64_t>& idx) {

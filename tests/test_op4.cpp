@@ -21,6 +21,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
+#include "scratch.hpp"
 #include "morse/io/op4.hpp"
 
 namespace {
@@ -55,7 +56,7 @@ Csc to_csc(std::int64_t nrows, std::int64_t ncols, const Entries& e) {
   return a;
 }
 
-void write(const std::string& path, const std::string& name, const Csc& a, const Op4WriteOptions& o,
+void write_csc(const std::string& path, const std::string& name, const Csc& a, const Op4WriteOptions& o,
            bool append = false) {
   write_op4(path, name, a.nrows, a.ncols, a.ptr, a.idx, a.val, o, append);
 }
@@ -328,46 +329,28 @@ std::string transcode(const std::string& path, bool swap, int marker, int word) 
 
 // ------------------------------------------------------------------------------------------------
 
-class Op4Test : public ::testing::Test {
+class Op4Test : public morse::test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path("/tmp") /
-           cat("morse_test_op4_r", morse::world_rank(), "_p", getpid(), "_", info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string path(const std::string& rel) const { return (dir_ / rel).string(); }
+  Op4Test() : ScratchDirTest("op4") {}
 
   /// Writes bytes to dir_/rel and returns the path.
-  std::string put(const std::string& rel, const std::string& bytes) const {
-    const std::string p = path(rel);
-    std::ofstream(p, std::ios::binary) << bytes;
-    return p;
-  }
+  std::string put(const std::string& rel, const std::string& bytes) const { return write(rel, bytes); }
 
   /// Expects reading matrix `name` of path to the end to throw a morse::Error whose message
   /// contains every part.
   static void expect_error(const std::string& path, const std::string& name,
                            std::initializer_list<std::string> parts) {
-    try {
-      Op4Reader r(path, name);
-      std::int64_t col;
-      std::vector<std::int64_t> rows;
-      std::vector<double> vals;
-      while (r.next(&col, &rows, &vals)) {
-      }
-      ADD_FAILURE() << "no error reading " << path;
-    } catch (const morse::Error& e) {
-      const std::string msg = e.what();
-      for (const std::string& part : parts)
-        EXPECT_NE(msg.find(part), std::string::npos) << "'" << part << "' not in: " << msg;
-    }
+    morse::test::expect_error_parts(
+        [&] {
+          Op4Reader r(path, name);
+          std::int64_t col;
+          std::vector<std::int64_t> rows;
+          std::vector<double> vals;
+          while (r.next(&col, &rows, &vals)) {
+          }
+        },
+        parts, path);
   }
-
-  fs::path dir_;
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -395,9 +378,9 @@ TEST_F(Op4Test, RoundTripEveryLayout) {
         o.bigmat = m.bigmat;
         o.single = single;
         const std::string p = path(label + ".op4");
-        write(p, "KAA", to_csc(37, 37, sym), o);
-        write(p, "rect", to_csc(5, 7, rect), o, true);
-        write(p, "ONE", to_csc(1, 1, one), o, true);
+        write_csc(p, "KAA", to_csc(37, 37, sym), o);
+        write_csc(p, "rect", to_csc(5, 7, rect), o, true);
+        write_csc(p, "ONE", to_csc(1, 1, one), o, true);
         EXPECT_EQ(Op4Reader::names_in_file(p), (std::vector<std::string>{"KAA", "RECT", "ONE"}));
 
         struct Case {
@@ -435,8 +418,8 @@ TEST_F(Op4Test, TwoMatricesByName) {
     Op4WriteOptions o;
     o.binary = binary;
     const std::string p = path(binary ? "km.op4b" : "km.op4");
-    write(p, "KAA", to_csc(4, 4, k), o);
-    write(p, "MAA", to_csc(4, 4, mass), o, true);
+    write_csc(p, "KAA", to_csc(4, 4, k), o);
+    write_csc(p, "MAA", to_csc(4, 4, mass), o, true);
     EXPECT_EQ(Op4Reader::names_in_file(p), (std::vector<std::string>{"KAA", "MAA"}));
     Op4Header h;
     expect_same(mass, read_all(p, "maa", &h));
@@ -457,8 +440,8 @@ TEST_F(Op4Test, EmptyMatrix) {
       o.sparse = sparse;
       const std::string p = path(cat("zero_", binary, sparse, ".op4"));
       const Csc z = to_csc(3, 2, {{{1, 1}, 0.0}});  // one explicit zero: nothing stored
-      write(p, "Z", z, o);
-      write(p, "ONE", to_csc(1, 1, {{{0, 0}, 1.0}}), o, true);
+      write_csc(p, "Z", z, o);
+      write_csc(p, "ONE", to_csc(1, 1, {{{0, 0}, 1.0}}), o, true);
       Op4Header h;
       EXPECT_TRUE(read_all(p, "Z", &h).empty());
       EXPECT_EQ(h.form, 2);
@@ -576,7 +559,7 @@ TEST_F(Op4Test, ReadsSparseAndWideAsciiLayouts) {
 TEST_F(Op4Test, WriterPrintsNastranAsciiLayout) {
   Op4WriteOptions o;
   const std::string dense = path("dense.op4");
-  write(dense, "kaa", to_csc(4, 4, small_symmetric(1e-300)), o);
+  write_csc(dense, "kaa", to_csc(4, 4, small_symmetric(1e-300)), o);
   EXPECT_EQ(slurp(dense),
             "       4       4       6       2KAA     1P,3E23.16\n"
             "       1       1       3\n"
@@ -595,7 +578,7 @@ TEST_F(Op4Test, WriterPrintsNastranAsciiLayout) {
   o.sparse = true;
   o.single = true;
   const std::string bigmat = path("bigmat.op4");
-  write(bigmat, "KAA", to_csc(4, 4, small_symmetric(1024.0)), o);
+  write_csc(bigmat, "KAA", to_csc(4, 4, small_symmetric(1024.0)), o);
   EXPECT_EQ(slurp(bigmat),
             "       4      -4       6       1KAA     1P,5E16.9\n"
             "       1       0       5\n"
@@ -620,7 +603,7 @@ TEST_F(Op4Test, WriterPrintsNastranAsciiLayout) {
   o.single = false;
   o.bigmat = false;
   const std::string packed = path("packed.op4");
-  write(packed, "KAA", to_csc(4, 4, small_symmetric(1e-300)), o);
+  write_csc(packed, "KAA", to_csc(4, 4, small_symmetric(1e-300)), o);
   EXPECT_EQ(slurp(packed),
             "       4       4       6       2KAA     1P,3E23.16\n"
             "       1       0       7\n"
@@ -651,7 +634,7 @@ TEST_F(Op4Test, WriterBinaryRecords) {
   Op4WriteOptions o;
   o.binary = true;
   const std::string p = path("one.op4");
-  write(p, "KAA", to_csc(2, 2, {{{1, 0}, 2.5}, {{1, 1}, -1.0}}), o);
+  write_csc(p, "KAA", to_csc(2, 2, {{{1, 0}, 2.5}, {{1, 1}, -1.0}}), o);
   const auto recs = records(p);
   ASSERT_EQ(recs.size(), 3u);
   ASSERT_EQ(recs[0].size(), 24u);
@@ -699,8 +682,8 @@ TEST_F(Op4Test, OtherBinaryLayouts) {
     const std::string p = path(cat(m.label, ".op4"));
     const Entries sym = as_stored(random_symmetric(37, rng, !m.single), m.single);
     const Entries rect = as_stored(dense_rect(rng), m.single);
-    write(p, "KAA", to_csc(37, 37, sym), o);
-    write(p, "RECT", to_csc(5, 7, rect), o, true);
+    write_csc(p, "KAA", to_csc(37, 37, sym), o);
+    write_csc(p, "RECT", to_csc(5, 7, rect), o, true);
     EXPECT_EQ(transcode(p, false, 4, 4), slurp(p));  // the transcoder itself
     for (const Layout& l : layouts) {
       SCOPED_TRACE(cat("swap ", l.swap, " marker ", l.marker, " word ", l.word));
@@ -822,7 +805,7 @@ TEST_F(Op4Test, BinaryErrors) {
   o.binary = true;
   const std::string good = path("good.op4");
   const Entries a = {{{0, 0}, 4.0}, {{0, 1}, -1.0}, {{1, 0}, -1.0}, {{1, 1}, 3.0}, {{2, 2}, 2.0}};
-  write(good, "KAA", to_csc(3, 3, a), o);
+  write_csc(good, "KAA", to_csc(3, 3, a), o);
   const std::string bytes = slurp(good);
   // Layout: header record at byte 0 (4 + 24 + 4 bytes); the record of column 1 at byte 32:
   // marker 32, ICOL 36, IROW 40, NW 44, two values from 48, marker 64; columns 2 and 3; the end
@@ -859,19 +842,19 @@ TEST_F(Op4Test, WriterErrors) {
   const Csc a = to_csc(2, 2, {{{0, 0}, 1.0}, {{1, 1}, 2.0}});
   const std::string p = path("w.op4");
   Op4WriteOptions o;
-  EXPECT_THROW(write(p, "TOOLONGNAME", a, o), morse::Error);
-  EXPECT_THROW(write(p, "K A", a, o), morse::Error);
+  EXPECT_THROW(write_csc(p, "TOOLONGNAME", a, o), morse::Error);
+  EXPECT_THROW(write_csc(p, "K A", a, o), morse::Error);
   Csc unsorted = to_csc(3, 1, {{{0, 0}, 1.0}, {{0, 2}, 2.0}});
   std::swap(unsorted.idx[0], unsorted.idx[1]);
-  EXPECT_THROW(write(p, "U", unsorted, o), morse::Error);
+  EXPECT_THROW(write_csc(p, "U", unsorted, o), morse::Error);
   Csc nan = a;
   nan.val[1] = std::nan("");
-  EXPECT_THROW(write(p, "N", nan, o), morse::Error);
+  EXPECT_THROW(write_csc(p, "N", nan, o), morse::Error);
   o.form = 6;
-  EXPECT_THROW(write(p, "R", to_csc(2, 3, {{{0, 0}, 1.0}}), o), morse::Error);
+  EXPECT_THROW(write_csc(p, "R", to_csc(2, 3, {{{0, 0}, 1.0}}), o), morse::Error);
   o.form = 0;
   o.single = true;
-  EXPECT_THROW(write(p, "S", to_csc(1, 1, {{{0, 0}, 1e300}}), o), morse::Error);
+  EXPECT_THROW(write_csc(p, "S", to_csc(1, 1, {{{0, 0}, 1e300}}), o), morse::Error);
 }
 
 }  // namespace
