@@ -1,6 +1,7 @@
 // The eigen solver's building blocks: inertia counts of K - sigma M against the eigenvalues of
 // the dense pencil (Sylvester's law of inertia), and the N lowest modes by inertia search +
-// spectrum slicing against the single-shift Krylov-Schur solve.
+// spectrum slicing against the single-shift Krylov-Schur solve, and the guarantee that no mode is
+// missed (Sylvester check, residuals, clusters against LAPACK).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -103,4 +104,88 @@ TEST(Eigen, CountBySlicingMatchesOneShift) {
     }
   EXPECT_LT(err_g, 1e-8);
   EXPECT_LT(err_x, 1e-6);
+}
+
+namespace {
+
+// A pencil with clusters: K = blockdiag(A, A, A) + the same A shifted (three identical copies of
+// a stiff chain, so every eigenvalue is triple) with a lumped M = I. Distributed over the ranks.
+void clustered(PetscInt m, UMat* K, UMat* M) {
+  const PetscInt n = 3 * m;
+  for (UMat* A : {K, M}) {
+    MORSE_CALL(MatCreateAIJ(PETSC_COMM_WORLD, PETSC_DECIDE, PETSC_DECIDE, n, n, 3, nullptr, 2, nullptr, A->ptr()));
+  }
+  PetscInt rs = 0, re = 0;
+  MORSE_CALL(MatGetOwnershipRange(K->get(), &rs, &re));
+  for (PetscInt r = rs; r < re; ++r) {
+    const PetscInt i = r % m;  // position in its copy
+    // A chain fixed at one end with springs k_i = 1 + i / m (not uniform: no extra degeneracy).
+    const double k_left = 1.0 + static_cast<double>(i) / m, k_right = 1.0 + static_cast<double>(i + 1) / m;
+    MORSE_CALL(MatSetValue(K->get(), r, r, 1e6 * (k_left + (i + 1 < m ? k_right : 0.0)), INSERT_VALUES));
+    if (i + 1 < m) MORSE_CALL(MatSetValue(K->get(), r, r + 1, -1e6 * k_right, INSERT_VALUES));
+    if (i > 0) MORSE_CALL(MatSetValue(K->get(), r, r - 1, -1e6 * k_left, INSERT_VALUES));
+    MORSE_CALL(MatSetValue(M->get(), r, r, 1.0, INSERT_VALUES));
+  }
+  for (UMat* A : {K, M}) {
+    MORSE_CALL(MatAssemblyBegin(A->get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatAssemblyEnd(A->get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatSetOption(A->get(), MAT_SYMMETRIC, PETSC_TRUE));
+  }
+}
+
+}  // namespace
+
+// Every mode, guaranteed: a cutoff solve on a pencil whose eigenvalues are all triple returns
+// each cluster whole (LAPACK on the dense pencil is the reference), its count equals Sylvester's
+// inertia, the residuals ||Kx - w^2 Mx|| / (||K|| ||x||) are below the tolerance and V^T M V = I;
+// a solve made to lose its highest pair (fault injection) is refused, by cutoff and by count.
+TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
+  const PetscInt m = 40, n = 3 * m;
+  UMat K, M;
+  clustered(m, &K, &M);
+  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  // Cutoff between clusters 10 and 11 (eigenvalues 30..32 and 33..35).
+  const double cutoff = 0.5 * (lam[29] + lam[30]);
+  cb::EigenSettings s;
+  s.omega2_max = cutoff;
+  s.prefix = "test_cluster_";
+  auto e = cb::solve_eigen(K.get(), M.get(), s, nullptr);
+  ASSERT_EQ(e.omega2.size(), 30u);
+  EXPECT_EQ(e.inertia_count, 30);
+  for (int k = 0; k < 30; ++k) EXPECT_NEAR(e.omega2[k], lam[k], 1e-9 * lam[k]) << "eigenvalue " << k;
+  EXPECT_LE(e.max_residual, 1e-10);
+  auto r = cb::relative_residuals(K.get(), M.get(), e.V.get(), e.omega2);
+  for (int k = 0; k < 30; ++k) EXPECT_LE(r[k], 1e-10) << "pair " << k;
+  UMat MV, G;
+  MORSE_CALL(MatMatMult(M.get(), e.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+  MORSE_CALL(MatTransposeMatMult(e.V.get(), MV.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, G.ptr()));
+  auto g = dense(G.get());
+  double err = 0;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) err = std::max(err, std::abs(g[i * 30 + j] - (i == j ? 1.0 : 0.0)));
+  EXPECT_LT(err, 1e-10);
+  // A wrong pair is caught by the residual check: perturb one eigenvalue.
+  auto wrong = e.omega2;
+  wrong[7] *= 1.0 + 1e-6;
+  EXPECT_GT(cb::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
+
+  // Fault injection: the solve loses its highest pair.
+  for (bool by_count : {false, true}) {
+    cb::EigenSettings t = s;
+    t.prefix = by_count ? "test_drop_count_" : "test_drop_cut_";
+    if (by_count) {
+      t.omega2_max = -1;
+      t.nev = 30;
+      t.count_slicing = 10;
+    }
+    t.drop_for_test = 1;
+    try {
+      cb::solve_eigen(K.get(), M.get(), t, nullptr);
+      ADD_FAILURE() << "a truncated solve passed the Sylvester check (by count: " << by_count << ")";
+    } catch (const Error& err) {
+      const std::string msg = err.what();
+      EXPECT_NE(msg.find("Sylvester"), std::string::npos) << msg;
+      EXPECT_NE(msg.find("missed modes"), std::string::npos) << msg;
+    }
+  }
 }

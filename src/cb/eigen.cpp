@@ -96,7 +96,7 @@ namespace {
 // power law N ~ sigma^p (secant in log-log, p starting at 3/2 as for a 3D solid) kept inside
 // the bracket, with the geometric mean as fallback.
 double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const std::string& what,
-                    PetscInt* factorizations) {
+                    PetscInt* factorizations, PetscInt* count) {
   InertiaCounter c(K, M, prefix);
   UVec dk, dm;
   MORSE_CALL(MatCreateVecs(K, nullptr, dk.ptr()));
@@ -130,7 +130,29 @@ double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const
     n_prev = n_sig;
   }
   *factorizations = c.factorizations();
+  *count = n_hi;
   return hi;
+}
+
+// The number of eigenvalues below the cutoff b of a slicing solve on [a, b], from the inertias
+// SLEPc computed at the ends of the interval, or from a new LDL^T factorization if it did not
+// report them.
+PetscInt inertia_below(EPS eps, Mat K, Mat M, double a, double b, const std::string& prefix) {
+  PetscInt n = 0;
+  PetscReal* shifts = nullptr;
+  PetscInt* inertias = nullptr;
+  PetscInt at_a = -1, at_b = -1;
+  if (EPSKrylovSchurGetInertias(eps, &n, &shifts, &inertias) == 0 && n > 0) {
+    for (PetscInt i = 0; i < n; ++i) {
+      if (shifts[i] == a) at_a = inertias[i];
+      if (shifts[i] == b) at_b = inertias[i];
+    }
+    PetscFree(shifts);
+    PetscFree(inertias);
+  }
+  if (at_a >= 0 && at_b >= 0) return at_b - at_a;
+  InertiaCounter c(K, M, prefix);
+  return c.count(b) - (a < 0 ? 0 : c.count(a));
 }
 
 }  // namespace
@@ -170,7 +192,7 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   if (count_by_slicing) {
     StageTimer timer(comm, s.stage + "SliceCutoff");
     auto t0 = std::chrono::steady_clock::now();
-    omega2_max = count_cutoff(K, M, s.nev, s.prefix, s.what, &out.inertia_counts);
+    omega2_max = count_cutoff(K, M, s.nev, s.prefix, s.what, &out.inertia_counts, &out.inertia_count);
     slicing = true;
     out.slice_omega2 = omega2_max;
     print0(comm, "  %s: the %d lowest by spectrum slicing below %.6g Hz (cutoff from %d inertia counts, %.1f s)\n",
@@ -232,7 +254,20 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
                 " eigenpairs converged; increase -", s.prefix, "eps_max_it or -", s.prefix,
                 count_by_slicing ? "eps_ncv, or solve with one shift (-" + s.prefix + "count_slicing 0)"
                                  : std::string("eps_ncv"));
-  const PetscInt n_out = slicing && !count_by_slicing ? nconv : s.nev;
+  // Every mode, guaranteed: the pairs found below the cutoff against Sylvester's inertia.
+  const PetscInt found = nconv - (slicing ? std::min(s.drop_for_test, nconv) : 0);
+  if (slicing) {
+    if (!count_by_slicing) out.inertia_count = inertia_below(eps, K, M, -1e-6 * omega2_max, omega2_max, s.prefix);
+    collective_check(comm, found == out.inertia_count
+                               ? std::string()
+                               : cat(s.what, ": ", found, " eigenpairs found below ", std::sqrt(omega2_max) / (2 * M_PI),
+                                     " Hz but Sylvester's inertia of K - omega^2 M counts ", out.inertia_count,
+                                     ": the solve ", found < out.inertia_count ? "missed modes" : "returned spurious pairs",
+                                     "; tighten -", s.prefix, "eps_tol or raise -", s.prefix, "eps_ncv"));
+    print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
+           s.what.c_str(), (int)found, std::sqrt(omega2_max) / (2 * M_PI));
+  }
+  const PetscInt n_out = slicing && !count_by_slicing ? found : s.nev;
   MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", omega2_max, ")");
 
   StageTimer extract(comm, s.stage + "EigenVectors");
@@ -280,7 +315,58 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     if (scale != 1.0) MORSE_CALL(VecScale(x, scale));
     MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &x));
   }
+  {
+    StageTimer timer(comm, s.stage + "EigenResiduals");
+    auto r = relative_residuals(K, M, out.V.get(), out.omega2);
+    PetscInt worst = 0;
+    for (PetscInt j = 0; j < n_out; ++j)
+      if (r[j] > r[worst]) worst = j;
+    out.max_residual = r[worst];
+    PetscReal tol = s.tol;
+    PetscInt max_it = 0;
+    MORSE_CALL(EPSGetTolerances(eps, &tol, &max_it));
+    collective_check(comm, out.max_residual <= std::max<double>(tol, s.tol)
+                               ? std::string()
+                               : cat(s.what, ": mode ", worst + 1, " (", std::sqrt(std::max(0.0, out.omega2[worst])) / (2 * M_PI),
+                                     " Hz) has the relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = ", out.max_residual,
+                                     " above the tolerance ", std::max<double>(tol, s.tol)));
+    print0(comm, "  %s: max relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = %.2e over %d pairs\n", s.what.c_str(),
+           out.max_residual, (int)n_out);
+  }
   return out;
+}
+
+std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2) {
+  PetscInt nv = 0;
+  MORSE_CALL(MatGetSize(V, nullptr, &nv));
+  MORSE_CHECK(static_cast<std::size_t>(nv) == omega2.size(), "relative_residuals: ", nv, " vectors but ",
+              omega2.size(), " eigenvalues");
+  PetscReal knorm = 0;
+  MORSE_CALL(MatNorm(K, NORM_INFINITY, &knorm));
+  std::vector<double> r(nv, 0.0);
+  constexpr PetscInt kBlock = 32;
+  for (PetscInt c0 = 0; c0 < nv; c0 += kBlock) {
+    const PetscInt c1 = std::min(nv, c0 + kBlock);
+    Mat Vb;
+    MORSE_CALL(MatDenseGetSubMatrix(V, PETSC_DECIDE, PETSC_DECIDE, c0, c1, &Vb));
+    UMat KV, MV;
+    MORSE_CALL(MatMatMult(K, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, KV.ptr()));
+    MORSE_CALL(MatMatMult(M, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+    std::vector<PetscReal> xn(c1 - c0), rn(c1 - c0);
+    MORSE_CALL(MatGetColumnNorms(Vb, NORM_2, xn.data()));
+    MORSE_CALL(MatDenseRestoreSubMatrix(V, &Vb));
+    for (PetscInt j = c0; j < c1; ++j) {
+      Vec kx, mx;
+      MORSE_CALL(MatDenseGetColumnVecWrite(KV.get(), j - c0, &kx));
+      MORSE_CALL(MatDenseGetColumnVecRead(MV.get(), j - c0, &mx));
+      MORSE_CALL(VecAXPY(kx, -omega2[j], mx));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(MV.get(), j - c0, &mx));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(KV.get(), j - c0, &kx));
+    }
+    MORSE_CALL(MatGetColumnNorms(KV.get(), NORM_2, rn.data()));
+    for (PetscInt j = c0; j < c1; ++j) r[j] = rn[j - c0] / (knorm * std::max<PetscReal>(xn[j - c0], 1e-300));
+  }
+  return r;
 }
 
 std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,

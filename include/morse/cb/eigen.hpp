@@ -31,6 +31,9 @@ struct EigenSettings {
   /// Prefix of the stage names (<stage>Factor, <stage>EigenSolve, <stage>EigenVectors), so that
   /// several eigen solves of one run stay apart in the stage table and in -log_view.
   std::string stage;
+  /// Fault injection for the tests: drop this many of the highest pairs before the Sylvester
+  /// check of a cutoff solve, which must then fail. 0 in production.
+  PetscInt drop_for_test = 0;
 };
 
 struct Eigenpairs {
@@ -42,15 +45,29 @@ struct Eigenpairs {
   bool slicing = false;        ///< solved by spectrum slicing
   double slice_omega2 = 0;     ///< count mode by slicing: the cutoff used
   PetscInt inertia_counts = 0; ///< count mode by slicing: factorizations spent finding it
+  /// Sylvester check of a solve that claims every pair below a cutoff (cutoff or count by
+  /// slicing): the number of eigenvalues below the cutoff from the inertia of K - cutoff*M, or -1
+  /// when the solve made no such claim (count mode with one shift).
+  PetscInt inertia_count = -1;
+  /// max over the returned pairs of ||K x - omega^2 M x|| / (||K||_inf ||x||) (checked <= tol).
+  double max_residual = 0;
   /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
   Mat factor() const;
 };
 
 /// Solves K x = omega^2 M x. sign_ref (same layout as K) fixes the eigenvector signs; may be
-/// null. Throws morse::Error (collectively) if nev exceeds the problem size, if K - shift*M is
-/// singular (MUMPS null pivots: the model is not restrained), or if fewer pairs converge than
-/// requested. Collective.
+/// null. Every mode is guaranteed: a solve that claims all pairs below a cutoff (cutoff, or
+/// count by slicing) is checked against Sylvester's inertia of K - cutoff*M, and every returned
+/// pair against its residual ||K x - omega^2 M x|| / (||K||_inf ||x||) <= tol; both are printed.
+/// Throws morse::Error (collectively) if nev exceeds the problem size, if K - shift*M is
+/// singular (MUMPS null pivots: the model is not restrained), if fewer pairs converge than
+/// requested, if the inertia count disagrees with the pairs found (a missed or spurious mode) or
+/// if a residual exceeds the tolerance. Collective.
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
+
+/// Relative residuals ||K x_j - omega2_j M x_j|| / (||K||_inf ||x_j||) of the columns of V (MPIDENSE,
+/// K's row layout), computed in blocks of columns. Collective.
+std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2);
 
 /// Sets an option in the database unless the user already gave it.
 void set_default_option(const std::string& name, const std::string& value);
