@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
@@ -24,6 +25,7 @@ PetscInt mumps_null_pivots(Mat F) {
 }
 
 Mat Eigenpairs::factor() const {
+  if (block_factor) return block_factor.get();
   if (!eps || slicing) return nullptr;
   ST st;
   KSP ksp;
@@ -169,8 +171,13 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ",
               n, " DOFs");
   PetscInt count_slicing = s.count_slicing;
+  char solver[32] = "";
+  std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
+    PetscCall(PetscOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
+                                 "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
+                                 "", solver, solver, sizeof solver, nullptr));
     PetscCall(PetscOptionsInt("-count_slicing",
                               "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
                               "", count_slicing, &count_slicing, nullptr));
@@ -178,6 +185,10 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     return PETSC_SUCCESS;
   };
   MORSE_CALL(get_options());
+  const std::string which = solver;
+  MORSE_CHECK(which == "block" || which == "krylovschur", "-", s.prefix, "eigen_solver ", which,
+              ": expected block or krylovschur");
+  if (which == "block") return solve_eigen_block(K, M, s, sign_ref);
   MORSE_CHECK(count_slicing >= 0, "-", s.prefix, "count_slicing must be >= 0 (got ", count_slicing, ")");
   const bool count_by_slicing =
       !slicing && count_slicing > 0 && s.nev >= count_slicing && s.shift == 0.0 && 4 * s.nev <= n;
@@ -306,15 +317,29 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     Vec x;
     MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &x));
     MORSE_CALL(EPSGetEigenvector(eps, order[j].second, x, nullptr));
-    double scale = normalized ? 1.0 : 1.0 / std::sqrt(m_norm2(x));
-    if (sign_ref) {
-      PetscScalar wx = 0;
-      MORSE_CALL(VecDot(x, sign_ref, &wx));
-      if (PetscRealPart(wx) < 0) scale = -scale;
-    }
-    if (scale != 1.0) MORSE_CALL(VecScale(x, scale));
+    if (!normalized) MORSE_CALL(VecScale(x, 1.0 / std::sqrt(m_norm2(x))));
     MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &x));
   }
+  PetscReal tol = s.tol;
+  PetscInt max_it = 0;
+  MORSE_CALL(EPSGetTolerances(eps, &tol, &max_it));
+  finish_pairs(K, M, s, std::max<double>(tol, s.tol), sign_ref, &out);
+  return out;
+}
+
+void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref, Eigenpairs* out_) {
+  Eigenpairs& out = *out_;
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  const auto n_out = static_cast<PetscInt>(out.omega2.size());
+  if (sign_ref)
+    for (PetscInt j = 0; j < n_out; ++j) {
+      Vec x;
+      MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &x));
+      PetscScalar wx = 0;
+      MORSE_CALL(VecDot(x, sign_ref, &wx));
+      if (PetscRealPart(wx) < 0) MORSE_CALL(VecScale(x, -1.0));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &x));
+    }
   {
     StageTimer timer(comm, s.stage + "EigenResiduals");
     auto r = relative_residuals(K, M, out.V.get(), out.omega2);
@@ -322,18 +347,14 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     for (PetscInt j = 0; j < n_out; ++j)
       if (r[j] > r[worst]) worst = j;
     out.max_residual = r[worst];
-    PetscReal tol = s.tol;
-    PetscInt max_it = 0;
-    MORSE_CALL(EPSGetTolerances(eps, &tol, &max_it));
-    collective_check(comm, out.max_residual <= std::max<double>(tol, s.tol)
+    collective_check(comm, out.max_residual <= tol
                                ? std::string()
                                : cat(s.what, ": mode ", worst + 1, " (", std::sqrt(std::max(0.0, out.omega2[worst])) / (2 * M_PI),
                                      " Hz) has the relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = ", out.max_residual,
-                                     " above the tolerance ", std::max<double>(tol, s.tol)));
+                                     " above the tolerance ", tol));
     print0(comm, "  %s: max relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = %.2e over %d pairs\n", s.what.c_str(),
            out.max_residual, (int)n_out);
   }
-  return out;
 }
 
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2) {

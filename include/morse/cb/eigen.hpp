@@ -34,6 +34,8 @@ struct EigenSettings {
   /// Fault injection for the tests: drop this many of the highest pairs before the Sylvester
   /// check of a cutoff solve, which must then fail. 0 in production.
   PetscInt drop_for_test = 0;
+  /// Default solver: "block" or "krylovschur" (-<prefix>eigen_solver overrides).
+  std::string solver = "krylovschur";
 };
 
 struct Eigenpairs {
@@ -51,6 +53,8 @@ struct Eigenpairs {
   PetscInt inertia_count = -1;
   /// max over the returned pairs of ||K x - omega^2 M x|| / (||K||_inf ||x||) (checked <= tol).
   double max_residual = 0;
+  /// The block solver's own factorization (the Krylov–Schur solver's lives in its EPS).
+  UMat block_factor;
   /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
   Mat factor() const;
 };
@@ -65,9 +69,20 @@ struct Eigenpairs {
 /// if a residual exceeds the tolerance. Collective.
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
 
+/// The last steps of every solver: the signs of out->V from sign_ref (may be null), then the
+/// residual check of every pair against tol (printed). Collective.
+void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref, Eigenpairs* out);
+
 /// Relative residuals ||K x_j - omega2_j M x_j|| / (||K||_inf ||x_j||) of the columns of V (MPIDENSE,
 /// K's row layout), computed in blocks of columns. Collective.
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2);
+
+/// The block shift-invert Krylov–Schur solver (src/cb/block_eigen.cpp), which solve_eigen uses
+/// with -<prefix>eigen_solver block: count mode, or cutoff mode as the count from Sylvester's
+/// inertia at the cutoff then a count solve (checked: exactly that many, all below it). Options
+/// -<prefix>block_size (16), -<prefix>block_max_dim, -<prefix>block_max_restarts,
+/// -<prefix>eps_tol. Collective.
+Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
 
 /// Sets an option in the database unless the user already gave it.
 void set_default_option(const std::string& name, const std::string& value);

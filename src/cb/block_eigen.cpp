@@ -1,0 +1,469 @@
+// Block shift-invert Krylov–Schur for K x = omega^2 M x (cb/eigen.hpp, -<prefix>eigen_solver block).
+//
+// The operator is Op = (K - sigma M)^-1 M, self-adjoint in the M inner product; its eigenvalues
+// theta = 1 / (omega^2 - sigma) are largest in magnitude for the omega^2 nearest sigma. One MUMPS
+// Cholesky factorization of K - sigma M; each step applies Op to a block of b vectors at once
+// (MatMatSolve: the factor is read once per block, not once per vector, which is what bounds a
+// single-vector solve). The basis Q is kept M-orthonormal by block classical Gram–Schmidt done
+// twice (two GEMMs per pass) and SVQB (the eigen-decomposition of the b x b Gram matrix), all
+// BLAS-3. The projected matrix H = Q^T M Op Q is filled from the Gram–Schmidt coefficients; the
+// Rayleigh–Ritz pairs of its leading part give the Ritz values, and the coupling block of the
+// last (residual) block gives each Ritz pair's residual ||Op x - theta x||_M = ||B y||. When the
+// basis is full, the method restarts à la Krylov–Schur: the best Ritz vectors are kept (their
+// projected matrix is diagonal, coupled to the residual block by B Y), and the expansion goes
+// on from the residual block. A Ritz pair is converged when ||B y|| <= tol |theta|.
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+
+#include "morse/cb/eigen.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+
+namespace morse::cb {
+
+namespace {
+
+// A uniform value in [-0.5, 0.5) from a key (splitmix64): the start block depends on the global
+// row and column only, so it is the same on any number of ranks.
+double uniform(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  x ^= x >> 31;
+  return static_cast<double>(x >> 11) * (1.0 / 9007199254740992.0) - 0.5;
+}
+
+PetscBLASInt blas(PetscInt v) {
+  PetscBLASInt b = 0;
+  MORSE_CALL(PetscBLASIntCast(v, &b));
+  return b;
+}
+
+// The local rows of an MPIDENSE matrix.
+struct Local {
+  PetscScalar* a = nullptr;
+  PetscInt ld = 1;
+};
+
+class BlockSolver {
+ public:
+  BlockSolver(Mat K, Mat M, Mat F, PetscInt b, PetscInt kmax, MPI_Comm comm)
+      : K_(K), M_(M), F_(F), b_(b), kmax_(kmax), comm_(comm) {
+    MORSE_CALL(MatGetLocalSize(K, &m_, nullptr));
+    MORSE_CALL(MatGetOwnershipRange(K, &rstart_, nullptr));
+    MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, Q_.ptr()));
+    for (UMat* X : {&W_, &RHS_}) MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, b, nullptr, X->ptr()));
+    H_.assign(static_cast<std::size_t>(kmax) * kmax, 0.0);
+  }
+
+  /// Runs until nev Ritz pairs (largest |theta|) are converged. Returns false if the restarts
+  /// run out. theta and Y (m x nev, column-major) and m describe the result.
+  bool run(PetscInt nev, double tol, PetscInt max_restarts, Progress* progress) {
+    // Start block: deterministic pseudo-random, M-orthonormalized.
+    {
+      Local w = local(W_.get());
+      for (PetscInt c = 0; c < b_; ++c)
+        for (PetscInt r = 0; r < m_; ++r)
+          w.a[r + w.ld * c] = uniform(static_cast<std::uint64_t>(rstart_ + r) * 1315423911ull + static_cast<std::uint64_t>(c));
+      restore(W_.get(), w);
+    }
+    std::vector<double> R;
+    normalize(0, &R);
+    store_block(0);
+    PetscInt k = b_;
+    for (restarts_ = 0; restarts_ <= max_restarts; ++restarts_) {
+      while (k + b_ <= kmax_) {
+        expand(k);
+        k += b_;
+      }
+      const PetscInt m = k - b_;
+      rayleigh_ritz(m);
+      // Residuals of the Ritz pairs: || B y_i || with B = H[m:k, 0:m].
+      PetscInt nconv = 0;
+      res_.assign(m, 0.0);
+      for (PetscInt i = 0; i < m; ++i) {
+        double s2 = 0;
+        for (PetscInt r = 0; r < b_; ++r) {
+          double v = 0;
+          for (PetscInt c = 0; c < m; ++c) v += H_[(m + r) + kmax_ * c] * Y_[c + m * i];
+          s2 += v * v;
+        }
+        res_[i] = std::sqrt(s2);
+      }
+      while (nconv < m && res_[nconv] <= tol * std::abs(theta_[nconv])) ++nconv;
+      if (progress) progress->update(static_cast<double>(std::min(nconv, nev)));
+      m_used_ = m;
+      if (nconv >= nev) return true;
+      if (restarts_ == max_restarts) break;
+      // Krylov–Schur restart: keep p Ritz vectors, then the residual block.
+      const PetscInt p = std::max(std::min(m - b_, (nev + m) / 2), std::min(nconv + 1, m - b_));
+      restart(m, p);
+      k = p + b_;
+    }
+    return false;
+  }
+
+  PetscInt restarts() const { return restarts_; }
+  PetscInt dim() const { return m_used_; }
+  const std::vector<double>& theta() const { return theta_; }
+
+  /// The first `count` Ritz vectors (wanted order) into V (MPIDENSE, count columns).
+  void ritz_vectors(PetscInt count, Mat V) {
+    Local q = local(Q_.get()), v = local(V);
+    const PetscScalar one = 1, zero = 0;
+    if (m_ > 0)
+      BLASgemm_("N", "N", &mloc(), ptr(count), ptr(m_used_), &one, q.a, ptr(q.ld), Y_.data(), ptr(m_used_), &zero, v.a,
+                ptr(v.ld));
+    restore(V, v);
+    restore(Q_.get(), q);
+  }
+
+ private:
+  Local local(Mat A) {
+    Local l;
+    MORSE_CALL(MatDenseGetArray(A, &l.a));
+    MORSE_CALL(MatDenseGetLDA(A, &l.ld));
+    l.ld = std::max<PetscInt>(l.ld, 1);
+    return l;
+  }
+  void restore(Mat A, Local& l) { MORSE_CALL(MatDenseRestoreArray(A, &l.a)); }
+  const PetscBLASInt* ptr(PetscInt v) {
+    scratch_[next_ = (next_ + 1) % 8] = blas(v);
+    return &scratch_[next_];
+  }
+  PetscBLASInt& mloc() {
+    mloc_ = blas(m_);
+    return mloc_;
+  }
+
+  // C (k x nb, column-major) = A^T B over all ranks, A and B local (m_ rows).
+  void gram(const PetscScalar* A, PetscInt lda, PetscInt k, const PetscScalar* B, PetscInt ldb, PetscInt nb,
+            std::vector<double>* C) {
+    C->assign(static_cast<std::size_t>(k) * nb, 0.0);
+    const PetscScalar one = 1, zero = 0;
+    if (m_ > 0 && k > 0)
+      BLASgemm_("T", "N", ptr(k), ptr(nb), &mloc(), &one, A, ptr(lda), B, ptr(ldb), &zero, C->data(), ptr(k));
+    MPI_Allreduce(MPI_IN_PLACE, C->data(), static_cast<int>(C->size()), MPI_DOUBLE, MPI_SUM, comm_);
+  }
+
+  void mult_M(Mat X, UMat* MX) {
+    if (*MX) {
+      Mat reuse = MX->get();
+      MORSE_CALL(MatMatMult(M_, X, MAT_REUSE_MATRIX, PETSC_DEFAULT, &reuse));
+    } else {
+      MORSE_CALL(MatMatMult(M_, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MX->ptr()));
+    }
+  }
+
+  // W -= Q[:, 0:k] C twice (classical Gram–Schmidt with reorthogonalization in the M inner
+  // product), adding the coefficients to H[0:k, col:col+b].
+  void orthogonalize(PetscInt k, PetscInt col, bool record) {
+    std::vector<double> C;
+    for (int pass = 0; pass < 2; ++pass) {
+      mult_M(W_.get(), &MW_);
+      Local q = local(Q_.get()), w = local(W_.get()), mw = local(MW_.get());
+      gram(q.a, q.ld, k, mw.a, mw.ld, b_, &C);
+      const PetscScalar minus = -1, one = 1;
+      if (m_ > 0 && k > 0)
+        BLASgemm_("N", "N", &mloc(), ptr(b_), ptr(k), &minus, q.a, ptr(q.ld), C.data(), ptr(k), &one, w.a, ptr(w.ld));
+      restore(MW_.get(), mw);
+      restore(W_.get(), w);
+      restore(Q_.get(), q);
+      if (record)
+        for (PetscInt c = 0; c < b_; ++c)
+          for (PetscInt r = 0; r < k; ++r) H_[r + kmax_ * (col + c)] += C[r + k * c];
+    }
+  }
+
+  // M-orthonormalizes W against itself (SVQB twice), given nothing; k = columns of Q it must stay
+  // orthogonal to when directions are replaced. R (b x b, column-major) is returned with
+  // W_in = W_out R. Directions that vanish (an invariant subspace) are replaced by new random
+  // vectors orthogonal to Q, with zero rows in R.
+  void normalize(PetscInt k, std::vector<double>* R) {
+    R->assign(static_cast<std::size_t>(b_) * b_, 0.0);
+    for (PetscInt i = 0; i < b_; ++i) (*R)[i + b_ * i] = 1.0;
+    for (int pass = 0; pass < 2; ++pass) {
+      mult_M(W_.get(), &MW_);
+      Local w = local(W_.get()), mw = local(MW_.get());
+      std::vector<double> G;
+      gram(w.a, w.ld, b_, mw.a, mw.ld, b_, &G);
+      restore(MW_.get(), mw);
+      restore(W_.get(), w);
+      for (PetscInt i = 0; i < b_; ++i)
+        for (PetscInt j = 0; j < i; ++j) G[i + b_ * j] = G[j + b_ * i] = 0.5 * (G[i + b_ * j] + G[j + b_ * i]);
+      std::vector<double> lam(b_), work(std::max<PetscInt>(1, 8 * b_));
+      PetscBLASInt info = 0, lwork = blas(work.size());
+      LAPACKsyev_("V", "U", ptr(b_), G.data(), ptr(b_), lam.data(), work.data(), &lwork, &info);
+      MORSE_CHECK(info == 0, "block eigen solver: LAPACK syev failed (", info, ")");
+      const double top = std::max(lam[b_ - 1], 0.0);
+      // T = S diag(1/sqrt(lam)) for the kept directions; Rp = diag(sqrt(lam)) S^T.
+      std::vector<double> T(static_cast<std::size_t>(b_) * b_, 0.0), Rp(static_cast<std::size_t>(b_) * b_, 0.0);
+      std::vector<PetscInt> lost;
+      for (PetscInt c = 0; c < b_; ++c) {
+        if (!(lam[c] > 1e-20 * top) || top == 0) {
+          lost.push_back(c);
+          continue;
+        }
+        const double s = std::sqrt(lam[c]);
+        for (PetscInt r = 0; r < b_; ++r) {
+          T[r + b_ * c] = G[r + b_ * c] / s;
+          Rp[c + b_ * r] = G[r + b_ * c] * s;
+        }
+      }
+      apply_right(W_.get(), T);
+      // R = Rp R
+      std::vector<double> Rn(static_cast<std::size_t>(b_) * b_, 0.0);
+      for (PetscInt c = 0; c < b_; ++c)
+        for (PetscInt r = 0; r < b_; ++r) {
+          double v = 0;
+          for (PetscInt t = 0; t < b_; ++t) v += Rp[r + b_ * t] * (*R)[t + b_ * c];
+          Rn[r + b_ * c] = v;
+        }
+      R->swap(Rn);
+      if (!lost.empty()) {
+        MORSE_CHECK(replaced_ < 64, "block eigen solver: the Krylov space cannot be extended (", lost.size(),
+                    " directions lost repeatedly)");
+        // New random directions in the lost columns, orthogonal to Q and to the kept columns.
+        Local w2 = local(W_.get());
+        for (PetscInt c : lost)
+          for (PetscInt r = 0; r < m_; ++r)
+            w2.a[r + w2.ld * c] =
+                uniform((static_cast<std::uint64_t>(rstart_ + r) * 2654435761ull) ^ (0x5bd1e995ull * (replaced_ + 1)));
+        restore(W_.get(), w2);
+        ++replaced_;
+        if (k > 0) orthogonalize(k, 0, false);
+        pass = -1;  // start the two passes again (R keeps zero rows for the new directions)
+      }
+    }
+    mult_M(W_.get(), &MW_);
+  }
+
+  // X <- X T (b x b) for an MPIDENSE X with b columns.
+  void apply_right(Mat X, const std::vector<double>& T) {
+    Local x = local(X);
+    std::vector<double> tmp(static_cast<std::size_t>(m_) * b_);
+    const PetscScalar one = 1, zero = 0;
+    if (m_ > 0) {
+      BLASgemm_("N", "N", &mloc(), ptr(b_), ptr(b_), &one, x.a, ptr(x.ld), T.data(), ptr(b_), &zero, tmp.data(),
+                ptr(m_));
+      for (PetscInt c = 0; c < b_; ++c) std::copy_n(&tmp[static_cast<std::size_t>(m_) * c], m_, x.a + x.ld * c);
+    }
+    restore(X, x);
+  }
+
+  // Q[:, col:col+b] = W, RHS = M W (= MW after normalize).
+  void store_block(PetscInt col) {
+    Local q = local(Q_.get()), w = local(W_.get()), mw = local(MW_.get()), rhs = local(RHS_.get());
+    for (PetscInt c = 0; c < b_; ++c) {
+      std::copy_n(w.a + w.ld * c, m_, q.a + q.ld * (col + c));
+      std::copy_n(mw.a + mw.ld * c, m_, rhs.a + rhs.ld * c);
+    }
+    restore(RHS_.get(), rhs);
+    restore(MW_.get(), mw);
+    restore(W_.get(), w);
+    restore(Q_.get(), q);
+  }
+
+  // One block step: W = Op Q[:, k-b:k], orthogonalized against Q[:, 0:k], normalized into
+  // Q[:, k:k+b]; fills H[0:k+b, k-b:k].
+  void expand(PetscInt k) {
+    const PetscInt j0 = k - b_;
+    MORSE_CALL(MatMatSolve(F_, RHS_.get(), W_.get()));
+    ++solves_;
+    orthogonalize(k, j0, true);
+    std::vector<double> R;
+    normalize(k, &R);
+    for (PetscInt c = 0; c < b_; ++c)
+      for (PetscInt r = 0; r < b_; ++r) H_[(k + r) + kmax_ * (j0 + c)] = R[r + b_ * c];
+    store_block(k);
+  }
+
+  // Ritz pairs of the symmetric part of H[0:m, 0:m], in the wanted order (largest |theta|).
+  void rayleigh_ritz(PetscInt m) {
+    std::vector<double> A(static_cast<std::size_t>(m) * m), lam(m);
+    for (PetscInt c = 0; c < m; ++c)
+      for (PetscInt r = 0; r < m; ++r) A[r + m * c] = 0.5 * (H_[r + kmax_ * c] + H_[c + kmax_ * r]);
+    PetscBLASInt info = 0, lwork = blas(std::max<PetscInt>(1, 34 * m));
+    std::vector<double> work(lwork);
+    LAPACKsyev_("V", "U", ptr(m), A.data(), ptr(m), lam.data(), work.data(), &lwork, &info);
+    MORSE_CHECK(info == 0, "block eigen solver: LAPACK syev failed on the projected matrix (", info, ")");
+    std::vector<PetscInt> order(m);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt b) { return std::abs(lam[a]) > std::abs(lam[b]); });
+    theta_.resize(m);
+    Y_.resize(static_cast<std::size_t>(m) * m);
+    for (PetscInt i = 0; i < m; ++i) {
+      theta_[i] = lam[order[i]];
+      std::copy_n(&A[static_cast<std::size_t>(m) * order[i]], m, &Y_[static_cast<std::size_t>(m) * i]);
+    }
+  }
+
+  // Keeps the first p Ritz vectors of the m-dimensional basis and the residual block Q[:, m:m+b].
+  void restart(PetscInt m, PetscInt p) {
+    Local q = local(Q_.get());
+    std::vector<double> X(static_cast<std::size_t>(std::max<PetscInt>(m_, 1)) * p);
+    const PetscScalar one = 1, zero = 0;
+    if (m_ > 0) {
+      BLASgemm_("N", "N", &mloc(), ptr(p), ptr(m), &one, q.a, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(), ptr(m_));
+      for (PetscInt c = 0; c < p; ++c) std::copy_n(&X[static_cast<std::size_t>(m_) * c], m_, q.a + q.ld * c);
+      for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
+    }
+    restore(Q_.get(), q);
+    // H: diag(theta) coupled to the residual block by B Y.
+    std::vector<double> BY(static_cast<std::size_t>(b_) * p, 0.0);
+    for (PetscInt i = 0; i < p; ++i)
+      for (PetscInt r = 0; r < b_; ++r) {
+        double v = 0;
+        for (PetscInt c = 0; c < m; ++c) v += H_[(m + r) + kmax_ * c] * Y_[c + m * i];
+        BY[r + b_ * i] = v;
+      }
+    std::fill(H_.begin(), H_.end(), 0.0);
+    for (PetscInt i = 0; i < p; ++i) {
+      H_[i + kmax_ * i] = theta_[i];
+      for (PetscInt r = 0; r < b_; ++r) H_[(p + r) + kmax_ * i] = BY[r + b_ * i];
+    }
+    // RHS still holds M times the residual block (the last block stored).
+  }
+
+  Mat K_, M_, F_;
+  PetscInt b_, kmax_;
+  MPI_Comm comm_;
+  PetscInt m_ = 0, rstart_ = 0;
+  UMat Q_, W_, MW_, RHS_;
+  std::vector<double> H_, theta_, Y_, res_;
+  PetscInt restarts_ = 0, m_used_ = 0, replaced_ = 0;
+  PetscBLASInt scratch_[8] = {}, mloc_ = 0;
+  int next_ = 0;
+
+ public:
+  PetscInt solves_ = 0;
+};
+
+}  // namespace
+
+Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(K, &n, nullptr));
+  PetscInt b = 16, kmax = -1, max_restarts = 200;
+  PetscReal tol = s.tol;
+  auto get_options = [&]() -> PetscErrorCode {
+    PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
+    PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each)", "", b, &b, nullptr));
+    PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(nev, 6 blocks))", "",
+                              kmax, &kmax, nullptr));
+    PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", max_restarts, &max_restarts, nullptr));
+    PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", tol, &tol, nullptr));
+    PetscOptionsEnd();
+    return PETSC_SUCCESS;
+  };
+  MORSE_CALL(get_options());
+  MORSE_CHECK(b >= 1, "-", s.prefix, "block_size must be >= 1 (got ", b, ")");
+  Eigenpairs out;
+  PetscInt nev = s.nev;
+  const bool cutoff = s.omega2_max > 0;
+  if (cutoff) {
+    // Every mode below the cutoff: their number from Sylvester's inertia, then that many.
+    StageTimer timer(comm, s.stage + "InertiaCount");
+    InertiaCounter c(K, M, s.prefix);
+    nev = c.count(s.omega2_max);
+    out.inertia_count = nev;
+    out.inertia_counts = 1;
+    MORSE_CHECK(nev > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", s.omega2_max, ")");
+  }
+  MORSE_CHECK(nev > 0, s.what, ": the number of modes must be positive (got ", nev, ")");
+  MORSE_CHECK(nev <= n, s.what, ": ", nev, " modes requested but the problem has only ", n, " DOFs");
+  b = std::min(b, std::max<PetscInt>(1, n / 3));
+  if (kmax < 0) kmax = nev + std::max(nev, 6 * b);
+  kmax = std::min(n, ((kmax + b - 1) / b) * b);
+  MORSE_CHECK(kmax >= std::min(n, nev + 2 * b) || kmax == n, "-", s.prefix, "block_max_dim ", kmax,
+              " is too small for ", nev, " modes with blocks of ", b, " (at least nev + 2 blocks)");
+  if (kmax == n) kmax = (n / b) * b;  // whole blocks
+
+  // One Cholesky factorization of K - shift M.
+  UMat A, F;
+  {
+    StageTimer timer(comm, s.stage + "Factor");
+    auto t0 = std::chrono::steady_clock::now();
+    Mat Ash = K;
+    if (s.shift != 0.0) {
+      MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A.ptr()));
+      MORSE_CALL(MatAXPY(A.get(), -s.shift, M, DIFFERENT_NONZERO_PATTERN));
+      MORSE_CALL(MatSetOption(A.get(), MAT_SYMMETRIC, PETSC_TRUE));
+      Ash = A.get();
+    }
+    MORSE_CALL(MatGetFactor(Ash, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F.ptr()));
+    MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
+    MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
+    MORSE_CALL(MatSetFromOptions(F.get()));
+    MatFactorInfo info;
+    MORSE_CALL(MatFactorInfoInitialize(&info));
+    MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
+    MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
+    out.factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  const PetscInt nulls = mumps_null_pivots(F.get());
+  collective_check(comm, nulls > 0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
+                                         " null pivots): the model is not restrained against "
+                                         "rigid-body motion; check -clamp and the boundary set")
+                                   : std::string());
+
+  BlockSolver solver(K, M, F.get(), b, kmax, comm);
+  bool ok = false;
+  {
+    StageTimer timer(comm, s.stage + "EigenSolve");
+    Progress progress(comm, s.what, static_cast<double>(nev));
+    ok = solver.run(nev, tol, max_restarts, &progress);
+  }
+  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", nev, " pairs in ", max_restarts,
+              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
+  out.iterations = solver.restarts();
+  StageTimer extract(comm, s.stage + "EigenVectors");
+  PetscInt m_local = 0;
+  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+  UMat X;
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, X.ptr()));
+  solver.ritz_vectors(nev, X.get());
+  // Ascending omega^2 = shift + 1/theta.
+  std::vector<std::pair<double, PetscInt>> order;
+  for (PetscInt i = 0; i < nev; ++i) order.emplace_back(s.shift + 1.0 / solver.theta()[i], i);
+  std::sort(order.begin(), order.end());
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, out.V.ptr()));
+  for (PetscInt j = 0; j < nev; ++j) {
+    out.omega2.push_back(order[j].first);
+    Vec src, dst;
+    MORSE_CALL(MatDenseGetColumnVecRead(X.get(), order[j].second, &src));
+    MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &dst));
+    MORSE_CALL(VecCopy(src, dst));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &dst));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(X.get(), order[j].second, &src));
+  }
+  print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
+         s.what.c_str(), (int)b, (int)kmax, (int)solver.restarts(), (int)solver.solves_, (int)(solver.solves_ * b));
+  if (cutoff) {
+    // The inertia count says how many lie below the cutoff: exactly that many must be found, all
+    // below it (one above means one below was missed).
+    const PetscInt found = nev - std::min(s.drop_for_test, nev);
+    out.omega2.resize(found);
+    const double top = found ? out.omega2.back() : 0.0;
+    collective_check(comm, found == nev && top <= s.omega2_max * (1 + 1e-8)
+                               ? std::string()
+                               : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", nev, " eigenvalues below ",
+                                     std::sqrt(s.omega2_max) / (2 * M_PI), " Hz but the solve returned ", found,
+                                     found ? cat(" up to ", std::sqrt(std::max(top, 0.0)) / (2 * M_PI), " Hz") : std::string(),
+                                     ": it missed modes"));
+    print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
+           s.what.c_str(), (int)nev, std::sqrt(s.omega2_max) / (2 * M_PI));
+  }
+  out.block_factor = std::move(F);
+  finish_pairs(K, M, s, tol, sign_ref, &out);
+  return out;
+}
+
+}  // namespace morse::cb
