@@ -58,6 +58,7 @@ class BlockSolver {
     MORSE_CALL(MatGetLocalSize(K, &m_, nullptr));
     MORSE_CALL(MatGetOwnershipRange(K, &rstart_, nullptr));
     MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, Q_.ptr()));
+    MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, MQ_.ptr()));
     for (UMat* X : {&W_, &RHS_}) MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, b, nullptr, X->ptr()));
     H_.assign(static_cast<std::size_t>(kmax) * kmax, 0.0);
   }
@@ -77,34 +78,32 @@ class BlockSolver {
     normalize(0, &R);
     store_block(0);
     PetscInt k = b_;
+    // Rayleigh–Ritz when the basis first exceeds nev and then every quarter of the remaining
+    // room (it costs O(k^3) on every rank), and always before a restart.
+    PetscInt next_check = std::min(kmax_, nev + b_);
     for (restarts_ = 0; restarts_ <= max_restarts; ++restarts_) {
-      while (k + b_ <= kmax_) {
+      PetscInt m = 0, nconv = 0;
+      while (true) {
+        const bool full = k + b_ > kmax_;
+        if (full || k >= next_check) {
+          m = k - b_;
+          rayleigh_ritz(m);
+          nconv = converged(m, tol);
+          if (progress) progress->update(static_cast<double>(std::min(nconv, nev)));
+          m_used_ = m;
+          if (nconv >= nev) return true;
+          if (full) break;
+          next_check = k + std::max(b_, (kmax_ - k) / 4);
+        }
         expand(k);
         k += b_;
       }
-      const PetscInt m = k - b_;
-      rayleigh_ritz(m);
-      // Residuals of the Ritz pairs: || B y_i || with B = H[m:k, 0:m].
-      PetscInt nconv = 0;
-      res_.assign(m, 0.0);
-      for (PetscInt i = 0; i < m; ++i) {
-        double s2 = 0;
-        for (PetscInt r = 0; r < b_; ++r) {
-          double v = 0;
-          for (PetscInt c = 0; c < m; ++c) v += H_[(m + r) + kmax_ * c] * Y_[c + m * i];
-          s2 += v * v;
-        }
-        res_[i] = std::sqrt(s2);
-      }
-      while (nconv < m && res_[nconv] <= tol * std::abs(theta_[nconv])) ++nconv;
-      if (progress) progress->update(static_cast<double>(std::min(nconv, nev)));
-      m_used_ = m;
-      if (nconv >= nev) return true;
       if (restarts_ == max_restarts) break;
       // Krylov–Schur restart: keep p Ritz vectors, then the residual block.
       const PetscInt p = std::max(std::min(m - b_, (nev + m) / 2), std::min(nconv + 1, m - b_));
       restart(m, p);
       k = p + b_;
+      next_check = std::min(kmax_, k + std::max(b_, (kmax_ - k) / 4));
     }
     return false;
   }
@@ -162,18 +161,19 @@ class BlockSolver {
   }
 
   // W -= Q[:, 0:k] C twice (classical Gram–Schmidt with reorthogonalization in the M inner
-  // product), adding the coefficients to H[0:k, col:col+b].
+  // product) with C = (M Q)^T W, so no product with M is needed; adds the coefficients to
+  // H[0:k, col:col+b] if record. MW is left stale (normalize recomputes it).
   void orthogonalize(PetscInt k, PetscInt col, bool record) {
+    if (k == 0) return;
     std::vector<double> C;
     for (int pass = 0; pass < 2; ++pass) {
-      mult_M(W_.get(), &MW_);
-      Local q = local(Q_.get()), w = local(W_.get()), mw = local(MW_.get());
-      gram(q.a, q.ld, k, mw.a, mw.ld, b_, &C);
+      Local q = local(Q_.get()), mq = local(MQ_.get()), w = local(W_.get());
+      gram(mq.a, mq.ld, k, w.a, w.ld, b_, &C);
       const PetscScalar minus = -1, one = 1;
-      if (m_ > 0 && k > 0)
+      if (m_ > 0)
         BLASgemm_("N", "N", &mloc(), ptr(b_), ptr(k), &minus, q.a, ptr(q.ld), C.data(), ptr(k), &one, w.a, ptr(w.ld));
-      restore(MW_.get(), mw);
       restore(W_.get(), w);
+      restore(MQ_.get(), mq);
       restore(Q_.get(), q);
       if (record)
         for (PetscInt c = 0; c < b_; ++c)
@@ -185,9 +185,13 @@ class BlockSolver {
   // orthogonal to when directions are replaced. R (b x b, column-major) is returned with
   // W_in = W_out R. Directions that vanish (an invariant subspace) are replaced by new random
   // vectors orthogonal to Q, with zero rows in R.
+  // M W is computed afresh at each pass (after Gram–Schmidt W can be much smaller than before,
+  // so an M W carried along would have lost its accuracy) and carried through the pass's
+  // transformation, so MW = M W on return.
   void normalize(PetscInt k, std::vector<double>* R) {
     R->assign(static_cast<std::size_t>(b_) * b_, 0.0);
     for (PetscInt i = 0; i < b_; ++i) (*R)[i + b_ * i] = 1.0;
+    int attempts = 0;
     for (int pass = 0; pass < 2; ++pass) {
       mult_M(W_.get(), &MW_);
       Local w = local(W_.get()), mw = local(MW_.get());
@@ -217,6 +221,7 @@ class BlockSolver {
         }
       }
       apply_right(W_.get(), T);
+      apply_right(MW_.get(), T);
       // R = Rp R
       std::vector<double> Rn(static_cast<std::size_t>(b_) * b_, 0.0);
       for (PetscInt c = 0; c < b_; ++c)
@@ -227,8 +232,8 @@ class BlockSolver {
         }
       R->swap(Rn);
       if (!lost.empty()) {
-        MORSE_CHECK(replaced_ < 64, "block eigen solver: the Krylov space cannot be extended (", lost.size(),
-                    " directions lost repeatedly)");
+        MORSE_CHECK(++attempts < 8, "block eigen solver: the Krylov space cannot be extended (", lost.size(),
+                    " directions lost repeatedly); lower -<prefix>block_max_dim");
         // New random directions in the lost columns, orthogonal to Q and to the kept columns.
         Local w2 = local(W_.get());
         for (PetscInt c : lost)
@@ -237,11 +242,10 @@ class BlockSolver {
                 uniform((static_cast<std::uint64_t>(rstart_ + r) * 2654435761ull) ^ (0x5bd1e995ull * (replaced_ + 1)));
         restore(W_.get(), w2);
         ++replaced_;
-        if (k > 0) orthogonalize(k, 0, false);
+        orthogonalize(k, 0, false);
         pass = -1;  // start the two passes again (R keeps zero rows for the new directions)
       }
     }
-    mult_M(W_.get(), &MW_);
   }
 
   // X <- X T (b x b) for an MPIDENSE X with b columns.
@@ -257,14 +261,17 @@ class BlockSolver {
     restore(X, x);
   }
 
-  // Q[:, col:col+b] = W, RHS = M W (= MW after normalize).
+  // Q[:, col:col+b] = W, MQ[:, col:col+b] = RHS = M W (= MW after normalize).
   void store_block(PetscInt col) {
-    Local q = local(Q_.get()), w = local(W_.get()), mw = local(MW_.get()), rhs = local(RHS_.get());
+    Local q = local(Q_.get()), mq = local(MQ_.get()), w = local(W_.get()), mw = local(MW_.get()),
+          rhs = local(RHS_.get());
     for (PetscInt c = 0; c < b_; ++c) {
       std::copy_n(w.a + w.ld * c, m_, q.a + q.ld * (col + c));
+      std::copy_n(mw.a + mw.ld * c, m_, mq.a + mq.ld * (col + c));
       std::copy_n(mw.a + mw.ld * c, m_, rhs.a + rhs.ld * c);
     }
     restore(RHS_.get(), rhs);
+    restore(MQ_.get(), mq);
     restore(MW_.get(), mw);
     restore(W_.get(), w);
     restore(Q_.get(), q);
@@ -282,6 +289,24 @@ class BlockSolver {
     for (PetscInt c = 0; c < b_; ++c)
       for (PetscInt r = 0; r < b_; ++r) H_[(k + r) + kmax_ * (j0 + c)] = R[r + b_ * c];
     store_block(k);
+  }
+
+  // Residuals ||B y_i|| of the Ritz pairs (B = H[m:m+b, 0:m], the coupling to the residual
+  // block); returns how many leading pairs satisfy ||B y_i|| <= tol |theta_i|.
+  PetscInt converged(PetscInt m, double tol) {
+    res_.assign(m, 0.0);
+    for (PetscInt i = 0; i < m; ++i) {
+      double s2 = 0;
+      for (PetscInt r = 0; r < b_; ++r) {
+        double v = 0;
+        for (PetscInt c = 0; c < m; ++c) v += H_[(m + r) + kmax_ * c] * Y_[c + m * i];
+        s2 += v * v;
+      }
+      res_[i] = std::sqrt(s2);
+    }
+    PetscInt nconv = 0;
+    while (nconv < m && res_[nconv] <= tol * std::abs(theta_[nconv])) ++nconv;
+    return nconv;
   }
 
   // Ritz pairs of the symmetric part of H[0:m, 0:m], in the wanted order (largest |theta|).
@@ -304,17 +329,21 @@ class BlockSolver {
     }
   }
 
-  // Keeps the first p Ritz vectors of the m-dimensional basis and the residual block Q[:, m:m+b].
+  // Keeps the first p Ritz vectors of the m-dimensional basis and the residual block Q[:, m:m+b]
+  // (the same combinations of M Q in MQ).
   void restart(PetscInt m, PetscInt p) {
-    Local q = local(Q_.get());
     std::vector<double> X(static_cast<std::size_t>(std::max<PetscInt>(m_, 1)) * p);
-    const PetscScalar one = 1, zero = 0;
-    if (m_ > 0) {
-      BLASgemm_("N", "N", &mloc(), ptr(p), ptr(m), &one, q.a, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(), ptr(m_));
-      for (PetscInt c = 0; c < p; ++c) std::copy_n(&X[static_cast<std::size_t>(m_) * c], m_, q.a + q.ld * c);
-      for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
+    for (Mat A : {Q_.get(), MQ_.get()}) {
+      Local q = local(A);
+      const PetscScalar one = 1, zero = 0;
+      if (m_ > 0) {
+        BLASgemm_("N", "N", &mloc(), ptr(p), ptr(m), &one, q.a, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(),
+                  ptr(m_));
+        for (PetscInt c = 0; c < p; ++c) std::copy_n(&X[static_cast<std::size_t>(m_) * c], m_, q.a + q.ld * c);
+        for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
+      }
+      restore(A, q);
     }
-    restore(Q_.get(), q);
     // H: diag(theta) coupled to the residual block by B Y.
     std::vector<double> BY(static_cast<std::size_t>(b_) * p, 0.0);
     for (PetscInt i = 0; i < p; ++i)
@@ -335,7 +364,7 @@ class BlockSolver {
   PetscInt b_, kmax_;
   MPI_Comm comm_;
   PetscInt m_ = 0, rstart_ = 0;
-  UMat Q_, W_, MW_, RHS_;
+  UMat Q_, MQ_, W_, MW_, RHS_;
   std::vector<double> H_, theta_, Y_, res_;
   PetscInt restarts_ = 0, m_used_ = 0, replaced_ = 0;
   PetscBLASInt scratch_[8] = {}, mloc_ = 0;
@@ -379,12 +408,27 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   }
   MORSE_CHECK(nev > 0, s.what, ": the number of modes must be positive (got ", nev, ")");
   MORSE_CHECK(nev <= n, s.what, ": ", nev, " modes requested but the problem has only ", n, " DOFs");
-  b = std::min(b, std::max<PetscInt>(1, n / 3));
-  if (kmax < 0) kmax = nev + std::max(nev, 6 * b);
-  kmax = std::min(n, ((kmax + b - 1) / b) * b);
-  MORSE_CHECK(kmax >= std::min(n, nev + 2 * b) || kmax == n, "-", s.prefix, "block_max_dim ", kmax,
+  const bool kmax_given = kmax >= 0;
+  MORSE_CHECK(!kmax_given || kmax >= std::min(n, nev + 2 * b), "-", s.prefix, "block_max_dim ", kmax,
               " is too small for ", nev, " modes with blocks of ", b, " (at least nev + 2 blocks)");
-  if (kmax == n) kmax = (n / b) * b;  // whole blocks
+  // The basis in whole blocks, at most n: nev + max(nev, 6 blocks) by default.
+  auto basis = [&](PetscInt bb) {
+    const PetscInt want = kmax_given ? kmax : nev + std::max(nev, 6 * bb);
+    const PetscInt k = std::min(n, ((want + bb - 1) / bb) * bb);
+    return k == n ? (n / bb) * bb : k;
+  };
+  // A restart keeps at least nev Ritz vectors and the residual block, so the basis must hold
+  // nev + 2 blocks, better 3. Small problems (n not far above nev) get smaller blocks.
+  b = std::min(b, std::max<PetscInt>(1, n / 3));
+  while (b > 1 && basis(b) < nev + 3 * b) b = std::max<PetscInt>(1, b / 2);
+  if (basis(b) < nev + 2 * b) {
+    // Nearly every mode of the problem is wanted: a Krylov space that fills the whole space is
+    // SLEPc's case.
+    print0(comm, "  %s: %d modes of %d DOFs leave no room for a block basis; solved by Krylov-Schur\n",
+           s.what.c_str(), (int)nev, (int)n);
+    return solve_eigen_krylovschur(K, M, s, sign_ref);
+  }
+  kmax = basis(b);
 
   // One Cholesky factorization of K - shift M.
   UMat A, F;

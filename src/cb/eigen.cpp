@@ -162,6 +162,27 @@ PetscInt inertia_below(EPS eps, Mat K, Mat M, double a, double b, const std::str
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
+  char solver[32] = "";
+  std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
+  auto get_options = [&]() -> PetscErrorCode {
+    PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
+    PetscCall(PetscOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
+                                 "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
+                                 "", solver, solver, sizeof solver, nullptr));
+    PetscOptionsEnd();
+    return PETSC_SUCCESS;
+  };
+  MORSE_CALL(get_options());
+  const std::string which = solver;
+  MORSE_CHECK(which == "block" || which == "krylovschur", "-", s.prefix, "eigen_solver ", which,
+              ": expected block or krylovschur");
+  if (which == "block") return solve_eigen_block(K, M, s, sign_ref);
+  return solve_eigen_krylovschur(K, M, s, sign_ref);
+}
+
+Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(K, &n, nullptr));
   bool slicing = s.omega2_max > 0;
@@ -171,13 +192,8 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ",
               n, " DOFs");
   PetscInt count_slicing = s.count_slicing;
-  char solver[32] = "";
-  std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
-                                 "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
-                                 "", solver, solver, sizeof solver, nullptr));
     PetscCall(PetscOptionsInt("-count_slicing",
                               "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
                               "", count_slicing, &count_slicing, nullptr));
@@ -185,10 +201,6 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     return PETSC_SUCCESS;
   };
   MORSE_CALL(get_options());
-  const std::string which = solver;
-  MORSE_CHECK(which == "block" || which == "krylovschur", "-", s.prefix, "eigen_solver ", which,
-              ": expected block or krylovschur");
-  if (which == "block") return solve_eigen_block(K, M, s, sign_ref);
   MORSE_CHECK(count_slicing >= 0, "-", s.prefix, "count_slicing must be >= 0 (got ", count_slicing, ")");
   const bool count_by_slicing =
       !slicing && count_slicing > 0 && s.nev >= count_slicing && s.shift == 0.0 && 4 * s.nev <= n;

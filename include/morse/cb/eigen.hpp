@@ -34,8 +34,8 @@ struct EigenSettings {
   /// Fault injection for the tests: drop this many of the highest pairs before the Sylvester
   /// check of a cutoff solve, which must then fail. 0 in production.
   PetscInt drop_for_test = 0;
-  /// Default solver: "block" or "krylovschur" (-<prefix>eigen_solver overrides).
-  std::string solver = "krylovschur";
+  /// Solver: "block" (default) or "krylovschur" (-<prefix>eigen_solver overrides).
+  std::string solver = "block";
 };
 
 struct Eigenpairs {
@@ -82,7 +82,15 @@ std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<do
 /// inertia at the cutoff then a count solve (checked: exactly that many, all below it). Options
 /// -<prefix>block_size (16), -<prefix>block_max_dim, -<prefix>block_max_restarts,
 /// -<prefix>eps_tol. Collective.
+/// A problem too small for a block basis (nev + 2 blocks > the number of DOFs) is handed to
+/// solve_eigen_krylovschur, with a notice.
 Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
+
+/// SLEPc's Krylov–Schur with MUMPS shift-invert (one vector at a time), which solve_eigen uses
+/// with -<prefix>eigen_solver krylovschur: count mode with one shift or, for many modes, by
+/// inertia search and spectrum slicing (-<prefix>count_slicing); cutoff mode by spectrum
+/// slicing. Collective.
+Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
 
 /// Sets an option in the database unless the user already gave it.
 void set_default_option(const std::string& name, const std::string& value);
