@@ -25,6 +25,14 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 
+// LAPACK's MRRR symmetric eigensolver (not in PETSc's BLAS/LAPACK header; the LAPACK that
+// PETSc links provides it).
+extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, const PetscBLASInt* n, double* a,
+                        const PetscBLASInt* lda, const double* vl, const double* vu, const PetscBLASInt* il,
+                        const PetscBLASInt* iu, const double* abstol, PetscBLASInt* m, double* w, double* z,
+                        const PetscBLASInt* ldz, PetscBLASInt* isuppz, double* work, const PetscBLASInt* lwork,
+                        PetscBLASInt* iwork, const PetscBLASInt* liwork, PetscBLASInt* info);
+
 namespace morse::cb {
 
 namespace {
@@ -45,6 +53,24 @@ PetscBLASInt blas(PetscInt v) {
   return b;
 }
 
+// One part of the block solver: a PETSc log event (-log_view) and its accumulated wall time.
+class Phase {
+ public:
+  Phase(const char* name, double* seconds)
+      : ev_(log_event(name)), seconds_(seconds), t0_(std::chrono::steady_clock::now()) {
+    PetscLogEventBegin(ev_, 0, 0, 0, 0);
+  }
+  ~Phase() {
+    PetscLogEventEnd(ev_, 0, 0, 0, 0);
+    *seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+ private:
+  PetscLogEvent ev_;
+  double* seconds_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
 // The local rows of an MPIDENSE matrix.
 struct Local {
   PetscScalar* a = nullptr;
@@ -53,8 +79,8 @@ struct Local {
 
 class BlockSolver {
  public:
-  BlockSolver(Mat K, Mat M, Mat F, PetscInt b, PetscInt kmax, MPI_Comm comm)
-      : K_(K), M_(M), F_(F), b_(b), kmax_(kmax), comm_(comm) {
+  BlockSolver(Mat K, Mat M, Mat F, PetscInt b, PetscInt kmax, bool positive, MPI_Comm comm)
+      : K_(K), M_(M), F_(F), b_(b), kmax_(kmax), comm_(comm), positive_(positive) {
     MORSE_CALL(MatGetLocalSize(K, &m_, nullptr));
     MORSE_CALL(MatGetOwnershipRange(K, &rstart_, nullptr));
     MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, Q_.ptr()));
@@ -78,32 +104,41 @@ class BlockSolver {
     normalize(0, &R);
     store_block(0);
     PetscInt k = b_;
-    // Rayleigh–Ritz when the basis first exceeds nev and then every quarter of the remaining
-    // room (it costs O(k^3) on every rank), and always before a restart.
-    PetscInt next_check = std::min(kmax_, nev + b_);
+    // Rayleigh–Ritz when the basis first exceeds nev and then at four equal steps up to the full
+    // basis (it costs O(k^3) on every rank), and always before a restart.
+    nev_ = nev;
+    auto step = [&](PetscInt from) { return std::max(b_, ((kmax_ - from) / 4 / b_) * b_); };
+    PetscInt next_check = std::min(kmax_, nev + b_), check_step = step(next_check);
     for (restarts_ = 0; restarts_ <= max_restarts; ++restarts_) {
       PetscInt m = 0, nconv = 0;
       while (true) {
         const bool full = k + b_ > kmax_;
         if (full || k >= next_check) {
           m = k - b_;
-          rayleigh_ritz(m);
-          nconv = converged(m, tol);
+          {
+            Phase ph("BlockRayleighRitz", &t_rr_);
+            rayleigh_ritz(m);
+            nconv = converged(m, tol);
+          }
           if (progress) progress->update(static_cast<double>(std::min(nconv, nev)));
           m_used_ = m;
           if (nconv >= nev) return true;
           if (full) break;
-          next_check = k + std::max(b_, (kmax_ - k) / 4);
+          next_check = k + check_step;
         }
         expand(k);
         k += b_;
       }
       if (restarts_ == max_restarts) break;
       // Krylov–Schur restart: keep p Ritz vectors, then the residual block.
-      const PetscInt p = std::max(std::min(m - b_, (nev + m) / 2), std::min(nconv + 1, m - b_));
-      restart(m, p);
+      const PetscInt p = std::min(std::max(std::min(m - b_, (nev + m) / 2), std::min(nconv + 1, m - b_)), nritz_);
+      {
+        Phase ph("BlockRestart", &t_restart_);
+        restart(m, p);
+      }
       k = p + b_;
-      next_check = std::min(kmax_, k + std::max(b_, (kmax_ - k) / 4));
+      check_step = step(k);
+      next_check = std::min(kmax_, k + check_step);
     }
     return false;
   }
@@ -281,8 +316,12 @@ class BlockSolver {
   // Q[:, k:k+b]; fills H[0:k+b, k-b:k].
   void expand(PetscInt k) {
     const PetscInt j0 = k - b_;
-    MORSE_CALL(MatMatSolve(F_, RHS_.get(), W_.get()));
+    {
+      Phase ph("BlockSolve", &t_solve_);
+      MORSE_CALL(MatMatSolve(F_, RHS_.get(), W_.get()));
+    }
     ++solves_;
+    Phase ph("BlockOrthogonalize", &t_orth_);
     orthogonalize(k, j0, true);
     std::vector<double> R;
     normalize(k, &R);
@@ -294,8 +333,8 @@ class BlockSolver {
   // Residuals ||B y_i|| of the Ritz pairs (B = H[m:m+b, 0:m], the coupling to the residual
   // block); returns how many leading pairs satisfy ||B y_i|| <= tol |theta_i|.
   PetscInt converged(PetscInt m, double tol) {
-    res_.assign(m, 0.0);
-    for (PetscInt i = 0; i < m; ++i) {
+    res_.assign(nritz_, 0.0);
+    for (PetscInt i = 0; i < nritz_; ++i) {
       double s2 = 0;
       for (PetscInt r = 0; r < b_; ++r) {
         double v = 0;
@@ -305,27 +344,45 @@ class BlockSolver {
       res_[i] = std::sqrt(s2);
     }
     PetscInt nconv = 0;
-    while (nconv < m && res_[nconv] <= tol * std::abs(theta_[nconv])) ++nconv;
+    while (nconv < nritz_ && res_[nconv] <= tol * std::abs(theta_[nconv])) ++nconv;
     return nconv;
   }
 
   // Ritz pairs of the symmetric part of H[0:m, 0:m], in the wanted order (largest |theta|).
+  // Only the pairs a restart or the result can use are computed (LAPACK syevr, MRRR): the
+  // largest max(nev, (nev + m)/2) + 1 when every theta is positive (shift below the spectrum:
+  // K - shift M positive definite), else all of them, ordered by |theta|.
   void rayleigh_ritz(PetscInt m) {
     std::vector<double> A(static_cast<std::size_t>(m) * m), lam(m);
     for (PetscInt c = 0; c < m; ++c)
       for (PetscInt r = 0; r < m; ++r) A[r + m * c] = 0.5 * (H_[r + kmax_ * c] + H_[c + kmax_ * r]);
-    PetscBLASInt info = 0, lwork = blas(std::max<PetscInt>(1, 34 * m));
-    std::vector<double> work(lwork);
-    LAPACKsyev_("V", "U", ptr(m), A.data(), ptr(m), lam.data(), work.data(), &lwork, &info);
-    MORSE_CHECK(info == 0, "block eigen solver: LAPACK syev failed on the projected matrix (", info, ")");
-    std::vector<PetscInt> order(m);
+    const PetscInt want = positive_ ? std::min(m, std::max(nev_, (nev_ + m) / 2) + 1) : m;
+    std::vector<double> Z(static_cast<std::size_t>(m) * want);
+    std::vector<PetscBLASInt> isuppz(2 * static_cast<std::size_t>(std::max<PetscInt>(want, 1)));
+    const PetscBLASInt nm = blas(m), il = blas(m - want + 1), iu = blas(m);
+    PetscBLASInt found = 0, info = 0, lwork = -1, liwork = -1, iwq = 0;
+    const double zero = 0.0;
+    double wq = 0;
+    const char* range = positive_ ? "I" : "A";
+    dsyevr_("V", range, "U", &nm, A.data(), &nm, &zero, &zero, &il, &iu, &zero, &found, lam.data(), Z.data(), &nm,
+            isuppz.data(), &wq, &lwork, &iwq, &liwork, &info);
+    lwork = static_cast<PetscBLASInt>(wq);
+    liwork = iwq;
+    std::vector<double> work(std::max<PetscBLASInt>(lwork, 1));
+    std::vector<PetscBLASInt> iwork(std::max<PetscBLASInt>(liwork, 1));
+    dsyevr_("V", range, "U", &nm, A.data(), &nm, &zero, &zero, &il, &iu, &zero, &found, lam.data(), Z.data(), &nm,
+            isuppz.data(), work.data(), &lwork, iwork.data(), &liwork, &info);
+    MORSE_CHECK(info == 0 && found == want, "block eigen solver: LAPACK syevr failed on the projected matrix (", info,
+                ", ", found, " of ", want, " pairs)");
+    std::vector<PetscInt> order(want);
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt b) { return std::abs(lam[a]) > std::abs(lam[b]); });
-    theta_.resize(m);
-    Y_.resize(static_cast<std::size_t>(m) * m);
-    for (PetscInt i = 0; i < m; ++i) {
+    nritz_ = want;
+    theta_.resize(want);
+    Y_.resize(static_cast<std::size_t>(m) * want);
+    for (PetscInt i = 0; i < want; ++i) {
       theta_[i] = lam[order[i]];
-      std::copy_n(&A[static_cast<std::size_t>(m) * order[i]], m, &Y_[static_cast<std::size_t>(m) * i]);
+      std::copy_n(&Z[static_cast<std::size_t>(m) * order[i]], m, &Y_[static_cast<std::size_t>(m) * i]);
     }
   }
 
@@ -366,26 +423,138 @@ class BlockSolver {
   PetscInt m_ = 0, rstart_ = 0;
   UMat Q_, MQ_, W_, MW_, RHS_;
   std::vector<double> H_, theta_, Y_, res_;
-  PetscInt restarts_ = 0, m_used_ = 0, replaced_ = 0;
+  PetscInt restarts_ = 0, m_used_ = 0, replaced_ = 0, nev_ = 0, nritz_ = 0;
+  bool positive_ = true;  // every theta > 0 (shift below the spectrum)
   PetscBLASInt scratch_[8] = {}, mloc_ = 0;
   int next_ = 0;
 
  public:
   PetscInt solves_ = 0;
+  double t_solve_ = 0, t_orth_ = 0, t_rr_ = 0, t_restart_ = 0;
 };
+
+}  // namespace
+
+namespace {
+
+// The basis in whole blocks of bb, at most n: kmax if given, else k + max(1.2 k, 6 blocks)
+// (measured on the stator, 1000 modes: a basis of 2.2 k converges without a restart, which
+// 2 k does not, and the restart costs more than the extra vectors).
+PetscInt basis_size(PetscInt n, PetscInt k, PetscInt bb, PetscInt kmax) {
+  const PetscInt want = kmax >= 0 ? kmax : k + std::max((6 * k + 4) / 5, 6 * bb);
+  const PetscInt d = std::min(n, ((want + bb - 1) / bb) * bb);
+  return d == n ? (n / bb) * bb : d;
+}
+
+// One MUMPS factorization of K - shift M (Cholesky for shift 0, LDL^T otherwise); a singular
+// K (null pivots at shift 0) is an error that names the likely cause.
+UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  StageTimer timer(comm, s.stage + "Factor");
+  auto t0 = std::chrono::steady_clock::now();
+  UMat A, F;
+  Mat Ash = K;
+  if (shift != 0.0) {
+    MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A.ptr()));
+    MORSE_CALL(MatAXPY(A.get(), -shift, M, DIFFERENT_NONZERO_PATTERN));
+    MORSE_CALL(MatSetOption(A.get(), MAT_SYMMETRIC, PETSC_TRUE));
+    Ash = A.get();
+  }
+  MORSE_CALL(MatGetFactor(Ash, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F.ptr()));
+  MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
+  MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
+  MORSE_CALL(MatSetFromOptions(F.get()));
+  MatFactorInfo info;
+  MORSE_CALL(MatFactorInfoInitialize(&info));
+  MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
+  MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
+  *seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const PetscInt nulls = mumps_null_pivots(F.get());
+  collective_check(comm, nulls > 0 ? (shift == 0.0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
+                                                         " null pivots): the model is not restrained against "
+                                                         "rigid-body motion; check -clamp and the boundary set")
+                                                   : cat(s.what, ": K - sigma M is singular at the shift sigma = ",
+                                                         shift, " (", nulls, " null pivots)"))
+                                   : std::string());
+  return F;
+}
+
+// dst[:, first + j] = src[:, cols[j].second] (MPIDENSE, the same row layout).
+void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols, Mat dst, PetscInt first) {
+  const PetscScalar* a = nullptr;
+  PetscScalar* d = nullptr;
+  PetscInt lda = 0, ldd = 0, m = 0;
+  MORSE_CALL(MatGetLocalSize(src, &m, nullptr));
+  MORSE_CALL(MatDenseGetLDA(src, &lda));
+  MORSE_CALL(MatDenseGetLDA(dst, &ldd));
+  MORSE_CALL(MatDenseGetArrayRead(src, &a));
+  MORSE_CALL(MatDenseGetArray(dst, &d));
+  for (std::size_t j = 0; j < cols.size(); ++j)
+    std::copy_n(a + lda * cols[j].second, m, d + ldd * (first + static_cast<PetscInt>(j)));
+  MORSE_CALL(MatDenseRestoreArray(dst, &d));
+  MORSE_CALL(MatDenseRestoreArrayRead(src, &a));
+}
+
+// The k pairs nearest to `shift` from the factor F of K - shift M: ascending omega^2 and the
+// M-orthonormal vectors (MPIDENSE, k columns, same order).
+struct Window {
+  std::vector<double> omega2;
+  UMat X;
+  PetscInt restarts = 0, solves = 0;
+  double t_solve = 0, t_orth = 0, t_rr = 0, t_restart = 0;
+};
+
+Window solve_window(Mat K, Mat M, Mat F, double shift, PetscInt k, PetscInt b, PetscInt kmax, double tol,
+                    PetscInt max_restarts, const EigenSettings& s, Progress* progress) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  PetscInt n = 0, m_local = 0;
+  MORSE_CALL(MatGetSize(K, &n, nullptr));
+  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+  // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
+  // factored without a null pivot), so the wanted ones are the largest.
+  BlockSolver solver(K, M, F, b, kmax, shift <= 0.0, comm);
+  bool ok = false;
+  {
+    StageTimer timer(comm, s.stage + "EigenSolve");
+    ok = solver.run(k, tol, max_restarts, progress);
+  }
+  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", k, " pairs in ", max_restarts,
+              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
+  StageTimer extract(comm, s.stage + "EigenVectors");
+  Window w;
+  w.restarts = solver.restarts();
+  w.solves = solver.solves_;
+  w.t_solve = solver.t_solve_;
+  w.t_orth = solver.t_orth_;
+  w.t_rr = solver.t_rr_;
+  w.t_restart = solver.t_restart_;
+  UMat X;
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, k, nullptr, X.ptr()));
+  solver.ritz_vectors(k, X.get());
+  // Ascending omega^2 = shift + 1/theta.
+  std::vector<std::pair<double, PetscInt>> order;
+  for (PetscInt i = 0; i < k; ++i) order.emplace_back(shift + 1.0 / solver.theta()[i], i);
+  std::sort(order.begin(), order.end());
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, k, nullptr, w.X.ptr()));
+  copy_columns(X.get(), order, w.X.get(), 0);
+  for (const auto& o : order) w.omega2.push_back(o.first);
+  return w;
+}
 
 }  // namespace
 
 Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  PetscInt n = 0;
+  PetscInt n = 0, m_local = 0;
   MORSE_CALL(MatGetSize(K, &n, nullptr));
-  PetscInt b = 16, kmax = -1, max_restarts = 200;
+  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+  PetscInt b = -1, kmax = -1, max_restarts = 200;
   PetscReal tol = s.tol;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
-    PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each)", "", b, &b, nullptr));
-    PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(nev, 6 blocks))", "",
+    PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
+                              "modes, else 16)", "", b, &b, nullptr));
+    PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
                               kmax, &kmax, nullptr));
     PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", max_restarts, &max_restarts, nullptr));
     PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", tol, &tol, nullptr));
@@ -393,7 +562,7 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
     return PETSC_SUCCESS;
   };
   MORSE_CALL(get_options());
-  MORSE_CHECK(b >= 1, "-", s.prefix, "block_size must be >= 1 (got ", b, ")");
+  MORSE_CHECK(b >= 1 || b == -1, "-", s.prefix, "block_size must be >= 1 (got ", b, ")");
   Eigenpairs out;
   PetscInt nev = s.nev;
   const bool cutoff = s.omega2_max > 0;
@@ -408,88 +577,36 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   }
   MORSE_CHECK(nev > 0, s.what, ": the number of modes must be positive (got ", nev, ")");
   MORSE_CHECK(nev <= n, s.what, ": ", nev, " modes requested but the problem has only ", n, " DOFs");
+  // Measured (bench/README.md, eigen_bench.py): 50 modes of the rotor 37 deck are fastest with
+  // blocks of 8 (fewer vectors solved), 1000 of the stator with 16 (32 needs a restart).
+  if (b < 0) b = nev < 100 ? 8 : 16;
   const bool kmax_given = kmax >= 0;
   MORSE_CHECK(!kmax_given || kmax >= std::min(n, nev + 2 * b), "-", s.prefix, "block_max_dim ", kmax,
               " is too small for ", nev, " modes with blocks of ", b, " (at least nev + 2 blocks)");
-  // The basis in whole blocks, at most n: nev + max(nev, 6 blocks) by default.
-  auto basis = [&](PetscInt bb) {
-    const PetscInt want = kmax_given ? kmax : nev + std::max(nev, 6 * bb);
-    const PetscInt k = std::min(n, ((want + bb - 1) / bb) * bb);
-    return k == n ? (n / bb) * bb : k;
-  };
   // A restart keeps at least nev Ritz vectors and the residual block, so the basis must hold
   // nev + 2 blocks, better 3. Small problems (n not far above nev) get smaller blocks.
   b = std::min(b, std::max<PetscInt>(1, n / 3));
-  while (b > 1 && basis(b) < nev + 3 * b) b = std::max<PetscInt>(1, b / 2);
-  if (basis(b) < nev + 2 * b) {
+  while (b > 1 && basis_size(n, nev, b, kmax) < nev + 3 * b) b = std::max<PetscInt>(1, b / 2);
+  if (basis_size(n, nev, b, kmax) < nev + 2 * b) {
     // Nearly every mode of the problem is wanted: a Krylov space that fills the whole space is
     // SLEPc's case.
     print0(comm, "  %s: %d modes of %d DOFs leave no room for a block basis; solved by Krylov-Schur\n",
            s.what.c_str(), (int)nev, (int)n);
     return solve_eigen_krylovschur(K, M, s, sign_ref);
   }
-  kmax = basis(b);
-
-  // One Cholesky factorization of K - shift M.
-  UMat A, F;
-  {
-    StageTimer timer(comm, s.stage + "Factor");
-    auto t0 = std::chrono::steady_clock::now();
-    Mat Ash = K;
-    if (s.shift != 0.0) {
-      MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A.ptr()));
-      MORSE_CALL(MatAXPY(A.get(), -s.shift, M, DIFFERENT_NONZERO_PATTERN));
-      MORSE_CALL(MatSetOption(A.get(), MAT_SYMMETRIC, PETSC_TRUE));
-      Ash = A.get();
-    }
-    MORSE_CALL(MatGetFactor(Ash, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F.ptr()));
-    MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
-    MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
-    MORSE_CALL(MatSetFromOptions(F.get()));
-    MatFactorInfo info;
-    MORSE_CALL(MatFactorInfoInitialize(&info));
-    MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
-    MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
-    out.factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  const PetscInt nulls = mumps_null_pivots(F.get());
-  collective_check(comm, nulls > 0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
-                                         " null pivots): the model is not restrained against "
-                                         "rigid-body motion; check -clamp and the boundary set")
-                                   : std::string());
-
-  BlockSolver solver(K, M, F.get(), b, kmax, comm);
-  bool ok = false;
-  {
-    StageTimer timer(comm, s.stage + "EigenSolve");
-    Progress progress(comm, s.what, static_cast<double>(nev));
-    ok = solver.run(nev, tol, max_restarts, &progress);
-  }
-  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", nev, " pairs in ", max_restarts,
-              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
-  out.iterations = solver.restarts();
-  StageTimer extract(comm, s.stage + "EigenVectors");
-  PetscInt m_local = 0;
-  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
-  UMat X;
-  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, X.ptr()));
-  solver.ritz_vectors(nev, X.get());
-  // Ascending omega^2 = shift + 1/theta.
-  std::vector<std::pair<double, PetscInt>> order;
-  for (PetscInt i = 0; i < nev; ++i) order.emplace_back(s.shift + 1.0 / solver.theta()[i], i);
-  std::sort(order.begin(), order.end());
-  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, out.V.ptr()));
-  for (PetscInt j = 0; j < nev; ++j) {
-    out.omega2.push_back(order[j].first);
-    Vec src, dst;
-    MORSE_CALL(MatDenseGetColumnVecRead(X.get(), order[j].second, &src));
-    MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &dst));
-    MORSE_CALL(VecCopy(src, dst));
-    MORSE_CALL(MatDenseRestoreColumnVecWrite(out.V.get(), j, &dst));
-    MORSE_CALL(MatDenseRestoreColumnVecRead(X.get(), order[j].second, &src));
-  }
+  Progress progress(comm, s.what, static_cast<double>(nev));
+  double factor_seconds = 0;
+  UMat F = factor_shifted(K, M, s.shift, s, &factor_seconds);
+  Window w = solve_window(K, M, F.get(), s.shift, nev, b, basis_size(n, nev, b, kmax), tol, max_restarts, s, &progress);
+  out.V = std::move(w.X);
+  out.omega2 = w.omega2;
+  out.block_factor = std::move(F);
+  out.iterations = w.restarts;
+  out.factor_seconds = factor_seconds;
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
-         s.what.c_str(), (int)b, (int)kmax, (int)solver.restarts(), (int)solver.solves_, (int)(solver.solves_ * b));
+         s.what.c_str(), (int)b, (int)basis_size(n, nev, b, kmax), (int)w.restarts, (int)w.solves, (int)(w.solves * b));
+  print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s, Rayleigh-Ritz %.2f s, restarts %.2f s\n",
+         s.what.c_str(), w.t_solve, w.t_orth, w.t_rr, w.t_restart);
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
@@ -505,7 +622,6 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
            s.what.c_str(), (int)nev, std::sqrt(s.omega2_max) / (2 * M_PI));
   }
-  out.block_factor = std::move(F);
   finish_pairs(K, M, s, tol, sign_ref, &out);
   return out;
 }

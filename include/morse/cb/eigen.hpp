@@ -78,10 +78,12 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2);
 
 /// The block shift-invert Krylov–Schur solver (src/cb/block_eigen.cpp), which solve_eigen uses
-/// with -<prefix>eigen_solver block: count mode, or cutoff mode as the count from Sylvester's
-/// inertia at the cutoff then a count solve (checked: exactly that many, all below it). Options
-/// -<prefix>block_size (16), -<prefix>block_max_dim, -<prefix>block_max_restarts,
-/// -<prefix>eps_tol. Collective.
+/// with -<prefix>eigen_solver block (the default): count mode, or cutoff mode as the count from
+/// Sylvester's inertia at the cutoff then a count solve (checked: exactly that many, all below
+/// it). Options -<prefix>block_size (8 below 100 modes, else 16), -<prefix>block_max_dim (nev +
+/// max(1.2 nev, 6 blocks)), -<prefix>block_max_restarts (200), -<prefix>eps_tol; MUMPS options
+/// of its factorization as -<prefix>block_mat_mumps_*.
+/// Collective.
 /// A problem too small for a block basis (nev + 2 blocks > the number of DOFs) is handed to
 /// solve_eigen_krylovschur, with a notice.
 Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
