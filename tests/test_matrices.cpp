@@ -198,10 +198,13 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
     }
   EXPECT_LT(dk, 1e-9 * kmax);
   EXPECT_LT(dm, 1e-9 * mmax);
-  // The superelement's spectrum (independent of the signs of the modes).
+  // The superelement's spectrum (independent of the signs of the modes). Two eigen solves of
+  // operators assembled differently agree to their tolerance (relative residual 1e-10 of the
+  // shift-inverted problem), not to round-off: the fixed-interface vectors then differ by about
+  // 1e-10 / (relative gap), and the Ritz values of the superelement by up to ~1e-9.
   auto wr = cb::dense_eigenvalues(static_cast<int>(n), res.K, res.M);
   auto wf = cb::dense_eigenvalues(static_cast<int>(n), ref.K, ref.M);
-  for (PetscInt j = 0; j < n; ++j) EXPECT_NEAR(wr[j], wf[j], 1e-9 * std::abs(wf[j]) + 1e-6) << "superelement mode " << j;
+  for (PetscInt j = 0; j < n; ++j) EXPECT_NEAR(wr[j], wf[j], 1e-8 * std::abs(wf[j]) + 1e-6) << "superelement mode " << j;
 }
 
 // A node set given by node ids (as -mesh_node_set_NAME does) selects every row of its nodes,

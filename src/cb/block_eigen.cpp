@@ -195,25 +195,48 @@ class BlockSolver {
     }
   }
 
-  // W -= Q[:, 0:k] C twice (classical Gram–Schmidt with reorthogonalization in the M inner
-  // product) with C = (M Q)^T W, so no product with M is needed; adds the coefficients to
-  // H[0:k, col:col+b] if record. MW is left stale (normalize recomputes it).
-  void orthogonalize(PetscInt k, PetscInt col, bool record) {
-    if (k == 0) return;
+  // How W is made M-orthogonal to Q[:, 0:k] by classical Gram–Schmidt (W -= Q C with
+  // C = (M Q)^T W, so no product with M is needed):
+  //   Twice:  two passes against all of Q (CGS2);
+  //   Local:  against the last two blocks, then one pass against all of Q. Op is M-self-adjoint,
+  //           so W = Op Q_j is, in exact arithmetic, orthogonal to every block but the last two
+  //           (block Lanczos); the local pass removes the large components, the global one what
+  //           rounding left. normalize() checks the global pass (DGKS) and repeats it if it
+  //           still cancelled much of W;
+  //   Once:   one pass against all of Q (that repetition).
+  enum class Passes { Twice, Local, Once };
+
+  // Adds the coefficients to H[0:k, col:col+b] if record. Returns the squared norms of the last
+  // pass's coefficient columns (the M-norm that pass removed). MW is left stale.
+  std::vector<double> orthogonalize(PetscInt k, PetscInt col, bool record, Passes how = Passes::Twice) {
+    std::vector<double> removed(b_, 0.0);
+    if (k == 0) return removed;
+    std::vector<std::pair<PetscInt, PetscInt>> ranges;  // [j0, j1) of Q per pass
+    if (how == Passes::Local) ranges = {{std::max<PetscInt>(0, k - 2 * b_), k}, {0, k}};
+    else if (how == Passes::Once) ranges = {{0, k}};
+    else ranges = {{0, k}, {0, k}};
     std::vector<double> C;
-    for (int pass = 0; pass < 2; ++pass) {
+    for (const auto& [j0, j1] : ranges) {
+      const PetscInt kk = j1 - j0;
       Local q = local(Q_.get()), mq = local(MQ_.get()), w = local(W_.get());
-      gram(mq.a, mq.ld, k, w.a, w.ld, b_, &C);
+      gram(mq.a + mq.ld * j0, mq.ld, kk, w.a, w.ld, b_, &C);
       const PetscScalar minus = -1, one = 1;
       if (m_ > 0)
-        BLASgemm_("N", "N", &mloc(), ptr(b_), ptr(k), &minus, q.a, ptr(q.ld), C.data(), ptr(k), &one, w.a, ptr(w.ld));
+        BLASgemm_("N", "N", &mloc(), ptr(b_), ptr(kk), &minus, q.a + q.ld * j0, ptr(q.ld), C.data(), ptr(kk), &one, w.a,
+                  ptr(w.ld));
       restore(W_.get(), w);
       restore(MQ_.get(), mq);
       restore(Q_.get(), q);
       if (record)
         for (PetscInt c = 0; c < b_; ++c)
-          for (PetscInt r = 0; r < k; ++r) H_[r + kmax_ * (col + c)] += C[r + k * c];
+          for (PetscInt r = 0; r < kk; ++r) H_[j0 + r + kmax_ * (col + c)] += C[r + kk * c];
+      for (PetscInt c = 0; c < b_; ++c) {
+        double s2 = 0;
+        for (PetscInt r = 0; r < kk; ++r) s2 += C[r + kk * c] * C[r + kk * c];
+        removed[c] = s2;
+      }
     }
+    return removed;
   }
 
   // M-orthonormalizes W against itself (SVQB twice), given nothing; k = columns of Q it must stay
@@ -223,10 +246,14 @@ class BlockSolver {
   // M W is computed afresh at each pass (after Gram–Schmidt W can be much smaller than before,
   // so an M W carried along would have lost its accuracy) and carried through the pass's
   // transformation, so MW = M W on return.
-  void normalize(PetscInt k, std::vector<double>* R) {
+  // With `removed` (the squared coefficient norms of a Local orthogonalization's global pass,
+  // recorded into H column col): if that pass removed more of a column than it left (DGKS,
+  // ||C_c||^2 > ||W_c||_M^2), the global pass is repeated before anything else.
+  void normalize(PetscInt k, std::vector<double>* R, const std::vector<double>* removed = nullptr, PetscInt col = 0) {
     R->assign(static_cast<std::size_t>(b_) * b_, 0.0);
     for (PetscInt i = 0; i < b_; ++i) (*R)[i + b_ * i] = 1.0;
     int attempts = 0;
+    bool checked = removed == nullptr;
     for (int pass = 0; pass < 2; ++pass) {
       mult_M(W_.get(), &MW_);
       Local w = local(W_.get()), mw = local(MW_.get());
@@ -234,6 +261,17 @@ class BlockSolver {
       gram(w.a, w.ld, b_, mw.a, mw.ld, b_, &G);
       restore(MW_.get(), mw);
       restore(W_.get(), w);
+      if (!checked) {
+        checked = true;
+        bool again = false;
+        for (PetscInt c = 0; c < b_; ++c) again = again || (*removed)[c] > G[c + b_ * c];
+        if (again) {
+          ++extra_passes_;
+          orthogonalize(k, col, true, Passes::Once);
+          pass = -1;
+          continue;
+        }
+      }
       for (PetscInt i = 0; i < b_; ++i)
         for (PetscInt j = 0; j < i; ++j) G[i + b_ * j] = G[j + b_ * i] = 0.5 * (G[i + b_ * j] + G[j + b_ * i]);
       std::vector<double> lam(b_), work(std::max<PetscInt>(1, 8 * b_));
@@ -322,9 +360,9 @@ class BlockSolver {
     }
     ++solves_;
     Phase ph("BlockOrthogonalize", &t_orth_);
-    orthogonalize(k, j0, true);
+    const auto removed = orthogonalize(k, j0, true, Passes::Local);
     std::vector<double> R;
-    normalize(k, &R);
+    normalize(k, &R, &removed, j0);
     for (PetscInt c = 0; c < b_; ++c)
       for (PetscInt r = 0; r < b_; ++r) H_[(k + r) + kmax_ * (j0 + c)] = R[r + b_ * c];
     store_block(k);
@@ -429,7 +467,7 @@ class BlockSolver {
   int next_ = 0;
 
  public:
-  PetscInt solves_ = 0;
+  PetscInt solves_ = 0, extra_passes_ = 0;
   double t_solve_ = 0, t_orth_ = 0, t_rr_ = 0, t_restart_ = 0;
 };
 
@@ -500,7 +538,7 @@ void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols,
 struct Window {
   std::vector<double> omega2;
   UMat X;
-  PetscInt restarts = 0, solves = 0;
+  PetscInt restarts = 0, solves = 0, extra_passes = 0;
   double t_solve = 0, t_orth = 0, t_rr = 0, t_restart = 0;
 };
 
@@ -524,6 +562,7 @@ Window solve_window(Mat K, Mat M, Mat F, double shift, PetscInt k, PetscInt b, P
   Window w;
   w.restarts = solver.restarts();
   w.solves = solver.solves_;
+  w.extra_passes = solver.extra_passes_;
   w.t_solve = solver.t_solve_;
   w.t_orth = solver.t_orth_;
   w.t_rr = solver.t_rr_;
@@ -605,8 +644,9 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   out.factor_seconds = factor_seconds;
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
          s.what.c_str(), (int)b, (int)basis_size(n, nev, b, kmax), (int)w.restarts, (int)w.solves, (int)(w.solves * b));
-  print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s, Rayleigh-Ritz %.2f s, restarts %.2f s\n",
-         s.what.c_str(), w.t_solve, w.t_orth, w.t_rr, w.t_restart);
+  print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s (%d of %d blocks reorthogonalized), Rayleigh-Ritz "
+         "%.2f s, restarts %.2f s\n", s.what.c_str(), w.t_solve, w.t_orth, (int)w.extra_passes, (int)w.solves, w.t_rr,
+         w.t_restart);
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
