@@ -471,10 +471,6 @@ class BlockSolver {
   double t_solve_ = 0, t_orth_ = 0, t_rr_ = 0, t_restart_ = 0;
 };
 
-}  // namespace
-
-namespace {
-
 // The basis in whole blocks of bb, at most n: kmax if given, else k + max(1.2 k, 6 blocks)
 // (measured on the stator, 1000 modes: a basis of 2.2 k converges without a restart, which
 // 2 k does not, and the restart costs more than the extra vectors).
@@ -484,8 +480,10 @@ PetscInt basis_size(PetscInt n, PetscInt k, PetscInt bb, PetscInt kmax) {
   return d == n ? (n / bb) * bb : d;
 }
 
-// One MUMPS factorization of K - shift M (Cholesky for shift 0, LDL^T otherwise); a singular
-// K (null pivots at shift 0) is an error that names the likely cause.
+// One MUMPS symmetric factorization of K - shift M (LDL^T: indefinite for a shift inside the
+// spectrum), its wall
+// time in *seconds; a singular K (null pivots at shift 0) is an error that names the likely
+// cause.
 UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   StageTimer timer(comm, s.stage + "Factor");
@@ -506,7 +504,7 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatFactorInfoInitialize(&info));
   MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
   MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
-  *seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const PetscInt nulls = mumps_null_pivots(F.get());
   collective_check(comm, nulls > 0 ? (shift == 0.0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
                                                          " null pivots): the model is not restrained against "
@@ -517,8 +515,8 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   return F;
 }
 
-// dst[:, first + j] = src[:, cols[j].second] (MPIDENSE, the same row layout).
-void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols, Mat dst, PetscInt first) {
+// dst[:, j] = src[:, cols[j].second] (MPIDENSE, the same row layout).
+void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols, Mat dst) {
   const PetscScalar* a = nullptr;
   PetscScalar* d = nullptr;
   PetscInt lda = 0, ldd = 0, m = 0;
@@ -527,57 +525,9 @@ void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols,
   MORSE_CALL(MatDenseGetLDA(dst, &ldd));
   MORSE_CALL(MatDenseGetArrayRead(src, &a));
   MORSE_CALL(MatDenseGetArray(dst, &d));
-  for (std::size_t j = 0; j < cols.size(); ++j)
-    std::copy_n(a + lda * cols[j].second, m, d + ldd * (first + static_cast<PetscInt>(j)));
+  for (std::size_t j = 0; j < cols.size(); ++j) std::copy_n(a + lda * cols[j].second, m, d + ldd * static_cast<PetscInt>(j));
   MORSE_CALL(MatDenseRestoreArray(dst, &d));
   MORSE_CALL(MatDenseRestoreArrayRead(src, &a));
-}
-
-// The k pairs nearest to `shift` from the factor F of K - shift M: ascending omega^2 and the
-// M-orthonormal vectors (MPIDENSE, k columns, same order).
-struct Window {
-  std::vector<double> omega2;
-  UMat X;
-  PetscInt restarts = 0, solves = 0, extra_passes = 0;
-  double t_solve = 0, t_orth = 0, t_rr = 0, t_restart = 0;
-};
-
-Window solve_window(Mat K, Mat M, Mat F, double shift, PetscInt k, PetscInt b, PetscInt kmax, double tol,
-                    PetscInt max_restarts, const EigenSettings& s, Progress* progress) {
-  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  PetscInt n = 0, m_local = 0;
-  MORSE_CALL(MatGetSize(K, &n, nullptr));
-  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
-  // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
-  // factored without a null pivot), so the wanted ones are the largest.
-  BlockSolver solver(K, M, F, b, kmax, shift <= 0.0, comm);
-  bool ok = false;
-  {
-    StageTimer timer(comm, s.stage + "EigenSolve");
-    ok = solver.run(k, tol, max_restarts, progress);
-  }
-  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", k, " pairs in ", max_restarts,
-              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
-  StageTimer extract(comm, s.stage + "EigenVectors");
-  Window w;
-  w.restarts = solver.restarts();
-  w.solves = solver.solves_;
-  w.extra_passes = solver.extra_passes_;
-  w.t_solve = solver.t_solve_;
-  w.t_orth = solver.t_orth_;
-  w.t_rr = solver.t_rr_;
-  w.t_restart = solver.t_restart_;
-  UMat X;
-  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, k, nullptr, X.ptr()));
-  solver.ritz_vectors(k, X.get());
-  // Ascending omega^2 = shift + 1/theta.
-  std::vector<std::pair<double, PetscInt>> order;
-  for (PetscInt i = 0; i < k; ++i) order.emplace_back(shift + 1.0 / solver.theta()[i], i);
-  std::sort(order.begin(), order.end());
-  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, k, nullptr, w.X.ptr()));
-  copy_columns(X.get(), order, w.X.get(), 0);
-  for (const auto& o : order) w.omega2.push_back(o.first);
-  return w;
 }
 
 }  // namespace
@@ -633,20 +583,39 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
            s.what.c_str(), (int)nev, (int)n);
     return solve_eigen_krylovschur(K, M, s, sign_ref);
   }
-  Progress progress(comm, s.what, static_cast<double>(nev));
-  double factor_seconds = 0;
-  UMat F = factor_shifted(K, M, s.shift, s, &factor_seconds);
-  Window w = solve_window(K, M, F.get(), s.shift, nev, b, basis_size(n, nev, b, kmax), tol, max_restarts, s, &progress);
-  out.V = std::move(w.X);
-  out.omega2 = w.omega2;
+  const PetscInt kdim = basis_size(n, nev, b, kmax);
+  UMat F = factor_shifted(K, M, s.shift, s, &out.factor_seconds);
+  // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
+  // factored without a null pivot), so the wanted ones are the largest.
+  BlockSolver solver(K, M, F.get(), b, kdim, s.shift <= 0.0, comm);
+  bool ok = false;
+  {
+    StageTimer timer(comm, s.stage + "EigenSolve");
+    Progress progress(comm, s.what, static_cast<double>(nev));
+    ok = solver.run(nev, tol, max_restarts, &progress);
+  }
+  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", nev, " pairs in ", max_restarts,
+              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
+  out.iterations = solver.restarts();
   out.block_factor = std::move(F);
-  out.iterations = w.restarts;
-  out.factor_seconds = factor_seconds;
+  {
+    StageTimer extract(comm, s.stage + "EigenVectors");
+    UMat X;
+    MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, X.ptr()));
+    solver.ritz_vectors(nev, X.get());
+    // Ascending omega^2 = shift + 1/theta.
+    std::vector<std::pair<double, PetscInt>> order;
+    for (PetscInt i = 0; i < nev; ++i) order.emplace_back(s.shift + 1.0 / solver.theta()[i], i);
+    std::sort(order.begin(), order.end());
+    MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, out.V.ptr()));
+    copy_columns(X.get(), order, out.V.get());
+    for (const auto& o : order) out.omega2.push_back(o.first);
+  }
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
-         s.what.c_str(), (int)b, (int)basis_size(n, nev, b, kmax), (int)w.restarts, (int)w.solves, (int)(w.solves * b));
+         s.what.c_str(), (int)b, (int)kdim, (int)solver.restarts(), (int)solver.solves_, (int)(solver.solves_ * b));
   print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s (%d of %d blocks reorthogonalized), Rayleigh-Ritz "
-         "%.2f s, restarts %.2f s\n", s.what.c_str(), w.t_solve, w.t_orth, (int)w.extra_passes, (int)w.solves, w.t_rr,
-         w.t_restart);
+         "%.2f s, restarts %.2f s\n", s.what.c_str(), solver.t_solve_, solver.t_orth_, (int)solver.extra_passes_,
+         (int)solver.solves_, solver.t_rr_, solver.t_restart_);
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
