@@ -95,13 +95,14 @@ def wait_idle(limit, timeout):
     return busy
 
 
-def run_mpi(name, morse_args, ranks, work_dir, omp_threads):
-    """Runs `mpirun -n ranks [/usr/bin/time] morse_args...`. Returns (result, cmd) where result is
-    None on failure, else a dict: stdout, process_wall, rank_max_rss_mb, sum_max_rss_mb,
-    rank_cpu_seconds, foreign_cpu_fraction (CPU other processes used, as a fraction of all CPUs
-    over the run) and contention (cores' worth of that foreign work beyond the cores morse left
-    idle, per rank)."""
-    cmd = ["mpirun", "-n", str(ranks)]
+def run_mpi(name, morse_args, ranks, work_dir, omp_threads, launcher=None, failure=None):
+    """Runs `mpirun -n ranks [/usr/bin/time] morse_args...` (`launcher(ranks)` instead of
+    `mpirun -n ranks` if given). Returns (result, cmd) where result is None on failure, else a
+    dict: stdout, stderr, process_wall, rank_max_rss_mb, sum_max_rss_mb, rank_cpu_seconds,
+    foreign_cpu_fraction (CPU other processes used, as a fraction of all CPUs over the run) and
+    contention (cores' worth of that foreign work beyond the cores morse left idle, per rank).
+    With a list `failure`, the failure's text is appended to it instead of printed."""
+    cmd = launcher(ranks) if launcher else ["mpirun", "-n", str(ranks)]
     # Each rank's /usr/bin/time appends one line to its own file (on a shared stderr the lines of
     # the ranks can interleave and be lost).
     time_file = os.path.join(work_dir, "time.txt")
@@ -116,14 +117,17 @@ def run_mpi(name, morse_args, ranks, work_dir, omp_threads):
     wall = time.monotonic() - t0
     st1 = proc_stat()
     if p.returncode != 0:
-        sys.stderr.write("%s: FAILED (exit %d): %s\n--- stdout\n%s\n--- stderr\n%s\n"
-                         % (name, p.returncode, " ".join(cmd), p.stdout[-4000:], p.stderr[-4000:]))
+        text = "exit %d\n--- stdout\n%s\n--- stderr\n%s" % (p.returncode, p.stdout[-4000:], p.stderr[-4000:])
+        if failure is not None:
+            failure.append(text)
+        else:
+            sys.stderr.write("%s: FAILED (%s): %s\n" % (name, " ".join(cmd), text))
         return None, cmd
     timing = ""
     if os.path.exists(time_file):
         with open(time_file) as f:
             timing = f.read()
-    r = {"stdout": p.stdout, "ranks": ranks, "process_wall": wall}
+    r = {"stdout": p.stdout, "stderr": p.stderr, "ranks": ranks, "process_wall": wall}
     rss = [int(x) for x in re.findall(r"^BENCH_MAXRSS_KB (\d+)", timing, re.M)]
     r["rank_max_rss_mb"] = [k / 1024.0 for k in rss]
     r["sum_max_rss_mb"] = sum(rss) / 1024.0 if rss else None

@@ -57,7 +57,7 @@ import time
 
 import numpy as np
 
-from benchlib import (EXTRA_ENV, RESULTS, ROOT, blas_info, cpu_busy, git_info, med, mpi_env, proc_stat,
+from benchlib import (EXTRA_ENV, RESULTS, ROOT, blas_info, cpu_busy, git_info, med, mpi_env, run_mpi,
                       wait_idle)
 
 PATHS = ["msh", "bdf", "mtx", "petsc", "op4"]
@@ -94,36 +94,11 @@ def run_plain(cmd, what):
 
 
 def run_morse(morse_args, ranks, work, omp_threads):
-    """`mpiexec ... -n ranks /usr/bin/time ... morse_args`: like benchlib.run_mpi, but with
-    mpiexec --oversubscribe --bind-to none. Returns (result dict or None, cmd, failure text)."""
-    cmd = mpiexec(ranks)
-    time_file = os.path.join(work, "time.txt")
-    if os.path.exists(time_file):
-        os.remove(time_file)
-    if os.path.exists("/usr/bin/time"):
-        cmd += ["/usr/bin/time", "-a", "-o", time_file, "-f", "BENCH_MAXRSS_KB %M BENCH_CPU_S %U %S"]
-    cmd += morse_args
-    st0 = proc_stat()
-    t0 = time.monotonic()
-    p = subprocess.run(cmd, capture_output=True, text=True, env=mpi_env(omp_threads))
-    wall = time.monotonic() - t0
-    st1 = proc_stat()
-    if p.returncode != 0:
-        return None, cmd, "exit %d\n--- stdout\n%s\n--- stderr\n%s" % (p.returncode, p.stdout[-4000:],
-                                                                      p.stderr[-4000:])
-    timing = open(time_file).read() if os.path.exists(time_file) else ""
-    r = {"stdout": p.stdout, "stderr": p.stderr, "process_wall": wall}
-    rss = [int(x) for x in re.findall(r"^BENCH_MAXRSS_KB (\d+)", timing, re.M)]
-    cpu = [float(u) + float(s) for u, s in re.findall(r"BENCH_CPU_S ([0-9.]+) ([0-9.]+)", timing)]
-    r["rank_max_rss_mb"] = [k / 1024.0 for k in rss]
-    r["sum_max_rss_mb"] = sum(rss) / 1024.0 if len(rss) == ranks else None
-    r["rank_cpu_seconds"] = cpu
-    if st0 and st1 and len(cpu) == ranks:
-        ncpu = os.cpu_count() or 1
-        r["foreign_cpu_fraction"] = max(0.0, (st1[0] - st0[0]) - sum(cpu)) / (wall * ncpu)
-    else:
-        r["foreign_cpu_fraction"] = None
-    return r, cmd, None
+    """benchlib.run_mpi with mpiexec --oversubscribe --bind-to none. Returns (result dict or None,
+    cmd, failure text)."""
+    failure = []
+    r, cmd = run_mpi("morse", morse_args, ranks, work, omp_threads, launcher=mpiexec, failure=failure)
+    return r, cmd, failure[0] if failure else ""
 
 
 def parse_stages(stdout):

@@ -193,6 +193,7 @@ def run_reduce(morse, mesh, ranks, modes, out_h5, log_view, omp_threads, extra):
     if run is None:
         return None, cmd
     r = parse_run(run.pop("stdout"))
+    run.pop("stderr")
     r.update(run)
     missing = [s for s in STAGES + ["total"] if s not in r["stages"]]
     if missing:

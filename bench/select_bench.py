@@ -146,6 +146,7 @@ def main():
                     failed.append({"ranks": nr, "run": k + 1, "command": " ".join(cmd)})
                     continue
                 r = parse_select(run.pop("stdout"))
+                run.pop("stderr")
                 r.update(run)
                 r["cpu_busy_before"] = busy
                 samples[nr].append(r)
