@@ -212,23 +212,132 @@ CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& 
   fold(g.B, n3, n2);
 }
 
-// The hot loop of the online stage: built for AVX2 + FMA as well as for the baseline, the
-// processor picks at run time (GCC function multiversioning).
+// The hot loops of the online stage: built for AVX2 + FMA as well as for the baseline, the
+// processor picks at run time (GCC function multiversioning). The clone is named by ISA level
+// (x86-64-v3: AVX2, FMA, BMI2), which GCC dispatches on the CPU's features: "arch=haswell" is
+// dispatched on the CPU model and never chosen on AMD processors.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define MORSE_KERNEL_CLONES __attribute__((target_clones("arch=haswell", "default")))
+#define MORSE_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define MORSE_KERNEL_CLONES
 #endif
 
-namespace {
+namespace detail {
 MORSE_KERNEL_CLONES
+void accumulate_rows(std::size_t n, std::size_t len, const double* __restrict z, const double* __restrict W,
+                     double* __restrict y) {
+  // Four rows per pass: one load and one store of y per four FMAs.
+  std::size_t m = 0;
+  for (; m + 4 <= n; m += 4) {
+    const double c0 = z[m], c1 = z[m + 1], c2 = z[m + 2], c3 = z[m + 3];
+    const double* __restrict w0 = W + m * len;
+    const double* __restrict w1 = w0 + len;
+    const double* __restrict w2 = w1 + len;
+    const double* __restrict w3 = w2 + len;
+    for (std::size_t p = 0; p < len; ++p) y[p] += c0 * w0[p] + c1 * w1[p] + c2 * w2[p] + c3 * w3[p];
+  }
+  for (; m < n; ++m) {
+    const double c = z[m];
+    const double* __restrict w = W + m * len;
+    for (std::size_t p = 0; p < len; ++p) y[p] += c * w[p];
+  }
+}
+
+MORSE_KERNEL_CLONES
+void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, const double* __restrict x,
+                   const double* __restrict H, double* __restrict y1, double* __restrict y2) {
+  // One panel of kPanel = 16 rows at a time, its accumulators held in four 4-lane registers over
+  // all columns (GCC vector extension: AVX2 in the x86-64-v3 clone, SSE pairs in the baseline).
+  static_assert(kPanel == 16, "panel_product holds 16 rows in four 4-lane accumulators");
+  typedef double v4 __attribute__((vector_size(32), aligned(8)));
+  for (std::size_t b = 0; b < n_panels; ++b) {
+    const double* __restrict h = H + b * n_cols * kPanel;
+    double* out = y1;
+    std::size_t c = 0;
+    for (std::size_t end : {split, n_cols}) {
+      v4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, a3 = a0;
+      for (; c < end; ++c, h += kPanel) {
+        const v4 xc = {x[c], x[c], x[c], x[c]};
+        a0 += xc * *reinterpret_cast<const v4*>(h);
+        a1 += xc * *reinterpret_cast<const v4*>(h + 4);
+        a2 += xc * *reinterpret_cast<const v4*>(h + 8);
+        a3 += xc * *reinterpret_cast<const v4*>(h + 12);
+      }
+      double* o = out + b * kPanel;
+      *reinterpret_cast<v4*>(o) = a0;
+      *reinterpret_cast<v4*>(o + 4) = a1;
+      *reinterpret_cast<v4*>(o + 8) = a2;
+      *reinterpret_cast<v4*>(o + 12) = a3;
+      out = y2;
+    }
+  }
+}
+
+MORSE_KERNEL_CLONES
+void sym_panel_product(std::size_t n_panels, const double* __restrict S, const double* __restrict x,
+                       double* __restrict y) {
+  // Panel b holds the blocks (b, b'), b' >= b, of the upper block triangle; column j of a block is
+  // 16 contiguous rows. A diagonal block is stored whole and applied as is. An off-diagonal block
+  // is applied twice from one load: y(I_b) += S(I_b, c) x_c (accumulated in registers) and
+  // y_c += S(I_b, c) . x(I_b) (its transpose). Half the bytes of the full product.
+  static_assert(kPanel == 16, "sym_panel_product holds 16 rows in four 4-lane accumulators");
+  typedef double v4 __attribute__((vector_size(32), aligned(8)));
+  for (std::size_t i = 0; i < n_panels * kPanel; ++i) y[i] = 0.0;
+  const double* __restrict s = S;
+  for (std::size_t b = 0; b < n_panels; ++b) {
+    const double* xb = x + b * kPanel;
+    const v4 x0 = *reinterpret_cast<const v4*>(xb), x1 = *reinterpret_cast<const v4*>(xb + 4),
+             x2 = *reinterpret_cast<const v4*>(xb + 8), x3 = *reinterpret_cast<const v4*>(xb + 12);
+    v4 a0 = {0, 0, 0, 0}, a1 = a0, a2 = a0, a3 = a0;
+    for (std::size_t j = 0; j < kPanel; ++j, s += kPanel) {
+      const double xc = xb[j];
+      const v4 xv = {xc, xc, xc, xc};
+      a0 += xv * *reinterpret_cast<const v4*>(s);
+      a1 += xv * *reinterpret_cast<const v4*>(s + 4);
+      a2 += xv * *reinterpret_cast<const v4*>(s + 8);
+      a3 += xv * *reinterpret_cast<const v4*>(s + 12);
+    }
+    // Off-diagonal blocks, four columns at a time: their four transposed dot products are
+    // reduced together (a 4 x 4 transpose of partial sums) into one store.
+    for (std::size_t c = (b + 1) * kPanel; c < n_panels * kPanel; c += 4) {
+      v4 d[4];
+      for (int j = 0; j < 4; ++j, s += kPanel) {
+        const double xc = x[c + j];
+        const v4 xv = {xc, xc, xc, xc};
+        const v4 t0 = *reinterpret_cast<const v4*>(s), t1 = *reinterpret_cast<const v4*>(s + 4),
+                 t2 = *reinterpret_cast<const v4*>(s + 8), t3 = *reinterpret_cast<const v4*>(s + 12);
+        a0 += xv * t0;
+        a1 += xv * t1;
+        a2 += xv * t2;
+        a3 += xv * t3;
+        d[j] = (t0 * x0 + t1 * x1) + (t2 * x2 + t3 * x3);
+      }
+      typedef long long m4 __attribute__((vector_size(32)));
+      const v4 e0 = __builtin_shuffle(d[0], d[1], m4{0, 4, 2, 6}) + __builtin_shuffle(d[0], d[1], m4{1, 5, 3, 7});
+      const v4 e1 = __builtin_shuffle(d[2], d[3], m4{0, 4, 2, 6}) + __builtin_shuffle(d[2], d[3], m4{1, 5, 3, 7});
+      *reinterpret_cast<v4*>(y + c) +=
+          __builtin_shuffle(e0, e1, m4{0, 1, 4, 5}) + __builtin_shuffle(e0, e1, m4{2, 3, 6, 7});
+    }
+    double* yb = y + b * kPanel;
+    *reinterpret_cast<v4*>(yb) += a0;
+    *reinterpret_cast<v4*>(yb + 4) += a1;
+    *reinterpret_cast<v4*>(yb + 8) += a2;
+    *reinterpret_cast<v4*>(yb + 12) += a3;
+  }
+}
+
+void quadratic_monomials(std::size_t r, const double* __restrict q, double* __restrict z) {
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) *z++ = q[i] * q[j];
+}
+}  // namespace detail
+
+namespace {
 void monomials_and_product(std::size_t r, std::size_t n, const double* __restrict q, double* __restrict z,
                            const double* __restrict W, double* __restrict y) {
   // Monomials: all q_i q_j (i <= j), then all q_i q_j q_k (i <= j <= k), both lexicographic.
-  double* z2 = z;
+  detail::quadratic_monomials(r, q, z);
   double* z3 = z + r * (r + 1) / 2;
-  for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = i; j < r; ++j) *z2++ = q[i] * q[j];
   const double* qq = z;
   for (std::size_t i = 0; i < r; ++i) {
     for (std::size_t j = i; j < r; ++j) {
@@ -238,21 +347,7 @@ void monomials_and_product(std::size_t r, std::size_t n, const double* __restric
     qq += r - i;
   }
   for (std::size_t p = 0; p < r; ++p) y[p] = 0.0;
-  // Four rows per pass: one load and one store of y per four FMAs.
-  std::size_t m = 0;
-  for (; m + 4 <= n; m += 4) {
-    const double c0 = z[m], c1 = z[m + 1], c2 = z[m + 2], c3 = z[m + 3];
-    const double* __restrict w0 = W + m * r;
-    const double* __restrict w1 = w0 + r;
-    const double* __restrict w2 = w1 + r;
-    const double* __restrict w3 = w2 + r;
-    for (std::size_t p = 0; p < r; ++p) y[p] += c0 * w0[p] + c1 * w1[p] + c2 * w2[p] + c3 * w3[p];
-  }
-  for (; m < n; ++m) {
-    const double c = z[m];
-    const double* __restrict w = W + m * r;
-    for (std::size_t p = 0; p < r; ++p) y[p] += c * w[p];
-  }
+  detail::accumulate_rows(n, r, z, W, y);
 }
 }  // namespace
 

@@ -1,6 +1,6 @@
-// Private to src/sim: the folded step operators shared by the single and the batched integrators,
-// and the Lagrange-multiplier contact correction of central differences (see morse/sim/sim.hpp,
-// ContactSettings).
+// Private to src/sim: the streaming kernel of the cubic forces, the folded step operators shared by
+// the single and the batched integrators, and the Lagrange-multiplier contact correction of
+// central differences (see morse/sim/sim.hpp, ContactSettings).
 #pragma once
 
 #include <petscsys.h>
@@ -12,6 +12,24 @@
 #include "morse/sim/sim.hpp"
 
 namespace morse::sim::detail {
+
+/// y(0..len) += sum_{m < n} z_m W(m, 0..len), W row-major n x len: the streaming product of the
+/// cubic kernels (folded explicit force, implicit tangent). Built for AVX2 + FMA and the baseline.
+void accumulate_rows(std::size_t n, std::size_t len, const double* z, const double* W, double* y);
+/// Rows per panel of panel_product.
+constexpr std::size_t kPanel = 16;
+/// Panel-major product: rows come in panels of kPanel (row b kPanel + k of column c at
+/// H[(b n_cols + c) kPanel + k]); y1 = the product over columns [0, split), y2 over [split, n_cols),
+/// n_panels kPanel entries each. Built for AVX2 + FMA and the baseline.
+void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, const double* x, const double* H,
+                   double* y1, double* y2);
+/// y = S x for a symmetric S of n_panels kPanel rows stored as its upper block triangle: for each
+/// panel b, the blocks (b, b'), b' = b .. n_panels - 1, each kPanel columns of kPanel contiguous
+/// rows (diagonal blocks whole). x and y have n_panels kPanel entries. Built for AVX2 + FMA and the
+/// baseline.
+void sym_panel_product(std::size_t n_panels, const double* S, const double* x, double* y);
+/// z = the r (r + 1) / 2 monomials q_i q_j, i <= j, lexicographic.
+void quadratic_monomials(std::size_t r, const double* q, double* z);
 
 /// Steps of length h that reach t_final (the last one may end just past it), as every integrator
 /// of src/sim counts them.

@@ -21,8 +21,13 @@
 #include "morse/sim/sim.hpp"
 #include "sim/contact.hpp"
 
+// The batched kernels are built for AVX2 without FMA as well as for the baseline (GCC function
+// multiversioning, dispatched on the CPU's features). No FMA: a lane's arithmetic is then the same
+// (each product and sum rounded) in the vector body and in the scalar remainder, so a speed's
+// result does not depend on how many lanes share its pass, bitwise. With FMA contraction the
+// vectorized and scalar paths round differently.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define MORSE_BATCH_CLONES __attribute__((target_clones("arch=haswell", "default")))
+#define MORSE_BATCH_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define MORSE_BATCH_CLONES
 #endif

@@ -164,6 +164,39 @@ class CubicKernel {
   std::vector<double> c3_, c4_, P3_;  // Potential: energy coefficients (sorted indices), P3
 };
 
+/// The nonlinear force and its tangent in one pass, for Newton in the implicit scheme. By Euler's
+/// theorem on the homogeneous parts of g~ (eq. 28), g~ = J2(q) q / 2 + J3(q) q / 3, where
+/// J2 = d(quadratic part)/dq is linear in q and J3 = d(cubic part)/dq is quadratic in q; so both come
+/// from one streaming product of the tangent coefficients with [q; q_a q_b (a <= b)]:
+/// (r + r(r+1)/2) columns of rows (p, m). When the tangent is symmetric to 1e-6 relative (g~ the
+/// gradient of a potential: exact tensors, STEP up to its identification error) only the rows
+/// p <= m are kept, averaged with (m, p): J and g are then those of the symmetrized potential,
+/// and Newton is exact on it. Otherwise all r^2 rows are kept (POD-filtered forces).
+/// Memory: 8 (r + r(r+1)/2) R bytes, R = r(r+1)/2 or r^2 (0.39 MB at r = 20, 82 MB at r = 79).
+class TangentKernel {
+ public:
+  explicit TangentKernel(const nlrom::CubicForce& g);
+  /// g = g~(q) (r entries) and J = dg~/dq (r x r, row-major: J[p r + m] = dg_p/dq_m). No allocation.
+  void apply(const double* q, double* g, double* J) const;
+  std::size_t r() const { return r_; }
+  bool symmetric() const { return symmetric_; }
+  /// max |dg_p/dq_m - dg_m/dq_p| over the coefficients, relative to the largest one.
+  double asymmetry() const { return asymmetry_; }
+  /// Floating-point operations and bytes of coefficients read by one apply().
+  double flops() const;
+  double bytes() const;
+
+ private:
+  std::size_t r_ = 0, rows_ = 0, n_panels_ = 0;
+  bool symmetric_ = false;
+  double asymmetry_ = 0.0;
+  // Panel-major (detail::panel_product): the rows_ x r quadratic part when symmetric_, else the
+  // rows_ x (r + r(r+1)/2) columns [q_c; q_a q_b]. S_: the cubic part when symmetric_, as the
+  // symmetric fourth-derivative matrix (detail::sym_panel_product).
+  std::vector<double> Hp_, S_;
+  mutable std::vector<double> x_, y2_, y3_;
+};
+
 /// Integrates from the initial state to t_final with s.scheme. Central: refuses (throws, naming
 /// the limit) a dt above critical_step(); stops with an error naming the time reached if the state
 /// becomes NaN or infinite. Trapezoidal: stops with an error naming the time reached if Newton
