@@ -310,7 +310,7 @@ void sym_panel_product(std::size_t n_panels, const double* __restrict S, const d
         a1 += xv * t1;
         a2 += xv * t2;
         a3 += xv * t3;
-        d[j] = (t0 * x0 + t1 * x1) + (t2 * x2 + t3 * x3);
+        d[j] = t3 * x3 + (t2 * x2 + (t1 * x1 + t0 * x0));  // one product, three FMAs
       }
       typedef long long m4 __attribute__((vector_size(32)));
       const v4 e0 = __builtin_shuffle(d[0], d[1], m4{0, 4, 2, 6}) + __builtin_shuffle(d[0], d[1], m4{1, 5, 3, 7});

@@ -79,10 +79,10 @@ bool cholesky_solve(std::size_t n, double* A, double* b, double* col) {
       for (std::size_t k = j + 1; k <= i; ++k) ri[k] -= l * col[k];
     }
   }
-  for (std::size_t i = 0; i < n; ++i) {  // L y = b
-    double v = b[i];
-    for (std::size_t k = 0; k < i; ++k) v -= A[i * n + k] * b[k];
-    b[i] = v / A[i * n + i];
+  for (std::size_t k = 0; k < n; ++k) {  // L y = b, by columns (no serial dot-product chain)
+    b[k] /= A[k * n + k];
+    const double v = b[k];
+    for (std::size_t i = k + 1; i < n; ++i) b[i] -= A[i * n + k] * v;
   }
   for (std::size_t i = n; i-- > 0;) {  // L^T x = y: subtract column i of L from the rows above
     b[i] /= A[i * n + i];
@@ -264,11 +264,21 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
       for (std::size_t i = 0; i < r; ++i) f[i] += c * l.p[i];
     }
   };
-  auto matvec = [&](const std::vector<double>& A, const std::vector<double>& x, double a, std::vector<double>& y) {
-    for (std::size_t i = 0; i < r; ++i) {
-      double v = 0.0;
-      for (std::size_t j = 0; j < r; ++j) v += A[i * r + j] * x[j];
-      y[i] += a * v;
+  // [M; K; C] stacked and stored by columns (r columns of 3r): y = [M x; K x; C x] as r axpys
+  // along contiguous columns (vectorized; a dot-product loop would be one serial FMA chain).
+  std::vector<double> MKC(3 * r * r), mkc(3 * r), aM(r), aC(r), aK(r), Mv0(3 * r);
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < r; ++j) {
+      MKC[j * 3 * r + i] = m.M[i * r + j];
+      MKC[j * 3 * r + r + i] = m.K[i * r + j];
+      MKC[j * 3 * r + 2 * r + i] = m.C[i * r + j];
+    }
+  auto stacked = [&](const double* __restrict x, double* __restrict y) {
+    for (std::size_t i = 0; i < 3 * r; ++i) y[i] = 0.0;
+    for (std::size_t j = 0; j < r; ++j) {
+      const double* __restrict a = &MKC[j * 3 * r];
+      const double xj = x[j];
+      for (std::size_t i = 0; i < 3 * r; ++i) y[i] += a[i] * xj;
     }
   };
   if (nonlinear) tangent->apply(q0.data(), g0.data(), G.data());
@@ -284,18 +294,28 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
     const double t0 = (n - 1) * h, t1 = n * h;
     load(t1, f1);
     q1 = q0;  // predictor u1 = u0, as fom
+    stacked(q0.data(), mkc.data());
+    stacked(v0.data(), Mv0.data());  // only its M part is used
+    for (std::size_t i = 0; i < r; ++i) {
+      aM[i] = -4.0 / (h * h) * mkc[i] - 4.0 / h * Mv0[i];
+      aK[i] = mkc[r + i] + g0[i];
+      aC[i] = -2.0 / h * mkc[2 * r + i];
+    }
     for (int it = 0;; ++it) {
-      for (std::size_t i = 0; i < r; ++i) v1[i] = 2.0 * (q1[i] - q0[i]) / h - v0[i];
-      // R = inertia + damping + internal - load
-      std::fill(R.begin(), R.end(), 0.0);
-      for (std::size_t i = 0; i < r; ++i) w[i] = v1[i] - v0[i];
-      matvec(m.M, w, 2.0 / h, R);
-      const double inertia = norm2(R);
-      for (std::size_t i = 0; i < r; ++i) w[i] = v0[i] + v1[i];
-      matvec(m.C, w, 1.0, R);
-      std::fill(internal.begin(), internal.end(), 0.0);
-      for (std::size_t i = 0; i < r; ++i) w[i] = q0[i] + q1[i];
-      matvec(m.K, w, 1.0, internal);
+      // R = inertia + damping + internal - load, with [M; K; C] q1 in one pass and the parts
+      // that depend on q0, v0 only (a_*) formed once per step:
+      //   inertia = (2/h) M (v1 - v0) = (4/h^2) M q1 + a_M,  a_M = -(4/h^2) M q0 - (4/h) M v0
+      //   damping = C (v0 + v1) = (2/h) C q1 + a_C,          a_C = -(2/h) C q0
+      //   internal = K (q0 + q1) + g0 + g1 = K q1 + a_K + g1, a_K = K q0 + g0
+      stacked(q1.data(), mkc.data());
+      double inertia = 0.0;
+      for (std::size_t i = 0; i < r; ++i) {
+        const double x = 4.0 / (h * h) * mkc[i] + aM[i];
+        R[i] = x + 2.0 / h * mkc[2 * r + i] + aC[i];
+        internal[i] = mkc[r + i] + aK[i];
+        inertia += x * x;
+      }
+      inertia = std::sqrt(inertia);
       if (nonlinear) {
         // At the predictor q1 = q0, g and the tangent are those of the last evaluation (the
         // converged q0, or its last correction at round-off when Newton stopped on the floor).
@@ -303,7 +323,7 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
           g1 = g0;
         else
           tangent->apply(q1.data(), g1.data(), G.data());  // G is used below only if the step goes on
-        for (std::size_t i = 0; i < r; ++i) internal[i] += g0[i] + g1[i];
+        for (std::size_t i = 0; i < r; ++i) internal[i] += g1[i];
       }
       double loadn = 0.0;
       for (std::size_t i = 0; i < r; ++i) {
