@@ -8,6 +8,7 @@
 #include <petscblaslapack.h>
 
 #include <cmath>
+#include <utility>
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/log.hpp"
@@ -55,6 +56,18 @@ std::vector<double> boundary_positions(const Model& m, const cb::CBResult& c) {
   }
   MPI_Allreduce(MPI_IN_PLACE, X.data(), static_cast<int>(X.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   return X;
+}
+
+// Exact and STEP (1 mm) tensors of a CB basis of the clamped box with r = 30 (12 boundary DOFs
+// of face x1 and 18 fixed-interface modes), where every index pattern (repeated, distinct) occurs.
+std::pair<nlrom::CubicForce, nlrom::CubicForce> box_forces_r30() {
+  auto m = box(ElementType::Hex8, 6);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  auto c = test::cb_basis(m, "x1", 18);
+  MORSE_CHECK(c.n() == 30, "box_forces_r30: the basis has ", c.n(), " columns, not 30");
+  nlrom::StepSettings ss;
+  ss.displacement = 1e-3;
+  return {nlrom::exact_forces(svk, c.T.get()), nlrom::step_forces(svk, c.T.get(), ss)};
 }
 
 }  // namespace
@@ -261,15 +274,8 @@ TEST(Sim, FullBasisReproducesFullModel) {
 // is no gradient (A perturbed) falls back to the folded form under Auto and is refused under
 // Potential.
 TEST(Sim, PotentialKernelMatchesFolded) {
-  auto m = box(ElementType::Hex8, 6);
-  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  auto c = test::cb_basis(m, "x1", 18);
   const std::size_t r = 30;
-  ASSERT_EQ(static_cast<std::size_t>(c.n()), r);
-  auto exact = nlrom::exact_forces(svk, c.T.get());
-  nlrom::StepSettings ss;
-  ss.displacement = 1e-3;
-  auto step = nlrom::step_forces(svk, c.T.get(), ss);
+  const auto [exact, step] = box_forces_r30();
   std::vector<double> P3(r * r);
   for (std::size_t i = 0; i < r * r; ++i) P3[i] = std::sin(1.0 + 0.37 * static_cast<double>(i));  // any matrix
   std::vector<double> q(r), y1(r), y2(r);
@@ -304,15 +310,8 @@ TEST(Sim, PotentialKernelMatchesFolded) {
 // derivative). At r = 30 (465 pairs, padded to 30 panels of 16) every index pattern occurs. Exact
 // tensors and STEP take the symmetric path, a force that is no gradient the general one.
 TEST(Sim, TangentKernelMatchesReference) {
-  auto m = box(ElementType::Hex8, 6);
-  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
-  auto c = test::cb_basis(m, "x1", 18);
   const std::size_t r = 30;
-  ASSERT_EQ(static_cast<std::size_t>(c.n()), r);
-  auto exact = nlrom::exact_forces(svk, c.T.get());
-  nlrom::StepSettings ss;
-  ss.displacement = 1e-3;
-  auto step = nlrom::step_forces(svk, c.T.get(), ss);
+  const auto [exact, step] = box_forces_r30();
   auto bad = exact;
   bad.A[5 * r + 7] += 1e-3 * bad.max_abs_A();
   bad.B[40 * r + 3] += 1e-3 * bad.max_abs_B();
