@@ -224,26 +224,6 @@ CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& 
 
 namespace detail {
 MORSE_KERNEL_CLONES
-void accumulate_rows(std::size_t n, std::size_t len, const double* __restrict z, const double* __restrict W,
-                     double* __restrict y) {
-  // Four rows per pass: one load and one store of y per four FMAs.
-  std::size_t m = 0;
-  for (; m + 4 <= n; m += 4) {
-    const double c0 = z[m], c1 = z[m + 1], c2 = z[m + 2], c3 = z[m + 3];
-    const double* __restrict w0 = W + m * len;
-    const double* __restrict w1 = w0 + len;
-    const double* __restrict w2 = w1 + len;
-    const double* __restrict w3 = w2 + len;
-    for (std::size_t p = 0; p < len; ++p) y[p] += c0 * w0[p] + c1 * w1[p] + c2 * w2[p] + c3 * w3[p];
-  }
-  for (; m < n; ++m) {
-    const double c = z[m];
-    const double* __restrict w = W + m * len;
-    for (std::size_t p = 0; p < len; ++p) y[p] += c * w[p];
-  }
-}
-
-MORSE_KERNEL_CLONES
 void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, const double* __restrict x,
                    const double* __restrict H, double* __restrict y1, double* __restrict y2) {
   // One panel of kPanel = 16 rows at a time, its accumulators held in four 4-lane registers over
@@ -333,6 +313,7 @@ void quadratic_monomials(std::size_t r, const double* __restrict q, double* __re
 }  // namespace detail
 
 namespace {
+MORSE_KERNEL_CLONES
 void monomials_and_product(std::size_t r, std::size_t n, const double* __restrict q, double* __restrict z,
                            const double* __restrict W, double* __restrict y) {
   // Monomials: all q_i q_j (i <= j), then all q_i q_j q_k (i <= j <= k), both lexicographic.
@@ -347,7 +328,21 @@ void monomials_and_product(std::size_t r, std::size_t n, const double* __restric
     qq += r - i;
   }
   for (std::size_t p = 0; p < r; ++p) y[p] = 0.0;
-  detail::accumulate_rows(n, r, z, W, y);
+  // Four rows per pass: one load and one store of y per four FMAs.
+  std::size_t m = 0;
+  for (; m + 4 <= n; m += 4) {
+    const double c0 = z[m], c1 = z[m + 1], c2 = z[m + 2], c3 = z[m + 3];
+    const double* __restrict w0 = W + m * r;
+    const double* __restrict w1 = w0 + r;
+    const double* __restrict w2 = w1 + r;
+    const double* __restrict w3 = w2 + r;
+    for (std::size_t p = 0; p < r; ++p) y[p] += c0 * w0[p] + c1 * w1[p] + c2 * w2[p] + c3 * w3[p];
+  }
+  for (; m < n; ++m) {
+    const double c = z[m];
+    const double* __restrict w = W + m * r;
+    for (std::size_t p = 0; p < r; ++p) y[p] += c * w[p];
+  }
 }
 }  // namespace
 

@@ -1,5 +1,5 @@
-// Private to src/sim: the streaming kernel of the cubic forces, the folded step operators shared by
-// the single and the batched integrators, and the Lagrange-multiplier contact correction of
+// Private to src/sim: the panel kernels of the implicit tangent (TangentKernel), the folded step
+// operators shared by the single and the batched integrators, and the Lagrange-multiplier contact correction of
 // central differences (see morse/sim/sim.hpp, ContactSettings).
 #pragma once
 
@@ -13,9 +13,6 @@
 
 namespace morse::sim::detail {
 
-/// y(0..len) += sum_{m < n} z_m W(m, 0..len), W row-major n x len: the streaming product of the
-/// cubic kernels (folded explicit force, implicit tangent). Built for AVX2 + FMA and the baseline.
-void accumulate_rows(std::size_t n, std::size_t len, const double* z, const double* W, double* y);
 /// Rows per panel of panel_product.
 constexpr std::size_t kPanel = 16;
 /// Panel-major product: rows come in panels of kPanel (row b kPanel + k of column c at

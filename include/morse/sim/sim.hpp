@@ -166,13 +166,17 @@ class CubicKernel {
 
 /// The nonlinear force and its tangent in one pass, for Newton in the implicit scheme. By Euler's
 /// theorem on the homogeneous parts of g~ (eq. 28), g~ = J2(q) q / 2 + J3(q) q / 3, where
-/// J2 = d(quadratic part)/dq is linear in q and J3 = d(cubic part)/dq is quadratic in q; so both come
-/// from one streaming product of the tangent coefficients with [q; q_a q_b (a <= b)]:
-/// (r + r(r+1)/2) columns of rows (p, m). When the tangent is symmetric to 1e-6 relative (g~ the
-/// gradient of a potential: exact tensors, STEP up to its identification error) only the rows
-/// p <= m are kept, averaged with (m, p): J and g are then those of the symmetrized potential,
-/// and Newton is exact on it. Otherwise all r^2 rows are kept (POD-filtered forces).
-/// Memory: 8 (r + r(r+1)/2) R bytes, R = r(r+1)/2 or r^2 (0.39 MB at r = 20, 82 MB at r = 79).
+/// J2 = d(quadratic part)/dq is linear in q and J3 = d(cubic part)/dq is quadratic in q; so both
+/// come from one product of the tangent coefficients with [q; q_a q_b (a <= b)].
+///  - Symmetric (the tangent symmetric to 1e-6 relative: g~ the gradient of a potential, as exact
+///    tensors and STEP up to its identification error): only the rows p <= m, averaged with
+///    (m, p), so J and g are those of the symmetrized potential and Newton is exact on it. J2 is a
+///    panel-major n2 x r matrix; J3 comes from T, the fourth derivative of the potential, an
+///    n2 x n2 symmetric matrix of which only the upper block triangle is stored (theory §9).
+///    Memory about 8 (n2 r + n2^2 / 2) bytes, n2 = r(r+1)/2: 0.25 MB at r = 20, 40 MB at r = 79.
+///  - Otherwise (POD-filtered forces): all r^2 rows (p, m) over the r + n2 columns, panel-major:
+///    8 r^2 (r + n2) bytes.
+/// The constructor holds the full r^2 x (r + n2) coefficients while it builds either layout.
 class TangentKernel {
  public:
   explicit TangentKernel(const nlrom::CubicForce& g);
