@@ -206,8 +206,8 @@ Assembly rotor_on_chain(double f_cut_hz = 1e4) {
   r.unbalances = {{"fan", 1e-4, 0.3}};
   r.speed_ratio = 1.5;
   r.rayleigh_beta = 2e-6;
-  Bearing b1{"front", 0, 0, 0, 103, 5e6, 4e6, 500.0, 400.0};
-  Bearing b2{"rear", 0, 5, 0, 106, 3e6, 3e6, 300.0, 300.0};
+  Bearing b1{"front", 0, 0, 0, 103, 5e6, 4e6, 500.0, 400.0, {}};
+  Bearing b2{"rear", 0, 5, 0, 106, 3e6, 3e6, 300.0, 300.0, {}};
   return Assembly({r}, {sm}, {b1, b2});
 }
 
@@ -365,7 +365,7 @@ TEST(RampupGyroscopic, CampbellDiagramOfADiskOnAMasslessShaft) {
   r.z = {0.0, L / 2, L};
   r.sections = {{d, 0.0, m}};
   r.disks = {{"disk", 1, mass, Ip, Id}};
-  Bearing b1{"left", 0, 0, -1, -1, kb, kb, 0, 0}, b2{"right", 0, 2, -1, -1, kb, kb, 0, 0};
+  Bearing b1{"left", 0, 0, -1, -1, kb, kb, 0, 0, {}}, b2{"right", 0, 2, -1, -1, kb, kb, 0, 0, {}};
   const Assembly a({r}, {}, {b1, b2});
   const Section s = section(d, m);
   const double kt = 1.0 / (1.0 / (2 * kb) + std::pow(L, 3) / (48 * s.EI) + L / (4 * s.kGA));
@@ -508,7 +508,7 @@ TEST(RampupIntegrate, EnergyIsConservedWithGyroscopicTermsWhenUndampedAndUnforce
   r.z = {0.0, 0.2, 0.4, 0.6};
   r.sections = {{0.05, 0.0, Material{}}};
   r.disks = {{"d", 2, 8.0, 0.3, 0.2}};
-  Bearing b1{"a", 0, 0, 0, 103, 4e6, 4e6, 0, 0}, b2{"b", 0, 3, 0, 106, 4e6, 2e6, 0, 0};
+  Bearing b1{"a", 0, 0, 0, 103, 4e6, 4e6, 0, 0, {}}, b2{"b", 0, 3, 0, 106, 4e6, 2e6, 0, 0, {}};
   const Assembly a({r}, {sm}, {b1, b2});
   LoadCase lc;
   lc.kind = LoadCase::Kind::Constant;
@@ -670,7 +670,7 @@ TEST_F(Rampup, BadInputGivesClearErrors) {
   r.sections = {{0.05, 0.0, Material{}}};
   r.disks = {{"turbine", 1, 10, 0.1, 0.05}};
   StatorModes sm = stator_modes(chain_superelement(false), {101}, 1e4);
-  Bearing b{"front", 0, 0, 0, 102, 1e6, 1e6, 0, 0};  // 102 is an interior node
+  Bearing b{"front", 0, 0, 0, 102, 1e6, 1e6, 0, 0, {}};  // 102 is an interior node
   expect_error_parts([&] { Assembly({r}, {sm}, {b}); },
                      {"bearing 'front'", "node 102", "not in the interface"},
                      "bearing on an interior node");
@@ -757,11 +757,11 @@ TEST(RampupPerformance, StepCostIsLinearInTheStatorModes) {
       rotors[k].unbalances = {{"d", 1e-3, 0}};
       rotors[k].speed_ratio = k ? 1.6 : 1.0;
     }
-    std::vector<Bearing> b = {{"1", 0, 0, 0, 1, 1e8, 1e8, 1e3, 1e3},
-                              {"2", 0, 19, 0, 2, 1e8, 1e8, 1e3, 1e3},
-                              {"3", 1, 0, 0, 3, 1e8, 1e8, 1e3, 1e3},
-                              {"4", 1, 19, 0, 4, 1e8, 1e8, 1e3, 1e3},
-                              {"5", 1, 10, 0, 5, 5e7, 5e7, 1e3, 1e3}};
+    std::vector<Bearing> b = {{"1", 0, 0, 0, 1, 1e8, 1e8, 1e3, 1e3, {}},
+                              {"2", 0, 19, 0, 2, 1e8, 1e8, 1e3, 1e3, {}},
+                              {"3", 1, 0, 0, 3, 1e8, 1e8, 1e3, 1e3, {}},
+                              {"4", 1, 19, 0, 4, 1e8, 1e8, 1e3, 1e3, {}},
+                              {"5", 1, 10, 0, 5, 5e7, 5e7, 1e3, 1e3, {}}};
     return Assembly(rotors, {sm}, b);
   };
   auto per_step = [](const Assembly& a, bool dense, int steps) {
@@ -789,4 +789,72 @@ TEST(RampupPerformance, StepCostIsLinearInTheStatorModes) {
   // machine); the dense step is cubic.
   EXPECT_LT(tc[3] / tc[1], 16.0);
   EXPECT_GT(td400, tc[2]);
+}
+
+TEST(RampupAssembly, BearingOnSeveralNodesSitsOnTheirMean) {
+  // A housing spread over nodes 103 and 106 (equal weights): the housing displacement is the mean
+  // of the nodes' x, y translations, and the bearing stiffness k w w^T with w = e_rotor - mean of
+  // the nodes' basis rows, whatever the state.
+  StatorModes sm = stator_modes(chain_superelement(false), {101}, 1e4, 0.0);
+  RotorSpec r;
+  r.name = "r";
+  r.z = {0.0, 0.4};
+  r.sections = {{0.05, 0.0, Material{}}};
+  Bearing b{"seat", 0, 1, 0, -1, 3e6, 2e6, 0, 0, {103, 106}};
+  const Assembly a({r}, {sm}, {b});
+  const int n = a.n(), N = sm.n_modes;
+  auto row = [&](std::int64_t node, int comp) {
+    for (std::size_t i = 0; i < sm.dof_node.size(); ++i)
+      if (sm.dof_node[i] == node && sm.dof_component[i] == comp)
+        return std::vector<double>(sm.phi.begin() + i * N, sm.phi.begin() + (i + 1) * N);
+    ADD_FAILURE() << "no row";
+    return std::vector<double>(N, 0.0);
+  };
+  std::vector<double> x(n);
+  for (int i = 0; i < n; ++i) x[i] = std::sin(0.7 * i + 0.3);
+  double F[2], ur[2], us[2];
+  a.bearing_state(x.data(), nullptr, F, ur, us);
+  const AssembledMatrices A = a.dense();
+  double worst = 0;
+  for (int d = 0; d < 2; ++d) {
+    const auto p3 = row(103, d + 1), p6 = row(106, d + 1);
+    double u3 = 0, u6 = 0;
+    for (int m = 0; m < N; ++m) u3 += p3[m] * x[m], u6 += p6[m] * x[m];
+    const double k = d == 0 ? 3e6 : 2e6;
+    worst = std::max(worst, std::fabs(us[d] - 0.5 * (u3 + u6)) / std::fabs(u3));
+    worst = std::max(worst, std::fabs(F[d] - k * (ur[d] - 0.5 * (u3 + u6))) / std::fabs(F[d]));
+    // The coupling block of K: K[rotor][m] = -k (p3 + p6)_m / 2.
+    const int rd = a.rotor_dof(0, 1, d);
+    for (int m = 0; m < N; ++m)
+      worst = std::max(worst, std::fabs(A.K[rd * n + m] + 0.5 * k * (p3[m] + p6[m])) / k);
+  }
+  EXPECT_LT(worst, 1e-12);
+  Bearing twice = b;
+  twice.nodes = {103, 103};
+  test::expect_error_parts([&] { Assembly({r}, {sm}, {twice}); }, {"bearing 'seat'", "node 103", "twice"},
+                           "a node listed twice");
+  expect_same_on_ranks(worst, "mean housing");
+}
+
+TEST(RampupErrors, FeatureErrorIsSeedEquation24) {
+  // x_ref spans [-2, 3] (range 5); x = x_ref + 0.1 at one sample: eq. 24 gives 0.1 / 5.
+  std::vector<double> ref = {0, 3, -2, 1, 0.5}, x = ref;
+  EXPECT_EQ(feature_error(x.data(), ref.data(), 5, 1), 0.0);
+  x[3] += 0.1;
+  EXPECT_NEAR(feature_error(x.data(), ref.data(), 5, 1), 0.1 / 5, 1e-15);
+  // Strided: the second of two interleaved features.
+  std::vector<double> two(10), two_ref(10);
+  for (int i = 0; i < 5; ++i) two[2 * i + 1] = x[i], two_ref[2 * i + 1] = ref[i], two[2 * i] = 7;
+  EXPECT_NEAR(feature_error(two.data() + 1, two_ref.data() + 1, 5, 2), 0.1 / 5, 1e-15);
+  // A constant reference that differs: infinite relative error.
+  std::vector<double> c(3, 1.0), y = {1.0, 1.0, 1.5};
+  EXPECT_TRUE(std::isinf(feature_error(y.data(), c.data(), 3, 1)));
+}
+
+TEST(RampupErrors, ScoreReproducesSeedTable1) {
+  // Seed 000 Table 1: (time t/t_ref, mean load error %, printed score /20), every row.
+  const double rows[][3] = {{1.01, 1.1, 8.9},  {0.45, 10.2, 5.5}, {0.66, 1.5, 11.9}, {0.37, 2.6, 13.7},
+                            {0.30, 3.3, 13.7}, {0.63, 1.2, 12.5}, {0.51, 1.7, 13.2}, {0.33, 5.0, 11.7},
+                            {0.51, 1.8, 13.1}, {0.12, 24.9, 8.8}, {0.58, 4.0, 10.2}, {0.45, 9.3, 6.2}};
+  for (const auto& r : rows) EXPECT_NEAR(score(r[1] / 100, r[0], 1.0), r[2], 0.051) << "row t = " << r[0];
 }

@@ -174,35 +174,8 @@ void run_nlrom(MPI_Comm comm) {
   auto gm = mesh::gather_to_rank0(md.lm);
   io::write_mesh(out, gm);
   // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
-  // owned members of every set (names from rank 0), gathered on rank 0.
-  {
-    int rank = 0, size = 1;
-    MPI_Comm_rank(comm, &rank);
-    MPI_Comm_size(comm, &size);
-    std::string names;
-    if (rank == 0)
-      for (const auto& kv : md.lm.mesh.node_sets) names += kv.first + "\n";
-    int len = static_cast<int>(names.size());
-    MPI_Bcast(&len, 1, MPI_INT, 0, comm);
-    names.resize(len);
-    MPI_Bcast(names.data(), len, MPI_CHAR, 0, comm);
-    for (std::size_t a = 0, b; (b = names.find('\n', a)) != std::string::npos; a = b + 1) {
-      const std::string name = names.substr(a, b - a);
-      std::vector<std::int64_t> mine;
-      auto it = md.lm.mesh.node_sets.find(name);
-      if (it != md.lm.mesh.node_sets.end())
-        for (auto k : it->second)
-          if (md.lm.node_owner[k] == rank) mine.push_back(md.lm.mesh.node_ids[k]);
-      int n = static_cast<int>(mine.size());
-      std::vector<int> counts(size), displs(size, 0);
-      MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
-      for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
-      std::vector<std::int64_t> all(rank == 0 ? displs[size - 1] + counts[size - 1] : 0);
-      MPI_Gatherv(mine.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, comm);
-      std::sort(all.begin(), all.end());
-      out.write("/nlrom/node_sets/" + name, all);
-    }
-  }
+  // owned members of every set, gathered on rank 0.
+  write_node_sets(out, md.lm, "/nlrom/node_sets");
   const auto R = static_cast<hsize_t>(r);
   out.write("/nlrom/M", rm.M, {R, R});
   out.write("/nlrom/K", rm.K, {R, R});

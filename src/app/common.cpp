@@ -172,7 +172,7 @@ void check_options(MPI_Comm comm, bool early) {
   std::string bad;
   static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
                                          "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_", "stress_",
-                                         "load_", "static_", "fom_krylov_", "fom_", "matrices_", "nastran_"};
+                                         "load_", "static_", "rampup_", "fom_krylov_", "fom_", "matrices_", "nastran_"};
   for (PetscInt i = 0; i < n; ++i) {
     std::string name = names[i];
     if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
@@ -263,10 +263,31 @@ UVec sign_reference(const Model& md) {
   return md.from_matrices ? cb::sign_reference(md.mm) : cb::sign_reference(md.lm, md.dofs);
 }
 
+void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(lm.comm, &rank);
+  MPI_Comm_size(lm.comm, &size);
+  // Every rank knows every set name (partition.hpp), in the same (map) order.
+  for (const auto& [name, nodes] : lm.mesh.node_sets) {
+    std::vector<std::int64_t> mine;
+    for (auto k : nodes)
+      if (lm.node_owner[k] == rank) mine.push_back(lm.mesh.node_ids[k]);
+    int n = static_cast<int>(mine.size());
+    std::vector<int> counts(size), displs(size, 0);
+    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, lm.comm);
+    for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
+    std::vector<std::int64_t> all(rank == 0 ? displs[size - 1] + counts[size - 1] : 0);
+    MPI_Gatherv(mine.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, lm.comm);
+    std::sort(all.begin(), all.end());
+    out.write(group + "/" + name, all);
+  }
+}
+
 void write_model(io::H5Output& out, const Model& md) {
   if (!md.from_matrices) {
     auto gm = mesh::gather_to_rank0(md.lm);
     io::write_mesh(out, gm);
+    write_node_sets(out, md.lm, "/mesh/node_sets");
     return;
   }
   std::vector<std::int64_t> node, comp;

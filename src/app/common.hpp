@@ -83,6 +83,10 @@ UVec sign_reference(const Model& md);
 /// id and component of every free row, and the matrix files). Collective.
 void write_model(io::H5Output& out, const Model& md);
 
+/// Every node set of the mesh as a dataset <group>/<SET> of external node ids, ascending (e.g.
+/// /mesh/node_sets, read back by `morse rampup` for bearing and clamp nodes). Collective.
+void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group);
+
 void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
                          PetscInt count);
 
@@ -153,5 +157,6 @@ void run_simulate(MPI_Comm comm);
 void run_compare(MPI_Comm comm, const std::vector<std::string>& args);
 void run_sweep(MPI_Comm comm);
 void run_stress(MPI_Comm comm);
+void run_rampup(MPI_Comm comm);
 
 }  // namespace morse::app::detail

@@ -45,6 +45,32 @@ Superelement read_superelement(const std::string& file) {
   return se;
 }
 
+std::vector<std::int64_t> resolve_nodes(const std::string& file,
+                                        const std::vector<std::string>& spec,
+                                        const std::string& who) {
+  std::vector<std::int64_t> ids;
+  auto add = [&](std::int64_t id) {
+    if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
+  };
+  for (const std::string& item : spec) {
+    MORSE_CHECK(!item.empty(), who, ": empty entry in the node list");
+    if (item.find_first_not_of("0123456789") == std::string::npos) {
+      add(std::stoll(item));
+      continue;
+    }
+    std::vector<std::int64_t> set;
+    std::vector<hsize_t> dims;
+    std::string err;
+    MORSE_CHECK(io::read_ints(file, "/mesh/node_sets/" + item, &set, &dims, &err), who, ": ",
+                item, " is neither a node id nor a node set of ", file,
+                " (/mesh/node_sets/<NAME>, written with the mesh; superelements of matrix input "
+                "have no sets: give node ids)");
+    MORSE_CHECK(!set.empty(), who, ": node set ", item, " of ", file, " is empty");
+    for (std::int64_t id : set) add(id);
+  }
+  return ids;
+}
+
 StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes,
                          double f_cut_hz, double damping_ratio) {
   const std::string who = cat("superelement ", se.source, ": ");
@@ -216,18 +242,29 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
       c.c = d == 0 ? b.cxx : b.cyy;
       if (b.stator >= 0) {
         const StatorModes& s = stators_[b.stator];
-        const bool clamped = std::find(s.clamped_nodes.begin(), s.clamped_nodes.end(), b.node) !=
-                             s.clamped_nodes.end();
-        MORSE_CHECK(!clamped, who, "node ", b.node, " of stator ", s.name, " is clamped");
-        std::size_t row = s.dof_node.size();
-        for (std::size_t i = 0; i < s.dof_node.size(); ++i)
-          if (s.dof_node[i] == b.node && s.dof_component[i] == d + 1) row = i;
-        MORSE_CHECK(row < s.dof_node.size(), who, "node ", b.node,
-                    " is not in the interface of stator ", s.name, " (no boundary DOF ",
-                    d == 0 ? "x" : "y", ")");
+        const std::vector<std::int64_t> nodes =
+            b.nodes.empty() ? std::vector<std::int64_t>{b.node} : b.nodes;
         c.stator_offset = stator_offset_[b.stator];
         c.n_modes = s.n_modes;
-        c.phi.assign(s.phi.begin() + row * s.n_modes, s.phi.begin() + (row + 1) * s.n_modes);
+        c.phi.assign(static_cast<std::size_t>(s.n_modes), 0.0);
+        for (std::size_t q = 0; q < nodes.size(); ++q) {
+          const std::int64_t node = nodes[q];
+          MORSE_CHECK(std::find(nodes.begin(), nodes.begin() + q, node) == nodes.begin() + q, who,
+                      "node ", node, " is listed twice");
+          const bool clamped = std::find(s.clamped_nodes.begin(), s.clamped_nodes.end(), node) !=
+                               s.clamped_nodes.end();
+          MORSE_CHECK(!clamped, who, "node ", node, " of stator ", s.name, " is clamped");
+          std::size_t row = s.dof_node.size();
+          for (std::size_t i = 0; i < s.dof_node.size(); ++i)
+            if (s.dof_node[i] == node && s.dof_component[i] == d + 1) row = i;
+          MORSE_CHECK(row < s.dof_node.size(), who, "node ", node,
+                      " is not in the interface of stator ", s.name, " (no boundary DOF ",
+                      d == 0 ? "x" : "y", ")");
+          // The housing point is the mean of the nodes (equal weights).
+          const double w = 1.0 / static_cast<double>(nodes.size());
+          for (int m = 0; m < s.n_modes; ++m)
+            c.phi[m] += w * s.phi[row * static_cast<std::size_t>(s.n_modes) + m];
+        }
       }
       couplings_.push_back(std::move(c));
     }

@@ -38,11 +38,16 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <complex>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
+
+namespace morse::io {
+class H5Output;
+}
 
 namespace morse::rampup {
 
@@ -174,6 +179,15 @@ struct StatorModes {
 StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes,
                          double f_cut_hz, double damping_ratio = -1.0);
 
+/// The node ids of `spec` for a superelement file: each entry of the list is either a node id
+/// (digits) or the name of a node set of the mesh the superelement was made from
+/// (/mesh/node_sets/<NAME>, written by every command that writes /mesh). Ids are returned in
+/// the order given, duplicates removed. Throws naming `who` (e.g. the option), the file and the
+/// entry if a set is missing (listing the sets the file has).
+std::vector<std::int64_t> resolve_nodes(const std::string& file,
+                                        const std::vector<std::string>& spec,
+                                        const std::string& who);
+
 /// The seed's truncation frequency of the stator modal bases (seed 000 §1, §3.3): factor times
 /// the top frequency of interest, taken as the top spin speed max_r |s_r| omega_max / 2 pi [Hz].
 double default_cut_hz(const std::vector<RotorSpec>& rotors, double omega_max, double factor = 2.5);
@@ -182,15 +196,21 @@ double default_cut_hz(const std::vector<RotorSpec>& rotors, double omega_max, do
 // Assembly
 
 /// A bearing: springs and dampers in x and y between station `station` of rotor `rotor` (its u_x,
-/// u_y) and the x, y translations (components 1, 2) of node `node` of stator `stator` (an index
-/// into the assembly's stators; -1 = the ground). Its force on the rotor is -F, on the stator +F:
-///   F_x = kxx (u_x,rotor - u_x,stator) + cxx (v_x,rotor - v_x,stator), F_y likewise.
+/// u_y) and the x, y translations (components 1, 2) of the housing point of stator `stator` (an
+/// index into the assembly's stators; -1 = the ground). Its force on the rotor is -F, on the
+/// housing +F:
+///   F_x = kxx (u_x,rotor - u_x,housing) + cxx (v_x,rotor - v_x,housing), F_y likewise.
+/// The housing point is node `node`, or, if `nodes` is not empty, the mean of the x, y
+/// translations of those nodes with equal weights (a bearing seat spread over several interface
+/// nodes, as a Nastran RBE3 with equal weights on translations does): each node then carries F /
+/// nodes.size(). A node may appear once.
 struct Bearing {
   std::string name;
   int rotor = 0, station = 0;
   int stator = -1;
   std::int64_t node = -1;
   double kxx = 0.0, kyy = 0.0, cxx = 0.0, cyy = 0.0;  ///< [N/m], [N s/m], >= 0
+  std::vector<std::int64_t> nodes;                    ///< several housing nodes (overrides node)
 };
 
 /// Dense assembled matrices of the model (for checks and the frequency-domain solution).
@@ -341,5 +361,45 @@ struct IntegratorStats {
 /// gives fewer than 20 steps per revolution at the top spin speed. Serial; not collective.
 IntegratorStats integrate(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
                           const std::function<void(const StepOutput&)>& callback);
+
+/// The time histories of a ramp-up (the outputs of `morse rampup`, docs/hdf5-schema.md /rampup):
+/// every output step (IntegratorSettings::output_every, the initial state included), per
+/// bearing b its F_x, F_y and the x, y displacements of the rotor station and of the housing.
+struct History {
+  std::vector<double> t, omega;                      ///< n_out: time [s], driving speed [rad/s]
+  std::vector<double> force, rotor_disp, stator_disp;  ///< n_out x bearings x 2, row-major
+  int n_bearings = 0;
+  std::size_t n_out() const { return t.size(); }
+};
+/// Integrates (integrate()) and records the history. `progress`, if given, is called after every
+/// output step with the fraction of the run done (for a progress line). Serial; not collective.
+History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
+               IntegratorStats* stats, const std::function<void(double)>& progress = nullptr);
+
+/// Seed 000 eq. 24: the maximum over the run of |x - x_ref| / (max x_ref - min x_ref), for one
+/// feature sampled n times with the given stride (x[i * stride], x_ref[i * stride]). Returns 0 if
+/// both histories are identical, +inf if x_ref is constant and x differs. Throws if n == 0.
+double feature_error(const double* x, const double* x_ref, std::size_t n, std::size_t stride);
+
+/// Writes the history as <group>/time, omega, bearing_force, rotor_displacement,
+/// stator_displacement (docs/hdf5-schema.md); reads it back (throws naming the file and dataset).
+void write_history(io::H5Output& out, const std::string& group, const History& h);
+History read_history(const std::string& file, const std::string& group = "/rampup");
+
+/// Seed 000 Table 1's error columns: eq. 24 for each load feature (F_x, F_y of each bearing,
+/// in bearing order) and each displacement feature (x, y of the rotor at each bearing), and
+/// their worst, best and mean. Throws unless both histories have the same bearings and the same
+/// output times (same dt and output interval).
+struct HistoryErrors {
+  std::vector<double> force, displacement;  ///< 2 per bearing
+  double force_worst = 0, force_best = 0, force_mean = 0;
+  double displacement_worst = 0, displacement_best = 0, displacement_mean = 0;
+};
+HistoryErrors compare(const History& h, const History& ref);
+
+/// Seed 000 §3.3's score S = S1 + S2 out of 20: S1 = 10 - eps_mean [%] if eps_mean < 10 %, else
+/// 0 (error_mean is a fraction); S2 = 10 (1 - t / t_ref) if t < t_ref, else 0. (The seed's
+/// printed rule for S2 reads "10 t / t_ref"; every row of its Table 1 fits 10 (1 - t / t_ref).)
+double score(double error_mean, double t, double t_ref);
 
 }  // namespace morse::rampup

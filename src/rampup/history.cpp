@@ -1,0 +1,122 @@
+// The ramp-up's time histories: recording, the /rampup datasets, and seed 000's error eq. 24
+// (docs/rampup-theory.md §6, docs/hdf5-schema.md /rampup).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "morse/core/error.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/rampup/rampup.hpp"
+
+namespace morse::rampup {
+
+History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
+               IntegratorStats* stats, const std::function<void(double)>& progress) {
+  History h;
+  h.n_bearings = static_cast<int>(a.bearings().size());
+  const std::size_t nb2 = 2 * a.bearings().size();
+  const double t_end = s.t_final > 0.0 ? s.t_final : load.ramp_time;
+  auto cb = [&](const StepOutput& o) {
+    h.t.push_back(o.t);
+    h.omega.push_back(o.speed);
+    h.force.insert(h.force.end(), o.force, o.force + nb2);
+    h.rotor_disp.insert(h.rotor_disp.end(), o.rotor_disp, o.rotor_disp + nb2);
+    h.stator_disp.insert(h.stator_disp.end(), o.stator_disp, o.stator_disp + nb2);
+    if (progress && t_end > 0.0) progress(std::min(1.0, o.t / t_end));
+  };
+  IntegratorStats st = integrate(a, load, s, cb);
+  if (stats) *stats = std::move(st);
+  return h;
+}
+
+double feature_error(const double* x, const double* x_ref, std::size_t n, std::size_t stride) {
+  MORSE_CHECK(n > 0, "feature_error: empty history");
+  double lo = x_ref[0], hi = x_ref[0], worst = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = x_ref[i * stride];
+    lo = std::min(lo, r);
+    hi = std::max(hi, r);
+    worst = std::max(worst, std::abs(x[i * stride] - r));
+  }
+  if (worst == 0.0) return 0.0;
+  return hi > lo ? worst / (hi - lo) : std::numeric_limits<double>::infinity();
+}
+
+void write_history(io::H5Output& out, const std::string& group, const History& h) {
+  const auto nt = static_cast<hsize_t>(h.n_out()), nb = static_cast<hsize_t>(h.n_bearings);
+  out.write(group + "/time", h.t);
+  out.attribute(group + "/time", "description", "output times [s]");
+  out.write(group + "/omega", h.omega);
+  out.attribute(group + "/omega", "description", "driving speed [rad/s]");
+  const std::pair<const char*, const std::vector<double>*> sets[] = {
+      {"bearing_force", &h.force}, {"rotor_displacement", &h.rotor_disp},
+      {"stator_displacement", &h.stator_disp}};
+  const char* what[] = {
+      "[time][bearing][x,y] bearing force F = k (u_rotor - u_housing) + c (v_rotor - v_housing) [N] "
+      "(on the housing; the rotor gets -F)",
+      "[time][bearing][x,y] displacement of the rotor station [m]",
+      "[time][bearing][x,y] displacement of the housing point (mean of its nodes; 0 on the ground) [m]"};
+  for (int k = 0; k < 3; ++k) {
+    out.write(group + "/" + sets[k].first, *sets[k].second, {nt, nb, 2});
+    out.attribute(group + "/" + sets[k].first, "description", what[k]);
+  }
+}
+
+History read_history(const std::string& file, const std::string& group) {
+  History h;
+  std::vector<hsize_t> d;
+  std::string err;
+  MORSE_CHECK(io::read_doubles(file, group + "/time", &h.t, &d, &err), err,
+              " (not a `morse rampup` file?)");
+  MORSE_CHECK(io::read_doubles(file, group + "/omega", &h.omega, &d, &err), err);
+  MORSE_CHECK(d.size() == 1 && d[0] == h.t.size(), file, ": ", group,
+              "/omega and /time differ in length");
+  std::vector<double>* sets[] = {&h.force, &h.rotor_disp, &h.stator_disp};
+  const char* names[] = {"bearing_force", "rotor_displacement", "stator_displacement"};
+  for (int k = 0; k < 3; ++k) {
+    MORSE_CHECK(io::read_doubles(file, group + "/" + names[k], sets[k], &d, &err), err);
+    MORSE_CHECK(d.size() == 3 && d[0] == h.t.size() && d[2] == 2, file, ": ", group, "/", names[k],
+                " must be [time][bearing][2]");
+    if (k == 0) h.n_bearings = static_cast<int>(d[1]);
+    MORSE_CHECK(static_cast<int>(d[1]) == h.n_bearings, file, ": ", group,
+                ": the bearing datasets disagree in size");
+  }
+  return h;
+}
+
+HistoryErrors compare(const History& h, const History& ref) {
+  MORSE_CHECK(h.n_bearings == ref.n_bearings, "the reference has ", ref.n_bearings,
+              " bearings, this run ", h.n_bearings, ": not the same engine model");
+  MORSE_CHECK(h.n_out() == ref.n_out() && h.n_out() > 0, "the reference has ", ref.n_out(),
+              " output times, this run ", h.n_out(),
+              ": run both with the same -rampup_dt, -rampup_t_final and -rampup_output_every");
+  for (std::size_t i = 0; i < h.n_out(); ++i)
+    MORSE_CHECK(std::abs(h.t[i] - ref.t[i]) <= 1e-9 * std::max(1.0, std::abs(ref.t[i])),
+                "output time ", i, " is ", h.t[i], " s here and ", ref.t[i],
+                " s in the reference: run both with the same time step and output interval");
+  HistoryErrors e;
+  const std::size_t nf = 2 * static_cast<std::size_t>(h.n_bearings);
+  auto summary = [](const std::vector<double>& v, double* worst, double* best, double* mean) {
+    *worst = 0.0, *best = std::numeric_limits<double>::infinity(), *mean = 0.0;
+    for (double x : v) *worst = std::max(*worst, x), *best = std::min(*best, x), *mean += x;
+    if (v.empty()) *best = 0.0;
+    else *mean /= static_cast<double>(v.size());
+  };
+  for (std::size_t f = 0; f < nf; ++f) {
+    e.force.push_back(feature_error(h.force.data() + f, ref.force.data() + f, h.n_out(), nf));
+    e.displacement.push_back(
+        feature_error(h.rotor_disp.data() + f, ref.rotor_disp.data() + f, h.n_out(), nf));
+  }
+  summary(e.force, &e.force_worst, &e.force_best, &e.force_mean);
+  summary(e.displacement, &e.displacement_worst, &e.displacement_best, &e.displacement_mean);
+  return e;
+}
+
+double score(double error_mean, double t, double t_ref) {
+  const double pct = 100.0 * error_mean;
+  const double s1 = pct < 10.0 ? 10.0 - pct : 0.0;
+  const double s2 = t < t_ref ? 10.0 * (1.0 - t / t_ref) : 0.0;
+  return s1 + s2;
+}
+
+}  // namespace morse::rampup
