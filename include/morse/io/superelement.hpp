@@ -24,20 +24,20 @@ namespace morse::io {
 
 /// A Craig-Bampton superelement as read from a morse HDF5 file.
 struct Superelement {
-  std::string source;              ///< the file (for messages and provenance comments)
-  std::string units = "unknown";   ///< /meta/units ("unknown" if absent)
-  std::string command;             ///< /meta/command (reduce, select), empty if absent
-  std::string selection_method;    ///< /rom@selection_method (select files), empty otherwise
-  int n = 0;                       ///< reduced size n = n_b + n_modes
-  int n_b = 0;                     ///< boundary DOFs
-  std::vector<double> K, M, C;     ///< row-major n x n; C empty if the file has no /rom/C
+  std::string source;                  ///< the file (for messages and provenance comments)
+  std::string units = "unknown";       ///< /meta/units ("unknown" if absent)
+  std::string command;                 ///< /meta/command (reduce, select), empty if absent
+  std::string selection_method;        ///< /rom@selection_method (select files), empty otherwise
+  int n = 0;                           ///< reduced size n = n_b + n_modes
+  int n_b = 0;                         ///< boundary DOFs
+  std::vector<double> K, M, C;         ///< row-major n x n; C empty if the file has no /rom/C
   std::vector<std::int64_t> dof_node;  ///< n_b: node id of each boundary DOF
   std::vector<int> dof_component;      ///< n_b: its component 1..6
   std::vector<std::int64_t> boundary_nodes;  ///< ascending, unique (/rom/boundary_nodes)
   /// Coordinates of boundary_nodes (3 per node, same order): from /mesh (mesh input) or
   /// set_boundary_coordinates(); empty if unknown (matrix input).
   std::vector<double> boundary_xyz;
-  bool from_mesh = false;              ///< the file has /mesh (mesh input)
+  bool from_mesh = false;  ///< the file has /mesh (mesh input)
   /// Matrix input only (/dofs): node id and component of every free row of the original model,
   /// used to tell a clamped component from an interior one at a boundary node.
   std::vector<std::int64_t> model_dof_node;
@@ -89,14 +89,14 @@ NodalShapes read_nodal_shapes(const Superelement& se);
 /// coordinates of rigid motion vanish, and R^T M_CB R is the rigid-body mass matrix of the full
 /// model (the Guyan mass is exact for rigid motion). K_CB R = 0 checks it.
 struct RigidBodyInertia {
-  bool valid = false;           ///< the superelement can move rigidly (stiffness_residual small)
-  std::string reason;           ///< why not, if !valid
-  double stiffness_residual = 0;  ///< max_k ||K_CB r_k|| / (||K_CB||_F ||r_k||) over the 6 motions
-  double mass = 0;              ///< total mass
-  std::array<double, 3> center{};       ///< centre of mass
-  std::array<double, 9> inertia_cm{};   ///< inertia tensor about the centre of mass, row-major
+  bool valid = false;              ///< the superelement can move rigidly (stiffness_residual small)
+  std::string reason;              ///< why not, if !valid
+  double stiffness_residual = 0;   ///< max_k ||K_CB r_k|| / (||K_CB||_F ||r_k||) over the 6 motions
+  double mass = 0;                 ///< total mass
+  std::array<double, 3> center{};  ///< centre of mass
+  std::array<double, 9> inertia_cm{};      ///< inertia tensor about the centre of mass, row-major
   std::array<double, 9> inertia_origin{};  ///< about the origin of the basic system
-  std::array<double, 36> rigid_mass{};  ///< R^T M_CB R (6 x 6, row-major; about the origin)
+  std::array<double, 36> rigid_mass{};     ///< R^T M_CB R (6 x 6, row-major; about the origin)
 };
 /// Needs se.boundary_xyz (throws naming the file otherwise). A superelement that cannot move
 /// rigidly (K_CB R != 0, e.g. clamped besides the interface) gives valid = false with the
@@ -124,7 +124,8 @@ struct MbdynInfo {
   bool inertia_written = false;
   RigidBodyInertia inertia;
 };
-MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se, const NodalShapes* shapes = nullptr);
+MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
+                          const NodalShapes* shapes = nullptr);
 
 /// Names of the Nastran matrices (OP4 and DMIG), 1-8 characters, a letter first.
 struct NastranNames {
@@ -134,7 +135,8 @@ struct NastranNames {
 
 /// OUTPUT4 ASCII file of K, M (and C as a third matrix) in /rom order, double precision
 /// ("1P,3E23.16": exact round trip), form 6 when exactly symmetric; written by io::write_op4.
-void write_op4_matrices(const std::string& path, const Superelement& se, const NastranNames& names = {});
+void write_op4_matrices(const std::string& path, const Superelement& se,
+                        const NastranNames& names = {});
 
 /// Default id offset of the SPOINTs that carry the modal coordinates in the DMIG deck: the
 /// smallest power of ten above every node id the file names (its mesh or DOF map, else the
@@ -158,19 +160,20 @@ std::string nastran_large_real(double v);
 
 /// MatrixMarket coordinate files of K, M (and C) at 17 significant digits (io::write_matrix:
 /// "symmetric" with the lower triangle when exactly symmetric, else "general").
-void write_matrix_market(const std::string& path_K, const std::string& path_M, const std::string& path_C,
-                         const Superelement& se);
+void write_matrix_market(const std::string& path_K, const std::string& path_M,
+                         const std::string& path_C, const Superelement& se);
 
 /// Text DOF map of the exported matrices: one line per row, `row node <id> <component>` for a
 /// boundary DOF and `row modal <k> <spoint id>` for modal coordinate k (1-based), with the
 /// frequency as a comment.
-void write_dof_map_text(const std::string& path, const Superelement& se, std::int64_t spoint_offset);
+void write_dof_map_text(const std::string& path, const Superelement& se,
+                        std::int64_t spoint_offset);
 
 // ---------------------------------------------------------------------------------------------
 // The whole export (what `morse export` does).
 
 struct ExportOptions {
-  std::string prefix;              ///< output prefix: <prefix>.fem, .op4, _dmig.bdf, _K.mtx, ...
+  std::string prefix;  ///< output prefix: <prefix>.fem, .op4, _dmig.bdf, _K.mtx, ...
   bool mbdyn = true, op4 = true, dmig = true, mtx = true;
   bool mbdyn_all_nodes = false;    ///< shapes at every mesh node (needs the basis)
   std::int64_t spoint_offset = 0;  ///< 0: default_spoint_offset()
