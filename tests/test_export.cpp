@@ -863,6 +863,52 @@ TEST(ExportNastranReal, FitsSixteenColumnsAndKeepsTenDigits) {
   EXPECT_EQ(io::nastran_large_real(1.0 / 3.0).size(), 16u);  // needs every column
 }
 
+// A superelement with rotational DOFs (matrix input): one node at p carrying a rigid body of mass
+// m, centre of mass p + d and inertia J_cm, written as its 6 x 6 mass matrix about the node.
+// R^T M R must give back the body: mass, centre and inertia about the centre.
+TEST(ExportRigidBody, RotationalDofsCarryTheirInertia) {
+  const double m = 3.5, p[3] = {0.4, -1.2, 2.0}, d[3] = {0.1, 0.25, -0.3};
+  const double Jcm[9] = {2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0};
+  io::Superelement se;
+  se.source = "point body";
+  se.n = se.n_b = 6;
+  se.K.assign(36, 0.0);
+  se.M.assign(36, 0.0);
+  for (int c = 1; c <= 6; ++c) {
+    se.dof_node.push_back(7);
+    se.dof_component.push_back(c);
+  }
+  se.boundary_nodes = {7};
+  se.boundary_xyz = {p[0], p[1], p[2]};
+  // About the node: [[m I, [S x]^T], [[S x], J_node]], S = m d, J_node = J_cm + m (|d|^2 I - d
+  // d^T).
+  const double S[3] = {m * d[0], m * d[1], m * d[2]};
+  const double Sx[3][3] = {{0, -S[2], S[1]}, {S[2], 0, -S[0]}, {-S[1], S[0], 0}};
+  const double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  for (int a = 0; a < 3; ++a) {
+    se.M[a * 6 + a] = m;
+    for (int b = 0; b < 3; ++b) {
+      se.M[(3 + a) * 6 + b] = Sx[a][b];
+      se.M[b * 6 + 3 + a] = Sx[a][b];
+      se.M[(3 + a) * 6 + 3 + b] = Jcm[a * 3 + b] + m * ((a == b ? d2 : 0.0) - d[a] * d[b]);
+    }
+  }
+  const auto in = io::rigid_body_inertia(se);
+  ASSERT_TRUE(in.valid) << in.reason;
+  EXPECT_NEAR(in.mass, m, 1e-14 * m);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(in.center[a], p[a] + d[a], 1e-14);
+  for (int k = 0; k < 9; ++k) EXPECT_NEAR(in.inertia_cm[k], Jcm[k], 1e-13) << k;
+  // The MBDyn file shows the rotations of the constraint modes (rx ry rz columns).
+  const std::string dir = cat("/tmp/morse_test_export_point_r", world_rank(), "_", getpid());
+  fs::create_directories(dir);
+  io::write_mbdyn_fem(dir + "/p.fem", se);
+  const Fem fem = read_fem(dir + "/p.fem");
+  for (int j = 0; j < 6; ++j)
+    for (int c = 0; c < 6; ++c) EXPECT_EQ(fem.shapes[j * 6 + c], j == c ? 1.0 : 0.0);
+  EXPECT_NEAR(fem.mass, m, 1e-14 * m);
+  fs::remove_all(dir);
+}
+
 // The command on every rank: rank 0 writes, errors are collective.
 TEST_F(ExportTest, CommandWritesTheChosenFormatsAndFailsCollectively) {
   const std::string prefix = cat(base_, "/cli");
