@@ -36,7 +36,7 @@ void print_stage_table(MPI_Comm comm) {
 }  // namespace
 
 const std::vector<std::string>& command_names() {
-  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "sweep", "stress", "compare", "mesh", "rampup"};
+  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "sweep", "stress", "compare", "export", "mesh", "rampup"};
   return names;
 }
 
@@ -63,12 +63,14 @@ void run_command(MPI_Comm comm, const std::string& command, const std::vector<st
     detail::run_stress(comm);
   else if (command == "compare")
     detail::run_compare(comm, args);
+  else if (command == "export")
+    detail::run_export(comm);
   else if (command == "mesh")
     detail::run_mesh(comm, args);
   else if (command == "rampup")
     detail::run_rampup(comm);
   else
-    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, mesh, rampup)"));
+    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, export, mesh, rampup)"));
   if ((command != "mesh" || (!args.empty() && args[0] == "info")) && !detail::help_requested()) print_stage_table(comm);
 }
 

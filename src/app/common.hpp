@@ -157,6 +157,7 @@ void run_simulate(MPI_Comm comm);
 void run_compare(MPI_Comm comm, const std::vector<std::string>& args);
 void run_sweep(MPI_Comm comm);
 void run_stress(MPI_Comm comm);
+void run_export(MPI_Comm comm);
 void run_rampup(MPI_Comm comm);
 
 }  // namespace morse::app::detail
