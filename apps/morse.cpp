@@ -18,6 +18,13 @@ static const char kHelp[] =
     "  select    rank and select fixed-interface modes (LPF EIM VEIM DEIM OMR CMSchi EBR IMR)\n"
     "  static    nonlinear (St Venant-Kirchhoff) static solution under nodal loads\n"
     "  fom       full-order nonlinear implicit dynamics under nodal loads (the reference)\n"
+    "  nlrom     nonlinear reduced model (CB, modal derivatives, POD; STEP or exact tensors)\n"
+    "  simulate  integrate a reduced model (explicit, contact with a casing or a plane)\n"
+    "  sweep     contact runs over rotation speeds, spread over the ranks (resumable)\n"
+    "  stress    stresses from a reduced or full run\n"
+    "  compare   a reduced run against the full run (seed 003 indicator)\n"
+    "  rampup    rotor-stator unbalance ramp-up on stator superelements, bearing loads\n"
+    "  export    superelement to MBDyn (.fem), Nastran (OP4, DMIG) and MatrixMarket\n"
     "  mesh box|blade|stator  write a generated mesh (box/beam, rotor-37-like blade, stator)\n"
     "  mesh info -mesh FILE   read a mesh and report its content and quality\n";
 
@@ -57,7 +64,7 @@ int main(int argc, char** argv) {
       if (words.empty()) {
         PetscBool help = PETSC_FALSE;
         PetscOptionsHasHelp(nullptr, &help);
-        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, mesh, rampup); see -help");
+        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, export, mesh, rampup); see -help");
       } else {
         morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
       }

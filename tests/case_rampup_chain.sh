@@ -62,6 +62,8 @@ expect_error "bearing 'rear'.*must be finite and >= 0" "$d/bad_k.h5" rampup "${e
   -rampup_stator_box_file "$d/basis.h5" -rampup_bearing_rear_k -5e7
 expect_error "\-rampup_unbalance fan: no such disk (disks: d)" "$d/bad_disk.h5" rampup "${engine[@]}" \
   -rampup_stator_box_file "$d/basis.h5" -rampup_unbalance fan
+expect_error "\-rampup_stator_box_file $d/none.h5: no such file" "$d/no_file.h5" rampup "${engine[@]}" \
+  -rampup_stator_box_file "$d/none.h5"
 expect_error "no /rom/K" "$d/bad_file.h5" rampup "${engine[@]}" -rampup_stator_box_file "$d/rampup_eim3.h5"
 expect_error "\-rampup_stator_box_clamp: nosuchset is neither a node id nor a node set" "$d/bad_set.h5" rampup \
   "${engine[@]}" -rampup_stator_box_file "$d/basis.h5" -rampup_stator_box_clamp nosuchset

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -277,6 +278,9 @@ Engine build(MPI_Comm comm, const RampupOptions& o, double omega_max) {
   {
     StageTimer t(comm, "StatorModes");
     for (const auto& so : o.stators) {
+      MORSE_CHECK(std::ifstream(so.file).good(), "-rampup_stator_", so.name, "_file ", so.file,
+                  ": no such file (make the superelement with morse reduce or morse select; for run/engine.opts, "
+                  "run/rampup makes it)");
       auto se = rampup::read_superelement(so.file);
       const auto clamp = rampup::resolve_nodes(so.file, so.clamp, cat("-rampup_stator_", so.name, "_clamp"));
       auto sm = rampup::stator_modes(se, clamp, so.cut_hz > 0 ? so.cut_hz : cut_default, so.damping_ratio);

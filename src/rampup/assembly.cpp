@@ -11,40 +11,6 @@
 
 namespace morse::rampup {
 
-Superelement read_superelement(const std::string& file) {
-  Superelement se;
-  se.source = file;
-  std::vector<hsize_t> dk, dm, dc, db;
-  std::string err;
-  MORSE_CHECK(io::read_doubles(file, "/rom/K", &se.K, &dk, &err), "superelement ", file,
-              ": no /rom/K (not a `morse reduce` or `morse select` file?): ", err);
-  MORSE_CHECK(io::read_doubles(file, "/rom/M", &se.M, &dm, &err), "superelement ", file,
-              ": no /rom/M: ", err);
-  MORSE_CHECK(dk.size() == 2 && dk[0] == dk[1] && dm == dk, "superelement ", file,
-              ": /rom/K and /rom/M must be square and of the same size");
-  se.n = static_cast<int>(dk[0]);
-  std::string ignored;
-  if (io::read_doubles(file, "/rom/C", &se.C, &dc, &ignored))
-    MORSE_CHECK(dc == dk, "superelement ", file, ": /rom/C is not the size of /rom/K");
-  std::vector<std::int64_t> labels;
-  MORSE_CHECK(io::read_ints(file, "/rom/boundary_dofs", &labels, &db, &err), "superelement ", file,
-              ": no /rom/boundary_dofs: ", err);
-  MORSE_CHECK(db.size() == 2 && db[1] == 2 && db[0] <= dk[0], "superelement ", file,
-              ": /rom/boundary_dofs must be [n_b][2] with n_b <= ", se.n);
-  se.n_b = static_cast<int>(db[0]);
-  for (int j = 0; j < se.n_b; ++j) {
-    se.dof_node.push_back(labels[2 * j]);
-    se.dof_component.push_back(static_cast<int>(labels[2 * j + 1]));
-  }
-  if (!io::read_ints(file, "/rom/boundary_nodes", &se.boundary_nodes, &db, &ignored)) {
-    se.boundary_nodes = se.dof_node;
-    std::sort(se.boundary_nodes.begin(), se.boundary_nodes.end());
-    se.boundary_nodes.erase(std::unique(se.boundary_nodes.begin(), se.boundary_nodes.end()),
-                            se.boundary_nodes.end());
-  }
-  return se;
-}
-
 std::vector<std::int64_t> resolve_nodes(const std::string& file,
                                         const std::vector<std::string>& spec,
                                         const std::string& who) {

@@ -45,6 +45,8 @@
 #include <string>
 #include <vector>
 
+#include "morse/io/superelement.hpp"
+
 namespace morse::io {
 class H5Output;
 }
@@ -140,18 +142,11 @@ RotorMatrices rotor_matrices(const RotorSpec& r);
 
 /// A superelement as `morse reduce` / `morse select` write it (docs/hdf5-schema.md, /rom):
 /// dense n x n K, M (and C if present), the first n_b DOFs physical boundary DOFs labelled by
-/// (node id, component 1..6), then fixed-interface modal coordinates.
-struct Superelement {
-  std::string source;  ///< file name (for messages)
-  int n = 0, n_b = 0;
-  std::vector<double> K, M, C;               ///< row-major n x n; C empty if absent
-  std::vector<std::int64_t> dof_node;        ///< n_b node ids
-  std::vector<int> dof_component;            ///< n_b components 1..6 (1..3 = x, y, z)
-  std::vector<std::int64_t> boundary_nodes;  ///< ascending
-};
-/// Reads /rom/K, /rom/M, /rom/C (optional), /rom/boundary_dofs and /rom/boundary_nodes (serial
-/// HDF5 on the calling rank). Throws naming the file if it has no /rom or the shapes disagree.
-Superelement read_superelement(const std::string& file);
+/// (node id, component 1..6), then fixed-interface modal coordinates. The reader is the io
+/// module's (io/superelement.hpp; it throws naming the file and dataset if there is no /rom or the
+/// shapes disagree).
+using Superelement = io::Superelement;
+using io::read_superelement;
 
 /// The modal basis of one superelement under the assembly's boundary conditions: every DOF of
 /// the clamped nodes removed, then the eigenpairs of (K, M) of what remains, mass-normalized
