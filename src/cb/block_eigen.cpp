@@ -147,16 +147,37 @@ class BlockSolver {
   PetscInt dim() const { return m_used_; }
   const std::vector<double>& theta() const { return theta_; }
 
-  /// The first `count` Ritz vectors (wanted order) into V (MPIDENSE, count columns).
-  void ritz_vectors(PetscInt count, Mat V) {
-    Local q = local(Q_.get()), v = local(V);
+  /// The Ritz vectors of the pairs `pick` (indices into the wanted order), in that order, into
+  /// the first pick.size() columns of the basis Q, in place: Q[:, j] = Q[:, 0:m] Y[:, pick[j]],
+  /// one block of rows at a time (rows are independent), so no second n x count matrix is
+  /// needed. The solver cannot continue afterwards. Returns Q.
+  Mat ritz_vectors_in_place(const std::vector<PetscInt>& pick) {
+    const PetscInt count = static_cast<PetscInt>(pick.size()), m = m_used_;
+    std::vector<double> Yp(static_cast<std::size_t>(m) * count);
+    for (PetscInt j = 0; j < count; ++j)
+      std::copy_n(&Y_[static_cast<std::size_t>(m) * pick[j]], m, &Yp[static_cast<std::size_t>(m) * j]);
+    Local q = local(Q_.get());
     const PetscScalar one = 1, zero = 0;
-    if (m_ > 0)
-      BLASgemm_("N", "N", &mloc(), ptr(count), ptr(m_used_), &one, q.a, ptr(q.ld), Y_.data(), ptr(m_used_), &zero, v.a,
-                ptr(v.ld));
-    restore(V, v);
+    const PetscInt rb = 512;
+    std::vector<double> tmp(static_cast<std::size_t>(rb) * std::max<PetscInt>(count, 1));
+    for (PetscInt r0 = 0; r0 < m_ && count > 0; r0 += rb) {
+      const PetscInt rows = std::min(rb, m_ - r0);
+      BLASgemm_("N", "N", ptr(rows), ptr(count), ptr(m), &one, q.a + r0, ptr(q.ld), Yp.data(), ptr(m), &zero,
+                tmp.data(), ptr(rows));
+      for (PetscInt c = 0; c < count; ++c)
+        std::copy_n(&tmp[static_cast<std::size_t>(rows) * c], rows, q.a + r0 + q.ld * c);
+    }
     restore(Q_.get(), q);
+    return Q_.get();
   }
+  /// Frees everything but the basis Q (M Q and the block work matrices): memory for the result.
+  void release_work() {
+    MQ_.reset();
+    W_.reset();
+    MW_.reset();
+    RHS_.reset();
+  }
+  void release_basis() { Q_.reset(); }
 
  private:
   Local local(Mat A) {
@@ -600,15 +621,23 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   out.block_factor = std::move(F);
   {
     StageTimer extract(comm, s.stage + "EigenVectors");
-    UMat X;
-    MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, X.ptr()));
-    solver.ritz_vectors(nev, X.get());
-    // Ascending omega^2 = shift + 1/theta.
+    // Ascending omega^2 = shift + 1/theta. The Ritz vectors are formed in place in the basis and
+    // the work matrices freed before V is allocated, so extraction never needs more memory than
+    // the solve (for 1000 modes of 478k DOFs: 3.8 GB instead of 7.6 GB more).
     std::vector<std::pair<double, PetscInt>> order;
     for (PetscInt i = 0; i < nev; ++i) order.emplace_back(s.shift + 1.0 / solver.theta()[i], i);
     std::sort(order.begin(), order.end());
+    std::vector<PetscInt> pick;
+    std::vector<std::pair<double, PetscInt>> first;
+    for (PetscInt j = 0; j < nev; ++j) {
+      pick.push_back(order[j].second);
+      first.emplace_back(order[j].first, j);
+    }
+    Mat Q = solver.ritz_vectors_in_place(pick);
+    solver.release_work();
     MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, out.V.ptr()));
-    copy_columns(X.get(), order, out.V.get());
+    copy_columns(Q, first, out.V.get());
+    solver.release_basis();
     for (const auto& o : order) out.omega2.push_back(o.first);
   }
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
