@@ -448,16 +448,22 @@ class BlockSolver {
   // Keeps the first p Ritz vectors of the m-dimensional basis and the residual block Q[:, m:m+b]
   // (the same combinations of M Q in MQ).
   void restart(PetscInt m, PetscInt p) {
-    std::vector<double> X(static_cast<std::size_t>(std::max<PetscInt>(m_, 1)) * p);
+    // In place, one block of rows at a time (rows are independent): no n x p temporary, so a
+    // restart needs no memory beyond the basis.
+    const PetscInt rb = 512;
+    std::vector<double> X(static_cast<std::size_t>(rb) * std::max<PetscInt>(p, 1));
     for (Mat A : {Q_.get(), MQ_.get()}) {
       Local q = local(A);
       const PetscScalar one = 1, zero = 0;
-      if (m_ > 0) {
-        BLASgemm_("N", "N", &mloc(), ptr(p), ptr(m), &one, q.a, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(),
-                  ptr(m_));
-        for (PetscInt c = 0; c < p; ++c) std::copy_n(&X[static_cast<std::size_t>(m_) * c], m_, q.a + q.ld * c);
-        for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
+      for (PetscInt r0 = 0; r0 < m_; r0 += rb) {
+        const PetscInt rows = std::min(rb, m_ - r0);
+        BLASgemm_("N", "N", ptr(rows), ptr(p), ptr(m), &one, q.a + r0, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(),
+                  ptr(rows));
+        for (PetscInt c = 0; c < p; ++c)
+          std::copy_n(&X[static_cast<std::size_t>(rows) * c], rows, q.a + r0 + q.ld * c);
       }
+      if (m_ > 0)
+        for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
       restore(A, q);
     }
     // H: diag(theta) coupled to the residual block by B Y.

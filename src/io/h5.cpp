@@ -81,6 +81,49 @@ void H5Output::write(const std::string& name, const std::vector<double>& data,
   if (!ok) note_error(name);
 }
 
+void H5Output::create_rows(const std::string& name, const std::vector<hsize_t>& dims) {
+  if (rank_ != 0 || !error_.empty()) return;
+  auto [grp, leaf] = split(name);
+  hid_t g = ensure_group(grp);
+  bool ok = g >= 0 && !dims.empty();
+  if (ok) {
+    hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+    hid_t ds = H5Dcreate2(g, leaf.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    ok = space >= 0 && ds >= 0;
+    if (ds >= 0) H5Dclose(ds);
+    if (space >= 0) H5Sclose(space);
+  }
+  if (g >= 0) H5Gclose(g);
+  if (!ok) note_error(name);
+}
+
+void H5Output::write_row(const std::string& name, hsize_t row, const std::vector<double>& data) {
+  if (rank_ != 0 || !error_.empty()) return;
+  hid_t ds = H5Dopen2(file_, name.c_str(), H5P_DEFAULT);
+  bool ok = ds >= 0;
+  if (ok) {
+    hid_t fs = H5Dget_space(ds);
+    const int nd = H5Sget_simple_extent_ndims(fs);
+    std::vector<hsize_t> dims(std::max(nd, 1)), start(dims.size(), 0), count;
+    H5Sget_simple_extent_dims(fs, dims.data(), nullptr);
+    count = dims;
+    count[0] = 1;
+    start[0] = row;
+    hsize_t per_row = 1;
+    for (std::size_t k = 1; k < dims.size(); ++k) per_row *= dims[k];
+    ok = nd >= 1 && row < dims[0] && data.size() == per_row;
+    if (ok) {
+      H5Sselect_hyperslab(fs, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
+      hid_t ms = H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr);
+      ok = H5Dwrite(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, data.data()) >= 0;
+      H5Sclose(ms);
+    }
+    H5Sclose(fs);
+    H5Dclose(ds);
+  }
+  if (!ok) note_error(name);
+}
+
 void H5Output::write(const std::string& name, const std::vector<std::int64_t>& data,
                      std::vector<hsize_t> dims) {
   if (rank_ != 0 || !error_.empty()) return;

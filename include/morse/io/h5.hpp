@@ -32,6 +32,11 @@ class H5Output {
   void write(const std::string& name, const std::vector<std::int64_t>& data,
              std::vector<hsize_t> dims = {});
   void write_string(const std::string& name, const std::string& value);
+  /// A dataset of doubles of shape dims written one row (first index) at a time, so that rank 0
+  /// never holds all of it: create_rows, then write_row for each row (data = the row, of the
+  /// product of the other dims). Rank 0 data; not collective.
+  void create_rows(const std::string& name, const std::vector<hsize_t>& dims);
+  void write_row(const std::string& name, hsize_t row, const std::vector<double>& data);
   /// Attribute on a group or dataset (created if missing as a group). Not collective.
   void attribute(const std::string& object, const std::string& name, const std::string& value);
   void attribute(const std::string& object, const std::string& name, double value);
