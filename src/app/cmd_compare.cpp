@@ -55,32 +55,6 @@ PetscErrorCode get_compare_options(MPI_Comm comm, CompareOptions* o) {
   return PETSC_SUCCESS;
 }
 
-std::string read_string_attribute(const std::string& file, const std::string& obj, const std::string& name) {
-  std::string out;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) return out;
-  if (H5Aexists_by_name(f, obj.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
-    hid_t a = H5Aopen_by_name(f, obj.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
-    hid_t t = H5Aget_type(a);
-    if (H5Tis_variable_str(t) > 0) {
-      char* s = nullptr;
-      hid_t mt = H5Tcopy(H5T_C_S1);
-      H5Tset_size(mt, H5T_VARIABLE);
-      if (H5Aread(a, mt, &s) >= 0 && s) out = s;
-      if (s) H5free_memory(s);
-      H5Tclose(mt);
-    } else {
-      std::vector<char> b(H5Tget_size(t) + 1, 0);
-      if (H5Aread(a, t, b.data()) >= 0) out = b.data();
-    }
-    H5Tclose(t);
-    H5Aclose(a);
-  }
-  H5Fclose(f);
-  return out;
-}
-
 // Writes /compare into a copy of `file`, then renames the copy over it.
 void write_compare(const std::string& file, const eval::Indicator& ind, double tmax, double tsnap,
                    const std::string& fom, const std::string& tip) {
@@ -201,7 +175,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       ind.e[2] = eval::peak_to_peak_criterion(uf, ur_f, ntip);
       ind.e[3] = eval::displacement_criterion(uf, ur_f);
       // e1: full fields at the snapshot nearest to t_max.
-      std::string model = co.rom_model.empty() ? read_string_attribute(rom, "/sim", "rom") : co.rom_model;
+      std::string model = co.rom_model.empty() ? io::read_string_attribute(rom, "/sim", "rom") : co.rom_model;
       MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
       if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
         throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));

@@ -733,4 +733,33 @@ void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const 
   MORSE_CHECK(std::rename(tmp.c_str(), xdmf_path.c_str()) == 0, "cannot rename ", tmp, " to ", xdmf_path);
 }
 
+std::string read_string_attribute(const std::string& file, const std::string& object, const std::string& name) {
+  std::string out;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return out;
+  if (H5Lexists(f, object.c_str(), H5P_DEFAULT) > 0 &&
+      H5Aexists_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
+    hid_t a = H5Aopen_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+    hid_t t = H5Aget_type(a);
+    if (H5Tget_class(t) == H5T_STRING) {
+      if (H5Tis_variable_str(t) > 0) {
+        char* s = nullptr;
+        hid_t mt = H5Tcopy(H5T_C_S1);
+        H5Tset_size(mt, H5T_VARIABLE);
+        if (H5Aread(a, mt, &s) >= 0 && s) out = s;
+        if (s) H5free_memory(s);
+        H5Tclose(mt);
+      } else {
+        std::vector<char> b(H5Tget_size(t) + 1, 0);
+        if (H5Aread(a, t, b.data()) >= 0) out = b.data();
+      }
+    }
+    H5Tclose(t);
+    H5Aclose(a);
+  }
+  H5Fclose(f);
+  return out;
+}
+
 }  // namespace morse::io

@@ -37,36 +37,6 @@ constexpr double kTwoPi = 6.283185307179586;
 constexpr double kRigidTol = 1e-6;
 
 // A scalar string attribute (fixed or variable length), empty if absent.
-std::string string_attribute(const std::string& file, const std::string& object,
-                             const std::string& name) {
-  std::string out;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) return out;
-  if (H5Lexists(f, object.c_str(), H5P_DEFAULT) > 0 &&
-      H5Aexists_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
-    hid_t a = H5Aopen_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
-    hid_t t = H5Aget_type(a);
-    if (H5Tget_class(t) == H5T_STRING) {
-      if (H5Tis_variable_str(t) > 0) {
-        char* s = nullptr;
-        hid_t mt = H5Tcopy(H5T_C_S1);
-        H5Tset_size(mt, H5T_VARIABLE);
-        if (H5Aread(a, mt, &s) >= 0 && s) out = s;
-        if (s) H5free_memory(s);
-        H5Tclose(mt);
-      } else {
-        std::vector<char> b(H5Tget_size(t) + 1, 0);
-        if (H5Aread(a, t, b.data()) >= 0) out = b.data();
-      }
-    }
-    H5Tclose(t);
-    H5Aclose(a);
-  }
-  H5Fclose(f);
-  return out;
-}
-
 bool has_link(const std::string& file, const std::string& name) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -281,7 +251,7 @@ Superelement read_superelement(const std::string& file) {
   std::string ignored;
   if (!read_string(file, "/meta/units", &se.units, &ignored)) se.units = "unknown";
   read_string(file, "/meta/command", &se.command, &ignored);
-  se.selection_method = string_attribute(file, "/rom", "selection_method");
+  se.selection_method = read_string_attribute(file, "/rom", "selection_method");
 
   if (has_link(file, "/mesh/node_ids")) {
     std::vector<std::int64_t> ids;

@@ -129,6 +129,9 @@ bool read_string(const std::string& file, const std::string& name, std::string* 
 /// A scalar numeric attribute `name` of `object` (a group or dataset), as a double.
 bool read_attribute(const std::string& file, const std::string& object, const std::string& name, double* out,
                     std::string* error);
+/// A string attribute `name` of `object` (fixed or variable length), or "" if the file, the
+/// object or the attribute is missing or not a string. Serial, any rank.
+std::string read_string_attribute(const std::string& file, const std::string& object, const std::string& name);
 /// Row `row` of a 2-D dataset of doubles (one hyperslab, not the whole dataset).
 bool read_double_row(const std::string& file, const std::string& name, std::int64_t row, std::vector<double>* out,
                      std::string* error);
