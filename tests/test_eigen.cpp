@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/cb/eigen.hpp"
@@ -232,6 +233,49 @@ TEST(Eigen, BlockSolverMatchesKrylovSchur) {
       for (int j = 0; j < 20; ++j) err = std::max(err, std::abs(x[i * 20 + j] - (i == j ? 1.0 : 0.0)));
     EXPECT_LT(err, 1e-6);
   }
+}
+
+// The default block basis is capped by memory (-<prefix>block_memory_gb, else 70 % of what is
+// available after the factorization): with room for 33 vectors on the node the 20 modes still
+// come out (blocks of 4, a 32-vector basis, so with restarts) and equal Krylov-Schur's; with
+// room for fewer than nev + 2 blocks the solve stops and says what it needs.
+TEST(Eigen, BlockBasisCappedByMemory) {
+  auto s = small_beam();
+  cb::EigenSettings ks;
+  ks.nev = 20;
+  ks.prefix = "test_mks_";
+  ks.count_slicing = 0;
+  auto w = cb::sign_reference(s.lm, s.dofs);
+  auto ref = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(s.ops.K.get(), &n, nullptr));
+  // Every rank of these tests runs on one machine: the node holds all n rows.
+  auto gb_for = [&](double vectors) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", 2.0 * sizeof(double) * static_cast<double>(n) * vectors / 1e9);
+    return std::string(buf);
+  };
+  cb::EigenSettings bs = ks;
+  bs.solver = "block";
+  bs.prefix = "test_mem_";
+  set_default_option("-test_mem_block_size", "4");
+  set_default_option("-test_mem_block_memory_gb", gb_for(33.5));
+  auto e = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
+  ASSERT_EQ(e.omega2.size(), 20u);
+  EXPECT_GT(e.iterations, 0) << "a 32-vector basis must restart";
+  for (int k = 0; k < 20; ++k) EXPECT_NEAR(e.omega2[k] / ref.omega2[k], 1.0, 1e-10) << "mode " << k;
+  EXPECT_LE(e.max_residual, 1e-10);
+  bs.prefix = "test_mem_small_";
+  set_default_option("-test_mem_small_block_size", "4");
+  set_default_option("-test_mem_small_block_memory_gb", gb_for(20.5));
+  std::string msg;
+  try {
+    cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
+  } catch (const std::exception& x) {
+    msg = x.what();
+  }
+  EXPECT_NE(msg.find("needs at least 28 vectors"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("-test_mem_small_eigen_solver krylovschur"), std::string::npos) << msg;
 }
 
 // The block solver's result does not depend on the block size: on the pencil whose eigenvalues

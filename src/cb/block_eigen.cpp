@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <numeric>
 
 #include "morse/cb/eigen.hpp"
@@ -507,6 +508,54 @@ PetscInt basis_size(PetscInt n, PetscInt k, PetscInt bb, PetscInt kmax) {
   return d == n ? (n / bb) * bb : d;
 }
 
+// Bytes of memory available on this machine now (Linux MemAvailable), or -1 if unknown.
+double available_bytes() {
+  std::ifstream f("/proc/meminfo");
+  std::string key;
+  double kb = 0;
+  std::string unit;
+  while (f >> key >> kb >> unit)
+    if (key == "MemAvailable:") return kb * 1024.0;
+  return -1.0;
+}
+
+// The default basis (kdim vectors) capped so that Q and M Q (2 kdim doubles per local row) fit
+// in 70 % of the memory available on each node once the factor exists, the ranks of a node
+// sharing it; the same on every rank. A cap below nev + 2 blocks is an error that says what the
+// solve needs. Collective.
+PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, PetscInt b, PetscInt kdim,
+                             double budget_gb, const EigenSettings& s) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  double rows = static_cast<double>(m_local), avail = 0.0;
+  MPI_Allreduce(MPI_IN_PLACE, &rows, 1, MPI_DOUBLE, MPI_SUM, node);
+  MPI_Comm_free(&node);
+  avail = available_bytes();
+  // The budget of the basis on a node: -block_memory_gb, else 70 % of what is available.
+  const double budget = budget_gb > 0 ? budget_gb * 1e9 : (avail > 0 ? 0.7 * avail : -1.0);
+  // Vectors of the basis that fit on this node (+inf if the memory is unknown).
+  double fit = budget > 0 && rows > 0 ? budget / (2.0 * sizeof(double) * rows) : 1e300;
+  MPI_Allreduce(MPI_IN_PLACE, &fit, 1, MPI_DOUBLE, MPI_MIN, comm);
+  if (fit >= static_cast<double>(kdim)) return kdim;
+  const PetscInt cap = static_cast<PetscInt>(fit / b) * b;
+  const double need_gb = 2.0 * sizeof(double) * rows * static_cast<double>(nev + 2 * b) / 1e9;
+  collective_check(comm, cap >= nev + 2 * b
+                             ? std::string()
+                             : cat(s.what, ": the block basis for ", nev, " modes needs at least ", nev + 2 * b,
+                                   " vectors, about ", need_gb, " GB on a node, and the basis may use ", budget / 1e9,
+                                   " GB (-", s.prefix, "block_memory_gb, default 70 % of the memory available): "
+                                   "ask for fewer modes per solve, run on more nodes, or use -", s.prefix,
+                                   "eigen_solver krylovschur"));
+  print0(comm,
+         "  %s: block basis capped at %d vectors (default %d) to fit Q and M Q in %.3g GB per node (%s): expect "
+         "restarts; -%sblock_max_dim sets the basis\n",
+         s.what.c_str(), (int)cap, (int)kdim, budget / 1e9,
+         budget_gb > 0 ? cat("-", s.prefix, "block_memory_gb").c_str()
+                       : cat("70% of the ", avail / 1e9, " GB available after the factorization").c_str(),
+         s.prefix.c_str());
+  return cap;
+}
+
 // One MUMPS symmetric factorization of K - shift M (LDL^T: indefinite for a shift inside the
 // spectrum), its wall
 // time in *seconds; a singular K (null pivots at shift 0) is an error that names the likely
@@ -565,13 +614,17 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   MORSE_CALL(MatGetSize(K, &n, nullptr));
   MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
   PetscInt b = -1, kmax = -1, max_restarts = 200;
-  PetscReal tol = s.tol;
+  PetscReal tol = s.tol, memory_gb = -1;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
     PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
                               "modes, else 16)", "", b, &b, nullptr));
     PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
                               kmax, &kmax, nullptr));
+    PetscCall(PetscOptionsReal("-block_memory_gb",
+                               "Memory for the basis (Q and M Q) per node [GB] when -block_max_dim is not given "
+                               "(default: 70% of the memory available after the factorization)",
+                               "", memory_gb, &memory_gb, nullptr));
     PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", max_restarts, &max_restarts, nullptr));
     PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", tol, &tol, nullptr));
     PetscOptionsEnd();
@@ -610,8 +663,9 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
            s.what.c_str(), (int)nev, (int)n);
     return solve_eigen_krylovschur(K, M, s, sign_ref);
   }
-  const PetscInt kdim = basis_size(n, nev, b, kmax);
+  PetscInt kdim = basis_size(n, nev, b, kmax);
   UMat F = factor_shifted(K, M, s.shift, s, &out.factor_seconds);
+  if (!kmax_given) kdim = memory_capped_basis(comm, m_local, nev, b, kdim, memory_gb, s);
   // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
   // factored without a null pivot), so the wanted ones are the largest.
   BlockSolver solver(K, M, F.get(), b, kdim, s.shift <= 0.0, comm);
