@@ -32,7 +32,6 @@ struct StatorOpt {
 struct DiskOpt {
   std::string name;
   double z = 0, mass = 0, Ip = 0, Id = 0;
-  bool z_set = false;
 };
 struct RotorOpt {
   std::string name;
@@ -44,7 +43,6 @@ struct RotorOpt {
 struct BearingOpt {
   std::string name, rotor, stator = "ground";
   double z = 0;
-  bool z_set = false;
   std::vector<std::string> nodes;
   std::vector<double> k, c;
 };
@@ -152,7 +150,6 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
       const std::string q = "-rampup_disk_" + d + "_";
       PetscCall(PetscOptionsReal((q + "z").c_str(), "Axial position [m] (a station of its rotor)", "", dk.z, &dk.z,
                                  &set));
-      dk.z_set = set;
       if (!set) fail(cat("disk ", d, ": give its position with ", q, "z"));
       PetscCall(PetscOptionsReal((q + "mass").c_str(), "Mass [kg]", "", dk.mass, &dk.mass, nullptr));
       PetscCall(PetscOptionsReal((q + "Ip").c_str(), "Polar moment of inertia [kg m^2]", "", dk.Ip, &dk.Ip, nullptr));
@@ -177,7 +174,6 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
     if (!set) fail(cat("bearing ", b, ": give its rotor with ", p, "rotor"));
     PetscCall(PetscOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "", bo.z, &bo.z,
                                &set));
-    bo.z_set = set;
     if (!set) fail(cat("bearing ", b, ": give its position with ", p, "z"));
     PetscCall(get_string(PetscOptionsObject, p + "stator", "Stator it sits in, or ground", &bo.stator, &set));
     PetscCall(get_list(PetscOptionsObject, p + "nodes", "Housing nodes of the stator (ids or node sets; several: their mean)", &bo.nodes));
@@ -342,7 +338,7 @@ void run_rampup(MPI_Comm comm) {
   is.alpha = o.alpha;
   is.output_every = static_cast<int>(o.output_every);
   is.dense = o.dense;
-  const double t_end = o.t_final > 0 ? o.t_final : o.ramp_time;
+  const double t_end = rampup::end_time(lc, is);
   MORSE_CHECK(t_end / o.dt < 5e8, "-rampup_dt ", o.dt, " s gives ", t_end / o.dt, " steps: too many");
 
   // Every rank builds the (small) model from the same options and files, so a bad input throws

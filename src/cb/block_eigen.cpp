@@ -157,18 +157,7 @@ class BlockSolver {
     std::vector<double> Yp(static_cast<std::size_t>(m) * count);
     for (PetscInt j = 0; j < count; ++j)
       std::copy_n(&Y_[static_cast<std::size_t>(m) * pick[j]], m, &Yp[static_cast<std::size_t>(m) * j]);
-    Local q = local(Q_.get());
-    const PetscScalar one = 1, zero = 0;
-    const PetscInt rb = 512;
-    std::vector<double> tmp(static_cast<std::size_t>(rb) * std::max<PetscInt>(count, 1));
-    for (PetscInt r0 = 0; r0 < m_ && count > 0; r0 += rb) {
-      const PetscInt rows = std::min(rb, m_ - r0);
-      BLASgemm_("N", "N", ptr(rows), ptr(count), ptr(m), &one, q.a + r0, ptr(q.ld), Yp.data(), ptr(m), &zero,
-                tmp.data(), ptr(rows));
-      for (PetscInt c = 0; c < count; ++c)
-        std::copy_n(&tmp[static_cast<std::size_t>(rows) * c], rows, q.a + r0 + q.ld * c);
-    }
-    restore(Q_.get(), q);
+    times_in_place(Q_.get(), m, Yp.data(), count);
     return Q_.get();
   }
   /// Frees everything but the basis Q (M Q and the block work matrices): memory for the result.
@@ -196,6 +185,25 @@ class BlockSolver {
   PetscBLASInt& mloc() {
     mloc_ = blas(m_);
     return mloc_;
+  }
+
+  // A[:, 0:count] = A[:, 0:m] Y (Y m x count, column-major), in place, one block of 512 rows at a
+  // time (row i of the product needs only row i of A): no n x count temporary, so restarts and
+  // the final Ritz vectors need no memory beyond the basis.
+  void times_in_place(Mat A, PetscInt m, const double* Y, PetscInt count) {
+    if (count <= 0) return;
+    Local q = local(A);
+    const PetscScalar one = 1, zero = 0;
+    const PetscInt rb = 512;
+    std::vector<double> tmp(static_cast<std::size_t>(rb) * count);
+    for (PetscInt r0 = 0; r0 < m_; r0 += rb) {
+      const PetscInt rows = std::min(rb, m_ - r0);
+      BLASgemm_("N", "N", ptr(rows), ptr(count), ptr(m), &one, q.a + r0, ptr(q.ld), Y, ptr(m), &zero, tmp.data(),
+                ptr(rows));
+      for (PetscInt c = 0; c < count; ++c)
+        std::copy_n(&tmp[static_cast<std::size_t>(rows) * c], rows, q.a + r0 + q.ld * c);
+    }
+    restore(A, q);
   }
 
   // C (k x nb, column-major) = A^T B over all ranks, A and B local (m_ rows).
@@ -449,20 +457,9 @@ class BlockSolver {
   // Keeps the first p Ritz vectors of the m-dimensional basis and the residual block Q[:, m:m+b]
   // (the same combinations of M Q in MQ).
   void restart(PetscInt m, PetscInt p) {
-    // In place, one block of rows at a time (rows are independent): no n x p temporary, so a
-    // restart needs no memory beyond the basis.
-    const PetscInt rb = 512;
-    std::vector<double> X(static_cast<std::size_t>(rb) * std::max<PetscInt>(p, 1));
     for (Mat A : {Q_.get(), MQ_.get()}) {
+      times_in_place(A, m, Y_.data(), p);
       Local q = local(A);
-      const PetscScalar one = 1, zero = 0;
-      for (PetscInt r0 = 0; r0 < m_; r0 += rb) {
-        const PetscInt rows = std::min(rb, m_ - r0);
-        BLASgemm_("N", "N", ptr(rows), ptr(p), ptr(m), &one, q.a + r0, ptr(q.ld), Y_.data(), ptr(m), &zero, X.data(),
-                  ptr(rows));
-        for (PetscInt c = 0; c < p; ++c)
-          std::copy_n(&X[static_cast<std::size_t>(rows) * c], rows, q.a + r0 + q.ld * c);
-      }
       if (m_ > 0)
         for (PetscInt c = 0; c < b_; ++c) std::copy_n(q.a + q.ld * (m + c), m_, q.a + q.ld * (p + c));
       restore(A, q);

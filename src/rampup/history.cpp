@@ -15,7 +15,7 @@ History record(const Assembly& a, const LoadCase& load, const IntegratorSettings
   History h;
   h.n_bearings = static_cast<int>(a.bearings().size());
   const std::size_t nb2 = 2 * a.bearings().size();
-  const double t_end = s.t_final > 0.0 ? s.t_final : load.ramp_time;
+  const double t_end = end_time(load, s);
   auto cb = [&](const StepOutput& o) {
     h.t.push_back(o.t);
     h.omega.push_back(o.speed);

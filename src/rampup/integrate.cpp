@@ -217,7 +217,7 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
   MORSE_CHECK(std::isfinite(load.omega_max), "rampup: the top speed must be finite");
   MORSE_CHECK(load.kind == LoadCase::Kind::Constant || load.ramp_time > 0.0,
               "rampup: the ramp time must be positive, got ", load.ramp_time, " s");
-  const double t_final = s.t_final > 0.0 ? s.t_final : load.ramp_time;
+  const double t_final = end_time(load, s);
   MORSE_CHECK(t_final > 0.0, "rampup: the final time must be positive (t_final or the ramp time)");
   const int n = a.n();
   const std::size_t nn = static_cast<std::size_t>(n);

@@ -327,6 +327,11 @@ struct IntegratorSettings {
   std::vector<double> x0, v0;  ///< initial state (empty: zero)
 };
 
+/// The end of the run: t_final, or the ramp time if t_final is 0.
+inline double end_time(const LoadCase& load, const IntegratorSettings& s) {
+  return s.t_final > 0.0 ? s.t_final : load.ramp_time;
+}
+
 /// What the callback sees after a step. Pointers are valid during the callback only.
 struct StepOutput {
   long step = 0;
