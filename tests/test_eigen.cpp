@@ -73,7 +73,8 @@ TEST(Eigen, InertiaCountsMatchTheDenseSpectrum) {
 }
 
 // Count mode by slicing (forced with a low threshold) gives the same N lowest eigenvalues as one
-// shift, M-orthonormal eigenvectors with the same shapes (MAC 1), and reports its cutoff.
+// shift, M-orthonormal eigenvectors with the same shapes (MAC 1), and reports its cutoff; so do
+// the slices solved concurrently on one subcommunicator per rank.
 TEST(Eigen, CountBySlicingMatchesOneShift) {
   auto s = small_beam();
   cb::EigenSettings one;
@@ -107,6 +108,27 @@ TEST(Eigen, CountBySlicingMatchesOneShift) {
     }
   EXPECT_LT(err_g, 1e-8);
   EXPECT_LT(err_x, 1e-6);
+
+  // The slices solved concurrently, one subcommunicator per rank (SLEPc's Krylov–Schur
+  // partitions, -<prefix>eps_krylovschur_partitions): the same pairs, checked by the same
+  // inertia count.
+  int size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  cb::EigenSettings par = sliced;
+  par.prefix = "test_sliced_par_";
+  set_default_option("-test_sliced_par_eps_krylovschur_partitions", std::to_string(size));
+  auto c = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), par, w.get());
+  EXPECT_EQ(c.partitions, size);
+  ASSERT_EQ(c.omega2.size(), 30u);
+  EXPECT_EQ(c.inertia_count, b.inertia_count);
+  for (int k = 0; k < 30; ++k) EXPECT_NEAR(c.omega2[k] / b.omega2[k], 1.0, 1e-9) << "mode " << k;
+  UMat Xc;
+  MORSE_CALL(MatTransposeMatMult(c.V.get(), MVb.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, Xc.ptr()));
+  auto xc = dense(Xc.get());
+  double err_c = 0;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) err_c = std::max(err_c, std::abs(xc[i * 30 + j] - (i == j ? 1.0 : 0.0)));
+  EXPECT_LT(err_c, 1e-6);
 }
 
 namespace {
@@ -175,20 +197,39 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
   wrong[7] *= 1.0 + 1e-6;
   EXPECT_GT(cb::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
 
-  // Fault injection: the solve loses its highest pair.
-  for (bool by_count : {false, true}) {
-    if (by_count && solver == "block") continue;  // the block solver makes no claim in count mode
+  // Count mode with one shift: the 29 lowest (the cut falls inside the 10th cluster, so the
+  // other converged copies of eigenvalue 29 tie at the window's edge) and the 12 nearest to a
+  // shift between clusters 5 and 6 are checked by inertia and pass.
+  for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
+    cb::EigenSettings t;
+    t.nev = nev;
+    t.shift = shift;
+    t.solver = solver;
+    t.count_slicing = 0;
+    t.prefix = cat("test_check_", solver, "_", nev, "_");
+    auto c = cb::solve_eigen(K.get(), M.get(), t, nullptr);
+    EXPECT_GE(c.inertia_count, nev) << "count mode was not checked by inertia";
+    EXPECT_LE(c.inertia_count, nev + 2);
+    if (shift > 0) {
+      EXPECT_GT(c.check_lo, 0.0);
+    }
+  }
+
+  // Fault injection: the solve loses a pair (by cutoff and count by slicing the highest, by
+  // count with one shift the lowest); the Sylvester check refuses it.
+  for (const std::string mode : {"cutoff", "count_slicing", "count"}) {
+    if (mode == "count_slicing" && solver == "block") continue;  // the block solver does not slice
     cb::EigenSettings t = s;
-    t.prefix = by_count ? "test_drop_count_" : "test_drop_cut_" + solver + "_";
-    if (by_count) {
+    t.prefix = cat("test_drop_", mode, "_", solver, "_");
+    if (mode != "cutoff") {
       t.omega2_max = -1;
       t.nev = 30;
-      t.count_slicing = 10;
+      t.count_slicing = mode == "count" ? 0 : 10;
     }
     t.drop_for_test = 1;
     try {
       cb::solve_eigen(K.get(), M.get(), t, nullptr);
-      ADD_FAILURE() << "a truncated solve passed the Sylvester check (by count: " << by_count << ")";
+      ADD_FAILURE() << "a truncated solve passed the Sylvester check (" << mode << ")";
     } catch (const Error& err) {
       const std::string msg = err.what();
       EXPECT_NE(msg.find("Sylvester"), std::string::npos) << msg;

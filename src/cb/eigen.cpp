@@ -269,6 +269,11 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     MORSE_CALL(EPSSolve(eps));
     MORSE_CALL(EPSMonitorCancel(eps));
   }
+  if (slicing) {
+    MORSE_CALL(EPSKrylovSchurGetPartitions(eps, &out.partitions));
+    if (out.partitions > 1)
+      print0(comm, "  %s: slices solved concurrently on %d subcommunicators\n", s.what.c_str(), (int)out.partitions);
+  }
   PetscInt nconv = 0;
   MORSE_CALL(EPSGetConverged(eps, &nconv));
   MORSE_CALL(EPSGetIterationNumber(eps, &out.iterations));
@@ -301,6 +306,14 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     order.emplace_back(PetscRealPart(kr), i);
   }
   std::sort(order.begin(), order.end());
+  if (!slicing) {
+    // One shift: the n_out pairs nearest the shift (the lowest for a shift at or below the
+    // spectrum), in ascending order; the others follow.
+    std::stable_sort(order.begin(), order.end(), [&](const auto& a, const auto& b) {
+      return std::abs(a.first - s.shift) < std::abs(b.first - s.shift);
+    });
+    std::sort(order.begin(), order.begin() + std::min<PetscInt>(n_out, nconv));
+  }
   PetscInt m_local = 0;
   MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
   MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, n_out, nullptr, out.V.ptr()));
@@ -336,6 +349,12 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   PetscInt max_it = 0;
   MORSE_CALL(EPSGetTolerances(eps, &tol, &max_it));
   finish_pairs(K, M, s, std::max<double>(tol, s.tol), sign_ref, &out);
+  if (!slicing) {
+    // One shift: the other converged pairs may tie with the last one returned.
+    std::vector<double> extra;
+    for (PetscInt j = n_out; j < nconv; ++j) extra.push_back(order[j].first);
+    check_count_by_inertia(K, M, s, extra, &out);
+  }
   return out;
 }
 
@@ -367,6 +386,50 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
     print0(comm, "  %s: max relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = %.2e over %d pairs\n", s.what.c_str(),
            out.max_residual, (int)n_out);
   }
+}
+
+void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vector<double>& extra, Eigenpairs* out_) {
+  Eigenpairs& out = *out_;
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  PetscBool check = s.check_inertia ? PETSC_TRUE : PETSC_FALSE;
+  auto get_options = [&]() -> PetscErrorCode {
+    PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
+    PetscCall(PetscOptionsBool("-check_inertia",
+                               "Count mode: check by Sylvester's inertia that no eigenvalue nearer the shift than "
+                               "those returned was missed (one LDL^T factorization)",
+                               "", check, &check, nullptr));
+    PetscOptionsEnd();
+    return PETSC_SUCCESS;
+  };
+  MORSE_CALL(get_options());
+  if (!check || out.omega2.empty()) return;
+  StageTimer timer(comm, s.stage + "InertiaCheck");
+  const auto t0 = std::chrono::steady_clock::now();
+  // The window [shift - d, shift + d] holds every pair returned; widened by 1e-6 so that its
+  // ends lie off the returned eigenvalues (a factorization at an eigenvalue is singular). K is
+  // positive semi-definite, so no eigenvalue lies below a window end <= 0.
+  double d = 0;
+  for (double w : out.omega2) d = std::max(d, std::abs(w - s.shift));
+  d = d * (1 + 1e-6) + 1e-300;
+  const double lo = s.shift - d, hi = s.shift + d;
+  InertiaCounter c(K, M, s.prefix);
+  const PetscInt counted = c.count(hi) - (lo > 0 ? c.count(lo) : 0);
+  const auto dropped = static_cast<PetscInt>(std::min<std::size_t>(s.drop_for_test, out.omega2.size()));
+  PetscInt found = static_cast<PetscInt>(out.omega2.size()) - dropped;
+  for (double w : extra) found += (w > lo && w < hi) ? 1 : 0;
+  out.inertia_count = counted;
+  out.check_lo = std::max(lo, 0.0);
+  out.check_hi = hi;
+  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
+  collective_check(comm, counted == found
+                             ? std::string()
+                             : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", counted,
+                                   " eigenvalues in [", hz(out.check_lo), ", ", hz(hi), "] Hz but the solve found ", found,
+                                   ": it ", counted > found ? "missed modes" : "returned spurious pairs", "; raise -",
+                                   s.prefix, "block_max_dim (block solver) or -", s.prefix, "eps_ncv (krylovschur)"));
+  print0(comm, "  %s: %d pairs in [%.6g, %.6g] Hz = Sylvester inertia count of K - omega^2 M (every mode found, %.1f s)\n",
+         s.what.c_str(), (int)found, hz(out.check_lo), hz(hi),
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
 }
 
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2) {

@@ -31,9 +31,14 @@ struct EigenSettings {
   /// Prefix of the stage names (<stage>Factor, <stage>EigenSolve, <stage>EigenVectors), so that
   /// several eigen solves of one run stay apart in the stage table and in -log_view.
   std::string stage;
-  /// Fault injection for the tests: drop this many of the highest pairs before the Sylvester
-  /// check of a cutoff solve, which must then fail. 0 in production.
+  /// Fault injection for the tests: drop this many pairs before the Sylvester check, which must
+  /// then fail: the highest of a cutoff solve (or count by slicing), the lowest of a count solve
+  /// with one shift. 0 in production.
   PetscInt drop_for_test = 0;
+  /// Count mode with one shift: check the claim "these are the nev pairs nearest the shift (the
+  /// nev lowest for shift <= 0)" by Sylvester's inertia (one LDL^T factorization, two for a
+  /// shift inside the spectrum). -<prefix>check_inertia overrides.
+  bool check_inertia = true;
   /// Solver: "block" (default) or "krylovschur" (-<prefix>eigen_solver overrides).
   std::string solver = "block";
 };
@@ -47,10 +52,15 @@ struct Eigenpairs {
   bool slicing = false;        ///< solved by spectrum slicing
   double slice_omega2 = 0;     ///< count mode by slicing: the cutoff used
   PetscInt inertia_counts = 0; ///< count mode by slicing: factorizations spent finding it
-  /// Sylvester check of a solve that claims every pair below a cutoff (cutoff or count by
-  /// slicing): the number of eigenvalues below the cutoff from the inertia of K - cutoff*M, or -1
-  /// when the solve made no such claim (count mode with one shift).
+  /// Slicing (Krylov–Schur): subcommunicators that solved slices concurrently
+  /// (-<prefix>eps_krylovschur_partitions; 1: all ranks on every slice).
+  PetscInt partitions = 1;
+  /// Sylvester check of a solve: the number of eigenvalues below the cutoff (cutoff or count by
+  /// slicing) from the inertia of K - cutoff*M; in count mode with one shift, the number in the
+  /// window [check_lo, check_hi] just wider than the pairs returned; -1 when not checked
+  /// (-<prefix>check_inertia false).
   PetscInt inertia_count = -1;
+  double check_lo = 0, check_hi = 0;  ///< count mode with one shift: the window checked
   /// max over the returned pairs of ||K x - omega^2 M x|| / (||K||_inf ||x||) (checked <= tol).
   double max_residual = 0;
   /// The block solver's own factorization (the Krylov–Schur solver's lives in its EPS).
@@ -72,6 +82,15 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
 /// The last steps of every solver: the signs of out->V from sign_ref (may be null), then the
 /// residual check of every pair against tol (printed). Collective.
 void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref, Eigenpairs* out);
+
+/// Sylvester check of a count solve with one shift (see EigenSettings::check_inertia): the pairs
+/// returned (out->omega2, ascending) claim to be the s.nev eigenvalues nearest s.shift. The
+/// eigenvalues in a window just wider than theirs, [shift - d, shift + d] with d the largest
+/// distance times (1 + 1e-6), are counted from the inertia of K - (shift +/- d) M and must equal
+/// the pairs found in it: those returned and `extra`, the other converged pairs of the solve
+/// (a tie at the edge of the window). A mismatch is a collective error naming the count; the
+/// check is printed. Collective.
+void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vector<double>& extra, Eigenpairs* out);
 
 /// Relative residuals ||K x_j - omega2_j M x_j|| / (||K||_inf ||x_j||) of the columns of V (MPIDENSE,
 /// K's row layout), computed in blocks of columns. Collective.
