@@ -3,8 +3,10 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,sweep,stress] [--ranks N] [--revs 10] [--sweep-revs 5]
+        [--stages roms,single,pod,sweep,stress] [--ranks N] [--revs 10] [--sweep-revs 5]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
+        [--pod-revs 5] [--pod-train-revs 1] [--pod-fom-dt 1e-6] [--pod-snap-every 5] [--pod-num 20]
+        [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
 
 Every stage skips a result that is already on disk (delete it to recompute), so the study can be
 stopped and resumed, and the stages can run at different times.
@@ -16,6 +18,15 @@ stopped and resumed, and the stages can run at different times.
   single  Omega = 1450 rad/s, --revs revolutions (the seed: 200): r79 nonlinear and linear (Fig. 17),
           r79 at dt and dt / 5 over 2 revolutions (Fig. 18), r89 and r54 nonlinear (Fig. 19: the
           seed's convergence check, and the fidelity of the cheaper sweep basis).
+  pod     seed Figs. 20-22: the MD model r79 at 1450 rad/s over --pod-revs revolutions (the `single`
+          stage's fig17_nonlinear if --pod-revs equals --revs), then for each training of
+          --pod-trainings a full-order `morse fom` over --pod-train-revs revolutions with snapshots
+          (contact: driven by the MD run's contact forces, -load_history; harmonic: the seed's §4
+          training, 300 N at 2000 rad/s at LE, turned radial as in §5; contact_linear: the contact
+          forces on the linear twin -fom_linear, a diagnosis), `morse nlrom -nlrom_basis pod`
+          (24 constraint modes + --pod-num POD vectors, exact tensors: the seed's 20) and the POD ROM's
+          contact run at 1450 rad/s over --pod-revs revolutions (step: 5e-8 s, or 0.9 x its critical
+          step if that is smaller).
   sweep   `morse sweep` of r54, linear over --sweep-linear and nonlinear over --sweep-nonlinear
           (lo:hi:step rad/s), --sweep-revs revolutions each, on --ranks ranks (the same basis for
           both maps, so that they differ by g~ alone; r79 would cost 3.6 times more per step).
@@ -190,6 +201,8 @@ def pod_stage(st, args, mesh, every):
                      args.pod_harmonic_amplitude, "-load_LE_omega", args.pod_harmonic_omega],
         # (b) the MD model's contact forces (interval means of /sim/contact/mean_force)
         "contact": ["-load_history", md],
+        # (b') the same forces on the linear twin of the full model (a diagnosis: docs/contact.md)
+        "contact_linear": ["-load_history", md, "-fom_linear"],
     }
     for tag in args.pod_trainings.split(","):
         fom = st.file("pod_fom_%s.h5" % tag)
@@ -214,21 +227,22 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mesh", default=os.path.join(ROOT, "meshes", "blade_coarse.msh"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "contact_study"))
-    ap.add_argument("--stages", default="roms,single,sweep,stress")
+    ap.add_argument("--stages", default="roms,single,pod,sweep,stress")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--revs", type=float, default=10.0)
     ap.add_argument("--sweep-revs", type=float, default=5.0)
     ap.add_argument("--sweeps", default="linear,nonlinear", help="which sweeps (and stress cases) to run")
     ap.add_argument("--sweep-linear", default="750:2200:10")
     ap.add_argument("--sweep-nonlinear", default="750:2200:50")
-    ap.add_argument("--pod-revs", type=float, default=3.0, help="pod: revolutions of the compared contact runs")
+    ap.add_argument("--pod-revs", type=float, default=5.0, help="pod: revolutions of the compared contact runs")
     ap.add_argument("--pod-train-revs", type=float, default=1.0, help="pod: length of the full-order training runs")
     ap.add_argument("--pod-fom-dt", type=float, default=1e-6, help="pod: step of the full-order training runs [s]")
     ap.add_argument("--pod-snap-every", type=int, default=5, help="pod: snapshot every K full-order steps")
     ap.add_argument("--pod-num", type=int, default=20, help="pod: POD vectors (the seed: 20, with 24 constraint modes)")
     ap.add_argument("--pod-harmonic-amplitude", type=float, default=300.0, help="pod (a): force at LE [N]")
     ap.add_argument("--pod-harmonic-omega", type=float, default=2000.0, help="pod (a): [rad/s]")
-    ap.add_argument("--pod-trainings", default="contact,harmonic", help="pod: which trainings (contact, harmonic)")
+    ap.add_argument("--pod-trainings", default="contact,harmonic,contact_linear",
+                    help="pod: which trainings (contact, harmonic, contact_linear)")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
