@@ -3,8 +3,10 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,sweep,stress] [--ranks N] [--revs 10] [--sweep-revs 5]
+        [--stages roms,single,pod,sweep,stress] [--ranks N] [--revs 10] [--sweep-revs 5]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
+        [--pod-revs 5] [--pod-train-revs 1] [--pod-fom-dt 1e-6] [--pod-snap-every 5] [--pod-num 20]
+        [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
 
 Every stage skips a result that is already on disk (delete it to recompute), so the study can be
 stopped and resumed, and the stages can run at different times.
@@ -16,6 +18,15 @@ stopped and resumed, and the stages can run at different times.
   single  Omega = 1450 rad/s, --revs revolutions (the seed: 200): r79 nonlinear and linear (Fig. 17),
           r79 at dt and dt / 5 over 2 revolutions (Fig. 18), r89 and r54 nonlinear (Fig. 19: the
           seed's convergence check, and the fidelity of the cheaper sweep basis).
+  pod     seed Figs. 20-22: the MD model r79 at 1450 rad/s over --pod-revs revolutions (the `single`
+          stage's fig17_nonlinear if --pod-revs equals --revs), then for each training of
+          --pod-trainings a full-order `morse fom` over --pod-train-revs revolutions with snapshots
+          (contact: driven by the MD run's contact forces, -load_history; harmonic: the seed's §4
+          training, 300 N at 2000 rad/s at LE, turned radial as in §5; contact_linear: the contact
+          forces on the linear twin -fom_linear, a diagnosis), `morse nlrom -nlrom_basis pod`
+          (24 constraint modes + --pod-num POD vectors, exact tensors: the seed's 20) and the POD ROM's
+          contact run at 1450 rad/s over --pod-revs revolutions (step: 5e-8 s, or 0.9 x its critical
+          step if that is smaller).
   sweep   `morse sweep` of r54, linear over --sweep-linear and nonlinear over --sweep-nonlinear
           (lo:hi:step rad/s), --sweep-revs revolutions each, on --ranks ranks (the same basis for
           both maps, so that they differ by g~ alone; r79 would cost 3.6 times more per step).
@@ -145,17 +156,93 @@ def critical_1b_eo8(sweep_file, f1b):
     return float(w[i])
 
 
+def critical_step(rom):
+    """2 / omega_max of the reduced (K, M): the central-difference limit of the linear model."""
+    with h5py.File(rom, "r") as f:
+        K, M = f["/nlrom/K"][:], f["/nlrom/M"][:]
+    return 2.0 / math.sqrt(np.max(np.linalg.eigvals(np.linalg.solve(M, K)).real))
+
+
+def le_radial(rom, sim):
+    """The LE node id (first contact node of a simulate file) and its e_r = (x, y, 0)/|(x, y)|."""
+    with h5py.File(sim, "r") as f:
+        le = int(f["/sim/contact/node_ids"][0])
+    with h5py.File(rom, "r") as f:
+        i = int(np.flatnonzero(f["/mesh/node_ids"][()] == le)[0])
+        x = f["/mesh/coordinates"][i]
+    rho = math.hypot(x[0], x[1])
+    return le, (x[0] / rho, x[1] / rho, 0.0)
+
+
+def pod_stage(st, args, mesh, every):
+    """Seed 003 Figs. 20-22: POD bases trained on full-order runs driven by (a) a harmonic radial load
+    at LE and (b) the contact forces of the MD model (r79) over its first --pod-train-revs revolutions,
+    then the contact simulation of each POD ROM at 1450 rad/s against the MD model's, all over --pod-revs
+    revolutions (the casing's growth rate depends on the run length, so every run has the same one)."""
+    revs, train = args.pod_revs, args.pod_train_revs
+    T_train = train * 2 * math.pi / OMEGA
+    print("POD bases trained on the full model (Figs. 20-22): %g revolutions, training %g" % (revs, train),
+          flush=True)
+    rom79 = st.file("rom_r79.h5")
+    if not st.run(args.ranks, rom_args(mesh, *ROMS["r79"], rom79), "nlrom r79 (24 + 15 + 40)", rom79, "rom_r79"):
+        return
+    md_name = "fig17_nonlinear" if revs == args.revs else "pod_md_%grev" % revs
+    md = simulate(st, "r79", OMEGA, revs, DT, False, md_name, every)
+    if md is None:
+        return
+    st.rec["pod_md"] = md_name
+    le, er = le_radial(rom79, md)
+    fom_common = ["fom", "-mesh", mesh, "-clamp", "root", "-fom_dt", args.pod_fom_dt, "-fom_tfinal", T_train,
+                  "-fom_snapshot_every", args.pod_snap_every, "-fom_monitor", "LE", "-fom_damping_modal", "5e-4",
+                  "-fom_damping_modes", 10]
+    trainings = {
+        # (a) the seed's training of §4 (300 N at LE, 2000 rad/s) turned radial, as the seed does in §5
+        "harmonic": ["-load_sets", "LE", "-load_LE_dir", "%.9g,%.9g,%.9g" % er, "-load_LE_amplitude",
+                     args.pod_harmonic_amplitude, "-load_LE_omega", args.pod_harmonic_omega],
+        # (b) the MD model's contact forces (interval means of /sim/contact/mean_force)
+        "contact": ["-load_history", md],
+        # (b') the same forces on the linear twin of the full model (a diagnosis: docs/contact.md)
+        "contact_linear": ["-load_history", md, "-fom_linear"],
+    }
+    for tag in args.pod_trainings.split(","):
+        fom = st.file("pod_fom_%s.h5" % tag)
+        if not st.run(args.ranks, fom_common + trainings[tag] + ["-out", fom], "fom training (%s)" % tag, fom,
+                      "pod_fom_" + tag):
+            continue
+        rom = st.file("rom_pod_%s.h5" % tag)
+        nargs = ["nlrom", "-mesh", mesh, "-clamp", "root", "-boundary", "tip", "-nlrom_basis", "pod", "-nlrom_num_pod",
+                 args.pod_num, "-nlrom_snapshots", fom, "-nlrom_forces", "exact", "-nlrom_damping_modal", "5e-4",
+                 "-nlrom_damping_modes", 10, "-out", rom]
+        if not st.run(args.ranks, nargs, "nlrom pod %s (24 + %d)" % (tag, args.pod_num), rom, "rom_pod_" + tag):
+            continue
+        hc = critical_step(rom)
+        dt = DT if DT < 0.9 * hc else 0.9 * hc
+        st.rec["pod_critical_dt_" + tag] = hc
+        simulate(st, "pod_%s" % tag, OMEGA, revs, dt, False, "pod_sim_%s" % tag, max(1, int(round(every * DT / dt))))
+    st.rec["pod_le"] = le
+    st.save()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--mesh", default=os.path.join(ROOT, "meshes", "blade_coarse.msh"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out", "contact_study"))
-    ap.add_argument("--stages", default="roms,single,sweep,stress")
+    ap.add_argument("--stages", default="roms,single,pod,sweep,stress")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--revs", type=float, default=10.0)
     ap.add_argument("--sweep-revs", type=float, default=5.0)
     ap.add_argument("--sweeps", default="linear,nonlinear", help="which sweeps (and stress cases) to run")
     ap.add_argument("--sweep-linear", default="750:2200:10")
     ap.add_argument("--sweep-nonlinear", default="750:2200:50")
+    ap.add_argument("--pod-revs", type=float, default=5.0, help="pod: revolutions of the compared contact runs")
+    ap.add_argument("--pod-train-revs", type=float, default=1.0, help="pod: length of the full-order training runs")
+    ap.add_argument("--pod-fom-dt", type=float, default=1e-6, help="pod: step of the full-order training runs [s]")
+    ap.add_argument("--pod-snap-every", type=int, default=5, help="pod: snapshot every K full-order steps")
+    ap.add_argument("--pod-num", type=int, default=20, help="pod: POD vectors (the seed: 20, with 24 constraint modes)")
+    ap.add_argument("--pod-harmonic-amplitude", type=float, default=300.0, help="pod (a): force at LE [N]")
+    ap.add_argument("--pod-harmonic-omega", type=float, default=2000.0, help="pod (a): [rad/s]")
+    ap.add_argument("--pod-trainings", default="contact,harmonic,contact_linear",
+                    help="pod: which trainings (contact, harmonic, contact_linear)")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
@@ -189,6 +276,9 @@ def main():
         simulate(st, "r54", OMEGA, args.revs, DT, False, "fig19_r54", every)
         simulate(st, "r79", OMEGA, 2, DT, False, "fig18_dt", every)
         simulate(st, "r79", OMEGA, 2, DT / 5, False, "fig18_dt5", 5 * every)
+
+    if "pod" in stages:
+        pod_stage(st, args, mesh, every)
 
     if "sweep" in stages:
         todo = {"linear": (True, args.sweep_linear), "nonlinear": (False, args.sweep_nonlinear)}

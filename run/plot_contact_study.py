@@ -17,6 +17,14 @@ numpy, h5py, matplotlib (Agg). Writes into DIR
                       the second half of the run against r79.
   contact_forces.png  normal contact force [kN] at LE, mid-chord (contact node 3) and TE over the
                       first 2 revolutions of fig17_nonlinear.h5 (else of another nonlinear run).
+  contact_fig20.png   (pod stage) the MD model's run named by study.json "pod_md" (solid) against the
+                      POD ROM trained on a harmonic radial load, pod_sim_harmonic.h5 (dashed);
+  contact_fig22.png   the same against the POD ROM trained on the MD contact forces, pod_sim_contact.h5;
+  contact_fig21.png   (a) the normal component of /sim/contact/mean_force (the training load of (b)) at
+                      LE, mid-chord and TE over the training run; (b) LE u_r of the MD run and of the full
+                      model driven by those forces (pod_fom_contact.h5, /fom/sets/LE).
+  contact_pod_spectra.png  Hann spectra of LE u_r over the second half of the three runs; their
+                      statistics (max, RMS, mean, std, peak frequency, time in contact) are printed.
 Figs. 17-19 have two panels: (a) transient = the first 20 % of the run (the casing ovalization reaches
 99 % of its height at 20 %), (b) steady state = the last 2 revolutions, or the last 20 % of the run
 if that is shorter. Windows come from the first (reference) file of a figure. Thin grey verticals mark
@@ -227,6 +235,120 @@ def figures(runs, img):
         print("contact_forces: skipped, no nonlinear simulation file")
 
 
+def hann_spectrum(t, y):
+    """Amplitude spectrum (Hann window, mean removed) of a uniformly sampled signal: (f [Hz], A)."""
+    y = y - y.mean()
+    w = np.hanning(len(y))
+    a = 2 * np.abs(np.fft.rfft(w * y)) / w.sum()
+    return np.fft.rfftfreq(len(y), t[1] - t[0]), a
+
+
+def pod_stats(r):
+    """Statistics of the LE radial displacement over the second half of a run, and of its contact."""
+    sel = r["t"] >= 0.5 * r["T"]
+    y = r["ur"][sel, 0]
+    f, a = hann_spectrum(r["t"][sel], y)
+    k = 1 + int(np.argmax(a[1:]))
+    fn = r["fn"][sel]
+    return {"max": float(np.abs(r["ur"][:, 0]).max()), "rms": float(np.sqrt(np.mean(y ** 2))), "mean": float(y.mean()),
+            "std": float(y.std()), "f_peak": float(f[k]), "a_peak": float(a[k]),
+            "contact": float(np.mean((fn > 0).any(axis=1))), "fmax": r["fmax"], "spectrum": (f, a)}
+
+
+def fom_le_radial(path, le):
+    """(t, u_r) of node le from a morse fom file (/fom/sets/LE, e_r of the node's /mesh position)."""
+    with h5py.File(path, "r") as f:
+        ids = f["fom/sets/LE/node_ids"][()]
+        j = int(np.flatnonzero(ids == le)[0])
+        u = f["fom/sets/LE/u"][:, j, :]
+        i = int(np.flatnonzero(f["mesh/node_ids"][()] == le)[0])
+        x = f["mesh/coordinates"][i]
+        t = f["fom/time"][()]
+    er = np.array([x[0], x[1], 0.0]) / np.hypot(x[0], x[1])
+    return t, u @ er
+
+
+def pod_figures(out, runs, img):
+    """Seed Figs. 20-22: the POD ROMs trained on (a) a harmonic load and (b) the MD model's contact forces."""
+    try:
+        with open(os.path.join(out, "study.json")) as fh:
+            rec = json.load(fh)
+    except (OSError, ValueError):
+        rec = {}
+    md_name = rec.get("pod_md")
+    md = runs.get(md_name) if md_name else None
+    if md is None:
+        print("contact_fig20-22: skipped, no pod stage in study.json")
+        return
+    w = f"$\\Omega$ = {md['omega']:g} rad/s"
+    pods = {tag: runs.get("pod_sim_" + tag) for tag in ("harmonic", "contact", "contact_linear")}
+    for tags, fig, what in [(["harmonic"], "contact_fig20.png", "a harmonic radial load at LE (seed Fig. 20)"),
+                            (["contact", "contact_linear"], "contact_fig22.png",
+                             "the MD model's contact forces (seed Fig. 22)")]:
+        have = [(t, pods[t]) for t in tags if pods[t]]
+        if not have:
+            print(f"{fig}: skipped, missing pod_sim_{tags[0]}.h5")
+            continue
+        labels = [f"modal derivatives, {md['model']}"] + [
+            f"POD {r['model']} = 24 + {r['r'] - 24}" + (", trained on the linear full model" if t.endswith("linear")
+                                                        else "") for t, r in have]
+        plot_ur([md] + [r for _, r in have], labels, fig,
+                f"LE radial displacement, MD vs POD trained on {what}, {w}, nonlinear", img)
+    # Fig. 21: the training load of (b), and the full model's response to it against the MD model's.
+    fom = os.path.join(out, "pod_fom_contact.h5")
+    with h5py.File(md["path"], "r") as f:
+        mt, mf = f["sim/contact/mean_force_time"][()], f["sim/contact/mean_force"][()]
+        nrm = f["sim/contact/normals"][()]
+    T_train = None
+    if os.path.isfile(fom):
+        with h5py.File(fom, "r") as f:
+            T_train = float(f["fom/time"][-1])
+    T_train = T_train or md["rev"]
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True, constrained_layout=True)
+    sel = mt <= T_train
+    n = mf.shape[1]
+    for j, ls, where in [(0, "-", "LE"), (n // 2 - 1, "-", "mid-chord"), (n - 1, "--", "TE")]:
+        radial = np.einsum("td,d->t", mf[sel, j, :], nrm[j])  # normal component lambda >= 0
+        axes[0].plot(1e3 * mt[sel], 1e-3 * radial, ls, lw=0.9, label=f"{where} (node {md['ids'][j]})")
+    axes[0].set(ylabel="normal force, 1 $\\mu$s means [kN]")
+    axes[0].set_title("(a) the training load of POD (b): MD contact forces over the training run (seed Fig. 21)",
+                      fontsize=10)
+    axes[0].legend(fontsize=8, loc="upper left")
+    sel = md["t"] <= T_train
+    axes[1].plot(1e3 * md["t"][sel], 1e3 * md["ur"][sel, 0], "-", lw=0.9, label=f"MD {md['model']} (with contact)")
+    for path, ls, lab in [(fom, "--", "full model under the MD contact forces (morse fom)"),
+                          (os.path.join(out, "pod_fom_contact_linear.h5"), ":", "the same, linear twin (-fom_linear)")]:
+        if os.path.isfile(path):
+            t, ur = fom_le_radial(path, int(md["ids"][0]))
+            axes[1].plot(1e3 * t, 1e3 * ur, ls, lw=0.9, label=lab)
+    axes[1].set(xlabel="time [ms]", ylabel="LE $u_r$ [mm]")
+    axes[1].set_title("(b) LE radial displacement over the training run", fontsize=10)
+    axes[1].legend(fontsize=8, loc="lower left")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.set_xlim(0, 1e3 * T_train)
+    fig.suptitle(f"POD training by contact forces, {w}", fontsize=11)
+    save(fig, img, "contact_fig21.png")
+    # Statistics and spectra of the second half.
+    have = [("MD " + md["model"], md)] + [(f"POD {tag} {r['model']}", r) for tag, r in pods.items() if r]
+    fig, ax = plt.subplots(figsize=(10, 4), constrained_layout=True)
+    print(f"\nFigs. 20-22, LE u_r over the second half of {md['T'] / md['rev']:.3g} revolutions:")
+    print(f"{'run':<28}{'max|u_r|':>10}{'RMS':>8}{'mean':>8}{'std':>8}{'f_peak':>8}{'in contact':>11}{'max F_n':>9}"
+          f"\n{'':<28}{'[mm]':>10}{'[mm]':>8}{'[mm]':>8}{'[mm]':>8}{'[Hz]':>8}{'[% time]':>11}{'[kN]':>9}")
+    for (lab, r), ls in zip(have, STYLES + ["-."]):
+        st = pod_stats(r)
+        print(f"{lab:<28}{1e3 * st['max']:>10.3f}{1e3 * st['rms']:>8.3f}{1e3 * st['mean']:>8.3f}{1e3 * st['std']:>8.3f}"
+              f"{st['f_peak']:>8.0f}{100 * st['contact']:>11.1f}{1e-3 * (st['fmax'] or 0):>9.1f}")
+        f, a = st["spectrum"]
+        keep = f <= 6000
+        ax.plot(f[keep], 1e3 * a[keep], ls, lw=0.9, label=f"{lab}: RMS {1e3 * st['rms']:.3g} mm")
+    ax.set(xlabel="frequency [Hz]", ylabel="amplitude [mm]", yscale="log")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"Spectrum of the LE radial displacement, second half of the run (Hann), {w}", fontsize=10)
+    save(fig, img, "contact_pod_spectra.png")
+
+
 def summary(out, runs):
     try:
         with open(os.path.join(out, "study.json")) as fh:
@@ -260,6 +382,7 @@ def main():
         if n not in runs and not n.startswith(("rom_", "sweep_")):
             runs[n] = load(path, quiet=True)
     figures(runs, a.img)
+    pod_figures(a.out, runs, a.img)
     summary(a.out, runs)
 
 

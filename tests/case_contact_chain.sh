@@ -28,6 +28,41 @@ t = np.linalg.norm(c["tangential"][:], axis=2)
 assert np.allclose(t, 0.15 * n, rtol=1e-9, atol=1e-9 * n.max())
 assert abs(f["/sim/time"][-1] - 2 * 2 * np.pi / 1200) < 4e-6
 PY
+# The contact force history (/sim/contact/normals, mean_force): with output every step the mean
+# force is lambda n + friction of that step; with output every 5 steps it is the mean of those 5
+# (the impulse is kept); it drives the full model through morse fom -load_history.
+run simulate -rom "$d/cb.h5" "${casing[@]}" -sim_omega 1200 -sim_revolutions 2 -sim_dt 4e-6 -sim_output_every 5 \
+  -out "$d/sim5.h5"
+/usr/bin/python3 - "$d/sim.h5" "$d/sim5.h5" "$d/cb.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+f, f5, rom = (h5py.File(p, "r") for p in sys.argv[1:4])
+c, c5 = f["/sim/contact"], f5["/sim/contact"]
+t, nrm, lam, fr, mf = f["/sim/time"][:], c["normals"][:], c["normal"][:], c["tangential"][:], c["mean_force"][:]
+ids = c["node_ids"][:]
+x = np.array([rom["/mesh/coordinates"][int(np.flatnonzero(rom["/mesh/node_ids"][:] == i)[0])] for i in ids])
+er = np.c_[x[:, :2] / np.hypot(x[:, 0], x[:, 1])[:, None], np.zeros(len(ids))]
+assert np.allclose(nrm, -er, atol=1e-14), "normals are not -e_r"
+want = lam[:, :, None] * nrm[None] + fr
+assert np.abs(mf[0]).max() == 0 and np.allclose(mf[1:], want[1:], rtol=1e-12, atol=1e-12 * np.abs(want).max())
+tm = c["mean_force_time"][:]
+assert tm[0] == 0 and np.allclose(tm[1:], 0.5 * (t[1:] + t[:-1]), rtol=1e-14)
+mf5, t5 = c5["mean_force"][:], f5["/sim/time"][:]
+n5 = len(t5) - 1
+assert np.allclose(t5, t[::5][:len(t5)])
+mean5 = want[1:5 * n5 + 1].reshape(n5, 5, *want.shape[1:]).mean(axis=1)
+assert np.abs(mean5).max() > 0, "no contact"
+assert np.allclose(mf5[1:], mean5, rtol=1e-10, atol=1e-10 * np.abs(mean5).max()), np.abs(mf5[1:] - mean5).max()
+PY
+run fom "${model[@]}" -load_history "$d/sim5.h5" -fom_linear -fom_dt 2e-5 -fom_tfinal 5e-3 -fom_monitor x1 \
+  -out "$d/fom_history.h5"
+/usr/bin/python3 - "$d/fom_history.h5" "$d/sim5.h5" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+src = f["/fom"].attrs["load_history"]
+src = src.decode() if isinstance(src, bytes) else src
+assert src == sys.argv[2] + ":/sim/contact", src
+assert np.abs(f["/fom/sets/x1/u"][:]).max() > 0, "no response to the contact forces"
+PY
 sweep=(sweep -rom "$d/cb.h5" "${casing[@]}" -sim_dt 4e-6 -sim_revolutions 150 -sweep_omega_min 800
        -sweep_omega_max 2000 -sweep_omega_step 100 -sweep_monitor x1 -sweep_spectrum_fmax 3000
        -sweep_spectrum_bins 60 -sweep_batch 3)

@@ -35,3 +35,36 @@ morse_add_ok_case(fom_linear_damped_ok fom_linear_ok.h5
   fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir y
   -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_linear -fom_damping_modal 0.01
   -fom_damping_modes 2 -fom_rayleigh 1,1e-6)
+
+# -load_history: bad tables fail on every rank before the run, naming the file (and line, dataset
+# or node); good tables (CSV and HDF5, with a harmonic load beside) write their file.
+set(MORSE_LH_FOM fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 2e-3)
+morse_add_error_case(fom_history_missing_file "morse: error: -load_history .*no_such_table\\.csv: cannot open"
+  fom_history_missing.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DIR}/no_such_table.csv)
+morse_add_error_case(fom_history_missing_dataset
+  "morse: error: -load_history .*load_history_box\\.h5: /no_forces is neither a load table.*/no_forces/forces"
+  fom_history_no_dataset.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_box.h5:/no_forces)
+morse_add_error_case(fom_history_missing_group "morse: error: -load_history .*load_history_box\\.h5: no group /nosuch"
+  fom_history_no_group.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_box.h5:/nosuch)
+morse_add_error_case(fom_history_bad_times
+  "morse: error: -load_history .*load_history_bad_times\\.csv:4: the times are not increasing"
+  fom_history_bad_times.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_bad_times.csv)
+morse_add_error_case(fom_history_nan "morse: error: -load_history .*load_history_nan\\.csv:2: value 4 is not finite"
+  fom_history_nan.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_nan.csv)
+morse_add_error_case(fom_history_unknown_node
+  "morse: error: .*load_history_unknown_node\\.csv: 1 node id\\(s\\) of the load table are not nodes of .*\\(777\\)"
+  fom_history_unknown_node.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_unknown_node.csv)
+morse_add_error_case(fom_history_too_short
+  "morse: error: .*load_history_box\\.csv: the load history covers \\[0, 0\\.003\\] s, not the run's \\[0, 0\\.005\\] s"
+  fom_history_short.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 5e-3 -load_history ${MORSE_CASE_DATA}/load_history_box.csv)
+morse_add_error_case(fom_history_bad_outside "morse: error: -load_history_outside: 'later' is not error, zero or hold"
+  fom_history_outside.h5 BOX
+  ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_box.csv -load_history_outside later)
+morse_add_ok_case(fom_history_csv_ok fom_history_csv.h5
+  fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir y
+  -load_x1_amplitude 1e5 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_monitor x1
+  -load_history '${MORSE_CASE_DATA}/load_history_box.csv')
+morse_add_ok_case(fom_history_h5_ok fom_history_h5.h5
+  fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -fom_dt 1e-4 -fom_tfinal 5e-3
+  -load_history '${MORSE_CASE_DATA}/load_history_box.h5' -load_history_outside hold -load_history_scale 0.5)

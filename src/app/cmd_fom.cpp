@@ -1,5 +1,5 @@
 // app/cmd_fom.cpp: `morse fom`, the full-order nonlinear implicit dynamics under the nodal loads
-// (dyn::integrate), the reference of every reduced model. Writes /fom: time, monitored set
+// (harmonic -load_* and tabulated -load_history; dyn::integrate), the reference of every reduced model. Writes /fom: time, monitored set
 // histories, energies, Newton statistics and full-field snapshots (written in parallel).
 #include <petscsys.h>
 
@@ -140,16 +140,25 @@ void run_fom(MPI_Comm comm) {
   std::vector<dyn::NodalLoad> load_list;
   std::string load_error;
   MORSE_CALL(get_loads(comm, &load_list, &load_error));
+  LoadHistoryOptions ho;
+  MORSE_CALL(get_load_history(comm, &ho));
   FomOptions fo;
   MORSE_CALL(get_fom_options(comm, &fo));
   if (help_requested()) return;
   check_options(comm, true);
   collective_check(comm, load_error);
+  collective_check(comm, ho.error);
   check(fo);
   const int rank = rank_of(comm);
 
   Model md = build_model(comm, o);
+  MORSE_CHECK(!(md.from_matrices && !ho.spec.empty()), "-load_history needs a mesh (node ids), not -matrices_* input");
   dyn::Loads loads(md.lm, md.dofs, load_list);
+  const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fo.s.t_final / fo.s.dt - 1e-9));
+  if (auto h = make_load_history(comm, md.lm, md.dofs, ho)) {
+    h->check_covers(0.0, n_steps * fo.s.dt);
+    loads.set_history(std::move(h));
+  }
   std::vector<dyn::SetProbe> probes;
   for (const auto& m : fo.monitor) probes.emplace_back(md.lm, md.dofs, m);
   fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
@@ -159,7 +168,6 @@ void run_fom(MPI_Comm comm) {
     MORSE_CALL(VecSet(u0.get(), 0.0));
     io::read_nodal_field(md.lm, md.dofs, fo.initial, fo.initial_dataset, u0.get());
   }
-  const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fo.s.t_final / fo.s.dt - 1e-9));
   if (std::abs(n_steps * fo.s.dt - fo.s.t_final) > 1e-9 * fo.s.t_final)
     print0(comm, "morse fom: -fom_tfinal is not a multiple of -fom_dt: the run ends at t = %g (%lld steps)\n",
            n_steps * fo.s.dt, (long long)n_steps);
@@ -269,6 +277,10 @@ void run_fom(MPI_Comm comm) {
     out.attribute_int("/fom/snapshots", "every", fo.snapshot_every);
   }
   if (!stats.damping_omega.empty()) out.write("/fom/damping/omega", stats.damping_omega);
+  if (const auto* h = loads.history()) {
+    out.attribute("/fom", "load_history", h->source());
+    out.attribute("/fom", "load_history_scale", ho.scale);
+  }
   out.attribute_int("/fom", "linear", fo.linear ? 1 : 0);
   out.attribute("/fom", "scheme", fo.scheme);
   out.attribute("/fom", "dt", fo.s.dt);

@@ -155,6 +155,13 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   std::vector<double> c_n, c_t, c_g, c_ur, e_r(3 * nc, 0.0);
   std::vector<std::int64_t> c_act;
   double c_max = 0.0, c_tmax = 0.0;
+  // The contact forces act for one step each: the mean force of every output interval (its
+  // impulse over its length) keeps what the output samples alone would miss, so that the
+  // history can drive another model (-load_history).
+  const std::vector<double> c_normal = nc ? sim::contact_normals(so.s.contact) : std::vector<double>{};
+  std::vector<double> c_sum(3 * nc, 0.0), c_mean, c_mean_t;
+  long c_count = 0;
+  double t_prev_out = 0.0;
   for (std::size_t k = 0; k < nc; ++k) {
     const double rho = std::hypot(cn[k].x[0], cn[k].x[1]);
     if (rho > 0) e_r[3 * k] = cn[k].x[0] / rho, e_r[3 * k + 1] = cn[k].x[1] / rho;
@@ -173,8 +180,20 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     tf = x.t;
     for (std::size_t k = 0; k < nc; ++k)
       if (x.contact_normal[k] > c_max) c_max = x.contact_normal[k], c_tmax = x.t;
+    if (nc && x.step > 0) {
+      for (std::size_t k = 0; k < nc; ++k)
+        for (int d = 0; d < 3; ++d)
+          c_sum[3 * k + d] += x.contact_normal[k] * c_normal[3 * k + d] + x.contact_friction[3 * k + d];
+      ++c_count;
+    }
     if (x.step % so.every != 0) return;
     if (nc) {
+      // Row 0 (the initial state) has no force; row i the mean over the steps since row i - 1.
+      for (std::size_t j = 0; j < 3 * nc; ++j) c_mean.push_back(c_count ? c_sum[j] / c_count : 0.0);
+      c_mean_t.push_back(x.step == 0 ? 0.0 : 0.5 * (t_prev_out + x.t));
+      std::fill(c_sum.begin(), c_sum.end(), 0.0);
+      c_count = 0;
+      t_prev_out = x.t;
       c_n.insert(c_n.end(), x.contact_normal, x.contact_normal + nc);
       c_t.insert(c_t.end(), x.contact_friction, x.contact_friction + 3 * nc);
       c_g.insert(c_g.end(), x.gap, x.gap + nc);
@@ -233,6 +252,17 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     out.attribute("/sim/contact/normal", "description", "[time][node] normal contact force lambda >= 0 [N]");
     out.write("/sim/contact/tangential", c_t, {nt, nn, 3});
     out.attribute("/sim/contact/tangential", "description", "[time][node][x,y,z] Coulomb friction force [N]");
+    out.write("/sim/contact/normals", c_normal, {nn, 3});
+    out.attribute("/sim/contact/normals", "description",
+                  "[node][x,y,z] unit normal n_k to the free side (constant): the force on node k is "
+                  "normal n_k + tangential");
+    out.write("/sim/contact/mean_force", c_mean, {nt, nn, 3});
+    out.attribute("/sim/contact/mean_force", "description",
+                  "[time][node][x,y,z] mean contact force (normal n_k + tangential) over the steps since the "
+                  "previous output row [N], global axes; row 0 is 0; at mean_force_time");
+    out.write("/sim/contact/mean_force_time", c_mean_t);
+    out.attribute("/sim/contact/mean_force_time", "description",
+                  "centre of each row's output interval [s] (0 for row 0): the time grid of mean_force");
     out.write("/sim/contact/gap", c_g, {nt, nn});
     out.attribute("/sim/contact/gap", "description", "[time][node] gap after the correction [m] (>= 0)");
     out.write("/sim/contact/active", c_act);

@@ -408,6 +408,49 @@ PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std:
   return PETSC_SUCCESS;
 }
 
+PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE, outside_set = PETSC_FALSE;
+  std::string outside = "error";
+  PetscOptionsBegin(comm, nullptr, "morse tabulated load history (linear interpolation in time)", "");
+  PetscCall(PetscOptionsString("-load_history",
+                               "FILE[:/GROUP]: nodal forces on a time grid, added to the -load_* loads: a CSV "
+                               "(time,node_id,fx,fy,fz), an HDF5 table (/load_history: time, node_ids, forces) or the "
+                               "contact forces of a morse simulate file (/sim/contact)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->spec = buf;
+  buf[0] = 0;
+  PetscCall(PetscOptionsString("-load_history_outside",
+                               "Outside the table's time grid: error (checked before the run), zero or hold (end values)",
+                               "", outside.c_str(), buf, sizeof buf, &outside_set));
+  if (outside_set) outside = buf;
+  PetscCall(PetscOptionsReal("-load_history_scale", "Factor on every force of the table", "", o->scale, &o->scale,
+                             nullptr));
+  PetscOptionsEnd();
+  if (auto why = dyn::parse_outside(outside, &o->outside); !why.empty()) o->error = cat("-load_history_outside: ", why);
+  if (o->error.empty() && !std::isfinite(o->scale)) o->error = "-load_history_scale must be finite";
+  if (o->error.empty() && o->spec.empty() && outside_set) o->error = "-load_history_outside needs -load_history FILE";
+  return PETSC_SUCCESS;
+}
+
+std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
+                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o) {
+  if (o.spec.empty()) return nullptr;
+  StageTimer t(comm, "LoadHistory");
+  dyn::LoadTable table;
+  try {
+    table = dyn::read_load_table(comm, o.spec);
+  } catch (const Error& e) {
+    throw Error(cat("-load_history ", e.what()));
+  }
+  auto h = std::make_shared<dyn::LoadHistory>(lm, dofs, table, o.outside, o.scale);
+  double peak = 0.0;
+  for (double f : table.forces) peak = std::max(peak, std::abs(f));
+  print0(comm, "morse: load history %s: %zu nodes, %zu times in [%g, %g] s, max |force component| %.4g N (x %g)\n",
+         table.source.c_str(), table.n_nodes(), table.n_times(), table.time.front(), table.time.back(), peak, o.scale);
+  return h;
+}
+
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;

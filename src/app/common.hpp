@@ -124,6 +124,21 @@ cb::CBSettings cb_settings(const ReduceOptions& r);
 PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error,
                          const char* prefix = nullptr);
 
+/// The tabulated load history of `morse fom` (docs/user-guide.md): -load_history FILE[:/GROUP],
+/// -load_history_outside error|zero|hold, -load_history_scale S.
+struct LoadHistoryOptions {
+  std::string spec;  ///< empty: none
+  dyn::Outside outside = dyn::Outside::Error;
+  double scale = 1.0;
+  std::string error;  ///< a bad value, naming the option
+};
+PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o);
+/// Reads the table (rank 0, broadcast) and applies it to the model; null without -load_history.
+/// Prints a one-line summary. Throws collectively on bad input (the reader's message, prefixed by
+/// the option). Collective.
+std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
+                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o);
+
 /// A comma-separated list of node sets from option `name` (empty if not given).
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
                             const char* prefix = nullptr);

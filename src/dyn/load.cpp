@@ -76,6 +76,7 @@ double Loads::factor(std::size_t i, double t) const {
 void Loads::evaluate(double t, Vec F) const {
   MORSE_CALL(VecSet(F, 0.0));
   for (std::size_t i = 0; i < loads_.size(); ++i) MORSE_CALL(VecAXPY(F, factor(i, t), patterns_[i].get()));
+  if (history_) history_->add_to(t, F);
 }
 
 double Loads::max_omega() const {

@@ -430,6 +430,19 @@ bool read_any(const std::string& file, const std::string& name, hid_t type, std:
 }
 }  // namespace
 
+bool has_object(const std::string& file, const std::string& name) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) return false;
+  bool exists = true;
+  for (std::size_t p = name.find('/', 1); exists; p = name.find('/', p + 1)) {
+    exists = H5Lexists(f, name.substr(0, p).c_str(), H5P_DEFAULT) > 0;
+    if (p == std::string::npos) break;
+  }
+  H5Fclose(f);
+  return exists;
+}
+
 bool read_doubles(const std::string& file, const std::string& name, std::vector<double>* out,
                   std::vector<hsize_t>* dims, std::string* error) {
   return read_any(file, name, H5T_NATIVE_DOUBLE, out, dims, error);

@@ -32,6 +32,26 @@ std::vector<ContactNode> contact_nodes(const nlrom::StoredModel& sm, const std::
   return out;
 }
 
+std::vector<double> contact_normals(const ContactSettings& c) {
+  const std::size_t n = c.nodes.size();
+  std::vector<double> normal(3 * n, 0.0);
+  if (c.obstacle == Obstacle::Plane) {
+    const double* nv = c.plane.normal;
+    const double nn = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+    MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn, ")");
+    for (std::size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d) normal[3 * k + d] = nv[d];
+  } else {
+    for (std::size_t k = 0; k < n; ++k) {
+      const double* x = c.nodes[k].x;
+      const double rho = std::hypot(x[0], x[1]);
+      MORSE_CHECK(rho > 0, "contact: casing contact node ", k, " lies on the rotation axis");
+      normal[3 * k] = -x[0] / rho, normal[3 * k + 1] = -x[1] / rho;  // -e_r
+    }
+  }
+  return normal;
+}
+
 }  // namespace morse::sim
 
 namespace morse::sim::detail {
@@ -41,16 +61,10 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
   MORSE_CHECK(c.mu >= 0 && std::isfinite(c.mu), "contact: the friction coefficient must be >= 0 (got ", c.mu, ")");
   for (const auto& node : c.nodes)
     MORSE_CHECK(node.dof + 3 <= r, "contact: node DOF ", node.dof, " is outside the reduced coordinates (r = ", r, ")");
-  normal_.assign(3 * n_, 0.0);
+  normal_ = contact_normals(c);
   slide_.assign(3 * n_, 0.0);
   theta0_.assign(n_, 0.0);
-  if (c.obstacle == Obstacle::Plane) {
-    const double* nv = c.plane.normal;
-    const double nn = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
-    MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn, ")");
-    for (std::size_t k = 0; k < n_; ++k)
-      for (int d = 0; d < 3; ++d) normal_[3 * k + d] = nv[d];
-  } else {
+  if (c.obstacle == Obstacle::Casing) {
     const auto& cs = c.casing;
     MORSE_CHECK(cs.clearance > 0 && cs.bump_height >= 0 && cs.lobes > 0 && cs.width > 0 && cs.alpha >= 0,
                 "contact: the casing needs clearance > 0, bump height >= 0, lobes > 0, width > 0, alpha >= 0");
@@ -59,8 +73,6 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
     for (std::size_t k = 0; k < n_; ++k) {
       const double* x = c.nodes[k].x;
       const double rho = std::hypot(x[0], x[1]);
-      MORSE_CHECK(rho > 0, "contact: casing contact node ", k, " lies on the rotation axis");
-      normal_[3 * k] = -x[0] / rho, normal_[3 * k + 1] = -x[1] / rho;  // -e_r
       slide_[3 * k] = -sgn * x[1] / rho, slide_[3 * k + 1] = sgn * x[0] / rho;  // sign(omega) e_theta
       theta0_[k] = std::atan2(x[1], x[0]);
     }

@@ -5,7 +5,9 @@
 //
 // Loads are nodal: each names a node set, a direction, a force per node (newtons per node, not a
 // traction) and a harmonic time law F(t) = A sin(omega t + phase); omega = 0 means the constant
-// load A (the phase is then ignored).
+// load A (the phase is then ignored). A tabulated history (LoadHistory: a force vector per node
+// on a time grid, linearly interpolated; e.g. the contact forces of a `morse simulate` run) may
+// be added to them.
 //
 // Statics: Newton (PETSc SNES, line search, MUMPS) on f_int(u) = lambda f_e(t_s), with load
 // stepping in lambda and cut-back of failed increments.
@@ -25,7 +27,9 @@
 #include <petscmat.h>
 #include <petscvec.h>
 
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -49,16 +53,108 @@ struct NodalLoad {
 /// Parses a direction: x, y, z or vx,vy,vz. Returns "" or an error message.
 std::string parse_direction(const std::string& text, double dir[3]);
 
+// ------------------------------------------------------------------------------------------
+// Tabulated nodal load histories (Nastran TABLED1 / Code_Aster DEFI_FONCTION, per node and
+// component): a force vector per node at each time of a grid t_0 < t_1 < ... < t_{n-1},
+// linearly interpolated in time in between,
+//
+//   f_k(t) = F_{i,k} + (t - t_i) / (t_{i+1} - t_i) (F_{i+1,k} - F_{i,k}),   t_i <= t <= t_{i+1}.
+//
+// Outside [t_0, t_{n-1}] the history is an error by default (Code_Aster's PROLONGEMENT='EXCLU'),
+// checked before a run starts; Outside::Zero and Outside::Hold give zero or the end values.
+
+/// What a LoadHistory gives outside its time grid.
+enum class Outside {
+  Error,  ///< throw (check_covers() before a run, evaluate() during it)
+  Zero,   ///< no force before t_0 and after t_{n-1}
+  Hold,   ///< the first / last row (constant extrapolation)
+};
+/// Parses error|zero|hold. Returns "" or an error message.
+std::string parse_outside(const std::string& text, Outside* out);
+
+/// A tabulated nodal force history, held whole (the same on every rank).
+struct LoadTable {
+  std::vector<double> time;            ///< n_t strictly increasing times [s]
+  std::vector<std::int64_t> node_ids;  ///< n_nodes mesh node ids (file labels), distinct
+  std::vector<double> forces;          ///< [time][node][x,y,z], n_t * n_nodes * 3 [N], global axes
+  std::string source;                  ///< where it came from (file and group), for messages
+  std::size_t n_times() const { return time.size(); }
+  std::size_t n_nodes() const { return node_ids.size(); }
+  /// "" if the table is consistent: at least one time and one node, sizes that match, strictly
+  /// increasing finite times, finite forces, distinct node ids; else a message naming source and
+  /// the first offending time row / node / value.
+  std::string validate() const;
+  /// Interval and weight of t: f(t) = (1 - w) F_i + w F_{i+1} (i + 1 < n_t; a one-row table gives
+  /// i = 0, w = 0). Outside the grid (beyond a relative 1e-9 of its span): *inside = false and
+  /// (i, w) are those of Outside::Hold. Not collective.
+  void locate(double t, std::size_t* i, double* w, bool* inside) const;
+};
+
+/// Reads a load table from a file (serial, any rank; no communication). `spec` is FILE or
+/// FILE:GROUP:
+///  - FILE ending in .csv (any case): lines "time, node_id, fx, fy, fz" (commas and/or blanks;
+///    '#' starts a comment; one optional header line of words). Rows come in blocks of one time,
+///    times increasing; every block lists every node of the table exactly once (any order).
+///  - HDF5, group with `time` (n_t), `node_ids` (n_nodes, integer) and `forces` (n_t, n_nodes, 3):
+///    the generic table (docs/hdf5-schema.md, "/load_history").
+///  - HDF5, a `morse simulate` contact group (/sim/contact): its `mean_force` (the mean contact
+///    force of each output interval, normal + friction, in global axes) at `mean_force_time`
+///    (interval centres), node_ids as written.
+///  Without GROUP, /load_history is tried, then /sim/contact. Returns "" or an error naming the file,
+///  the dataset (or CSV line) and the fault (missing file / dataset, bad shape, non-increasing
+///  times, NaN, duplicate node, ...); the table is validated.
+std::string read_load_table(const std::string& spec, LoadTable* table);
+/// The same, read on rank 0 and broadcast: every rank returns the table, or every rank throws
+/// the reader's message. Collective.
+LoadTable read_load_table(MPI_Comm comm, const std::string& spec);
+
+/// A tabulated nodal load history applied to a distributed model: the table's forces on the free
+/// DOFs of its nodes (clamped DOFs are dropped: they are reactions), scaled by `scale`.
+class LoadHistory {
+ public:
+  /// Collective. Throws (collectively) if the table does not validate or if a node id is not a
+  /// node of the mesh (naming up to 10 of them and the table's source). Every rank keeps the
+  /// columns of the nodes it owns only.
+  LoadHistory(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const LoadTable& table, Outside outside = Outside::Error,
+              double scale = 1.0);
+  /// F += scale f(t) on the owned DOFs. Not collective (the same time on every rank gives the same
+  /// verdict). Throws if t is outside the grid and outside() is Error.
+  void add_to(double t, Vec F) const;
+  /// Throws (on every rank alike) if outside() is Error and [t_begin, t_end] is not inside the
+  /// grid (to its relative 1e-9 tolerance), naming the source and both intervals.
+  void check_covers(double t_begin, double t_end) const;
+  double t_first() const { return grid_.time.front(); }
+  double t_last() const { return grid_.time.back(); }
+  std::size_t n_nodes() const { return n_nodes_; }
+  Outside outside() const { return outside_; }
+  const std::string& source() const { return grid_.source; }
+  /// Sum over the table's nodes of scale * f(t), clamped DOFs included (3 values). Not collective.
+  std::vector<double> total(double t) const;
+
+ private:
+  LoadTable grid_;  // the time grid and source only (the forces are kept per owned DOF below)
+  std::vector<PetscInt> local_;  // local index in F of each owned, free entry
+  std::vector<double> values_;   // [time][entry], scaled
+  std::vector<double> sum_;      // [time][x,y,z], scaled total over every node
+  Outside outside_;
+  std::size_t n_nodes_ = 0;
+};
+
 /// The load vectors of a list of nodal loads on a distributed model. Collective.
 class Loads {
  public:
   /// Throws (collectively) if a set does not exist (the message lists the sets), is empty, or
   /// a direction is zero. Loads on clamped DOFs are dropped (they are reactions).
   Loads(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::vector<NodalLoad>& loads);
-  /// F = f_e(t) (F has the DOF layout). Collective.
+  /// F = f_e(t) (F has the DOF layout): the harmonic loads plus the tabulated history, if any.
+  /// Collective.
   void evaluate(double t, Vec F) const;
   const std::vector<NodalLoad>& loads() const { return loads_; }
-  bool empty() const { return loads_.empty(); }
+  /// Adds a tabulated history to f_e (at most one; replaces a previous one). factor(), pattern()
+  /// and max_omega() describe the harmonic loads only.
+  void set_history(std::shared_ptr<const LoadHistory> history) { history_ = std::move(history); }
+  const LoadHistory* history() const { return history_.get(); }
+  bool empty() const { return loads_.empty() && !history_; }
   /// Time factor of load i: amplitude sin(omega t + phase) (amplitude if omega = 0).
   double factor(std::size_t i, double t) const;
   /// Unit-amplitude spatial pattern of load i (f_e(t) = sum_i factor(i, t) pattern(i)).
@@ -69,6 +165,7 @@ class Loads {
  private:
   std::vector<NodalLoad> loads_;
   std::vector<UVec> patterns_;  // unit-amplitude spatial pattern of each load
+  std::shared_ptr<const LoadHistory> history_;
 };
 
 /// The displacements of the nodes of one node set, sampled from distributed vectors onto rank 0

@@ -124,6 +124,9 @@ bool read_doubles(const std::string& file, const std::string& name, std::vector<
                   std::vector<hsize_t>* dims, std::string* error);
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
                std::vector<hsize_t>* dims, std::string* error);
+/// True if `file` opens as HDF5 and holds the object (group or dataset) `name` (every link on
+/// its path existing). Serial, any rank; never prints HDF5's error stack.
+bool has_object(const std::string& file, const std::string& name);
 /// A scalar string dataset (as written by H5Output::write_string, e.g. /meta/units).
 bool read_string(const std::string& file, const std::string& name, std::string* out, std::string* error);
 /// A scalar numeric attribute `name` of `object` (a group or dataset), as a double.

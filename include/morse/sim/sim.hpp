@@ -75,6 +75,13 @@ struct ContactSettings {
   double mu = 0.15;                ///< Coulomb friction coefficient
 };
 
+/// The unit normal n_k of each contact node, pointing to the free side (3 values per node, global
+/// axes; constant in time): the plane's normal, or -e_r = -(x, y, 0)/|(x, y)| of the node's
+/// reference position for the casing. The force of contact node k on the structure is
+/// lambda_k n_k + its friction force (StepState::contact_friction). Throws on a plane normal that
+/// is not a unit vector or a casing node on the axis.
+std::vector<double> contact_normals(const ContactSettings& c);
+
 /// The contact nodes of node set `set` of a stored model: each node's u_x index in q (it must be
 /// a physical boundary node of the basis; throws naming the first that is not) and its reference
 /// position from /mesh/coordinates.
