@@ -76,8 +76,9 @@ def read_freqs(path):
         return np.array(f["/fom/frequencies_hz"][()])
 
 
-# The stages of the eigen solve (EigenResiduals runs inside EigenVectors and is not added twice).
-EIGEN_STAGES = ("Factor", "SliceCutoff", "InertiaCount", "EigenSolve", "EigenVectors")
+# The stages of the eigen solve: the factorization, the solve, the vectors, the residual check of
+# every pair and the Sylvester check of a count solve (each its own stage, none nested).
+EIGEN_STAGES = ("Factor", "SliceCutoff", "InertiaCount", "EigenSolve", "EigenVectors", "EigenResiduals", "InertiaCheck")
 
 
 def eigen_seconds(sec):

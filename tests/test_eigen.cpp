@@ -215,6 +215,35 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
     }
   }
 
+  // The check itself, on hand-made results with the eigenvalues of LAPACK: the 29 lowest cut the
+  // 10th cluster, whose third copy is not among the pairs (an unconverged tie): accepted, with
+  // 30 counted; the 29 lowest but the first (a missed mode) and a cluster copy dropped from
+  // inside the window are refused.
+  {
+    cb::EigenSettings t;
+    t.nev = 29;
+    t.prefix = cat("test_check_hand_", solver, "_");
+    cb::Eigenpairs tie;
+    tie.omega2.assign(lam.begin(), lam.begin() + 29);
+    cb::check_count_by_inertia(K.get(), M.get(), t, {}, &tie);
+    EXPECT_EQ(tie.inertia_count, 30);
+    for (int variant = 0; variant < 2; ++variant) {
+      cb::Eigenpairs miss;
+      if (variant == 0) miss.omega2.assign(lam.begin() + 1, lam.begin() + 30);  // the lowest lost
+      else {
+        miss.omega2.assign(lam.begin(), lam.begin() + 30);
+        miss.omega2.erase(miss.omega2.begin() + 13);  // one copy of the 5th cluster lost
+      }
+      std::string msg;
+      try {
+        cb::check_count_by_inertia(K.get(), M.get(), t, {}, &miss);
+      } catch (const Error& err) {
+        msg = err.what();
+      }
+      EXPECT_NE(msg.find("missed modes"), std::string::npos) << "variant " << variant << ": " << msg;
+    }
+  }
+
   // Fault injection: the solve loses a pair (by cutoff and count by slicing the highest, by
   // count with one shift the lowest); the Sylvester check refuses it.
   for (const std::string mode : {"cutoff", "count_slicing", "count"}) {
