@@ -150,6 +150,10 @@ endfunction()
 
 morse_add_ok_case(modes_ok modes_ok.h5
   modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 6 ${MORSE_CASE_MATERIAL_STR})
+# The eigen solver's check and monitor options are accepted on the command line.
+morse_add_ok_case(modes_solver_options modes_solver_options.h5
+  modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 6 -modes_check_inertia false -modes_block_monitor
+  -modes_block_check_every 1 ${MORSE_CASE_MATERIAL_STR})
 morse_add_ok_case(reduce_ok reduce_ok.h5
   reduce -mesh '${MORSE_CASE_BOX}' -clamp x0 -boundary x1 -cb_num_fixed_modes 4 -cb_write_basis
   ${MORSE_CASE_MATERIAL_STR})

@@ -27,7 +27,7 @@ bool inner_option(const std::string& name) {
   // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
   // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
   static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_krylov_", "fom_", "nlrom_"};
-  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "eigen_solver", "block_", "snes_", "ksp_", "pc_", "mat_mumps_"};
+  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "eigen_solver", "check_inertia", "block_", "snes_", "ksp_", "pc_", "mat_mumps_"};
   for (const char* p : solvers)
     if (name.rfind(p, 0) == 0)
       for (const char* q : inner)
