@@ -3,6 +3,7 @@
 
 #include <mpi.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -123,6 +124,27 @@ inline void direct_solve(Mat A, Vec b, Vec x) {
   MORSE_CALL(PCSetType(pc, PCCHOLESKY));
   MORSE_CALL(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
   MORSE_CALL(KSPSolve(ksp.get(), b, x));
+}
+
+// Rank independence of a history recorded on one rank (serial) and on all ranks (all): rows of
+// 4 values, three displacements then an energy, each kind against its largest magnitude. Returns
+// "" if they agree to rtol, else what differs; *energy_scale (if given) gets the largest energy.
+inline std::string history_rank_difference(const std::vector<double>& serial, const std::vector<double>& all,
+                                           double rtol, double* energy_scale = nullptr) {
+  if (serial.size() != all.size())
+    return cat("1 rank recorded ", serial.size(), " values, all ranks ", all.size(), "; ");
+  double scale[2] = {0, 0}, diff[2] = {0, 0};
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const int q = i % 4 == 3 ? 1 : 0;
+    scale[q] = std::max(scale[q], std::abs(serial[i]));
+    diff[q] = std::max(diff[q], std::abs(serial[i] - all[i]));
+  }
+  if (energy_scale) *energy_scale = scale[1];
+  std::string msg;
+  for (int q = 0; q < 2; ++q)
+    if (!(diff[q] <= rtol * scale[q]))
+      msg += cat(q ? "energy" : "displacement", ": 1 rank vs all ranks differ by ", diff[q], " of ", scale[q], "; ");
+  return msg;
 }
 
 }  // namespace morse::test

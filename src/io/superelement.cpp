@@ -36,20 +36,6 @@ constexpr double kTwoPi = 6.283185307179586;
 // Round-off of the Schur complement gives ~1e-12 on well-conditioned models; a clamp gives O(1).
 constexpr double kRigidTol = 1e-6;
 
-// A scalar string attribute (fixed or variable length), empty if absent.
-bool has_link(const std::string& file, const std::string& name) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) return false;
-  bool ok = true;
-  for (std::size_t p = name.find('/', 1); ok; p = name.find('/', p + 1)) {
-    ok = H5Lexists(f, name.substr(0, p).c_str(), H5P_DEFAULT) > 0;
-    if (p == std::string::npos) break;
-  }
-  H5Fclose(f);
-  return ok;
-}
-
 std::string shape_text(const std::vector<hsize_t>& d) {
   std::string s = "[";
   for (std::size_t i = 0; i < d.size(); ++i) s += cat(i ? "][" : "", d[i]);
@@ -206,7 +192,7 @@ Superelement read_superelement(const std::string& file) {
   se.n = static_cast<int>(dk[0]);
   MORSE_CHECK(read_doubles(file, "/rom/M", &se.M, &dm, &err), file, ": no /rom/M");
   MORSE_CHECK(dm == dk, file, ": /rom/M is ", shape_text(dm), " but /rom/K is ", shape_text(dk));
-  if (has_link(file, "/rom/C")) {
+  if (has_object(file, "/rom/C")) {
     MORSE_CHECK(read_doubles(file, "/rom/C", &se.C, &dc, &err), err);
     MORSE_CHECK(dc == dk, file, ": /rom/C is ", shape_text(dc), " but /rom/K is ", shape_text(dk));
   }
@@ -235,7 +221,7 @@ Superelement read_superelement(const std::string& file) {
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
   std::vector<hsize_t> dn;
-  if (has_link(file, "/rom/boundary_nodes")) {
+  if (has_object(file, "/rom/boundary_nodes")) {
     MORSE_CHECK(read_ints(file, "/rom/boundary_nodes", &se.boundary_nodes, &dn, &err), err);
     auto sorted = se.boundary_nodes;
     std::sort(sorted.begin(), sorted.end());
@@ -253,7 +239,7 @@ Superelement read_superelement(const std::string& file) {
   read_string(file, "/meta/command", &se.command, &ignored);
   se.selection_method = read_string_attribute(file, "/rom", "selection_method");
 
-  if (has_link(file, "/mesh/node_ids")) {
+  if (has_object(file, "/mesh/node_ids")) {
     std::vector<std::int64_t> ids;
     std::vector<double> xyz;
     std::vector<hsize_t> di, dx;
@@ -272,7 +258,7 @@ Superelement read_superelement(const std::string& file) {
     }
     se.from_mesh = true;
     se.model_node_ids = ids;
-  } else if (has_link(file, "/dofs/node")) {
+  } else if (has_object(file, "/dofs/node")) {
     std::vector<std::int64_t> node, comp;
     std::vector<hsize_t> d1, d2;
     MORSE_CHECK(read_ints(file, "/dofs/node", &node, &d1, &err), err);
@@ -341,7 +327,7 @@ NodalShapes read_nodal_shapes(const Superelement& se) {
     MORSE_CHECK(read_doubles(file, "/cb/fixed_interface/mode_shapes", &phi, &df, &err), err, why);
     MORSE_CHECK(df.size() == 3 && df[1] == nn && df[2] == 3, file,
                 ": /cb/fixed_interface/mode_shapes is ", shape_text(df), " for ", nn, " nodes");
-    if (has_link(file, "/rom/selected_modes")) {
+    if (has_object(file, "/rom/selected_modes")) {
       MORSE_CHECK(read_ints(file, "/rom/selected_modes", &columns, &ds, &err), err);
     } else {
       for (int k = 0; k < se.n_modes(); ++k) columns.push_back(k);
