@@ -62,7 +62,8 @@ InertiaCounter::InertiaCounter(Mat K, Mat M, const std::string& prefix) : K_(K),
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
   MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A_.ptr()));
-  MORSE_CALL(MatSetOptionsPrefix(A_.get(), (prefix + "inertia_").c_str()));
+  prefix_ = prefix + "inertia_";
+  MORSE_CALL(MatSetOptionsPrefix(A_.get(), prefix_.c_str()));
   // K and M assembled by morse share their pattern (same elements, full element blocks); the
   // fast axpy is used only when every rank sees the same number of stored entries.
   MatInfo ik, im;
@@ -82,6 +83,11 @@ PetscInt InertiaCounter::count(double sigma) {
     MORSE_CALL(MatGetFactor(A_.get(), MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F_.ptr()));
     MORSE_CALL(MatMumpsSetIcntl(F_.get(), 13, 1));
     MORSE_CALL(MatMumpsSetIcntl(F_.get(), 14, 50));
+    // -<prefix>inertia_mat_mumps_* reach this factorization (ICNTL(13) = 1 is needed for the
+    // inertia in parallel and stays).
+    MORSE_CALL(MatSetOptionsPrefix(F_.get(), prefix_.c_str()));
+    MORSE_CALL(MatSetFromOptions(F_.get()));
+    MORSE_CALL(MatMumpsSetIcntl(F_.get(), 13, 1));
     MORSE_CALL(MatCholeskyFactorSymbolic(F_.get(), A_.get(), nullptr, &info));
   }
   MORSE_CALL(MatCholeskyFactorNumeric(F_.get(), A_.get(), &info));

@@ -131,6 +131,7 @@ class InertiaCounter {
  private:
   Mat K_, M_;
   UMat A_, F_;
+  std::string prefix_;
   bool same_pattern_ = false;
   PetscInt calls_ = 0;
 };
