@@ -565,10 +565,10 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
                              double budget_gb, const EigenSettings& s) {
   MPI_Comm node;
   MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
-  double rows = static_cast<double>(m_local), avail = 0.0;
+  double rows = static_cast<double>(m_local);
   MPI_Allreduce(MPI_IN_PLACE, &rows, 1, MPI_DOUBLE, MPI_SUM, node);
   MPI_Comm_free(&node);
-  avail = available_bytes();
+  const double avail = available_bytes();
   // The budget of the basis on a node: -block_memory_gb, else 70 % of what is available.
   const double budget = budget_gb > 0 ? budget_gb * 1e9 : (avail > 0 ? 0.7 * avail : -1.0);
   // Vectors of the basis that fit on this node (+inf if the memory is unknown).

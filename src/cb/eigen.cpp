@@ -81,10 +81,9 @@ PetscInt InertiaCounter::count(double sigma) {
     // K - sigma M is indefinite: MUMPS's symmetric indefinite LDL^T (not flagged SPD), with the
     // inertia available in parallel (ICNTL(13) = 1) and room for delayed pivots (ICNTL(14)).
     MORSE_CALL(MatGetFactor(A_.get(), MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F_.ptr()));
-    MORSE_CALL(MatMumpsSetIcntl(F_.get(), 13, 1));
     MORSE_CALL(MatMumpsSetIcntl(F_.get(), 14, 50));
-    // -<prefix>inertia_mat_mumps_* reach this factorization (ICNTL(13) = 1 is needed for the
-    // inertia in parallel and stays).
+    // -<prefix>inertia_mat_mumps_* reach this factorization, but ICNTL(13) = 1 (the inertia in
+    // parallel needs it) is set after them.
     MORSE_CALL(MatSetOptionsPrefix(F_.get(), prefix_.c_str()));
     MORSE_CALL(MatSetFromOptions(F_.get()));
     MORSE_CALL(MatMumpsSetIcntl(F_.get(), 13, 1));
@@ -457,7 +456,7 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   if (tied > 0)
     print0(comm, "  %s: the farthest pair returned (%.9g Hz) is one of a cluster: %d more eigenvalue(s) within 1e-6 of it "
-           "are not returned; every eigenvalue below the cluster is\n",
+           "are not returned; every eigenvalue nearer the shift than the cluster is returned\n",
            s.what.c_str(), hz(far), (int)tied);
 }
 
