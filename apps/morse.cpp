@@ -52,6 +52,7 @@ static int handle_error(MPI_Comm err_comm, const char* what) {
 }
 
 int main(int argc, char** argv) {
+  morse::use_huge_pages(argv);
   // The command words come before the first option.
   std::vector<std::string> words;
   for (int i = 1; i < argc && argv[i][0] != '-'; ++i) words.emplace_back(argv[i]);

@@ -5,6 +5,7 @@
 #include "morse/core/session.hpp"
 
 int main(int argc, char** argv) {
+  morse::use_huge_pages(argv);
   ::testing::InitGoogleTest(&argc, argv);
   int result = 0;
   {
