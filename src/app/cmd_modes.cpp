@@ -48,6 +48,7 @@ void run_modes(MPI_Comm comm) {
   es.shift = shift;
   es.prefix = "modes_";
   es.what = "full-model modes";
+  es.keep_factor = false;  // nothing solves with it afterwards: the Sylvester check reuses it
   auto w = cb::sign_reference(md.lm, md.dofs);
   auto eig = cb::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
   check_options(comm, false);

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <numeric>
 
 #include "morse/cb/eigen.hpp"
@@ -562,7 +563,7 @@ double available_bytes() {
 // sharing it; the same on every rank. A cap below nev + 2 blocks is an error that says what the
 // solve needs. Collective.
 PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, PetscInt b, PetscInt kdim,
-                             double budget_gb, const EigenSettings& s) {
+                             double budget_gb, const EigenSettings& s, double share = 1.0) {
   MPI_Comm node;
   MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
   double rows = static_cast<double>(m_local);
@@ -570,7 +571,8 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
   MPI_Comm_free(&node);
   const double avail = available_bytes();
   // The budget of the basis on a node: -block_memory_gb, else 70 % of what is available.
-  const double budget = budget_gb > 0 ? budget_gb * 1e9 : (avail > 0 ? 0.7 * avail : -1.0);
+  // `share`: the fraction of it this solve may take (slices solved side by side on one node).
+  const double budget = share * (budget_gb > 0 ? budget_gb * 1e9 : (avail > 0 ? 0.7 * avail : -1.0));
   // Vectors of the basis that fit on this node (+inf if the memory is unknown).
   double fit = budget > 0 && rows > 0 ? budget / (2.0 * sizeof(double) * rows) : 1e300;
   MPI_Allreduce(MPI_IN_PLACE, &fit, 1, MPI_DOUBLE, MPI_MIN, comm);
@@ -598,9 +600,10 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
 // spectrum), its wall
 // time in *seconds; a singular K (null pivots at shift 0) is an error that names the likely
 // cause.
-UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds) {
+UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  StageTimer timer(comm, s.stage + "Factor");
+  std::unique_ptr<StageTimer> timer;
+  if (timed) timer = std::make_unique<StageTimer>(comm, s.stage + "Factor");
   auto t0 = std::chrono::steady_clock::now();
   UMat A, F;
   Mat Ash = K;
@@ -614,6 +617,9 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
   MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
   MORSE_CALL(MatSetFromOptions(F.get()));
+  // A factor that the Sylvester check will refactor for its inertia: the root front unsplit
+  // (ScaLAPACK's root has no inertia), set after the user's options as in InertiaCounter.
+  if (!s.keep_factor) MORSE_CALL(MatMumpsSetIcntl(F.get(), 13, 1));
   MatFactorInfo info;
   MORSE_CALL(MatFactorInfoInitialize(&info));
   MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
@@ -644,37 +650,390 @@ void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols,
   MORSE_CALL(MatDenseRestoreArrayRead(src, &a));
 }
 
-}  // namespace
 
-Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
-  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  PetscInt n = 0, m_local = 0;
-  MORSE_CALL(MatGetSize(K, &n, nullptr));
-  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
-  PetscInt b = -1, kmax = -1, max_restarts = 200, check_every = 0;
+// The block solver's options (-<prefix>block_*, -<prefix>eps_tol).
+struct BlockOptions {
+  PetscInt b = -1, kmax = -1, max_restarts = 200, check_every = 0, slices = 1, partitions = 1;
   PetscBool monitor = PETSC_FALSE;
-  PetscReal tol = s.tol, memory_gb = -1;
+  PetscReal tol = 0, memory_gb = -1;
+};
+
+BlockOptions block_options(MPI_Comm comm, const EigenSettings& s) {
+  BlockOptions o;
+  o.tol = s.tol;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
     PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
-                              "modes, else 16)", "", b, &b, nullptr));
+                              "modes, else 16)", "", o.b, &o.b, nullptr));
     PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
-                              kmax, &kmax, nullptr));
+                              o.kmax, &o.kmax, nullptr));
     PetscCall(PetscOptionsReal("-block_memory_gb",
                                "Memory for the basis (Q and M Q) per node [GB] when -block_max_dim is not given "
                                "(default: 70% of the memory available after the factorization)",
-                               "", memory_gb, &memory_gb, nullptr));
-    PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", max_restarts, &max_restarts, nullptr));
+                               "", o.memory_gb, &o.memory_gb, nullptr));
+    PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", o.max_restarts, &o.max_restarts, nullptr));
     PetscCall(PetscOptionsInt("-block_check_every", "Rayleigh-Ritz every N blocks (default 0: adaptive, extrapolated "
-                              "from the converged counts)", "", check_every, &check_every, nullptr));
-    PetscCall(PetscOptionsBool("-block_monitor", "Print the converged count at every Rayleigh-Ritz", "", monitor,
-                               &monitor, nullptr));
-    PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", tol, &tol, nullptr));
+                              "from the converged counts)", "", o.check_every, &o.check_every, nullptr));
+    PetscCall(PetscOptionsBool("-block_monitor", "Print the converged count at every Rayleigh-Ritz", "", o.monitor,
+                               &o.monitor, nullptr));
+    PetscCall(PetscOptionsInt("-block_slices", "Spectrum slicing: solve [0, cutoff] in this many slices, one shift and "
+                              "one Sylvester count each (default 1: one shift; -block_partitions if that is larger)", "",
+                              o.slices, &o.slices, nullptr));
+    PetscCall(PetscOptionsInt("-block_partitions", "Subcommunicators solving slices side by side (each holds a copy of "
+                              "K and M and its own factorizations)", "", o.partitions, &o.partitions, nullptr));
+    PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", o.tol, &o.tol, nullptr));
     PetscOptionsEnd();
     return PETSC_SUCCESS;
   };
   MORSE_CALL(get_options());
-  MORSE_CHECK(b >= 1 || b == -1, "-", s.prefix, "block_size must be >= 1 (got ", b, ")");
+  MORSE_CHECK(o.b >= 1 || o.b == -1, "-", s.prefix, "block_size must be >= 1 (got ", o.b, ")");
+  MORSE_CHECK(o.check_every >= 0, "-", s.prefix, "block_check_every must be >= 0 (got ", o.check_every, ")");
+  MORSE_CHECK(o.partitions >= 1, "-", s.prefix, "block_partitions must be >= 1 (got ", o.partitions, ")");
+  MORSE_CHECK(o.slices >= 1, "-", s.prefix, "block_slices must be >= 1 (got ", o.slices, ")");
+  if (o.slices < o.partitions) o.slices = o.partitions;
+  return o;
+}
+
+// Block size and basis for nev pairs of an n-DOF problem; false if nev + 2 blocks do not fit
+// (nearly every mode of the problem wanted).
+bool block_shape(PetscInt n, PetscInt nev, const BlockOptions& o, const EigenSettings& s, PetscInt* b_out, PetscInt* kdim) {
+  // Measured (bench/README.md, eigen_bench.py): 50 modes of the rotor 37 deck are fastest with
+  // blocks of 8 (fewer vectors solved), 1000 of the stator with 16 (32 needs a restart).
+  PetscInt b = o.b < 0 ? (nev < 100 ? 8 : 16) : o.b;
+  MORSE_CHECK(o.kmax < 0 || o.kmax >= std::min(n, nev + 2 * b), "-", s.prefix, "block_max_dim ", o.kmax,
+              " is too small for ", nev, " modes with blocks of ", b, " (at least nev + 2 blocks)");
+  // A restart keeps at least nev Ritz vectors and the residual block, so the basis must hold
+  // nev + 2 blocks, better 3. Small problems (n not far above nev) get smaller blocks.
+  b = std::min(b, std::max<PetscInt>(1, n / 3));
+  while (b > 1 && basis_size(n, nev, b, o.kmax) < nev + 3 * b) b = std::max<PetscInt>(1, b / 2);
+  *b_out = b;
+  *kdim = basis_size(n, nev, b, o.kmax);
+  return *kdim >= nev + 2 * b;
+}
+
+// One count solve by the block solver: the nev pairs nearest `shift` (the lowest for shift <= 0),
+// ascending. `timed`: the Factor, EigenSolve and EigenVectors stages are recorded (the slices
+// of a spectrum-slicing solve, different on different subcommunicators, are not); `share`: the
+// part of the node's memory the basis may take.
+struct CountSolve {
+  std::vector<double> omega2;  // ascending
+  UMat V, F;
+  std::vector<double> extra;  // omega^2 of the other converged Ritz pairs
+  PetscInt b = 0, kdim = 0, restarts = 0, solves = 0, extra_passes = 0;
+  double factor_seconds = 0, t_solve = 0, t_orth = 0, t_rr = 0, t_restart = 0;
+};
+
+CountSolve block_count_solve(Mat K, Mat M, PetscInt nev, double shift, const EigenSettings& s, const BlockOptions& o,
+                             bool timed, double share, Progress* progress) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  PetscInt n = 0, m_local = 0;
+  MORSE_CALL(MatGetSize(K, &n, nullptr));
+  MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+  CountSolve r;
+  const bool fits = block_shape(n, nev, o, s, &r.b, &r.kdim);
+  MORSE_CHECK(fits, s.what, ": ", nev, " pairs of ", n, " DOFs leave no room for a block basis");
+  EigenSettings sf = s;
+  sf.shift = shift;
+  r.F = factor_shifted(K, M, shift, sf, &r.factor_seconds, timed);
+  if (o.kmax < 0) r.kdim = memory_capped_basis(comm, m_local, nev, r.b, r.kdim, o.memory_gb, s, share);
+  // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
+  // factored without a null pivot), so the wanted ones are the largest.
+  BlockSolver solver(K, M, r.F.get(), r.b, r.kdim, shift <= 0.0, comm);
+  solver.set_checks(o.check_every, o.monitor);
+  bool ok = false;
+  {
+    std::unique_ptr<StageTimer> timer;
+    if (timed) timer = std::make_unique<StageTimer>(comm, s.stage + "EigenSolve");
+    ok = solver.run(nev, o.tol, o.max_restarts, progress);
+  }
+  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", nev, " pairs in ", o.max_restarts,
+              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
+  r.restarts = solver.restarts();
+  r.solves = solver.solves_;
+  r.extra_passes = solver.extra_passes_;
+  r.t_solve = solver.t_solve_;
+  r.t_orth = solver.t_orth_;
+  r.t_rr = solver.t_rr_;
+  r.t_restart = solver.t_restart_;
+  for (double t : solver.converged_beyond(nev, o.tol)) r.extra.push_back(shift + 1.0 / t);
+  std::unique_ptr<StageTimer> timer;
+  if (timed) timer = std::make_unique<StageTimer>(comm, s.stage + "EigenVectors");
+  // Ascending omega^2 = shift + 1/theta. The Ritz vectors are formed in place in the basis and
+  // the work matrices freed before V is allocated, so extraction never needs more memory than
+  // the solve (for 1000 modes of 478k DOFs: 3.8 GB instead of 7.6 GB more).
+  std::vector<std::pair<double, PetscInt>> order;
+  for (PetscInt i = 0; i < nev; ++i) order.emplace_back(shift + 1.0 / solver.theta()[i], i);
+  std::sort(order.begin(), order.end());
+  std::vector<PetscInt> pick;
+  std::vector<std::pair<double, PetscInt>> first;
+  for (PetscInt j = 0; j < nev; ++j) {
+    pick.push_back(order[j].second);
+    first.emplace_back(order[j].first, j);
+  }
+  Mat Q = solver.ritz_vectors_in_place(pick);
+  solver.release_work();
+  MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, r.V.ptr()));
+  copy_columns(Q, first, r.V.get());
+  solver.release_basis();
+  for (const auto& x : order) r.omega2.push_back(x.first);
+  return r;
+}
+
+// Moves the columns of per-partition dense matrices (each on its subcommunicator, rows in that
+// subcommunicator's layout of the same n global rows) into V (MPIDENSE on comm, its own row
+// layout): column c of this partition's Vsub goes to column dest[c] of V (skipped if < 0). Every
+// rank passes its own partition's Vsub (null if it has no columns) and dest. MPI_Alltoallv in
+// rounds of at most 32 columns, so no message exceeds 32 local row blocks. Collective on comm.
+void gather_columns(MPI_Comm comm, Mat Vsub, PetscInt sub_rstart, PetscInt sub_rend, const std::vector<PetscInt>& dest,
+                    Mat V) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  const PetscInt* ranges = nullptr;
+  MORSE_CALL(MatGetOwnershipRanges(V, &ranges));
+  PetscInt vr0 = 0, vr1 = 0;
+  MORSE_CALL(MatGetOwnershipRange(V, &vr0, &vr1));
+  // Every rank's subcommunicator rows, and how many columns it sends per round.
+  std::vector<PetscInt> sub0(size), sub1(size);
+  MPI_Allgather(&sub_rstart, 1, MPIU_INT, sub0.data(), 1, MPIU_INT, comm);
+  MPI_Allgather(&sub_rend, 1, MPIU_INT, sub1.data(), 1, MPIU_INT, comm);
+  const PetscInt ncols = static_cast<PetscInt>(dest.size());
+  std::vector<PetscInt> all_ncols(size);
+  MPI_Allgather(&ncols, 1, MPIU_INT, all_ncols.data(), 1, MPIU_INT, comm);
+  const PetscInt most = *std::max_element(all_ncols.begin(), all_ncols.end());
+  // Every rank's destination columns (ranks of one partition have the same).
+  std::vector<int> dcount(size), ddispl(size);
+  for (int q = 0; q < size; ++q) dcount[q] = static_cast<int>(all_ncols[q]);
+  for (int q = 1; q < size; ++q) ddispl[q] = ddispl[q - 1] + dcount[q - 1];
+  std::vector<PetscInt> all_dest(static_cast<std::size_t>(ddispl[size - 1] + dcount[size - 1]));
+  MPI_Allgatherv(dest.data(), static_cast<int>(ncols), MPIU_INT, all_dest.data(), dcount.data(), ddispl.data(), MPIU_INT,
+                 comm);
+  const PetscScalar* a = nullptr;
+  PetscInt lda = 1;
+  if (Vsub) {
+    MORSE_CALL(MatDenseGetArrayRead(Vsub, &a));
+    MORSE_CALL(MatDenseGetLDA(Vsub, &lda));
+  }
+  PetscScalar* v = nullptr;
+  PetscInt ldv = 1;
+  MORSE_CALL(MatDenseGetArray(V, &v));
+  MORSE_CALL(MatDenseGetLDA(V, &ldv));
+  const PetscInt round = 32;
+  auto overlap = [](PetscInt a0, PetscInt a1, PetscInt b0, PetscInt b1) {
+    return std::make_pair(std::max(a0, b0), std::min(a1, b1));
+  };
+  for (PetscInt c0 = 0; c0 < most; c0 += round) {
+    std::vector<int> scount(size), sdispl(size), rcount(size), rdispl(size);
+    std::vector<double> sendbuf, recvbuf;
+    const PetscInt mine = std::max<PetscInt>(0, std::min(round, ncols - c0));
+    for (int q = 0; q < size; ++q) {
+      const auto [r0, r1] = overlap(sub_rstart, sub_rend, ranges[q], ranges[q + 1]);
+      sdispl[q] = static_cast<int>(sendbuf.size());
+      if (r1 > r0)
+        for (PetscInt c = c0; c < c0 + mine; ++c)
+          sendbuf.insert(sendbuf.end(), a + (r0 - sub_rstart) + lda * c, a + (r1 - sub_rstart) + lda * c);
+      scount[q] = static_cast<int>(sendbuf.size()) - sdispl[q];
+    }
+    int total = 0;
+    for (int q = 0; q < size; ++q) {
+      const auto [r0, r1] = overlap(sub0[q], sub1[q], vr0, vr1);
+      const PetscInt theirs = std::max<PetscInt>(0, std::min(round, all_ncols[q] - c0));
+      rdispl[q] = total;
+      rcount[q] = r1 > r0 ? static_cast<int>((r1 - r0) * theirs) : 0;
+      total += rcount[q];
+    }
+    recvbuf.resize(static_cast<std::size_t>(total));
+    MPI_Alltoallv(sendbuf.data(), scount.data(), sdispl.data(), MPI_DOUBLE, recvbuf.data(), rcount.data(),
+                  rdispl.data(), MPI_DOUBLE, comm);
+    for (int q = 0; q < size; ++q) {
+      const auto [r0, r1] = overlap(sub0[q], sub1[q], vr0, vr1);
+      if (r1 <= r0) continue;
+      const PetscInt theirs = std::max<PetscInt>(0, std::min(round, all_ncols[q] - c0));
+      for (PetscInt c = 0; c < theirs; ++c) {
+        const PetscInt d = all_dest[static_cast<std::size_t>(ddispl[q] + c0 + c)];
+        if (d < 0) continue;
+        std::copy_n(&recvbuf[static_cast<std::size_t>(rdispl[q] + (r1 - r0) * c)], r1 - r0, v + (r0 - vr0) + ldv * d);
+      }
+    }
+  }
+  MORSE_CALL(MatDenseRestoreArray(V, &v));
+  if (Vsub) MORSE_CALL(MatDenseRestoreArrayRead(Vsub, &a));
+}
+
+// Spectrum slicing with the block solver (theory §3): every eigenvalue in [0, top] (cutoff
+// mode: top = the cutoff; count mode: a cutoff with nev to 1.2 nev below it from inertia
+// counts, and the nev lowest kept). [0, top] is cut into S slices at beta_i = top (i/S)^(2/3)
+// (Weyl's law N ~ omega^3 for a 3D solid: about equal counts), the eigenvalues in each counted by
+// Sylvester's inertia at its ends, then found by a count solve about its middle: the n_i pairs
+// nearest the middle are exactly those inside, so each slice is checked (n_i pairs, all inside)
+// and the counts add up to N(top). The slices are spread over P subcommunicators (copies of K
+// and M by MatCreateRedundantMatrix), which count and solve side by side; the eigenvectors are
+// moved to K's layout at the end.
+Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockOptions& o, Vec sign_ref) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  int size = 1, rank = 0;
+  MPI_Comm_size(comm, &size);
+  MPI_Comm_rank(comm, &rank);
+  const PetscInt S = o.slices, P = o.partitions;
+  MORSE_CHECK(P <= size && size % P == 0, "-", s.prefix, "block_partitions ", P, " must divide the number of ranks (",
+              size, ")");
+  MORSE_CHECK(s.omega2_max > 0 || s.shift == 0.0, s.what, ": spectrum slicing (-", s.prefix,
+              "block_slices) finds the lowest modes; it takes no shift (got ", s.shift, ")");
+  Eigenpairs out;
+  out.slicing = true;
+  out.partitions = P;
+  const auto t_all = std::chrono::steady_clock::now();
+  double top = s.omega2_max;
+  PetscInt N = 0;
+  if (s.omega2_max > 0) {
+    StageTimer timer(comm, s.stage + "InertiaCount");
+    InertiaCounter c(K, M, s.prefix);
+    N = c.count(top);
+    out.inertia_counts = 1;
+    MORSE_CHECK(N > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", top, ")");
+  } else {
+    MORSE_CHECK(s.nev > 0, s.what, ": the number of modes must be positive (got ", s.nev, ")");
+    StageTimer timer(comm, s.stage + "SliceCutoff");
+    top = count_cutoff(K, M, s.nev, s.prefix, s.what, &out.inertia_counts, &N);
+  }
+  out.inertia_count = N;
+  out.slice_omega2 = top;
+  const PetscInt n_out = s.omega2_max > 0 ? N : s.nev;
+  // The slices' ends, and which partition takes which slice (slice i: partition i mod P).
+  std::vector<double> beta(S + 1);
+  for (PetscInt i = 0; i <= S; ++i) beta[i] = top * std::pow(static_cast<double>(i) / static_cast<double>(S), 2.0 / 3.0);
+  beta[S] = top;
+  const int part = static_cast<int>(rank / (size / P));
+  MPI_Comm sub = MPI_COMM_NULL;
+  MPI_Comm_split(comm, part, rank, &sub);
+  UMat Ksub, Msub;
+  Mat Ks = K, Ms = M;
+  if (P > 1) {
+    MORSE_CALL(MatCreateRedundantMatrix(K, P, sub, MAT_INITIAL_MATRIX, Ksub.ptr()));
+    MORSE_CALL(MatCreateRedundantMatrix(M, P, sub, MAT_INITIAL_MATRIX, Msub.ptr()));
+    Ks = Ksub.get();
+    Ms = Msub.get();
+  }
+  // N(beta_i) at the inner ends, counted by the partition of slice i - 1, shared.
+  std::vector<PetscInt> below(S + 1, 0);
+  below[S] = N;
+  std::string err;
+  std::vector<std::pair<PetscInt, CountSolve>> mine;  // (slice, its pairs)
+  double t_count = 0, t_solve = 0;
+  {
+    StageTimer timer(comm, s.stage + "SliceCounts");
+    const auto t0 = std::chrono::steady_clock::now();
+    if (S > 1) {
+      InertiaCounter c(Ks, Ms, s.prefix);
+      for (PetscInt i = 1; i < S; ++i)
+        if ((i - 1) % P == part) below[i] = c.count(beta[i]);
+    }
+    MPI_Allreduce(MPI_IN_PLACE, below.data(), static_cast<int>(S + 1), MPIU_INT, MPI_MAX, comm);
+    t_count = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  for (PetscInt i = 0; i < S; ++i)
+    MORSE_CHECK(below[i + 1] >= below[i], s.what, ": inertia counts not monotone at ", beta[i + 1], " (", below[i + 1],
+                " < ", below[i], ")");
+  {
+    StageTimer timer(comm, s.stage + "EigenSolve");
+    const auto t0 = std::chrono::steady_clock::now();
+    PetscInt my_total = 0;
+    for (PetscInt i = part; i < S; i += P) my_total += below[i + 1] - below[i];
+    Progress progress(part == 0 ? sub : MPI_COMM_SELF, s.what, static_cast<double>(std::max<PetscInt>(my_total, 1)));
+    PetscInt done = 0;
+    for (PetscInt i = part; i < S; i += P) {
+      const PetscInt ni = below[i + 1] - below[i];
+      if (ni == 0) continue;
+      auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
+      CountSolve r = block_count_solve(Ks, Ms, ni, 0.5 * (beta[i] + beta[i + 1]), s, o, false, 1.0 / P, nullptr);
+      // Ritz values about a shift in the slice carry an error of about tol |omega^2 - shift|, 1e-8
+      // relative for the lowest modes of the first slice: the Rayleigh quotients are exact to
+      // the square of the vectors' error.
+      r.omega2 = rayleigh_quotients(Ks, Ms, r.V.get());
+      // Fault injection: the highest slice loses its `drop_for_test` highest pairs.
+      if (i == S - 1 && s.drop_for_test > 0) r.omega2.resize(r.omega2.size() - std::min<std::size_t>(s.drop_for_test, r.omega2.size()));
+      PetscInt inside = 0;
+      for (double w : r.omega2) inside += w >= beta[i] * (1 - 1e-12) && w <= beta[i + 1] * (1 + 1e-12) ? 1 : 0;
+      if (inside != ni && err.empty())
+        err = cat(s.what, ": slice ", i + 1, " of ", S, " [", hz(beta[i]), ", ", hz(beta[i + 1]),
+                  "] Hz: Sylvester's inertia counts ", ni, " eigenvalues in it but the solve found ", inside,
+                  ": it missed modes; raise -", s.prefix, "block_max_dim or use more slices");
+      done += ni;
+      progress.update(static_cast<double>(done));
+      mine.emplace_back(i, std::move(r));
+    }
+    t_solve = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  collective_check(comm, err);
+  // The eigenvalues and vectors, in K's layout, ascending (the slices are, and each slice nearly:
+  // the Rayleigh quotients of a cluster may come in another order than its Ritz values).
+  std::vector<double> all(static_cast<std::size_t>(N), -1e300);
+  PetscInt solves = 0, vectors = 0;
+  for (const auto& [i, r] : mine) {
+    std::copy(r.omega2.begin(), r.omega2.end(), all.begin() + below[i]);
+    if (sub != MPI_COMM_NULL) {
+      int sr = 0;
+      MPI_Comm_rank(sub, &sr);
+      if (sr == 0) solves += r.solves, vectors += r.solves * r.b;
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(N), MPI_DOUBLE, MPI_MAX, comm);
+  // position[k]: where pair k (slice order) goes in ascending order (ties kept in slice order).
+  std::vector<PetscInt> sorted(N), position(N);
+  std::iota(sorted.begin(), sorted.end(), 0);
+  std::stable_sort(sorted.begin(), sorted.end(), [&](PetscInt a, PetscInt b) { return all[a] < all[b]; });
+  for (PetscInt k = 0; k < N; ++k) position[sorted[k]] = k;
+  MPI_Allreduce(MPI_IN_PLACE, &solves, 1, MPIU_INT, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &vectors, 1, MPIU_INT, MPI_SUM, comm);
+  {
+    StageTimer timer(comm, s.stage + "EigenVectors");
+    PetscInt m_local = 0, n = 0, r0 = 0, r1 = 0;
+    MORSE_CALL(MatGetSize(K, &n, nullptr));
+    MORSE_CALL(MatGetLocalSize(K, &m_local, nullptr));
+    MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, n_out, nullptr, out.V.ptr()));
+    MORSE_CALL(MatGetOwnershipRange(Ks, &r0, &r1));
+    // One round per slice index of a partition: partition p sends its k-th slice.
+    const PetscInt rounds = (S + P - 1) / P;
+    for (PetscInt k = 0; k < rounds; ++k) {
+      const PetscInt i = part + k * P;
+      Mat Vs = nullptr;
+      std::vector<PetscInt> dest;
+      for (auto& [si, r] : mine)
+        if (si == i) {
+          Vs = r.V.get();
+          for (PetscInt c = 0; c < static_cast<PetscInt>(r.omega2.size()); ++c)
+            dest.push_back(position[below[i] + c] < n_out ? position[below[i] + c] : -1);
+        }
+      gather_columns(comm, Vs, r0, r1, dest, out.V.get());
+      for (auto& [si, r] : mine)
+        if (si == i) r.V.reset();
+    }
+  }
+  std::sort(all.begin(), all.end());
+  out.omega2.assign(all.begin(), all.begin() + n_out);
+  mine.clear();
+  Ksub.reset();
+  Msub.reset();
+  MPI_Comm_free(&sub);
+  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
+  print0(comm, "  %s: block solver in %d slices of [0, %.6g] Hz on %d subcommunicator(s) of %d rank(s): counts %.1f s, "
+         "solves %.1f s, %d block solves (%d vectors)\n", s.what.c_str(), (int)S, hz(top), (int)P, size / (int)P, t_count,
+         t_solve, (int)solves, (int)vectors);
+  print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M, slice by slice (every mode "
+         "found%s, %.1f s in all)\n", s.what.c_str(), (int)N, hz(top),
+         n_out < N ? cat(", the ", n_out, " lowest kept").c_str() : "",
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t_all).count());
+  finish_pairs(K, M, s, o.tol, sign_ref, &out);
+  return out;
+}
+
+}  // namespace
+
+Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(K, &n, nullptr));
+  const BlockOptions o = block_options(comm, s);
+  if (o.slices > 1) return solve_block_slices(K, M, s, o, sign_ref);
   Eigenpairs out;
   PetscInt nev = s.nev;
   const bool cutoff = s.omega2_max > 0;
@@ -689,67 +1048,29 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   }
   MORSE_CHECK(nev > 0, s.what, ": the number of modes must be positive (got ", nev, ")");
   MORSE_CHECK(nev <= n, s.what, ": ", nev, " modes requested but the problem has only ", n, " DOFs");
-  // Measured (bench/README.md, eigen_bench.py): 50 modes of the rotor 37 deck are fastest with
-  // blocks of 8 (fewer vectors solved), 1000 of the stator with 16 (32 needs a restart).
-  if (b < 0) b = nev < 100 ? 8 : 16;
-  const bool kmax_given = kmax >= 0;
-  MORSE_CHECK(!kmax_given || kmax >= std::min(n, nev + 2 * b), "-", s.prefix, "block_max_dim ", kmax,
-              " is too small for ", nev, " modes with blocks of ", b, " (at least nev + 2 blocks)");
-  // A restart keeps at least nev Ritz vectors and the residual block, so the basis must hold
-  // nev + 2 blocks, better 3. Small problems (n not far above nev) get smaller blocks.
-  b = std::min(b, std::max<PetscInt>(1, n / 3));
-  while (b > 1 && basis_size(n, nev, b, kmax) < nev + 3 * b) b = std::max<PetscInt>(1, b / 2);
-  if (basis_size(n, nev, b, kmax) < nev + 2 * b) {
+  PetscInt b = 0, kdim = 0;
+  if (!block_shape(n, nev, o, s, &b, &kdim)) {
     // Nearly every mode of the problem is wanted: a Krylov space that fills the whole space is
     // SLEPc's case.
     print0(comm, "  %s: %d modes of %d DOFs leave no room for a block basis; solved by Krylov-Schur\n",
            s.what.c_str(), (int)nev, (int)n);
     return solve_eigen_krylovschur(K, M, s, sign_ref);
   }
-  PetscInt kdim = basis_size(n, nev, b, kmax);
-  UMat F = factor_shifted(K, M, s.shift, s, &out.factor_seconds);
-  if (!kmax_given) kdim = memory_capped_basis(comm, m_local, nev, b, kdim, memory_gb, s);
-  // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
-  // factored without a null pivot), so the wanted ones are the largest.
-  MORSE_CHECK(check_every >= 0, "-", s.prefix, "block_check_every must be >= 0 (got ", check_every, ")");
-  BlockSolver solver(K, M, F.get(), b, kdim, s.shift <= 0.0, comm);
-  solver.set_checks(check_every, monitor);
-  bool ok = false;
+  CountSolve r;
   {
-    StageTimer timer(comm, s.stage + "EigenSolve");
     Progress progress(comm, s.what, static_cast<double>(nev));
-    ok = solver.run(nev, tol, max_restarts, &progress);
+    r = block_count_solve(K, M, nev, s.shift, s, o, true, 1.0, &progress);
   }
-  MORSE_CHECK(ok, s.what, ": the block solver did not converge ", nev, " pairs in ", max_restarts,
-              " restarts; raise -", s.prefix, "block_max_dim or -", s.prefix, "block_max_restarts");
-  out.iterations = solver.restarts();
-  out.block_factor = std::move(F);
-  {
-    StageTimer extract(comm, s.stage + "EigenVectors");
-    // Ascending omega^2 = shift + 1/theta. The Ritz vectors are formed in place in the basis and
-    // the work matrices freed before V is allocated, so extraction never needs more memory than
-    // the solve (for 1000 modes of 478k DOFs: 3.8 GB instead of 7.6 GB more).
-    std::vector<std::pair<double, PetscInt>> order;
-    for (PetscInt i = 0; i < nev; ++i) order.emplace_back(s.shift + 1.0 / solver.theta()[i], i);
-    std::sort(order.begin(), order.end());
-    std::vector<PetscInt> pick;
-    std::vector<std::pair<double, PetscInt>> first;
-    for (PetscInt j = 0; j < nev; ++j) {
-      pick.push_back(order[j].second);
-      first.emplace_back(order[j].first, j);
-    }
-    Mat Q = solver.ritz_vectors_in_place(pick);
-    solver.release_work();
-    MORSE_CALL(MatCreateDense(comm, m_local, PETSC_DECIDE, n, nev, nullptr, out.V.ptr()));
-    copy_columns(Q, first, out.V.get());
-    solver.release_basis();
-    for (const auto& o : order) out.omega2.push_back(o.first);
-  }
+  out.iterations = r.restarts;
+  out.factor_seconds = r.factor_seconds;
+  out.block_factor = std::move(r.F);
+  out.V = std::move(r.V);
+  out.omega2 = std::move(r.omega2);
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
-         s.what.c_str(), (int)b, (int)kdim, (int)solver.restarts(), (int)solver.solves_, (int)(solver.solves_ * b));
+         s.what.c_str(), (int)r.b, (int)r.kdim, (int)r.restarts, (int)r.solves, (int)(r.solves * r.b));
   print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s (%d of %d blocks reorthogonalized), Rayleigh-Ritz "
-         "%.2f s, restarts %.2f s\n", s.what.c_str(), solver.t_solve_, solver.t_orth_, (int)solver.extra_passes_,
-         (int)solver.solves_, solver.t_rr_, solver.t_restart_);
+         "%.2f s, restarts %.2f s\n", s.what.c_str(), r.t_solve, r.t_orth, (int)r.extra_passes,
+         (int)r.solves, r.t_rr, r.t_restart);
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
@@ -765,12 +1086,8 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
            s.what.c_str(), (int)nev, std::sqrt(s.omega2_max) / (2 * M_PI));
   }
-  finish_pairs(K, M, s, tol, sign_ref, &out);
-  if (!cutoff) {
-    std::vector<double> extra;
-    for (double t : solver.converged_beyond(nev, tol)) extra.push_back(s.shift + 1.0 / t);
-    check_count_by_inertia(K, M, s, extra, &out);
-  }
+  finish_pairs(K, M, s, o.tol, sign_ref, &out);
+  if (!cutoff) check_count_by_inertia(K, M, s, r.extra, &out);
   return out;
 }
 

@@ -58,7 +58,7 @@ PetscErrorCode progress_monitor(EPS, PetscInt, PetscInt nconv, PetscScalar*, Pet
 
 }  // namespace
 
-InertiaCounter::InertiaCounter(Mat K, Mat M, const std::string& prefix) : K_(K), M_(M) {
+InertiaCounter::InertiaCounter(Mat K, Mat M, const std::string& prefix, Mat reuse) : K_(K), M_(M) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
   MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, A_.ptr()));
@@ -70,6 +70,8 @@ InertiaCounter::InertiaCounter(Mat K, Mat M, const std::string& prefix) : K_(K),
   MORSE_CALL(MatGetInfo(K, MAT_LOCAL, &ik));
   MORSE_CALL(MatGetInfo(M, MAT_LOCAL, &im));
   same_pattern_ = !any_rank(comm, ik.nz_used != im.nz_used);
+  // K - sigma M has K's pattern only if M's is the same.
+  if (same_pattern_) reuse_ = reuse;
 }
 
 PetscInt InertiaCounter::count(double sigma) {
@@ -77,6 +79,16 @@ PetscInt InertiaCounter::count(double sigma) {
   MORSE_CALL(MatAXPY(A_.get(), -sigma, M_, same_pattern_ ? SAME_NONZERO_PATTERN : UNKNOWN_NONZERO_PATTERN));
   MatFactorInfo info;
   MORSE_CALL(MatFactorInfoInitialize(&info));
+  if (reuse_) {
+    // The caller's factor, analysed on K's pattern with ICNTL(13) = 1: refactored in place,
+    // with room for the delayed pivots of an indefinite matrix.
+    MORSE_CALL(MatMumpsSetIcntl(reuse_, 14, 50));
+    MORSE_CALL(MatCholeskyFactorNumeric(reuse_, A_.get(), &info));
+    ++calls_;
+    PetscInt nneg = 0;
+    MORSE_CALL(MatGetInertia(reuse_, &nneg, nullptr, nullptr));
+    return nneg;
+  }
   if (!F_) {
     // K - sigma M is indefinite: MUMPS's symmetric indefinite LDL^T (not flagged SPD), with the
     // inertia available in parallel (ICNTL(13) = 1) and room for delayed pivots (ICNTL(14)).
@@ -96,12 +108,9 @@ PetscInt InertiaCounter::count(double sigma) {
   return nneg;
 }
 
-namespace {
-
-// Cutoff sigma with nev <= N(sigma) <= 1.2 nev eigenvalues below it, N from inertia counts:
-// from the ratio of the diagonals (a high, safe start), then steps along the estimated local
-// power law N ~ sigma^p (secant in log-log, p starting at 3/2 as for a 3D solid) kept inside
-// the bracket, with the geometric mean as fallback.
+// Steps of count_cutoff: from the ratio of the diagonals (a high, safe start), then steps along
+// the estimated local power law N ~ sigma^p (secant in log-log, p starting at 3/2 as for a 3D
+// solid) kept inside the bracket, with the geometric mean as fallback.
 double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const std::string& what,
                     PetscInt* factorizations, PetscInt* count) {
   InertiaCounter c(K, M, prefix);
@@ -140,6 +149,8 @@ double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const
   *count = n_hi;
   return hi;
 }
+
+namespace {
 
 // The number of eigenvalues below the cutoff b of a slicing solve on [a, b], from the inertias
 // SLEPc computed at the ends of the interval, or from a new LDL^T factorization if it did not
@@ -418,7 +429,10 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
   double d = 0, far = 0;
   for (double w : out.omega2)
     if (std::abs(w - s.shift) >= d) d = std::abs(w - s.shift), far = w;
-  InertiaCounter c(K, M, s.prefix);
+  // The block solver's factor when the caller does not keep it (analysed with ICNTL(13) = 1):
+  // refactored in place, so the check needs no symbolic analysis and no second factor.
+  const bool reuse = !s.keep_factor && out.block_factor;
+  InertiaCounter c(K, M, s.prefix, reuse ? out.block_factor.get() : nullptr);
   auto counted_in = [&](double dd) { return c.count(s.shift + dd) - (s.shift - dd > 0 ? c.count(s.shift - dd) : 0); };
   // Pairs found strictly inside the window: those returned (but the `drop_for_test` lowest) and
   // the other converged ones.
@@ -451,14 +465,40 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
                                    "] Hz but the solve found ", found, ": it ",
                                    counted > found ? "missed modes" : "returned spurious pairs", "; raise -", s.prefix,
                                    "block_max_dim (block solver) or -", s.prefix, "eps_ncv (krylovschur)"));
-  print0(comm, "  %s: %d pairs in [%.6g, %.6g] Hz = Sylvester inertia count of K - omega^2 M (every mode found, %.1f s)\n",
+  print0(comm, "  %s: %d pairs in [%.6g, %.6g] Hz = Sylvester inertia count of K - omega^2 M (every mode found, %.1f s%s)\n",
          s.what.c_str(), (int)(found + tied), hz(out.check_lo), hz(out.check_hi),
-         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+         reuse ? ", the solver's factor refactored" : "");
+  // The factor now holds K - sigma M at the check's last shift: not the caller's any more.
+  if (reuse) out.block_factor.reset();
   if (tied > 0)
     print0(comm, "  %s: the farthest pair returned (%.9g Hz) is one of a cluster: %d more eigenvalue(s) within 1e-6 of it "
            "are not returned; every eigenvalue nearer the shift than the cluster is returned\n",
            s.what.c_str(), hz(far), (int)tied);
 }
+
+namespace {
+
+// fn(c0, c1, Vb, KV, MV) for the columns [c0, c1) of V, in blocks of 32: Vb the columns, KV and
+// MV their products with K and M (the same layout).
+template <class Fn>
+void for_column_blocks(Mat K, Mat M, Mat V, Fn fn) {
+  PetscInt nv = 0;
+  MORSE_CALL(MatGetSize(V, nullptr, &nv));
+  constexpr PetscInt kBlock = 32;
+  for (PetscInt c0 = 0; c0 < nv; c0 += kBlock) {
+    const PetscInt c1 = std::min(nv, c0 + kBlock);
+    Mat Vb;
+    MORSE_CALL(MatDenseGetSubMatrix(V, PETSC_DECIDE, PETSC_DECIDE, c0, c1, &Vb));
+    UMat KV, MV;
+    MORSE_CALL(MatMatMult(K, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, KV.ptr()));
+    MORSE_CALL(MatMatMult(M, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+    fn(c0, c1, Vb, KV.get(), MV.get());
+    MORSE_CALL(MatDenseRestoreSubMatrix(V, &Vb));
+  }
+}
+
+}  // namespace
 
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2) {
   PetscInt nv = 0;
@@ -468,29 +508,43 @@ std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<do
   PetscReal knorm = 0;
   MORSE_CALL(MatNorm(K, NORM_INFINITY, &knorm));
   std::vector<double> r(nv, 0.0);
-  constexpr PetscInt kBlock = 32;
-  for (PetscInt c0 = 0; c0 < nv; c0 += kBlock) {
-    const PetscInt c1 = std::min(nv, c0 + kBlock);
-    Mat Vb;
-    MORSE_CALL(MatDenseGetSubMatrix(V, PETSC_DECIDE, PETSC_DECIDE, c0, c1, &Vb));
-    UMat KV, MV;
-    MORSE_CALL(MatMatMult(K, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, KV.ptr()));
-    MORSE_CALL(MatMatMult(M, Vb, MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+  for_column_blocks(K, M, V, [&](PetscInt c0, PetscInt c1, Mat Vb, Mat KV, Mat MV) {
     std::vector<PetscReal> xn(c1 - c0), rn(c1 - c0);
     MORSE_CALL(MatGetColumnNorms(Vb, NORM_2, xn.data()));
-    MORSE_CALL(MatDenseRestoreSubMatrix(V, &Vb));
     for (PetscInt j = c0; j < c1; ++j) {
       Vec kx, mx;
-      MORSE_CALL(MatDenseGetColumnVecWrite(KV.get(), j - c0, &kx));
-      MORSE_CALL(MatDenseGetColumnVecRead(MV.get(), j - c0, &mx));
+      MORSE_CALL(MatDenseGetColumnVecWrite(KV, j - c0, &kx));
+      MORSE_CALL(MatDenseGetColumnVecRead(MV, j - c0, &mx));
       MORSE_CALL(VecAXPY(kx, -omega2[j], mx));
-      MORSE_CALL(MatDenseRestoreColumnVecRead(MV.get(), j - c0, &mx));
-      MORSE_CALL(MatDenseRestoreColumnVecWrite(KV.get(), j - c0, &kx));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(MV, j - c0, &mx));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(KV, j - c0, &kx));
     }
-    MORSE_CALL(MatGetColumnNorms(KV.get(), NORM_2, rn.data()));
+    MORSE_CALL(MatGetColumnNorms(KV, NORM_2, rn.data()));
     for (PetscInt j = c0; j < c1; ++j) r[j] = rn[j - c0] / (knorm * std::max<PetscReal>(xn[j - c0], 1e-300));
-  }
+  });
   return r;
+}
+
+std::vector<double> rayleigh_quotients(Mat K, Mat M, Mat V) {
+  PetscInt nv = 0;
+  MORSE_CALL(MatGetSize(V, nullptr, &nv));
+  std::vector<double> q(nv, 0.0);
+  for_column_blocks(K, M, V, [&](PetscInt c0, PetscInt c1, Mat Vb, Mat KV, Mat MV) {
+    std::vector<PetscScalar> xk(c1 - c0), xm(c1 - c0);
+    for (PetscInt j = c0; j < c1; ++j) {
+      Vec x, kx, mx;
+      MORSE_CALL(MatDenseGetColumnVecRead(Vb, j - c0, &x));
+      MORSE_CALL(MatDenseGetColumnVecRead(KV, j - c0, &kx));
+      MORSE_CALL(MatDenseGetColumnVecRead(MV, j - c0, &mx));
+      MORSE_CALL(VecDot(kx, x, &xk[j - c0]));
+      MORSE_CALL(VecDot(mx, x, &xm[j - c0]));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(MV, j - c0, &mx));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(KV, j - c0, &kx));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(Vb, j - c0, &x));
+      q[j] = PetscRealPart(xk[j - c0]) / PetscRealPart(xm[j - c0]);
+    }
+  });
+  return q;
 }
 
 std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,

@@ -41,6 +41,12 @@ struct EigenSettings {
   bool check_inertia = true;
   /// Solver: "block" (default) or "krylovschur" (-<prefix>eigen_solver overrides).
   std::string solver = "block";
+  /// The caller uses the factorization after the solve (Eigenpairs::factor(), as the
+  /// Craig–Bampton constraint modes do). When false, the block solver's factorization is made
+  /// with the root front unsplit (MUMPS ICNTL(13) = 1, so that its inertia is exact) and the
+  /// Sylvester check refactors it in place at its shifts: no second symbolic analysis and no
+  /// second factor in memory; Eigenpairs::factor() is then null.
+  bool keep_factor = true;
 };
 
 struct Eigenpairs {
@@ -96,12 +102,22 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
 /// K's row layout), computed in blocks of columns. Collective.
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2);
 
+/// Rayleigh quotients x^T K x / x^T M x of the columns of V (MPIDENSE, K's row layout): the
+/// eigenvalue estimate whose error is quadratic in the vector's, used by spectrum slicing, whose
+/// Ritz values omega^2 = shift + 1/theta carry the error tol |omega^2 - shift| of a shift far
+/// from them. Collective.
+std::vector<double> rayleigh_quotients(Mat K, Mat M, Mat V);
+
 /// The block shift-invert Krylov–Schur solver (src/cb/block_eigen.cpp), which solve_eigen uses
 /// with -<prefix>eigen_solver block (the default): count mode, or cutoff mode as the count from
 /// Sylvester's inertia at the cutoff then a count solve (checked: exactly that many, all below
 /// it). Options -<prefix>block_size (8 below 100 modes, else 16), -<prefix>block_max_dim (nev +
 /// max(1.2 nev, 6 blocks)), -<prefix>block_max_restarts (200), -<prefix>eps_tol; MUMPS options
-/// of its factorization as -<prefix>block_mat_mumps_*.
+/// of its factorization as -<prefix>block_mat_mumps_*. With -<prefix>block_slices S > 1 (or
+/// -<prefix>block_partitions P > 1), spectrum slicing: [0, cutoff] (count mode: a cutoff from
+/// inertia counts, the nev lowest kept) cut into S slices, each counted by Sylvester's inertia
+/// at its ends and solved by a count solve about its middle, checked slice by slice; the slices
+/// are spread over P subcommunicators that work side by side (P must divide the ranks).
 /// Collective.
 /// A problem too small for a block basis (nev + 2 blocks > the number of DOFs) is handed to
 /// solve_eigen_krylovschur, with a notice.
@@ -124,17 +140,28 @@ PetscInt mumps_null_pivots(Mat F);
 /// layout; the symbolic factorization is done once per counter. Collective.
 class InertiaCounter {
  public:
-  InertiaCounter(Mat K, Mat M, const std::string& prefix);
+  /// With `reuse`, a MUMPS symmetric (LDL^T) factor whose analysis was made on a matrix with K's
+  /// pattern and ICNTL(13) = 1: each count refactors it in place (no new analysis), which
+  /// destroys what it held. It is used only when K and M share their pattern; it must outlive
+  /// the counter.
+  InertiaCounter(Mat K, Mat M, const std::string& prefix, Mat reuse = nullptr);
   PetscInt count(double sigma);
   PetscInt factorizations() const { return calls_; }
 
  private:
   Mat K_, M_;
   UMat A_, F_;
+  Mat reuse_ = nullptr;
   std::string prefix_;
   bool same_pattern_ = false;
   PetscInt calls_ = 0;
 };
+
+/// A cutoff sigma with nev <= N(sigma) <= 1.2 nev eigenvalues of K x = lambda M x below it, N
+/// from inertia counts (InertiaCounter with `prefix`); *count = N(sigma), *factorizations = the
+/// counts spent. Collective.
+double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const std::string& what,
+                    PetscInt* factorizations, PetscInt* count);
 
 /// Dense generalized symmetric eigenvalues of (K, M), row-major n x n, ascending (LAPACK sygv).
 /// If vectors is not null it receives the M-normalized eigenvectors (column k = mode k,
