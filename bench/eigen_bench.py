@@ -65,10 +65,18 @@ CASES = {
 }
 
 
+# Solver variants: the name in --solvers -> morse's options. "slices<P>": the block solver by
+# spectrum slicing on P subcommunicators side by side (-modes_block_partitions P, one slice each).
+SOLVER_ARGS = {"block": ["-modes_eigen_solver", "block"],
+               "krylovschur": ["-modes_eigen_solver", "krylovschur"],
+               "slices1": ["-modes_eigen_solver", "block", "-modes_block_slices", "2"],
+               "slices2": ["-modes_eigen_solver", "block", "-modes_block_partitions", "2"]}
+
+
 def morse_args(case, solver, out, extra):
     c = CASES[case]
-    return [MORSE, "modes", "-mesh", c["mesh"], "-clamp", c["clamp"], "-modes_nev", str(c["nev"]),
-            "-modes_eigen_solver", solver, "-modes_xdmf", "false", "-out", out] + c.get("extra", []) + extra
+    return [MORSE, "modes", "-mesh", c["mesh"], "-clamp", c["clamp"], "-modes_nev", str(c["nev"])] + \
+        SOLVER_ARGS[solver] + ["-modes_xdmf", "false", "-out", out] + c.get("extra", []) + extra
 
 
 def read_freqs(path):
@@ -78,7 +86,7 @@ def read_freqs(path):
 
 # The stages of the eigen solve: the factorization, the solve, the vectors, the residual check of
 # every pair and the Sylvester check of a count solve (each its own stage, none nested).
-EIGEN_STAGES = ("Factor", "SliceCutoff", "InertiaCount", "EigenSolve", "EigenVectors", "EigenResiduals", "InertiaCheck")
+EIGEN_STAGES = ("Factor", "SliceCutoff", "InertiaCount", "EigenSolve", "EigenVectors", "EigenResiduals", "InertiaCheck", "SliceCounts")
 
 
 def eigen_seconds(sec):
@@ -88,7 +96,7 @@ def eigen_seconds(sec):
 def summary_lines(stdout):
     keep = []
     for line in stdout.splitlines():
-        if re.search(r"residual|Sylvester|block Krylov|restart|slicing|inertia", line):
+        if re.search(r"residual|Sylvester|block Krylov|restart|slicing|slices|inertia", line):
             keep.append(line.strip())
     return keep
 

@@ -154,6 +154,14 @@ morse_add_ok_case(modes_ok modes_ok.h5
 morse_add_ok_case(modes_solver_options modes_solver_options.h5
   modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 6 -modes_check_inertia false -modes_block_monitor
   -modes_block_check_every 1 ${MORSE_CASE_MATERIAL_STR})
+# The block solver by spectrum slicing from the command line (3 slices, one communicator).
+morse_add_ok_case(modes_block_slices modes_block_slices.h5
+  modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 12 -modes_block_slices 3 ${MORSE_CASE_MATERIAL_STR})
+# Slices on subcommunicators that do not divide the ranks: refused, naming the option.
+morse_add_error_case(modes_bad_partitions
+  "morse: error: -modes_block_partitions 3 must divide the number of ranks"
+  modes_bad_partitions.h5 BOX
+  ARGS modes -mesh ${MORSE_CASE_BOX} -clamp x0 -modes_nev 6 -modes_block_partitions 3 ${MORSE_CASE_MATERIAL})
 morse_add_ok_case(reduce_ok reduce_ok.h5
   reduce -mesh '${MORSE_CASE_BOX}' -clamp x0 -boundary x1 -cb_num_fixed_modes 4 -cb_write_basis
   ${MORSE_CASE_MATERIAL_STR})

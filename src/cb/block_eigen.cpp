@@ -944,7 +944,12 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
       const PetscInt ni = below[i + 1] - below[i];
       if (ni == 0) continue;
       auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
-      CountSolve r = block_count_solve(Ks, Ms, ni, 0.5 * (beta[i] + beta[i + 1]), s, o, false, 1.0 / P, nullptr);
+      // About the middle, where the ni nearest pairs are exactly those inside. The lowest slice
+      // could be solved about 0 (its ni pairs are the ni lowest), but measured on the stator
+      // (1000 modes, 2 slices) that took 142 s against 122 s about the middle: from 0 the
+      // pairs near the slice's top converge last, as in a one-shift solve.
+      const double sigma = 0.5 * (beta[i] + beta[i + 1]);
+      CountSolve r = block_count_solve(Ks, Ms, ni, sigma, s, o, false, 1.0 / P, nullptr);
       // Ritz values about a shift in the slice carry an error of about tol |omega^2 - shift|, 1e-8
       // relative for the lowest modes of the first slice: the Rayleigh quotients are exact to
       // the square of the vectors' error.
