@@ -406,9 +406,7 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
   }
 }
 
-void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vector<double>& extra, Eigenpairs* out_) {
-  Eigenpairs& out = *out_;
-  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+bool count_check_wanted(MPI_Comm comm, const EigenSettings& s) {
   PetscBool check = s.check_inertia ? PETSC_TRUE : PETSC_FALSE;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
@@ -420,6 +418,13 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
     return PETSC_SUCCESS;
   };
   MORSE_CALL(get_options());
+  return check == PETSC_TRUE;
+}
+
+void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vector<double>& extra, Eigenpairs* out_) {
+  Eigenpairs& out = *out_;
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  const bool check = count_check_wanted(comm, s);
   if (!check || out.omega2.empty()) return;
   StageTimer timer(comm, s.stage + "InertiaCheck");
   const auto t0 = std::chrono::steady_clock::now();

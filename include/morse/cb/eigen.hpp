@@ -98,6 +98,10 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
 /// check is printed. Collective.
 void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vector<double>& extra, Eigenpairs* out);
 
+/// Whether the count check of a one-shift solve will run: EigenSettings::check_inertia, or
+/// -<prefix>check_inertia. Collective.
+bool count_check_wanted(MPI_Comm comm, const EigenSettings& s);
+
 /// Relative residuals ||K x_j - omega2_j M x_j|| / (||K||_inf ||x_j||) of the columns of V (MPIDENSE,
 /// K's row layout), computed in blocks of columns. Collective.
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2);
