@@ -4,9 +4,9 @@
 // theta = 1 / (omega^2 - sigma) are largest in magnitude for the omega^2 nearest sigma. One MUMPS
 // Cholesky factorization of K - sigma M; each step applies Op to a block of b vectors at once
 // (MatMatSolve: the factor is read once per block, not once per vector, which is what bounds a
-// single-vector solve). The basis Q is kept M-orthonormal by block classical Gram–Schmidt done
-// twice (two GEMMs per pass) and SVQB (the eigen-decomposition of the b x b Gram matrix), all
-// BLAS-3. The projected matrix H = Q^T M Op Q is filled from the Gram–Schmidt coefficients; the
+// single-vector solve). The basis Q is kept M-orthonormal by block classical Gram–Schmidt (a
+// local pass against the last two blocks, then one global pass, repeated by the DGKS test) and
+// SVQB (the eigen-decomposition of the b x b Gram matrix), all BLAS-3. The projected matrix H = Q^T M Op Q is filled from the Gram–Schmidt coefficients; the
 // Rayleigh–Ritz pairs of its leading part give the Ritz values, and the coupling block of the
 // last (residual) block gives each Ritz pair's residual ||Op x - theta x||_M = ||B y||. When the
 // basis is full, the method restarts à la Krylov–Schur: the best Ritz vectors are kept (their
@@ -288,13 +288,13 @@ class BlockSolver {
     return removed;
   }
 
-  // M-orthonormalizes W against itself (SVQB twice), given nothing; k = columns of Q it must stay
+  // M-orthonormalizes W against itself (SVQB, twice unless the block is well conditioned), given nothing; k = columns of Q it must stay
   // orthogonal to when directions are replaced. R (b x b, column-major) is returned with
   // W_in = W_out R. Directions that vanish (an invariant subspace) are replaced by new random
   // vectors orthogonal to Q, with zero rows in R.
   // M W is computed afresh at each pass (after Gram–Schmidt W can be much smaller than before,
   // so an M W carried along would have lost its accuracy) and carried through the pass's
-  // transformation, so MW = M W on return.
+  // transformation, so MW = M W on return; a well-conditioned block stops after one pass.
   // With `removed` (the squared coefficient norms of a Local orthogonalization's global pass,
   // recorded into H column col): if that pass removed more of a column than it left (DGKS,
   // ||C_c||^2 > ||W_c||_M^2), the global pass is repeated before anything else.
