@@ -31,6 +31,9 @@ void use_huge_pages(char** argv) {
   const char* t = std::getenv("GLIBC_TUNABLES");
   // Already set (by us after the re-exec, or by the user, whatever the value): never loop.
   if (t && std::strstr(t, "glibc.malloc.hugetlb")) return;
+  // Under valgrind /proc/self/exe is the valgrind tool, not morse: never re-execute there.
+  const char* pre = std::getenv("LD_PRELOAD");
+  if (pre && std::strstr(pre, "vgpreload")) return;
   std::ifstream f("/sys/kernel/mm/transparent_hugepage/enabled");
   std::string mode((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (mode.find("[madvise]") == std::string::npos && mode.find("[always]") == std::string::npos) return;
