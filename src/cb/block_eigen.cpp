@@ -915,6 +915,10 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   const int part = static_cast<int>(rank / (size / P));
   MPI_Comm sub = MPI_COMM_NULL;
   MPI_Comm_split(comm, part, rank, &sub);
+  // Freed on every way out (an error in a slice throws collectively).
+  std::unique_ptr<MPI_Comm, void (*)(MPI_Comm*)> sub_guard(&sub, [](MPI_Comm* c) {
+    if (*c != MPI_COMM_NULL) MPI_Comm_free(c);
+  });
   UMat Ksub, Msub;
   Mat Ks = K, Ms = M;
   if (P > 1) {
@@ -948,7 +952,8 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
     const auto t0 = std::chrono::steady_clock::now();
     PetscInt my_total = 0;
     for (PetscInt i = part; i < S; i += P) my_total += below[i + 1] - below[i];
-    Progress progress(part == 0 ? sub : MPI_COMM_SELF, s.what, static_cast<double>(std::max<PetscInt>(my_total, 1)));
+    // Printed by rank 0 of comm, which works in partition 0: that partition's progress.
+    Progress progress(comm, s.what, static_cast<double>(std::max<PetscInt>(my_total, 1)));
     PetscInt done = 0;
     for (PetscInt i = part; i < S; i += P) {
       const PetscInt ni = below[i + 1] - below[i];
@@ -1030,7 +1035,6 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   mine.clear();
   Ksub.reset();
   Msub.reset();
-  MPI_Comm_free(&sub);
   auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
   print0(comm, "  %s: block solver in %d slices of [0, %.6g] Hz on %d subcommunicator(s) of %d rank(s): counts %.1f s, "
          "solves %.1f s, %d block solves (%d vectors)\n", s.what.c_str(), (int)S, hz(top), (int)P, size / (int)P, t_count,
