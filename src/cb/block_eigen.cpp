@@ -950,11 +950,6 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   {
     StageTimer timer(comm, s.stage + "EigenSolve");
     const auto t0 = std::chrono::steady_clock::now();
-    PetscInt my_total = 0;
-    for (PetscInt i = part; i < S; i += P) my_total += below[i + 1] - below[i];
-    // Printed by rank 0 of comm, which works in partition 0: that partition's progress.
-    Progress progress(comm, s.what, static_cast<double>(std::max<PetscInt>(my_total, 1)));
-    PetscInt done = 0;
     for (PetscInt i = part; i < S; i += P) {
       const PetscInt ni = below[i + 1] - below[i];
       if (ni == 0) continue;
@@ -966,7 +961,9 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
       const double sigma = 0.5 * (beta[i] + beta[i + 1]);
       EigenSettings ss = s;
       ss.keep_factor = true;  // nothing refactors a slice's factor (no ICNTL(13) = 1 for it)
-      CountSolve r = block_count_solve(Ks, Ms, ni, sigma, ss, o, false, 1.0 / P, nullptr);
+      // Converged pairs of the slice, printed by rank 0 of comm (it works in partition 0).
+      Progress progress(comm, cat(s.what, " slice ", i + 1, "/", S), static_cast<double>(ni));
+      CountSolve r = block_count_solve(Ks, Ms, ni, sigma, ss, o, false, 1.0 / P, &progress);
       // Ritz values about a shift in the slice carry an error of about tol |omega^2 - shift|, 1e-8
       // relative for the lowest modes of the first slice: the Rayleigh quotients are exact to
       // the square of the vectors' error.
@@ -979,8 +976,6 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
         err = cat(s.what, ": slice ", i + 1, " of ", S, " [", hz(beta[i]), ", ", hz(beta[i + 1]),
                   "] Hz: Sylvester's inertia counts ", ni, " eigenvalues in it but the solve found ", inside,
                   ": it missed modes; raise -", s.prefix, "block_max_dim or use more slices");
-      done += ni;
-      progress.update(static_cast<double>(done));
       mine.emplace_back(i, std::move(r));
     }
     t_solve = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
