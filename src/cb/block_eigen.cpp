@@ -606,10 +606,11 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
 }
 
 // One MUMPS symmetric factorization of K - shift M (LDL^T: indefinite for a shift inside the
-// spectrum), its wall
-// time in *seconds; a singular K (null pivots at shift 0) is an error that names the likely
-// cause.
-UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed) {
+// spectrum), its wall time in *seconds (the Factor stage if `timed`); with `for_inertia` its
+// root front stays unsplit (ICNTL(13) = 1) so that the Sylvester check can refactor it. A
+// singular K (null pivots at shift 0) is an error that names the likely cause.
+UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed,
+                    bool for_inertia) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   std::unique_ptr<StageTimer> timer;
   if (timed) timer = std::make_unique<StageTimer>(comm, s.stage + "Factor");
@@ -628,7 +629,7 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatSetFromOptions(F.get()));
   // A factor that the Sylvester check will refactor for its inertia: the root front unsplit
   // (ScaLAPACK's root has no inertia), set after the user's options as in InertiaCounter.
-  if (!s.keep_factor && s.omega2_max <= 0 && count_check_wanted(comm, s)) MORSE_CALL(MatMumpsSetIcntl(F.get(), 13, 1));
+  if (for_inertia) MORSE_CALL(MatMumpsSetIcntl(F.get(), 13, 1));
   MatFactorInfo info;
   MORSE_CALL(MatFactorInfoInitialize(&info));
   MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
@@ -723,7 +724,8 @@ bool block_shape(PetscInt n, PetscInt nev, const BlockOptions& o, const EigenSet
 // One count solve by the block solver: the nev pairs nearest `shift` (the lowest for shift <= 0),
 // ascending. `timed`: the Factor, EigenSolve and EigenVectors stages are recorded (the slices
 // of a spectrum-slicing solve, different on different subcommunicators, are not); `share`: the
-// part of the node's memory the basis may take.
+// part of the node's memory the basis may take; `for_inertia`: the factor is made so that the
+// Sylvester check can refactor it in place (MUMPS ICNTL(13) = 1).
 struct CountSolve {
   std::vector<double> omega2;  // ascending
   UMat V, F;
@@ -733,7 +735,7 @@ struct CountSolve {
 };
 
 CountSolve block_count_solve(Mat K, Mat M, PetscInt nev, double shift, const EigenSettings& s, const BlockOptions& o,
-                             bool timed, double share, Progress* progress) {
+                             bool timed, double share, bool for_inertia, Progress* progress) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   PetscInt n = 0, m_local = 0;
   MORSE_CALL(MatGetSize(K, &n, nullptr));
@@ -741,9 +743,7 @@ CountSolve block_count_solve(Mat K, Mat M, PetscInt nev, double shift, const Eig
   CountSolve r;
   const bool fits = block_shape(n, nev, o, s, &r.b, &r.kdim);
   MORSE_CHECK(fits, s.what, ": ", nev, " pairs of ", n, " DOFs leave no room for a block basis");
-  EigenSettings sf = s;
-  sf.shift = shift;
-  r.F = factor_shifted(K, M, shift, sf, &r.factor_seconds, timed);
+  r.F = factor_shifted(K, M, shift, s, &r.factor_seconds, timed, for_inertia);
   if (o.kmax < 0) r.kdim = memory_capped_basis(comm, m_local, nev, r.b, r.kdim, o.memory_gb, s, share);
   // With shift <= 0 every theta = 1/(omega^2 - shift) is positive (K is semi-definite and was
   // factored without a null pivot), so the wanted ones are the largest.
@@ -892,6 +892,7 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   out.slicing = true;
   out.partitions = P;
   const auto t_all = std::chrono::steady_clock::now();
+  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
   double top = s.omega2_max;
   PetscInt N = 0;
   if (s.omega2_max > 0) {
@@ -953,17 +954,14 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
     for (PetscInt i = part; i < S; i += P) {
       const PetscInt ni = below[i + 1] - below[i];
       if (ni == 0) continue;
-      auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
       // About the middle, where the ni nearest pairs are exactly those inside. The lowest slice
       // could be solved about 0 (its ni pairs are the ni lowest), but measured on the stator
       // (1000 modes, 2 slices) that took 142 s against 122 s about the middle: from 0 the
       // pairs near the slice's top converge last, as in a one-shift solve.
       const double sigma = 0.5 * (beta[i] + beta[i + 1]);
-      EigenSettings ss = s;
-      ss.keep_factor = true;  // nothing refactors a slice's factor (no ICNTL(13) = 1 for it)
       // Converged pairs of the slice, printed by rank 0 of comm (it works in partition 0).
       Progress progress(comm, cat(s.what, " slice ", i + 1, "/", S), static_cast<double>(ni));
-      CountSolve r = block_count_solve(Ks, Ms, ni, sigma, ss, o, false, 1.0 / P, &progress);
+      CountSolve r = block_count_solve(Ks, Ms, ni, sigma, s, o, false, 1.0 / P, false, &progress);
       // Ritz values about a shift in the slice carry an error of about tol |omega^2 - shift|, 1e-8
       // relative for the lowest modes of the first slice: the Rayleigh quotients are exact to
       // the square of the vectors' error.
@@ -984,14 +982,13 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   // The eigenvalues and vectors, in K's layout, ascending (the slices are, and each slice nearly:
   // the Rayleigh quotients of a cluster may come in another order than its Ritz values).
   std::vector<double> all(static_cast<std::size_t>(N), -1e300);
+  // Block solves counted once per partition (by its first rank).
+  int sub_rank = 0;
+  MPI_Comm_rank(sub, &sub_rank);
   PetscInt solves = 0, vectors = 0;
   for (const auto& [i, r] : mine) {
     std::copy(r.omega2.begin(), r.omega2.end(), all.begin() + below[i]);
-    if (sub != MPI_COMM_NULL) {
-      int sr = 0;
-      MPI_Comm_rank(sub, &sr);
-      if (sr == 0) solves += r.solves, vectors += r.solves * r.b;
-    }
+    if (sub_rank == 0) solves += r.solves, vectors += r.solves * r.b;
   }
   MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(N), MPI_DOUBLE, MPI_MAX, comm);
   // position[k]: where pair k (slice order) goes in ascending order (ties kept in slice order).
@@ -1012,17 +1009,14 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
     const PetscInt rounds = (S + P - 1) / P;
     for (PetscInt k = 0; k < rounds; ++k) {
       const PetscInt i = part + k * P;
-      Mat Vs = nullptr;
+      // This partition's k-th slice, if it has one (empty slices were not solved).
+      auto it = std::find_if(mine.begin(), mine.end(), [&](const auto& x) { return x.first == i; });
       std::vector<PetscInt> dest;
-      for (auto& [si, r] : mine)
-        if (si == i) {
-          Vs = r.V.get();
-          for (PetscInt c = 0; c < static_cast<PetscInt>(r.omega2.size()); ++c)
-            dest.push_back(position[below[i] + c] < n_out ? position[below[i] + c] : -1);
-        }
-      gather_columns(comm, Vs, r0, r1, dest, out.V.get());
-      for (auto& [si, r] : mine)
-        if (si == i) r.V.reset();
+      if (it != mine.end())
+        for (PetscInt c = 0; c < static_cast<PetscInt>(it->second.omega2.size()); ++c)
+          dest.push_back(position[below[i] + c] < n_out ? position[below[i] + c] : -1);
+      gather_columns(comm, it != mine.end() ? it->second.V.get() : nullptr, r0, r1, dest, out.V.get());
+      if (it != mine.end()) it->second.V.reset();
     }
   }
   std::sort(all.begin(), all.end());
@@ -1030,7 +1024,6 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   mine.clear();
   Ksub.reset();
   Msub.reset();
-  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
   print0(comm, "  %s: block solver in %d slices of [0, %.6g] Hz on %d subcommunicator(s) of %d rank(s): counts %.1f s, "
          "solves %.1f s, %d block solves (%d vectors)\n", s.what.c_str(), (int)S, hz(top), (int)P, size / (int)P, t_count,
          t_solve, (int)solves, (int)vectors);
@@ -1075,7 +1068,9 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   CountSolve r;
   {
     Progress progress(comm, s.what, static_cast<double>(nev));
-    r = block_count_solve(K, M, nev, s.shift, s, o, true, 1.0, &progress);
+    // The factor is refactored in place by the count check when the caller does not keep it.
+    const bool for_inertia = !cutoff && !s.keep_factor && count_check_wanted(comm, s);
+    r = block_count_solve(K, M, nev, s.shift, s, o, true, 1.0, for_inertia, &progress);
   }
   out.iterations = r.restarts;
   out.factor_seconds = r.factor_seconds;
