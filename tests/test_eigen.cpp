@@ -466,3 +466,50 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
   }
   EXPECT_NE(msg.find("block_partitions"), std::string::npos) << msg;
 }
+
+// The count check refactoring the block solver's own factor in place (keep_factor = false, as
+// morse modes runs): the same Sylvester counts as a check with its own factorization, against
+// LAPACK's eigenvalues (the 29 lowest cut the 10th triple cluster: 30 counted; the 12 nearest a
+// shift between clusters 5 and 6), no factor left to the caller, and a solve made to lose its
+// lowest pair refused.
+TEST(Eigen, CountCheckRefactorsTheSolverFactor) {
+  const PetscInt m = 40, n = 3 * m;
+  UMat K, M;
+  clustered(m, &K, &M);
+  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
+    SCOPED_TRACE(cat("nev ", nev));
+    cb::EigenSettings t;
+    t.nev = nev;
+    t.shift = shift;
+    t.solver = "block";
+    t.keep_factor = false;
+    t.prefix = cat("test_reuse_", nev, "_");
+    auto e = cb::solve_eigen(K.get(), M.get(), t, nullptr);
+    EXPECT_EQ(e.factor(), nullptr);
+    // LAPACK: the eigenvalues in the checked window.
+    PetscInt expected = 0;
+    for (double l : lam) expected += l >= e.check_lo && l <= e.check_hi ? 1 : 0;
+    EXPECT_EQ(e.inertia_count, expected);
+    EXPECT_GE(e.inertia_count, nev);
+    cb::EigenSettings own = t;
+    own.keep_factor = true;
+    own.prefix = cat("test_own_", nev, "_");
+    auto f = cb::solve_eigen(K.get(), M.get(), own, nullptr);
+    EXPECT_NE(f.factor(), nullptr);
+    EXPECT_EQ(f.inertia_count, e.inertia_count);
+  }
+  cb::EigenSettings d;
+  d.nev = 30;
+  d.solver = "block";
+  d.keep_factor = false;
+  d.drop_for_test = 1;
+  d.prefix = "test_reuse_drop_";
+  std::string msg;
+  try {
+    cb::solve_eigen(K.get(), M.get(), d, nullptr);
+  } catch (const Error& err) {
+    msg = err.what();
+  }
+  EXPECT_NE(msg.find("missed modes"), std::string::npos) << msg;
+}
