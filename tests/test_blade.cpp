@@ -465,10 +465,10 @@ BladeModes solve_blade(const BladeSpec& spec, int nev) {
   auto dofs = fe::number_dofs(lm, {"root"});
   mesh::Material steel{"maraging steel", 1.8e11, 0.3, 8000.0};
   auto ops = fe::assemble(lm, dofs, steel);
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = nev;
   es.prefix = "test_blade_";
-  auto eig = cb::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
 
   std::vector<std::int64_t> wanted{le, te};
   wanted.insert(wanted.end(), le_line.begin(), le_line.end());

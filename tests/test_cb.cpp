@@ -175,14 +175,14 @@ TEST(CraigBampton, ModalBlockIsDiagonal) {
 // added; with every interior mode they coincide.
 TEST(CraigBampton, FrequenciesConvergeFromAbove) {
   auto c = beam(PETSC_COMM_WORLD);
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 10;
   es.prefix = "test_fom_";
-  auto fom = cb::solve_eigen(c.ops.K.get(), c.ops.M.get(), es, nullptr);
+  auto fom = eigen::solve_eigen(c.ops.K.get(), c.ops.M.get(), es, nullptr);
   std::vector<double> prev_err(6, 1e300), guyan_err;
   for (PetscInt nphi : {0, 2, 4, 8, 16, 32}) {
     auto r = reduce(c, nphi);
-    auto rom = cb::dense_eigenvalues(static_cast<int>(r.n()), r.K, r.M);
+    auto rom = eigen::dense_eigenvalues(static_cast<int>(r.n()), r.K, r.M);
     for (int k = 0; k < 6; ++k) {
       double rel = (rom[k] - fom.omega2[k]) / fom.omega2[k];
       EXPECT_GT(rel, -1e-9) << "mode " << k << " with " << nphi << " modes below the full model";
@@ -212,11 +212,11 @@ TEST(CraigBampton, AllInteriorModesReproduceTheFullModel) {
   const PetscInt n_i = c.dofs.n_global - 3 * c.lm.node_set_sizes.at("x1");
   auto r = reduce(c, n_i);
   ASSERT_EQ(r.n(), c.dofs.n_global);
-  auto rom = cb::dense_eigenvalues(static_cast<int>(r.n()), r.K, r.M);
-  cb::EigenSettings es;
+  auto rom = eigen::dense_eigenvalues(static_cast<int>(r.n()), r.K, r.M);
+  eigen::EigenSettings es;
   es.nev = 12;
   es.prefix = "test_fom_";
-  auto fom = cb::solve_eigen(c.ops.K.get(), c.ops.M.get(), es, nullptr);
+  auto fom = eigen::solve_eigen(c.ops.K.get(), c.ops.M.get(), es, nullptr);
   for (int k = 0; k < 12; ++k) EXPECT_NEAR(rom[k] / fom.omega2[k], 1.0, 1e-9) << "mode " << k;
 }
 
@@ -320,8 +320,8 @@ TEST(DenseEigen, VectorsBelowACutoff) {
         K[i * n + j] += R[i * n + k] * s_of(k) * R[j * n + k];
       }
   std::vector<double> all, some;
-  auto w_all = cb::dense_eigenvalues(n, K, M, &all);
-  auto w_some = cb::dense_eigenvalues(n, K, M, &some, 0.5 * (w_all[5] + w_all[6]));
+  auto w_all = eigen::dense_eigenvalues(n, K, M, &all);
+  auto w_some = eigen::dense_eigenvalues(n, K, M, &some, 0.5 * (w_all[5] + w_all[6]));
   for (int k = 0; k < n; ++k) EXPECT_NEAR(w_some[k], w_all[k], 1e-12 * w_all.back());
   for (int m = 0; m < n; ++m) {
     double res = 0, scale = 0, zero = 0;

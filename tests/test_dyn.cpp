@@ -92,10 +92,10 @@ TEST(Static, CantileverMatchesEulerElastica) {
 TEST(Fom, LinearTwinMatchesModalSuperposition) {
   auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex20, 1.0, 0.1, 6, 1, 0.3);
   fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 20;
   es.prefix = "test_modes_";
-  auto eig = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
   const double w1 = std::sqrt(eig.omega2[0]), W = 0.6 * w1, A = 100.0;
   dyn::Loads loads(b.lm, b.dofs, {tip_load(A, W)});
   UVec F, ustat, tmp;
@@ -141,10 +141,10 @@ TEST(Fom, LinearTwinMatchesModalSuperposition) {
 TEST(Fom, ModalDampingDecayRate) {
   auto b = cantilever(PETSC_COMM_WORLD, ElementType::Hex20, 1.0, 0.1, 6, 1, 0.3);
   fe::Svk svk(b.lm, b.dofs, b.mat, b.ops.K.get());
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 3;
   es.prefix = "test_modes_";
-  auto eig = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(b.ops.K.get(), b.ops.M.get(), es, nullptr);
   const double w1 = std::sqrt(eig.omega2[0]), xi = 0.02;
   UVec u0;
   MORSE_CALL(MatCreateVecs(b.ops.K.get(), u0.ptr(), nullptr));

@@ -9,13 +9,14 @@
 #include <cstdio>
 
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/fe/model.hpp"
+#include "eigen/detail/testing.hpp"
 #include "util.hpp"
 
 using namespace morse;
-using cb::set_default_option;
+using eigen::set_default_option;
 
 namespace {
 
@@ -76,8 +77,8 @@ TEST(Eigen, InertiaCountsMatchTheDenseSpectrum) {
   auto s = small_beam();
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(s.ops.K.get(), &n, nullptr));
-  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(s.ops.K.get()), dense(s.ops.M.get()));
-  cb::InertiaCounter counter(s.ops.K.get(), s.ops.M.get(), "test_inertia_");
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(s.ops.K.get()), dense(s.ops.M.get()));
+  eigen::InertiaCounter counter(s.ops.K.get(), s.ops.M.get(), "test_inertia_");
   for (PetscInt k : {PetscInt(0), PetscInt(1), PetscInt(5), PetscInt(40), n / 2, n - 2}) {
     const double sigma = 0.5 * (lam[k] + lam[k + 1]);
     EXPECT_EQ(counter.count(sigma), k + 1) << "cutoff between eigenvalues " << k << " and " << k + 1;
@@ -92,17 +93,17 @@ TEST(Eigen, InertiaCountsMatchTheDenseSpectrum) {
 // the slices solved concurrently on one subcommunicator per rank.
 TEST(Eigen, CountBySlicingMatchesOneShift) {
   auto s = small_beam();
-  cb::EigenSettings one;
+  eigen::EigenSettings one;
   one.nev = 30;
   one.prefix = "test_one_";
   one.count_slicing = 0;
   one.solver = "krylovschur";  // count by slicing is a path of the SLEPc solver
-  cb::EigenSettings sliced = one;
+  eigen::EigenSettings sliced = one;
   sliced.prefix = "test_sliced_";
   sliced.count_slicing = 10;
   auto w = cb::sign_reference(s.lm, s.dofs);
-  auto a = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), one, w.get());
-  auto b = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), sliced, w.get());
+  auto a = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), one, w.get());
+  auto b = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), sliced, w.get());
   EXPECT_FALSE(a.slicing);
   EXPECT_TRUE(b.slicing);
   EXPECT_GT(b.inertia_counts, 0);
@@ -118,10 +119,10 @@ TEST(Eigen, CountBySlicingMatchesOneShift) {
   // inertia count.
   int size = 1;
   MPI_Comm_size(PETSC_COMM_WORLD, &size);
-  cb::EigenSettings par = sliced;
+  eigen::EigenSettings par = sliced;
   par.prefix = "test_sliced_par_";
   set_default_option("-test_sliced_par_eps_krylovschur_partitions", std::to_string(size));
-  auto c = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), par, w.get());
+  auto c = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), par, w.get());
   EXPECT_EQ(c.partitions, size);
   ASSERT_EQ(c.omega2.size(), 30u);
   EXPECT_EQ(c.inertia_count, b.inertia_count);
@@ -168,37 +169,37 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
   // Cutoff between clusters 10 and 11 (eigenvalues 30..32 and 33..35).
   const double cutoff = 0.5 * (lam[29] + lam[30]);
-  cb::EigenSettings s;
+  eigen::EigenSettings s;
   s.omega2_max = cutoff;
   s.solver = solver;
   s.prefix = "test_cluster_" + solver + "_";
-  auto e = cb::solve_eigen(K.get(), M.get(), s, nullptr);
+  auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
   ASSERT_EQ(e.omega2.size(), 30u);
   EXPECT_EQ(e.inertia_count, 30);
   for (int k = 0; k < 30; ++k) EXPECT_NEAR(e.omega2[k], lam[k], 1e-9 * lam[k]) << "eigenvalue " << k;
   EXPECT_LE(e.max_residual, 1e-10);
-  auto r = cb::relative_residuals(K.get(), M.get(), e.V.get(), e.omega2);
+  auto r = eigen::relative_residuals(K.get(), M.get(), e.V.get(), e.omega2);
   for (int k = 0; k < 30; ++k) EXPECT_LE(r[k], 1e-10) << "pair " << k;
   EXPECT_LT(identity_deviation(M.get(), e.V.get(), e.V.get()), 1e-10);
   // A wrong pair is caught by the residual check: perturb one eigenvalue.
   auto wrong = e.omega2;
   wrong[7] *= 1.0 + 1e-6;
-  EXPECT_GT(cb::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
+  EXPECT_GT(eigen::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
 
   // Count mode with one shift: the 29 lowest (the cut falls inside the 10th cluster, so the
   // other converged copies of eigenvalue 29 tie at the window's edge) and the 12 nearest to a
   // shift between clusters 5 and 6 are checked by inertia and pass.
   for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
-    cb::EigenSettings t;
+    eigen::EigenSettings t;
     t.nev = nev;
     t.shift = shift;
     t.solver = solver;
     t.count_slicing = 0;
     t.prefix = cat("test_check_", solver, "_", nev, "_");
-    auto c = cb::solve_eigen(K.get(), M.get(), t, nullptr);
+    auto c = eigen::solve_eigen(K.get(), M.get(), t, nullptr);
     EXPECT_GE(c.inertia_count, nev) << "count mode was not checked by inertia";
     EXPECT_LE(c.inertia_count, nev + 2);
     if (shift > 0) {
@@ -211,15 +212,15 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
   // 30 counted; the 29 lowest but the first (a missed mode) and a cluster copy dropped from
   // inside the window are refused.
   {
-    cb::EigenSettings t;
+    eigen::EigenSettings t;
     t.nev = 29;
     t.prefix = cat("test_check_hand_", solver, "_");
-    cb::Eigenpairs tie;
+    eigen::Eigenpairs tie;
     tie.omega2.assign(lam.begin(), lam.begin() + 29);
-    cb::check_count_by_inertia(K.get(), M.get(), t, {}, &tie);
+    eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &tie);
     EXPECT_EQ(tie.inertia_count, 30);
     for (int variant = 0; variant < 2; ++variant) {
-      cb::Eigenpairs miss;
+      eigen::Eigenpairs miss;
       if (variant == 0) miss.omega2.assign(lam.begin() + 1, lam.begin() + 30);  // the lowest lost
       else {
         miss.omega2.assign(lam.begin(), lam.begin() + 30);
@@ -227,7 +228,7 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
       }
       std::string msg;
       try {
-        cb::check_count_by_inertia(K.get(), M.get(), t, {}, &miss);
+        eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &miss);
       } catch (const Error& err) {
         msg = err.what();
       }
@@ -239,16 +240,16 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
   // count with one shift the lowest); the Sylvester check refuses it.
   for (const std::string mode : {"cutoff", "count_slicing", "count"}) {
     if (mode == "count_slicing" && solver == "block") continue;  // the block solver does not slice
-    cb::EigenSettings t = s;
+    eigen::EigenSettings t = s;
     t.prefix = cat("test_drop_", mode, "_", solver, "_");
     if (mode != "cutoff") {
       t.omega2_max = -1;
       t.nev = 30;
       t.count_slicing = mode == "count" ? 0 : 10;
     }
-    t.drop_for_test = 1;
+    eigen::detail::DropForTest drop(1);
     try {
-      cb::solve_eigen(K.get(), M.get(), t, nullptr);
+      eigen::solve_eigen(K.get(), M.get(), t, nullptr);
       ADD_FAILURE() << "a truncated solve passed the Sylvester check (" << mode << ")";
     } catch (const Error& err) {
       const std::string msg = err.what();
@@ -265,20 +266,20 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
 // restarts; M-orthonormal vectors; its factor is kept for reuse.
 TEST(Eigen, BlockSolverMatchesKrylovSchur) {
   auto s = small_beam();
-  cb::EigenSettings ks;
+  eigen::EigenSettings ks;
   ks.nev = 20;
   ks.prefix = "test_ks_";
   ks.count_slicing = 0;
   auto w = cb::sign_reference(s.lm, s.dofs);
-  auto ref = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
+  auto ref = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
   for (auto [block, dim] : {std::pair<int, int>{1, 0}, {4, 0}, {16, 0}, {4, 32}}) {
     SCOPED_TRACE(cat("block ", block, " max dim ", dim));
-    cb::EigenSettings bs = ks;
+    eigen::EigenSettings bs = ks;
     bs.solver = "block";
     bs.prefix = cat("test_blk_", block, "_", dim, "_");
     set_default_option("-" + bs.prefix + "block_size", std::to_string(block));
     if (dim) set_default_option("-" + bs.prefix + "block_max_dim", std::to_string(dim));
-    auto e = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
+    auto e = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
     ASSERT_EQ(e.omega2.size(), 20u);
     EXPECT_NE(e.factor(), nullptr);
     for (int k = 0; k < 20; ++k) EXPECT_NEAR(e.omega2[k] / ref.omega2[k], 1.0, 1e-10) << "mode " << k;
@@ -295,12 +296,12 @@ TEST(Eigen, BlockSolverMatchesKrylovSchur) {
 // room for fewer than nev + 2 blocks the solve stops and says what it needs.
 TEST(Eigen, BlockBasisCappedByMemory) {
   auto s = small_beam();
-  cb::EigenSettings ks;
+  eigen::EigenSettings ks;
   ks.nev = 20;
   ks.prefix = "test_mks_";
   ks.count_slicing = 0;
   auto w = cb::sign_reference(s.lm, s.dofs);
-  auto ref = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
+  auto ref = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(s.ops.K.get(), &n, nullptr));
   // Every rank of these tests runs on one machine: the node holds all n rows.
@@ -309,12 +310,12 @@ TEST(Eigen, BlockBasisCappedByMemory) {
     std::snprintf(buf, sizeof buf, "%.17g", 2.0 * sizeof(double) * static_cast<double>(n) * vectors / 1e9);
     return std::string(buf);
   };
-  cb::EigenSettings bs = ks;
+  eigen::EigenSettings bs = ks;
   bs.solver = "block";
   bs.prefix = "test_mem_";
   set_default_option("-test_mem_block_size", "4");
   set_default_option("-test_mem_block_memory_gb", gb_for(33.5));
-  auto e = cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
+  auto e = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
   ASSERT_EQ(e.omega2.size(), 20u);
   EXPECT_GT(e.iterations, 0) << "a 32-vector basis must restart";
   for (int k = 0; k < 20; ++k) EXPECT_NEAR(e.omega2[k] / ref.omega2[k], 1.0, 1e-10) << "mode " << k;
@@ -324,7 +325,7 @@ TEST(Eigen, BlockBasisCappedByMemory) {
   set_default_option("-test_mem_small_block_memory_gb", gb_for(20.5));
   std::string msg;
   try {
-    cb::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
+    eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), bs, w.get());
   } catch (const std::exception& x) {
     msg = x.what();
   }
@@ -341,17 +342,17 @@ TEST(Eigen, BlockSolverIndependentOfBlockSize) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
-  std::vector<cb::Eigenpairs> runs;
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  std::vector<eigen::Eigenpairs> runs;
   for (auto [block, dim] : {std::pair<int, int>{1, 0}, {2, 0}, {5, 0}, {16, 0}, {5, 50}}) {
     SCOPED_TRACE(cat("block ", block, " max dim ", dim));
-    cb::EigenSettings s;
+    eigen::EigenSettings s;
     s.nev = 30;
     s.solver = "block";
     s.prefix = cat("test_bsz_", block, "_", dim, "_");
     set_default_option("-" + s.prefix + "block_size", std::to_string(block));
     if (dim) set_default_option("-" + s.prefix + "block_max_dim", std::to_string(dim));
-    auto e = cb::solve_eigen(K.get(), M.get(), s, nullptr);
+    auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
     ASSERT_EQ(e.omega2.size(), 30u);
     for (int k = 0; k < 30; ++k) EXPECT_NEAR(e.omega2[k], lam[k], 1e-10 * lam[k]) << "eigenvalue " << k;
     EXPECT_LE(e.max_residual, 1e-10);
@@ -374,13 +375,13 @@ TEST(Eigen, BlockSolverIndependentOfBlockSize) {
     EXPECT_LT(worst, 1e-8) << "run " << r << ": a cluster's subspace differs from the first run's";
   }
   // A shift between clusters 5 and 6: the 12 eigenvalues nearest to it, from both sides.
-  cb::EigenSettings s;
+  eigen::EigenSettings s;
   s.nev = 12;
   s.solver = "block";
   s.prefix = "test_bsz_shift_";
   s.shift = 0.5 * (lam[14] + lam[15]);
   set_default_option("-" + s.prefix + "block_size", "4");
-  auto e = cb::solve_eigen(K.get(), M.get(), s, nullptr);
+  auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
   std::vector<double> nearest(lam.begin(), lam.end());
   std::sort(nearest.begin(), nearest.end(),
             [&](double a, double b) { return std::abs(a - s.shift) < std::abs(b - s.shift); });
@@ -403,15 +404,15 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
-  cb::EigenSettings s;
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  eigen::EigenSettings s;
   s.omega2_max = 0.5 * (lam[29] + lam[30]);
   s.solver = "block";
   s.prefix = "test_bslice_cut_";
   set_default_option("-test_bslice_cut_block_slices", "3");
   set_default_option("-test_bslice_cut_block_partitions", std::to_string(size));
   set_default_option("-test_bslice_cut_block_size", "2");
-  auto e = cb::solve_eigen(K.get(), M.get(), s, nullptr);
+  auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
   EXPECT_TRUE(e.slicing);
   EXPECT_EQ(e.partitions, size);
   EXPECT_EQ(e.inertia_count, 30);
@@ -422,16 +423,16 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
 
   auto b = small_beam();
   auto w = cb::sign_reference(b.lm, b.dofs);
-  cb::EigenSettings one;
+  eigen::EigenSettings one;
   one.nev = 30;
   one.solver = "block";
   one.prefix = "test_bslice_one_";
-  auto a = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), one, w.get());
-  cb::EigenSettings sl = one;
+  auto a = eigen::solve_eigen(b.ops.K.get(), b.ops.M.get(), one, w.get());
+  eigen::EigenSettings sl = one;
   sl.prefix = "test_bslice_cnt_";
   set_default_option("-test_bslice_cnt_block_slices", "4");
   set_default_option("-test_bslice_cnt_block_partitions", std::to_string(size));
-  auto c = cb::solve_eigen(b.ops.K.get(), b.ops.M.get(), sl, w.get());
+  auto c = eigen::solve_eigen(b.ops.K.get(), b.ops.M.get(), sl, w.get());
   EXPECT_TRUE(c.slicing);
   ASSERT_EQ(c.omega2.size(), 30u);
   EXPECT_GE(c.inertia_count, 30);
@@ -441,26 +442,26 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
   EXPECT_LT(identity_deviation(b.ops.M.get(), a.V.get(), c.V.get()), 1e-6);
 
   // Fault injection: the highest slice loses a pair.
-  cb::EigenSettings d = s;
+  eigen::EigenSettings d = s;
   d.prefix = "test_bslice_drop_";
-  d.drop_for_test = 1;
   set_default_option("-test_bslice_drop_block_slices", "3");
   set_default_option("-test_bslice_drop_block_partitions", std::to_string(size));
   std::string msg;
   try {
-    cb::solve_eigen(K.get(), M.get(), d, nullptr);
+    eigen::detail::DropForTest drop(1);
+    eigen::solve_eigen(K.get(), M.get(), d, nullptr);
   } catch (const Error& err) {
     msg = err.what();
   }
   EXPECT_NE(msg.find("Sylvester"), std::string::npos) << msg;
   EXPECT_NE(msg.find("missed modes"), std::string::npos) << msg;
 
-  cb::EigenSettings bad = s;
+  eigen::EigenSettings bad = s;
   bad.prefix = "test_bslice_bad_";
   set_default_option("-test_bslice_bad_block_partitions", std::to_string(size + 1));
   msg.clear();
   try {
-    cb::solve_eigen(K.get(), M.get(), bad, nullptr);
+    eigen::solve_eigen(K.get(), M.get(), bad, nullptr);
   } catch (const Error& err) {
     msg = err.what();
   }
@@ -476,38 +477,38 @@ TEST(Eigen, CountCheckRefactorsTheSolverFactor) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = cb::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
   for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
     SCOPED_TRACE(cat("nev ", nev));
-    cb::EigenSettings t;
+    eigen::EigenSettings t;
     t.nev = nev;
     t.shift = shift;
     t.solver = "block";
     t.keep_factor = false;
     t.prefix = cat("test_reuse_", nev, "_");
-    auto e = cb::solve_eigen(K.get(), M.get(), t, nullptr);
+    auto e = eigen::solve_eigen(K.get(), M.get(), t, nullptr);
     EXPECT_EQ(e.factor(), nullptr);
     // LAPACK: the eigenvalues in the checked window.
     PetscInt expected = 0;
     for (double l : lam) expected += l >= e.check_lo && l <= e.check_hi ? 1 : 0;
     EXPECT_EQ(e.inertia_count, expected);
     EXPECT_GE(e.inertia_count, nev);
-    cb::EigenSettings own = t;
+    eigen::EigenSettings own = t;
     own.keep_factor = true;
     own.prefix = cat("test_own_", nev, "_");
-    auto f = cb::solve_eigen(K.get(), M.get(), own, nullptr);
+    auto f = eigen::solve_eigen(K.get(), M.get(), own, nullptr);
     EXPECT_NE(f.factor(), nullptr);
     EXPECT_EQ(f.inertia_count, e.inertia_count);
   }
-  cb::EigenSettings d;
+  eigen::EigenSettings d;
   d.nev = 30;
   d.solver = "block";
   d.keep_factor = false;
-  d.drop_for_test = 1;
   d.prefix = "test_reuse_drop_";
   std::string msg;
   try {
-    cb::solve_eigen(K.get(), M.get(), d, nullptr);
+    eigen::detail::DropForTest drop(1);
+    eigen::solve_eigen(K.get(), M.get(), d, nullptr);
   } catch (const Error& err) {
     msg = err.what();
   }

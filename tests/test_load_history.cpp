@@ -299,10 +299,10 @@ TEST(LoadHistory, LinearRampMatchesClosedForm) {
   auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex20, 1.0, 0.1, 0.1, 6, 1, 1));
   auto mat = test::steel();
   fe::Svk svk(m.lm, m.dofs, mat, m.ops.K.get());
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 20;
   es.prefix = "test_modes_";
-  auto eig = cb::solve_eigen(m.ops.K.get(), m.ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(m.ops.K.get(), m.ops.M.get(), es, nullptr);
   const double w1 = std::sqrt(eig.omega2[0]), T1 = 2 * M_PI / w1, T = 2.3 * T1, A = 100.0;
   const auto tip = set_ids(m.lm, "x1");
   auto table = uniform_table(tip, {0.0, T}, [&](double t) { return std::vector<double>{0, 0, A * t / T}; });
@@ -357,10 +357,10 @@ TEST(LoadHistory, SampledHarmonicConvergesToHarmonicLoad) {
   auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex20, 1.0, 0.1, 0.1, 6, 1, 1));
   auto mat = test::steel();
   fe::Svk svk(m.lm, m.dofs, mat, m.ops.K.get());
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 1;
   es.prefix = "test_modes_";
-  auto eig = cb::solve_eigen(m.ops.K.get(), m.ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(m.ops.K.get(), m.ops.M.get(), es, nullptr);
   const double w1 = std::sqrt(eig.omega2[0]), W = 0.6 * w1, A = 100.0, TW = 2 * M_PI / W;
   const auto tip = set_ids(m.lm, "x1");
   dyn::FomSettings s;

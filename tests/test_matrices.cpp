@@ -11,8 +11,8 @@
 #include <initializer_list>
 
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/matrices.hpp"
 #include "morse/io/op4.hpp"
 #include "util.hpp"
@@ -202,8 +202,8 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
   // operators assembled differently agree to their tolerance (relative residual 1e-10 of the
   // shift-inverted problem), not to round-off: the fixed-interface vectors then differ by about
   // 1e-10 / (relative gap), and the Ritz values of the superelement by up to ~1e-9.
-  auto wr = cb::dense_eigenvalues(static_cast<int>(n), res.K, res.M);
-  auto wf = cb::dense_eigenvalues(static_cast<int>(n), ref.K, ref.M);
+  auto wr = eigen::dense_eigenvalues(static_cast<int>(n), res.K, res.M);
+  auto wf = eigen::dense_eigenvalues(static_cast<int>(n), ref.K, ref.M);
   for (PetscInt j = 0; j < n; ++j) EXPECT_NEAR(wr[j], wf[j], 1e-8 * std::abs(wf[j]) + 1e-6) << "superelement mode " << j;
 }
 

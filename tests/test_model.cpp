@@ -135,11 +135,11 @@ TEST_P(ModelByType, FreeFreeHasSixRigidBodyModes) {
   auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
   auto dofs = fe::number_dofs(lm, {});
   auto ops = fe::assemble(lm, dofs, test::steel());
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 8;
   es.shift = -1e3;  // K is singular: shift away from the rigid-body eigenvalue 0
   es.prefix = "test_ff_";
-  auto eig = cb::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
   const double first_elastic = eig.omega2[6];
   EXPECT_GT(first_elastic, 1e3) << name(GetParam());
   for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(eig.omega2[i]), 1e-8 * first_elastic) << name(GetParam()) << " mode " << i;
@@ -237,10 +237,10 @@ TEST_P(Cantilever, FrequenciesMatchClosedForms) {
   auto dofs = fe::number_dofs(lm, {"x0"});
   const auto mat = test::steel();
   auto ops = fe::assemble(lm, dofs, mat);
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = 14;
   es.prefix = "test_cant_";
-  auto eig = cb::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
+  auto eig = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
 
   const double A = by * hz, Iy = by * hz * hz * hz / 12.0, E = mat.E, rho = mat.rho;
   const double G = E / (2 * (1 + mat.nu));

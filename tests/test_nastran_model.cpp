@@ -11,8 +11,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/nastran.hpp"
@@ -124,11 +124,11 @@ double rel_diff(Mat A, Mat B) {
 }
 
 std::vector<double> lowest(const Assembled& a, PetscInt n) {
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = n;
   es.prefix = "test_";
   auto w = cb::sign_reference(a.lm, a.dofs);
-  return cb::solve_eigen(a.ops.K.get(), a.ops.M.get(), es, w.get()).omega2;
+  return eigen::solve_eigen(a.ops.K.get(), a.ops.M.get(), es, w.get()).omega2;
 }
 
 }  // namespace

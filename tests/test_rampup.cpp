@@ -14,8 +14,8 @@
 #include <complex>
 #include <cstdio>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/rampup/rampup.hpp"
 #include "scratch.hpp"
@@ -79,7 +79,7 @@ std::vector<double> pinned_frequencies(double L, double d, const Material& m, in
       Kr[i * nr + j] = K[keep[i] * nd + keep[j]];
       Mr[i * nr + j] = M[keep[i] * nd + keep[j]];
     }
-  auto lam = cb::dense_eigenvalues(nr, Kr, Mr);
+  auto lam = eigen::dense_eigenvalues(nr, Kr, Mr);
   for (double& l : lam) l = std::sqrt(l);
   return lam;
 }

@@ -41,11 +41,11 @@ Result solve(MPI_Comm comm, int nev) {
   r.volume = ops.volume;
   r.mass = ops.mass;
   r.rho = lm.mesh.materials.at(0).rho;
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = nev;
   es.prefix = "test_r37_";
   auto w = cb::sign_reference(lm, dofs);
-  r.omega2 = cb::solve_eigen(ops.K.get(), ops.M.get(), es, w.get()).omega2;
+  r.omega2 = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, w.get()).omega2;
   return r;
 }
 

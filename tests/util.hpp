@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/partition.hpp"

@@ -9,9 +9,9 @@
 
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 
@@ -43,14 +43,14 @@ void run_modes(MPI_Comm comm) {
   check_options(comm, true);
   MORSE_CHECK(nev > 0, "-modes_nev must be positive (got ", nev, ")");
   Model md = build_model(comm, o);
-  cb::EigenSettings es;
+  eigen::EigenSettings es;
   es.nev = nev;
   es.shift = shift;
   es.prefix = "modes_";
   es.what = "full-model modes";
   es.keep_factor = false;  // nothing solves with it afterwards: the Sylvester check reuses it
   auto w = cb::sign_reference(md.lm, md.dofs);
-  auto eig = cb::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
+  auto eig = eigen::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
   check_options(comm, false);
 
   const std::vector<double> f_hz = hz(eig.omega2);

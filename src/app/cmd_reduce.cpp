@@ -9,9 +9,9 @@
 
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 
@@ -64,7 +64,7 @@ void run_reduce(MPI_Comm comm) {
   std::vector<double> rom_f;
   {
     StageTimer t(comm, "ReducedEigen");
-    rom_f = hz(cb::dense_eigenvalues(n, res.K, res.M));
+    rom_f = hz(eigen::dense_eigenvalues(n, res.K, res.M));
   }
   const std::vector<double> fi_hz = hz(res.fixed_omega2);
   print0(comm, "morse: Craig-Bampton superelement: %d boundary DOFs (%zu nodes) + %d fixed-interface modes = %d\n",

@@ -13,10 +13,10 @@
 
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/select/select.hpp"
@@ -198,9 +198,9 @@ void run_select(MPI_Comm comm) {
     ic = select::interface_coupling(comm, md.ops.K.get(), md.ops.M.get(), res);
   }
   // Full-model modes with the real boundary conditions (clamp only): MAC reference and IMR.
-  cb::Eigenpairs fom;
+  eigen::Eigenpairs fom;
   {
-    cb::EigenSettings es;
+    eigen::EigenSettings es;
     es.prefix = "select_fom_";
     es.stage = "Fom";
     es.what = "full-model modes";
@@ -209,7 +209,7 @@ void run_select(MPI_Comm comm) {
     else
       es.omega2_max = l_an;
     auto w = sign_reference(md);
-    fom = cb::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
+    fom = eigen::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
   }
   const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
 
@@ -241,10 +241,10 @@ void run_select(MPI_Comm comm) {
                     " fixed-interface modes)");
       imr->clamped_modes = modes;
     } else {
-      cb::Eigenpairs sys;
+      eigen::Eigenpairs sys;
       Mat Ks = md.ops.K.get();
       UMat Kspring;
-      cb::Eigenpairs* use = &fom;
+      eigen::Eigenpairs* use = &fom;
       if (so.imr_support == "spring") {
         MORSE_CALL(MatDuplicate(md.ops.K.get(), MAT_COPY_VALUES, Kspring.ptr()));
         for (auto g : res.boundary_dofs) {
@@ -255,12 +255,12 @@ void run_select(MPI_Comm comm) {
         MORSE_CALL(MatAssemblyBegin(Kspring.get(), MAT_FINAL_ASSEMBLY));
         MORSE_CALL(MatAssemblyEnd(Kspring.get(), MAT_FINAL_ASSEMBLY));
         Ks = Kspring.get();
-        cb::EigenSettings es;
+        eigen::EigenSettings es;
         es.prefix = "select_imr_";
         es.stage = "Imr";
         es.what = "IMR system modes";
         es.omega2_max = l_an;
-        sys = cb::solve_eigen(Ks, md.ops.M.get(), es, nullptr);
+        sys = eigen::solve_eigen(Ks, md.ops.M.get(), es, nullptr);
         use = &sys;
       }
       const PetscInt n_sys = static_cast<PetscInt>(use->omega2.size());
@@ -310,7 +310,7 @@ void run_select(MPI_Comm comm) {
     mr.K = select::restrict_operator(res.K, nb, nr, mr.sel.selected);
     const int n = static_cast<int>(nb + mr.sel.selected.size());
     std::vector<double> vec;
-    auto lam = cb::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
+    auto lam = eigen::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
     mr.rom_f = hz(lam);
     while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
     // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
@@ -346,7 +346,7 @@ void run_select(MPI_Comm comm) {
   // Plain frequency-ordered Craig-Bampton for the same candidate set: reference row.
   PetscInt cb_in_band = 0;
   {
-    auto lam = cb::dense_eigenvalues(static_cast<int>(nr), res.K, res.M);
+    auto lam = eigen::dense_eigenvalues(static_cast<int>(nr), res.K, res.M);
     while (cb_in_band < nr && lam[cb_in_band] <= l_an) ++cb_in_band;
   }
   print0(comm, "\nmorse select: %d candidate fixed-interface modes (%s .. %s Hz), %d boundary DOFs; analysis band "

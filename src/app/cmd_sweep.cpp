@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "app/common.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
@@ -123,7 +123,7 @@ void run_sweep(MPI_Comm comm) {
   rec.rom = so.rom;
   rec.n_speeds = n_speeds;
   rec.frequencies = s.frequencies();
-  for (double w2 : cb::dense_eigenvalues(static_cast<int>(r), sm.model.K, sm.model.M, nullptr))
+  for (double w2 : eigen::dense_eigenvalues(static_cast<int>(r), sm.model.K, sm.model.M, nullptr))
     rec.eigenfrequencies_hz.push_back(hz(w2));
   // Resume: rank 0 reads the file; the speeds it holds are skipped on every rank.
   const int rank = rank_of(comm);

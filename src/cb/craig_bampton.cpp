@@ -10,6 +10,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 
 namespace morse::cb {
 
@@ -240,21 +241,21 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   }
 
   // Fixed-interface modes (eq. 4).
-  Eigenpairs eig;
+  eigen::Eigenpairs eig;
   const bool want_modes = s.fmax_hz > 0 || s.n_fixed > 0;
   if (want_modes) {
     MORSE_CHECK(s.fmax_hz > 0 || s.n_fixed <= n_i, s.n_fixed, " fixed-interface modes requested but the model has only ",
                 n_i, " interior DOFs");
     Vec wi;
     MORSE_CALL(VecGetSubVector(w, is_i.get(), &wi));
-    EigenSettings es;
+    eigen::EigenSettings es;
     es.prefix = s.prefix;
     es.what = "fixed-interface modes";
     if (s.fmax_hz > 0)
       es.omega2_max = std::pow(2.0 * M_PI * s.fmax_hz, 2);
     else
       es.nev = s.n_fixed;
-    eig = solve_eigen(Kii.get(), Mii.get(), es, wi);
+    eig = eigen::solve_eigen(Kii.get(), Mii.get(), es, wi);
     MORSE_CALL(VecRestoreSubVector(w, is_i.get(), &wi));
     out.fixed_omega2 = eig.omega2;
     out.factor_seconds = eig.factor_seconds;
@@ -277,7 +278,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
       MORSE_CALL(MatFactorInfoInitialize(&info));
       MORSE_CALL(MatCholeskyFactorSymbolic(F, Kii.get(), nullptr, &info));
       MORSE_CALL(MatCholeskyFactorNumeric(F, Kii.get(), &info));
-      PetscInt nulls = mumps_null_pivots(F);
+      PetscInt nulls = eigen::mumps_null_pivots(F);
       MORSE_CHECK(nulls == 0, "K_ii is singular (", nulls,
                   " null pivots): the model with its boundary set clamped is not restrained; "
                   "check -clamp and -boundary");

@@ -19,10 +19,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/eigen/eigen.hpp"
 
 namespace morse::dyn {
 
@@ -161,12 +161,12 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
   std::vector<double> ck;
   if (s.modal_xi > 0 && s.damping_modes > 0) {
     StageTimer t(comm, "DampingModes");
-    cb::EigenSettings es;
+    eigen::EigenSettings es;
     es.nev = s.damping_modes;
     es.prefix = s.prefix + "damping_";
     es.what = "modal damping modes";
     es.stage = "Damping";
-    auto eig = cb::solve_eigen(K, M, es, nullptr);
+    auto eig = eigen::solve_eigen(K, M, es, nullptr);
     for (PetscInt k = 0; k < s.damping_modes; ++k) {
       UVec Mphi;
       MORSE_CALL(VecDuplicate(u0.get(), Mphi.ptr()));

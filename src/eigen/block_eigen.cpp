@@ -1,4 +1,4 @@
-// Block shift-invert Krylov–Schur for K x = omega^2 M x (cb/eigen.hpp, -<prefix>eigen_solver block).
+// Block shift-invert Krylov–Schur for K x = omega^2 M x (eigen/eigen.hpp, -<prefix>eigen_solver block).
 //
 // The operator is Op = (K - sigma M)^-1 M, self-adjoint in the M inner product; its eigenvalues
 // theta = 1 / (omega^2 - sigma) are largest in magnitude for the omega^2 nearest sigma. One MUMPS
@@ -23,9 +23,11 @@
 #include <memory>
 #include <numeric>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+
+#include "eigen/detail/testing.hpp"
+#include "morse/eigen/eigen.hpp"
 
 // LAPACK's MRRR symmetric eigensolver (not in PETSc's BLAS/LAPACK header; the LAPACK that
 // PETSc links provides it).
@@ -35,7 +37,7 @@ extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, c
                         const PetscBLASInt* ldz, PetscBLASInt* isuppz, double* work, const PetscBLASInt* lwork,
                         PetscBLASInt* iwork, const PetscBLASInt* liwork, PetscBLASInt* info);
 
-namespace morse::cb {
+namespace morse::eigen {
 
 namespace {
 
@@ -967,7 +969,7 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
       // the square of the vectors' error.
       r.omega2 = rayleigh_quotients(Ks, Ms, r.V.get());
       // Fault injection: the highest slice loses its `drop_for_test` highest pairs.
-      if (i == S - 1 && s.drop_for_test > 0) r.omega2.resize(r.omega2.size() - std::min<std::size_t>(s.drop_for_test, r.omega2.size()));
+      if (i == S - 1 && detail::drop_for_test() > 0) r.omega2.resize(r.omega2.size() - std::min<std::size_t>(detail::drop_for_test(), r.omega2.size()));
       PetscInt inside = 0;
       for (double w : r.omega2) inside += w >= beta[i] * (1 - 1e-12) && w <= beta[i + 1] * (1 + 1e-12) ? 1 : 0;
       if (inside != ni && err.empty())
@@ -1085,7 +1087,7 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
-    const PetscInt found = nev - std::min(s.drop_for_test, nev);
+    const PetscInt found = nev - std::min(detail::drop_for_test(), nev);
     out.omega2.resize(found);
     const double top = found ? out.omega2.back() : 0.0;
     collective_check(comm, found == nev && top <= s.omega2_max * (1 + 1e-8)
@@ -1102,4 +1104,4 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   return out;
 }
 
-}  // namespace morse::cb
+}  // namespace morse::eigen

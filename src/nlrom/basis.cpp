@@ -10,9 +10,9 @@
 #include <numeric>
 #include <random>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
@@ -182,7 +182,7 @@ UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& b
   MORSE_CALL(MatFactorInfoInitialize(&info));
   MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Kb.get(), nullptr, &info));
   MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Kb.get(), &info));
-  const PetscInt nulls = cb::mumps_null_pivots(F.get());
+  const PetscInt nulls = eigen::mumps_null_pivots(F.get());
   MORSE_CHECK(nulls == 0, "modal derivatives: K_ii is singular (", nulls, " null pivots); check -clamp and -boundary");
   if (np > 0) MORSE_CALL(MatMatSolve(F.get(), Rhs.get(), Psi.get()));
   return Psi;
@@ -434,7 +434,7 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
   if (xi > 0 && k > 0) {
     MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
     std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
-    const auto w = cb::dense_eigenvalues(static_cast<int>(r), rm.K, rm.M, &X);
+    const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm.K, rm.M, &X);
     for (PetscInt m = 0; m < k; ++m) {
       const double om = std::sqrt(std::max(0.0, w[m]));
       rm.damping_omega.push_back(om);

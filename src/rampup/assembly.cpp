@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "lapack.hpp"
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/rampup/rampup.hpp"
 
@@ -82,7 +82,7 @@ StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>
   std::vector<double> V;
   std::vector<double> lam;
   try {
-    lam = cb::dense_eigenvalues(static_cast<int>(nr), Kr, Mr, &V, w_cut2);
+    lam = eigen::dense_eigenvalues(static_cast<int>(nr), Kr, Mr, &V, w_cut2);
   } catch (const Error& e) {
     throw Error(cat(who, "clamped modal basis: ", e.what()));
   }

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <optional>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/sim/sim.hpp"
 #include "sim/contact.hpp"
 
@@ -98,7 +98,7 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
 double StepState::energy() const { return sim::energy(*model, q, v); }
 
 double critical_step(const nlrom::ReducedModel& m) {
-  const auto w = cb::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
 }
 

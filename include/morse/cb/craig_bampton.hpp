@@ -16,7 +16,6 @@
 #include <string>
 #include <vector>
 
-#include "morse/cb/eigen.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/matrices.hpp"
 

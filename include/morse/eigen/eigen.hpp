@@ -1,4 +1,4 @@
-// morse/cb/eigen.hpp: generalized symmetric eigenproblems K x = omega^2 M x with SLEPc.
+// morse/eigen/eigen.hpp: generalized symmetric eigenproblems K x = omega^2 M x with SLEPc.
 //
 // Shift-invert with a MUMPS Cholesky factorization. By count (nev lowest pairs about the shift)
 // or by cutoff (every pair below omega2_max, by spectrum slicing with MUMPS inertia). The
@@ -13,7 +13,7 @@
 
 #include "morse/core/handle.hpp"
 
-namespace morse::cb {
+namespace morse::eigen {
 
 struct EigenSettings {
   PetscInt nev = 0;         ///< number of pairs wanted (count mode), or
@@ -31,10 +31,6 @@ struct EigenSettings {
   /// Prefix of the stage names (<stage>Factor, <stage>EigenSolve, <stage>EigenVectors), so that
   /// several eigen solves of one run stay apart in the stage table and in -log_view.
   std::string stage;
-  /// Fault injection for the tests: drop this many pairs before the Sylvester check, which must
-  /// then fail: the highest of a cutoff solve (or count by slicing), the lowest of a count solve
-  /// with one shift. 0 in production.
-  PetscInt drop_for_test = 0;
   /// Count mode with one shift: check the claim "these are the nev pairs nearest the shift (the
   /// nev lowest for shift <= 0)" by Sylvester's inertia (one LDL^T factorization, two for a
   /// shift inside the spectrum). -<prefix>check_inertia overrides.
@@ -112,7 +108,7 @@ std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<do
 /// from them. Collective.
 std::vector<double> rayleigh_quotients(Mat K, Mat M, Mat V);
 
-/// The block shift-invert Krylov–Schur solver (src/cb/block_eigen.cpp), which solve_eigen uses
+/// The block shift-invert Krylov–Schur solver (src/eigen/block_eigen.cpp), which solve_eigen uses
 /// with -<prefix>eigen_solver block (the default): count mode, or cutoff mode as the count from
 /// Sylvester's inertia at the cutoff then a count solve (checked: exactly that many, all below
 /// it). Options -<prefix>block_size (8 below 100 modes, else 16), -<prefix>block_max_dim (nev +
@@ -177,4 +173,4 @@ std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
                                       std::vector<double>* vectors = nullptr,
                                       double vectors_max = std::numeric_limits<double>::infinity());
 
-}  // namespace morse::cb
+}  // namespace morse::eigen

@@ -166,7 +166,7 @@ struct StatorModes {
   std::vector<std::int64_t> clamped_nodes;
 };
 /// Computes the clamped, truncated modal basis (dense LAPACK sygv/sygvx via
-/// cb::dense_eigenvalues; O(n^3)). Damping: damping_ratio >= 0 gives c_i = 2 xi omega_i;
+/// eigen::dense_eigenvalues; O(n^3)). Damping: damping_ratio >= 0 gives c_i = 2 xi omega_i;
 /// damping_ratio < 0 takes the diagonal of Phi^T C Phi from the superelement's C (0 without
 /// C), and reports the relative size of its dropped off-diagonal part (the stator block is kept
 /// diagonal, see integrate()). Throws if a clamped node is not a boundary node, if f_cut_hz <= 0
