@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/units.hpp"
 #include "util.hpp"
 
 #include <petscblaslapack.h>
@@ -253,8 +254,8 @@ TEST(CraigBampton, IndependentOfRankCount) {
 TEST(CraigBampton, CutoffSelectionMatchesCount) {
   auto c = beam(PETSC_COMM_WORLD);
   auto by_count = reduce(c, 12);
-  const double f11 = std::sqrt(by_count.fixed_omega2[10]) / (2 * M_PI);
-  const double f12 = std::sqrt(by_count.fixed_omega2[11]) / (2 * M_PI);
+  const double f11 = hz(by_count.fixed_omega2[10]);
+  const double f12 = hz(by_count.fixed_omega2[11]);
   auto by_cut = reduce(c, -1, false, 0.5 * (f11 + f12));
   ASSERT_EQ(by_cut.n_phi, 11);
   for (int k = 0; k < 11; ++k) EXPECT_NEAR(by_cut.fixed_omega2[k] / by_count.fixed_omega2[k], 1.0, 1e-10);

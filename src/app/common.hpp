@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/units.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
@@ -25,17 +26,6 @@
 #include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
-
-constexpr double kTwoPi = 6.283185307179586;
-
-/// Frequency [Hz] of an eigenvalue omega^2 (negative round-off of rigid modes clipped to 0).
-inline double hz(double omega2) { return std::sqrt(std::max(0.0, omega2)) / kTwoPi; }
-inline std::vector<double> hz(const std::vector<double>& omega2) {
-  std::vector<double> f;
-  f.reserve(omega2.size());
-  for (double l : omega2) f.push_back(hz(l));
-  return f;
-}
 
 struct CommonOptions {
   std::string mesh;

@@ -10,6 +10,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
 
 namespace morse::cb {
@@ -252,7 +253,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
     es.prefix = s.prefix;
     es.what = "fixed-interface modes";
     if (s.fmax_hz > 0)
-      es.omega2_max = std::pow(2.0 * M_PI * s.fmax_hz, 2);
+      es.omega2_max = omega2_of_hz(s.fmax_hz);
     else
       es.nev = s.n_fixed;
     eig = eigen::solve_eigen(Kii.get(), Mii.get(), es, wi);

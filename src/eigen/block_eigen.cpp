@@ -25,9 +25,10 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/units.hpp"
+#include "morse/eigen/eigen.hpp"
 
 #include "eigen/detail/testing.hpp"
-#include "morse/eigen/eigen.hpp"
 
 // LAPACK's MRRR symmetric eigensolver (not in PETSc's BLAS/LAPACK header; the LAPACK that
 // PETSc links provides it).
@@ -894,7 +895,6 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   out.slicing = true;
   out.partitions = P;
   const auto t_all = std::chrono::steady_clock::now();
-  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
   double top = s.omega2_max;
   PetscInt N = 0;
   if (s.omega2_max > 0) {
@@ -1093,11 +1093,11 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
     collective_check(comm, found == nev && top <= s.omega2_max * (1 + 1e-8)
                                ? std::string()
                                : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", nev, " eigenvalues below ",
-                                     std::sqrt(s.omega2_max) / (2 * M_PI), " Hz but the solve returned ", found,
-                                     found ? cat(" up to ", std::sqrt(std::max(top, 0.0)) / (2 * M_PI), " Hz") : std::string(),
+                                     hz(s.omega2_max), " Hz but the solve returned ", found,
+                                     found ? cat(" up to ", hz(top), " Hz") : std::string(),
                                      ": it missed modes"));
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
-           s.what.c_str(), (int)nev, std::sqrt(s.omega2_max) / (2 * M_PI));
+           s.what.c_str(), (int)nev, hz(s.omega2_max));
   }
   finish_pairs(K, M, s, o.tol, sign_ref, &out);
   if (!cutoff) check_count_by_inertia(K, M, s, r.extra, &out);

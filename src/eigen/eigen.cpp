@@ -9,6 +9,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/units.hpp"
 
 #include "eigen/detail/testing.hpp"
 
@@ -242,7 +243,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     slicing = true;
     out.slice_omega2 = omega2_max;
     print0(comm, "  %s: the %d lowest by spectrum slicing below %.6g Hz (cutoff from %d inertia counts, %.1f s)\n",
-           s.what.c_str(), (int)s.nev, std::sqrt(omega2_max) / (2 * M_PI), (int)out.inertia_counts,
+           s.what.c_str(), (int)s.nev, hz(omega2_max), (int)out.inertia_counts,
            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   out.slicing = slicing;
@@ -311,12 +312,12 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     if (!count_by_slicing) out.inertia_count = inertia_below(eps, K, M, -1e-6 * omega2_max, omega2_max, s.prefix);
     collective_check(comm, found == out.inertia_count
                                ? std::string()
-                               : cat(s.what, ": ", found, " eigenpairs found below ", std::sqrt(omega2_max) / (2 * M_PI),
+                               : cat(s.what, ": ", found, " eigenpairs found below ", hz(omega2_max),
                                      " Hz but Sylvester's inertia of K - omega^2 M counts ", out.inertia_count,
                                      ": the solve ", found < out.inertia_count ? "missed modes" : "returned spurious pairs",
                                      "; tighten -", s.prefix, "eps_tol or raise -", s.prefix, "eps_ncv"));
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
-           s.what.c_str(), (int)found, std::sqrt(omega2_max) / (2 * M_PI));
+           s.what.c_str(), (int)found, hz(omega2_max));
   }
   const PetscInt n_out = slicing && !count_by_slicing ? found : s.nev;
   MORSE_CHECK(n_out > 0, s.what, ": no eigenvalue below the cutoff (omega^2 = ", omega2_max, ")");
@@ -405,7 +406,7 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
     out.max_residual = r[worst];
     collective_check(comm, out.max_residual <= tol
                                ? std::string()
-                               : cat(s.what, ": mode ", worst + 1, " (", std::sqrt(std::max(0.0, out.omega2[worst])) / (2 * M_PI),
+                               : cat(s.what, ": mode ", worst + 1, " (", hz(out.omega2[worst]),
                                      " Hz) has the relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = ", out.max_residual,
                                      " above the tolerance ", tol));
     print0(comm, "  %s: max relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = %.2e over %d pairs\n", s.what.c_str(),
@@ -460,7 +461,6 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
   out.inertia_count = counted;
   out.check_lo = std::max(s.shift - outer, 0.0);
   out.check_hi = s.shift + outer;
-  auto hz = [](double w2) { return std::sqrt(std::max(w2, 0.0)) / (2 * M_PI); };
   // More eigenvalues than pairs found: either one was missed, or the count cut a cluster whose
   // other copies lie within 1e-6 of the farthest pair returned and did not converge (a tie,
   // which the claim "the nev nearest" allows). The window just inside that pair tells which.

@@ -21,6 +21,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/handle.hpp"
+#include "morse/core/units.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/matrices.hpp"
 #include "morse/io/op4.hpp"
@@ -31,7 +32,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
 // Largest K_CB r_k relative to ||K_CB||_F ||r_k|| for a superelement that can move rigidly.
 // Round-off of the Schur complement gives ~1e-12 on well-conditioned models; a clamp gives O(1).
 constexpr double kRigidTol = 1e-6;
@@ -170,7 +170,7 @@ void check_spoints(const Superelement& se, std::int64_t offset) {
 double Superelement::modal_frequency_hz(int k) const {
   const std::size_t j = static_cast<std::size_t>(n_b + k);
   const double m = M[j * n + j], s = K[j * n + j];
-  return m > 0 && s > 0 ? std::sqrt(s / m) / kTwoPi : 0.0;
+  return m > 0 && s > 0 ? hz(s / m) : 0.0;
 }
 
 Superelement read_superelement(const std::string& file) {

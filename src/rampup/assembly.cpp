@@ -5,6 +5,7 @@
 
 #include "lapack.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/rampup/rampup.hpp"
@@ -78,7 +79,7 @@ StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>
       Kr[i * nr + j] = se.K[keep[i] * n + keep[j]];
       Mr[i * nr + j] = se.M[keep[i] * n + keep[j]];
     }
-  const double w_cut2 = std::pow(2.0 * M_PI * f_cut_hz, 2);
+  const double w_cut2 = omega2_of_hz(f_cut_hz);
   std::vector<double> V;
   std::vector<double> lam;
   try {

@@ -3,6 +3,7 @@
 #include <numeric>
 
 #include "morse/core/error.hpp"
+#include "morse/core/units.hpp"
 #include "morse/select/select.hpp"
 
 #include <petscblaslapack.h>
@@ -136,7 +137,7 @@ std::vector<double> ebr_scores(MPI_Comm comm, const InterfaceCoupling& ic, const
   std::vector<double> s(nphi, 0.0);
   std::string err;
   for (std::size_t k = rank; k < ex.freq_hz.size() && err.empty(); k += size) {
-    const double w2 = std::pow(2 * M_PI * ex.freq_hz[k], 2);
+    const double w2 = omega2_of_hz(ex.freq_hz[k]);
     std::vector<double> A(static_cast<std::size_t>(nr) * nr);
     for (PetscInt i = 0; i < nr * nr; ++i) A[i] = cb.K[i] - w2 * cb.M[i];
     // All components: one real unit load per boundary DOF, each scored on its own. Otherwise
