@@ -231,7 +231,7 @@ Vec distorted_nodes(ElementType t, unsigned seed) {
   Vec x = affine_nodes(t, kShear, {0.3, -0.2, 0.5});
   const int nv = mesh::vertices_per_element(t);
   for (int k = 0; k < 3 * nv; ++k) x[k] += 0.12 * size * u(rng);
-  const auto& edges = fe::mid_edges(t);
+  const auto& edges = mesh::mid_edges(t);
   for (size_t e = 0; e < edges.size(); ++e)
     for (int i = 0; i < 3; ++i)
       x[3 * (nv + e) + i] =
@@ -414,7 +414,7 @@ TEST_P(ElementTest, NodeTables) {
   const ElementType t = GetParam();
   const int n = num_nodes(t), nv = mesh::vertices_per_element(t);
   const auto& ref = fe::reference_nodes(t);
-  const auto& edges = fe::mid_edges(t);
+  const auto& edges = mesh::mid_edges(t);
   ASSERT_EQ(static_cast<int>(ref.size()), n);
   ASSERT_EQ(static_cast<int>(edges.size()), n - nv);
   for (size_t k = 0; k < edges.size(); ++k) {
@@ -426,18 +426,18 @@ TEST_P(ElementTest, NodeTables) {
   for (int a = 0; a < n; ++a) EXPECT_TRUE(inside_reference(t, ref[a].data(), 0.0));
 }
 
-// The mid-edge tables are the Gmsh convention documented in element.hpp; everything else (reference
+// The mid-edge tables are the Gmsh convention documented in mesh/cells.hpp; everything else (reference
 // nodes, shape functions) is derived from them, so pin them literally.
 TEST(Element, MidEdgeTablesAreGmsh) {
   using Edges = std::vector<std::pair<int, int>>;
-  EXPECT_TRUE(fe::mid_edges(ElementType::Tet4).empty());
-  EXPECT_TRUE(fe::mid_edges(ElementType::Wedge6).empty());
-  EXPECT_TRUE(fe::mid_edges(ElementType::Hex8).empty());
-  EXPECT_EQ(fe::mid_edges(ElementType::Tet10),
+  EXPECT_TRUE(mesh::mid_edges(ElementType::Tet4).empty());
+  EXPECT_TRUE(mesh::mid_edges(ElementType::Wedge6).empty());
+  EXPECT_TRUE(mesh::mid_edges(ElementType::Hex8).empty());
+  EXPECT_EQ(mesh::mid_edges(ElementType::Tet10),
             (Edges{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}}));
-  EXPECT_EQ(fe::mid_edges(ElementType::Wedge15),
+  EXPECT_EQ(mesh::mid_edges(ElementType::Wedge15),
             (Edges{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}}));
-  EXPECT_EQ(fe::mid_edges(ElementType::Hex20), (Edges{{0, 1},
+  EXPECT_EQ(mesh::mid_edges(ElementType::Hex20), (Edges{{0, 1},
                                                       {0, 3},
                                                       {0, 4},
                                                       {1, 2},
@@ -616,7 +616,7 @@ TEST(Element, Tet10SlidMidNodesVolume) {
   const ElementType t = ElementType::Tet10;
   Vec xyz = affine_nodes(t, kShear, {0.5, 0.5, 0.5});
   const double alpha[6] = {0.42, 0.55, 0.6, 0.45, 0.4, 0.58};
-  const auto& edges = fe::mid_edges(t);
+  const auto& edges = mesh::mid_edges(t);
   for (int e = 0; e < 6; ++e)
     for (int i = 0; i < 3; ++i)
       xyz[3 * (4 + e) + i] =
@@ -675,7 +675,7 @@ TEST_P(ElementTest, InvertedElement) {
   // Swap vertices 0 and 1 and rebuild the mid-edge nodes on the new edges.
   Vec bad = good;
   for (int i = 0; i < 3; ++i) std::swap(bad[i], bad[3 + i]);
-  const auto& edges = fe::mid_edges(t);
+  const auto& edges = mesh::mid_edges(t);
   for (size_t e = 0; e < edges.size(); ++e)
     for (int i = 0; i < 3; ++i)
       bad[3 * (nv + e) + i] = 0.5 * (bad[3 * edges[e].first + i] + bad[3 * edges[e].second + i]);
@@ -691,6 +691,26 @@ TEST_P(ElementTest, InvertedElement) {
   EXPECT_LT(dk, 0.0);
   EXPECT_LT(dm, 0.0);
   for (double k : K) EXPECT_TRUE(std::isfinite(k));
+}
+
+// mesh::corner_jacobian (the orientation test of the Nastran reader, which does not depend on fe)
+// is bitwise fe's Jacobian determinant at the centroid of the linear cell, on distorted, inverted
+// and mirrored cells.
+TEST_P(ElementTest, CornerJacobianIsFeJacobianAtCentroid) {
+  const ElementType t = GetParam();
+  if (mesh::is_quadratic(t)) return;
+  const int nv = mesh::vertices_per_element(t);
+  for (unsigned seed : {3u, 11u, 29u}) {
+    Vec x = distorted_nodes(t, seed);
+    for (int pass = 0; pass < 3; ++pass) {
+      if (pass == 1)
+        for (int i = 0; i < 3; ++i) std::swap(x[i], x[3 + i]);
+      if (pass == 2)
+        for (int a = 0; a < nv; ++a) x[3 * a] = -x[3 * a];
+      EXPECT_EQ(mesh::corner_jacobian(t, x.data()), fe::jacobian_determinant(t, x.data(), mesh::centroid(t)))
+          << mesh::element_name(t) << " seed " << seed << " pass " << pass;
+    }
+  }
 }
 
 // --- stiffness ---------------------------------------------------------------------------------

@@ -146,7 +146,7 @@ void check_box(const BoxSpec& s) {
   // Positive Jacobians, total volume, mid-edge nodes at edge midpoints.
   const double volume = s.lx * s.ly * s.lz;
   double total = 0;
-  const auto& mids = morse::fe::mid_edges(s.type);
+  const auto& mids = morse::mesh::mid_edges(s.type);
   const int nvert = morse::mesh::vertices_per_element(s.type);
   for (std::int64_t e = 0; e < m.num_elements(); ++e) {
     const auto xyz = element_xyz(m, e);

@@ -82,7 +82,7 @@ void expect_midpoints(const Mesh& m) {
     const ElementType t = m.elem_types[e];
     const auto xyz = element_xyz(m, e);
     const int nv = morse::mesh::vertices_per_element(t);
-    const auto& edges = morse::fe::mid_edges(t);
+    const auto& edges = morse::mesh::mid_edges(t);
     for (std::size_t j = 0; j < edges.size(); ++j)
       for (int d = 0; d < 3; ++d)
         EXPECT_NEAR(xyz[3 * (nv + j) + d],

@@ -84,7 +84,7 @@ void write_inp(const mesh::Mesh& m, const std::string& path, const std::string& 
   for (std::int64_t k = 0; k < m.num_nodes(); ++k)
     f << m.node_ids[k] << ", " << m.coords[3 * k] << ", " << m.coords[3 * k + 1] << ", " << m.coords[3 * k + 2] << "\n";
   const auto t = m.elem_types[0];
-  const auto perm = fe::foreign_to_morse(t, abaqus_mid_edges(t));  // Abaqus position -> morse index
+  const auto perm = mesh::foreign_to_morse(t, abaqus_mid_edges(t));  // Abaqus position -> morse index
   f << "*ELEMENT, TYPE=" << abaqus_type(t) << ", ELSET=SOLID\n";
   for (std::int64_t e = 0; e < m.num_elements(); ++e) {
     f << m.elem_ids[e];

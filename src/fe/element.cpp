@@ -170,7 +170,7 @@ void shape_tet10(const double* x, double* N, double* dN) {
     N[i] = L[i] * (2.0 * L[i] - 1.0);
     for (int d = 0; d < 3; ++d) dN[3 * i + d] = (4.0 * L[i] - 1.0) * dL[3 * i + d];
   }
-  const auto& edges = mid_edges(ElementType::Tet10);
+  const auto& edges = mesh::mid_edges(ElementType::Tet10);
   for (int k = 0; k < 6; ++k) {
     const int p = edges[k].first, q = edges[k].second, m = 4 + k;
     N[m] = 4.0 * L[p] * L[q];
@@ -214,7 +214,7 @@ void shape_wedge15(const double* x, double* N, double* dN) {
     dN[3 * i + 1] = dNdL * T.dy[t];
     dN[3 * i + 2] = 0.5 * L * s * (2.0 * L + 2.0 * s * z - 1.0);
   }
-  const auto& edges = mid_edges(ElementType::Wedge15);
+  const auto& edges = mesh::mid_edges(ElementType::Wedge15);
   for (int k = 0; k < 9; ++k) {
     const int p = edges[k].first, q = edges[k].second, m = 6 + k;
     if (q == p + 3) {  // edge along zeta
@@ -426,29 +426,6 @@ const QuadratureRule& mass_rule(ElementType t) {
   return rules[type_index(t)];
 }
 
-const std::vector<std::pair<int, int>>& mid_edges(ElementType t) {
-  static const std::array<std::vector<std::pair<int, int>>, mesh::kNumElementTypes> edges = {{
-      {},
-      {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}},
-      {},
-      {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}},
-      {},
-      {{0, 1},
-       {0, 3},
-       {0, 4},
-       {1, 2},
-       {1, 5},
-       {2, 3},
-       {2, 6},
-       {3, 7},
-       {4, 5},
-       {4, 7},
-       {5, 6},
-       {6, 7}},
-  }};
-  return edges[type_index(t)];
-}
-
 const std::vector<std::array<double, 3>>& reference_nodes(ElementType t) {
   static const std::array<std::vector<Point>, mesh::kNumElementTypes> nodes = [] {
     const std::vector<Point> tet = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -462,7 +439,7 @@ const std::vector<std::array<double, 3>>& reference_nodes(ElementType t) {
       const int nv = mesh::vertices_per_element(et);
       r[i] = nv == 4 ? tet : nv == 6 ? wedge : hex;
       // Mid-edge nodes sit at the middle of their (straight) reference edge.
-      for (const auto& [p, q] : mid_edges(et)) {
+      for (const auto& [p, q] : mesh::mid_edges(et)) {
         Point m;
         for (int d = 0; d < 3; ++d) m[d] = 0.5 * (r[i][p][d] + r[i][q][d]);
         r[i].push_back(m);
@@ -638,27 +615,6 @@ double strain_displacement(ElementType t, const double* xyz, const double xi[3],
     c[5 * nd + 1] = gx;
   }
   return det;
-}
-
-std::vector<int> foreign_to_morse(ElementType t, const std::vector<std::pair<int, int>>& foreign) {
-  const int nv = mesh::vertices_per_element(t), n = mesh::nodes_per_element(t);
-  const auto& ours = mid_edges(t);
-  MORSE_CHECK(static_cast<int>(ours.size()) == n - nv && static_cast<int>(foreign.size()) == n - nv,
-              "node ordering: mid-edge table size mismatch for ", mesh::element_name(t));
-  std::vector<int> perm(n, -1);
-  for (int i = 0; i < nv; ++i) perm[i] = i;  // vertex orderings coincide
-  std::vector<bool> used(n - nv, false);
-  for (int i = 0; i < n - nv; ++i) {
-    auto [a, b] = foreign[i];
-    for (int j = 0; j < n - nv; ++j)
-      if (!used[j] && ((ours[j].first == a && ours[j].second == b) || (ours[j].first == b && ours[j].second == a))) {
-        perm[nv + i] = nv + j;
-        used[j] = true;
-        break;
-      }
-    MORSE_CHECK(perm[nv + i] >= 0, "node ordering: no ", mesh::element_name(t), " node on edge (", a, ",", b, ")");
-  }
-  return perm;
 }
 
 }  // namespace morse::fe

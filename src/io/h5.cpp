@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "morse/core/error.hpp"
-#include "morse/fe/element.hpp"
+#include "morse/mesh/cells.hpp"
 
 namespace morse::io {
 
@@ -659,20 +659,16 @@ void write_provenance(H5Output& out, const std::string& command, const std::stri
 
 namespace {
 
-// XDMF (VTK) type codes and node orderings, expressed by the vertex pairs of the mid-edge nodes.
+// XDMF type codes and names; the node orderings (VTK's) are in mesh/cells.hpp.
 struct XdmfType {
   int code;
   const char* name;
-  std::vector<std::pair<int, int>> edges;
 };
 
 const XdmfType& xdmf_type(mesh::ElementType t) {
   using ET = mesh::ElementType;
-  static const XdmfType tet4{6, "Tetrahedron", {}}, wedge6{8, "Wedge", {}}, hex8{9, "Hexahedron", {}};
-  static const XdmfType tet10{38, "Tetrahedron_10", {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}}};
-  static const XdmfType wedge15{40, "Wedge_15", {{0, 1}, {1, 2}, {0, 2}, {3, 4}, {4, 5}, {3, 5}, {0, 3}, {1, 4}, {2, 5}}};
-  static const XdmfType hex20{48, "Hexahedron_20",
-                              {{0, 1}, {1, 2}, {2, 3}, {0, 3}, {4, 5}, {5, 6}, {6, 7}, {4, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}}};
+  static const XdmfType tet4{6, "Tetrahedron"}, wedge6{8, "Wedge"}, hex8{9, "Hexahedron"};
+  static const XdmfType tet10{38, "Tetrahedron_10"}, wedge15{40, "Wedge_15"}, hex20{48, "Hexahedron_20"};
   switch (t) {
     case ET::Tet4: return tet4;
     case ET::Tet10: return tet10;
@@ -684,7 +680,7 @@ const XdmfType& xdmf_type(mesh::ElementType t) {
 }
 
 // perm[i] = morse node index of the i-th XDMF node.
-std::vector<int> xdmf_permutation(mesh::ElementType t) { return fe::foreign_to_morse(t, xdmf_type(t).edges); }
+std::vector<int> xdmf_permutation(mesh::ElementType t) { return mesh::foreign_to_morse(t, mesh::NodeOrder::Vtk); }
 
 }  // namespace
 

@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
-#include "morse/fe/element.hpp"
+#include "morse/mesh/cells.hpp"
 
 namespace morse::mesh {
 
@@ -45,33 +45,11 @@ constexpr AbaqusType kAbaqusTypes[] = {
 };
 constexpr const char* kSupportedTypes = "C3D4, C3D10, C3D6, C3D15, C3D8, C3D20, C3D20R";
 
-using EdgeList = std::vector<std::pair<int, int>>;
-
-/// Vertex pairs of the Abaqus mid-edge nodes (0-based); entry k is node vertices + k.
-const EdgeList& abaqus_mid_edges(ElementType t) {
-  static const EdgeList kNone;
-  static const EdgeList kTet10{{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
-  static const EdgeList kWedge15{{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5},
-                                 {5, 3}, {0, 3}, {1, 4}, {2, 5}};
-  static const EdgeList kHex20{{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
-                               {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
-  switch (t) {
-    case ElementType::Tet10:
-      return kTet10;
-    case ElementType::Wedge15:
-      return kWedge15;
-    case ElementType::Hex20:
-      return kHex20;
-    default:
-      return kNone;
-  }
-}
-
-using Perm = std::array<int, fe::kMaxNodes>;
+using Perm = std::array<int, kMaxNodes>;
 
 Perm build_perm(ElementType t) {
   Perm p{};
-  const auto f2m = fe::foreign_to_morse(t, abaqus_mid_edges(t));
+  const auto f2m = foreign_to_morse(t, NodeOrder::Abaqus);
   for (std::size_t i = 0; i < f2m.size(); ++i) p[f2m[i]] = static_cast<int>(i);
   return p;
 }
@@ -722,7 +700,7 @@ class Reader {
     mesh.elem_ids.reserve(ne);
     mesh.elem_material.reserve(ne);
     std::size_t off = 0;
-    std::array<std::int64_t, fe::kMaxNodes> idx{}, ordered{};
+    std::array<std::int64_t, kMaxNodes> idx{}, ordered{};
     for (std::size_t el = 0; el < ne; ++el) {
       const ElementType t = elem_types_[el];
       const int n = nodes_per_element(t);

@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
-#include "morse/fe/element.hpp"
+#include "morse/mesh/cells.hpp"
 
 namespace morse::mesh {
 
@@ -64,26 +64,6 @@ const SolidCard& solid_card(ElementType t) {
 
 using EdgeList = std::vector<std::pair<int, int>>;
 
-/// Vertex pairs (0-based) of the Nastran midside grids: G5..G10, G7..G15, G9..G20.
-const EdgeList& nastran_mid_edges(ElementType t) {
-  static const EdgeList kNone;
-  static const EdgeList kTetra{{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
-  static const EdgeList kPenta{{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4},
-                               {2, 5}, {3, 4}, {4, 5}, {5, 3}};
-  static const EdgeList kHexa{{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5},
-                              {2, 6}, {3, 7}, {4, 5}, {5, 6}, {6, 7}, {7, 4}};
-  switch (t) {
-    case ElementType::Tet10:
-      return kTetra;
-    case ElementType::Wedge15:
-      return kPenta;
-    case ElementType::Hex20:
-      return kHexa;
-    default:
-      return kNone;
-  }
-}
-
 /// The vertex permutation that mirrors an element (an involution): the tetrahedron swaps G2 and
 /// G3, the pentahedron and the hexahedron swap their bottom and top faces.
 std::vector<int> mirror_vertices(ElementType t) {
@@ -101,8 +81,8 @@ std::vector<int> mirror_vertices(ElementType t) {
 /// element whose corners are mirrored first (vertex i goes to sigma(i); a midside grid follows its
 /// edge, whose ends are renamed by sigma).
 struct Ordering {
-  std::array<int, fe::kMaxNodes> direct{};
-  std::array<int, fe::kMaxNodes> mirrored{};
+  std::array<int, kMaxNodes> direct{};
+  std::array<int, kMaxNodes> mirrored{};
 };
 
 Ordering build_ordering(ElementType t) {
@@ -114,11 +94,11 @@ Ordering build_ordering(ElementType t) {
     o.mirrored[i] = sigma[i];
   }
   if (n > nv) {
-    const EdgeList& edges = nastran_mid_edges(t);
+    const EdgeList& edges = mid_edges(t, NodeOrder::Nastran);
     EdgeList renamed;
     for (const auto& [a, b] : edges) renamed.emplace_back(sigma[a], sigma[b]);
-    const std::vector<int> d = fe::foreign_to_morse(t, edges);
-    const std::vector<int> m = fe::foreign_to_morse(t, renamed);
+    const std::vector<int> d = foreign_to_morse(t, edges);
+    const std::vector<int> m = foreign_to_morse(t, renamed);
     for (int i = nv; i < n; ++i) {
       o.direct[i] = d[i];
       o.mirrored[i] = m[i];
@@ -134,14 +114,6 @@ const Ordering& ordering(ElementType t) {
     return a;
   }();
   return all[static_cast<int>(t)];
-}
-
-/// Reference point at which the orientation of the corner element is judged.
-const double* centroid(ElementType linear) {
-  static const double kTet[3] = {0.25, 0.25, 0.25};
-  static const double kWedge[3] = {1.0 / 3, 1.0 / 3, 0.0};
-  static const double kHex[3] = {0.0, 0.0, 0.0};
-  return linear == ElementType::Tet4 ? kTet : linear == ElementType::Wedge6 ? kWedge : kHex;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -1000,10 +972,10 @@ class Reader {
     r.loc = card_.loc;
     r.id = id_field(0, "EID");
     r.pid = id_field(1, "PID");
-    static const char* const kG[fe::kMaxNodes] = {"G1",  "G2",  "G3",  "G4",  "G5",  "G6",  "G7",
+    static const char* const kG[kMaxNodes] = {"G1",  "G2",  "G3",  "G4",  "G5",  "G6",  "G7",
                                                   "G8",  "G9",  "G10", "G11", "G12", "G13", "G14",
                                                   "G15", "G16", "G17", "G18", "G19", "G20"};
-    std::array<int64_t, fe::kMaxNodes> g{};
+    std::array<int64_t, kMaxNodes> g{};
     int n_mid = 0;
     for (int k = 0; k < nq; ++k) {
       const char* what = kG[k];
@@ -1406,7 +1378,7 @@ class Reader {
     int64_t n_mirrored = 0;
     std::string first_mirrored;
     {
-      std::array<int64_t, fe::kMaxNodes> idx{}, ordered{};
+      std::array<int64_t, kMaxNodes> idx{}, ordered{};
       std::array<double, 3 * 8> xyz{};
       for (const ElemRec& r : elems_) {
         const int n = nodes_per_element(r.type);
@@ -1422,7 +1394,7 @@ class Reader {
         const int nv = vertices_per_element(r.type);
         for (int i = 0; i < nv; ++i)
           for (int j = 0; j < 3; ++j) xyz[3 * i + j] = mesh.coords[3 * idx[i] + j];
-        const double det = fe::jacobian_determinant(sc.linear, xyz.data(), centroid(sc.linear));
+        const double det = corner_jacobian(sc.linear, xyz.data());
         const Ordering& o = ordering(r.type);
         const auto& perm = det < 0 ? o.mirrored : o.direct;
         if (det < 0 && n_mirrored++ == 0)

@@ -1,15 +1,8 @@
 // morse/fe/element.hpp: isoparametric solid elements (shape functions, quadrature, element
 // stiffness and consistent mass for linear isotropic elasticity).
 //
-// Node ordering (morse = Gmsh convention). Reference cells:
-//   tet:   vertices (0,0,0) (1,0,0) (0,1,0) (0,0,1)
-//   wedge: vertices (0,0,-1) (1,0,-1) (0,1,-1) (0,0,1) (1,0,1) (0,1,1)   [triangle x line]
-//   hex:   vertices (-1,-1,-1) (1,-1,-1) (1,1,-1) (-1,1,-1) then the same at zeta=+1
-// Mid-edge nodes of quadratic types, given by the vertex pair of their edge (see mid_edges()):
-//   tet10:   4:(0,1) 5:(1,2) 6:(0,2) 7:(0,3) 8:(2,3) 9:(1,3)
-//   wedge15: 6:(0,1) 7:(0,2) 8:(0,3) 9:(1,2) 10:(1,4) 11:(2,5) 12:(3,4) 13:(3,5) 14:(4,5)
-//   hex20:   8:(0,1) 9:(0,3) 10:(0,4) 11:(1,2) 12:(1,5) 13:(2,3) 14:(2,6) 15:(3,7)
-//            16:(4,5) 17:(4,7) 18:(5,6) 19:(6,7)
+// Node ordering: morse's (= Gmsh's), whose reference cells and mid-edge nodes are given in
+// mesh/cells.hpp (mesh::mid_edges()).
 // Element DOFs are node-major: (u_x, u_y, u_z) of node 0, then node 1, ... Matrices are dense,
 // row-major, size (3n)x(3n).
 #pragma once
@@ -18,13 +11,14 @@
 #include <utility>
 #include <vector>
 
+#include "morse/mesh/cells.hpp"
 #include "morse/mesh/mesh.hpp"
 
 namespace morse::fe {
 
 using mesh::ElementType;
 
-constexpr int kMaxNodes = 20;
+using mesh::kMaxNodes;
 constexpr int kMaxDofs = 3 * kMaxNodes;
 
 /// A quadrature rule on the reference cell. Weights sum to the reference cell volume
@@ -42,15 +36,6 @@ const QuadratureRule& mass_rule(ElementType t);
 
 /// Reference coordinates of the nodes (n x 3, in morse ordering).
 const std::vector<std::array<double, 3>>& reference_nodes(ElementType t);
-/// Vertex pairs of the mid-edge nodes, in order (empty for linear types). Entry k belongs to node
-/// vertices_per_element(t) + k.
-const std::vector<std::pair<int, int>>& mid_edges(ElementType t);
-
-/// Node permutation from another node ordering of type t (vertices in the same order, mid-edge
-/// nodes given by their vertex pairs, entry k belonging to node vertices + k): returns, for each
-/// node position i of the other ordering, the morse node index. Throws morse::Error if the two
-/// tables do not name the same edges.
-std::vector<int> foreign_to_morse(ElementType t, const std::vector<std::pair<int, int>>& foreign_mid_edges);
 
 /// Shape functions N (n) and derivatives dN (n x 3, row-major, d/dxi, d/deta, d/dzeta) at xi.
 /// dN may be null.

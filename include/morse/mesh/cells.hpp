@@ -1,0 +1,52 @@
+// morse/mesh/cells.hpp: the node orderings of the cells in one place (morse's own, which is
+// Gmsh's, and those of Abaqus, Nastran and XDMF/VTK), and the size of the largest cell.
+//
+// Every ordering lists the vertices as morse does; the orderings differ in their mid-edge nodes
+// only, each of which is named by the vertex pair of its edge. morse (= Gmsh) reference cells:
+//   tet:   vertices (0,0,0) (1,0,0) (0,1,0) (0,0,1)
+//   wedge: vertices (0,0,-1) (1,0,-1) (0,1,-1) (0,0,1) (1,0,1) (0,1,1)   [triangle x line]
+//   hex:   vertices (-1,-1,-1) (1,-1,-1) (1,1,-1) (-1,1,-1) then the same at zeta=+1
+// and their mid-edge nodes:
+//   tet10:   4:(0,1) 5:(1,2) 6:(0,2) 7:(0,3) 8:(2,3) 9:(1,3)
+//   wedge15: 6:(0,1) 7:(0,2) 8:(0,3) 9:(1,2) 10:(1,4) 11:(2,5) 12:(3,4) 13:(3,5) 14:(4,5)
+//   hex20:   8:(0,1) 9:(0,3) 10:(0,4) 11:(1,2) 12:(1,5) 13:(2,3) 14:(2,6) 15:(3,7)
+//            16:(4,5) 17:(4,7) 18:(5,6) 19:(6,7)
+// Nothing here is collective.
+#pragma once
+
+#include <utility>
+#include <vector>
+
+#include "morse/mesh/mesh.hpp"
+
+namespace morse::mesh {
+
+/// Nodes of the largest cell (hex20).
+constexpr int kMaxNodes = 20;
+
+/// The node orderings morse reads or writes. morse's own ordering is Gmsh's; XDMF uses VTK's.
+enum class NodeOrder { Gmsh, Abaqus, Nastran, Vtk };
+
+/// Vertex pairs of the mid-edge nodes of type t in ordering o, in order (empty for linear types):
+/// entry k belongs to node vertices_per_element(t) + k.
+const std::vector<std::pair<int, int>>& mid_edges(ElementType t, NodeOrder o = NodeOrder::Gmsh);
+
+/// Node permutation from another node ordering of type t (vertices in the same order, mid-edge
+/// nodes given by their vertex pairs, entry k belonging to node vertices + k): returns, for each
+/// node position i of the other ordering, the morse node index. Throws morse::Error if the two
+/// tables do not name the same edges.
+std::vector<int> foreign_to_morse(ElementType t, const std::vector<std::pair<int, int>>& foreign_mid_edges);
+
+/// foreign_to_morse(t, mid_edges(t, o)): for each node position i of ordering o, the morse node index.
+std::vector<int> foreign_to_morse(ElementType t, NodeOrder o);
+
+/// Reference coordinates of the centroid of a linear cell (Tet4, Wedge6 or Hex8).
+const double* centroid(ElementType linear);
+
+/// Jacobian determinant of the linear cell `linear` (Tet4, Wedge6 or Hex8) with vertex
+/// coordinates xyz (vertices x 3, row-major) at its centroid: negative for a cell whose vertices
+/// are listed in the mirrored order. The same number, bitwise, as fe::jacobian_determinant(linear,
+/// xyz, centroid(linear)).
+double corner_jacobian(ElementType linear, const double* xyz);
+
+}  // namespace morse::mesh
