@@ -65,7 +65,7 @@ MESH_INPUT_STAGES = ["ReadDistribute", "NumberDofs", "Preallocate", "Assemble"]
 MATRIX_INPUT_STAGES = ["ReadMatrices"]
 # Stages that run inside another one (a stage's line is printed when it ends, so a nested stage
 # comes before its parent in the table): ReadMatrix (K, then M) inside ReadMatrices, and
-# EigenResiduals inside EigenVectors (src/cb/eigen.cpp). They are reported but not added again.
+# EigenResiduals inside EigenVectors (src/eigen/eigen.cpp). They are reported but not added again.
 NESTED_IN = {"ReadMatrix": "ReadMatrices", "EigenResiduals": "EigenVectors"}
 PER_MATRIX_STAGES = ["ReadMatrix"]  # once per matrix: kept apart as ReadMatrix_1 (K), ReadMatrix_2 (M)
 OUTPUT_STAGES = ["Write"]
