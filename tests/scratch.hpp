@@ -1,13 +1,17 @@
-// Shared fixture of the serial reader tests: a fresh scratch directory per test and rank, and the
-// check that a call throws a morse::Error naming every expected part.
+// Scratch directories of the tests (one per rank, or one shared by the ranks), as scope objects
+// and as fixtures, and the check that a call throws a morse::Error naming every expected part.
 #pragma once
 
 #include <gtest/gtest.h>
+#include <mpi.h>
+#include <petscsys.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <memory>
 #include <string>
 
 #include "morse/core/error.hpp"
@@ -15,20 +19,24 @@
 
 namespace morse::test {
 
-/// /tmp/morse_test_<tag>_r<rank>_p<pid>_<test name>, created empty before each test and removed
-/// after it. Every rank has its own directory (the tests it serves are serial).
-class ScratchDirTest : public ::testing::Test {
- protected:
-  explicit ScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = std::filesystem::path("/tmp") / cat("morse_test_", tag_, "_r", world_rank(), "_p", getpid(), "_", info->name());
+/// A fresh empty directory of this rank, /tmp/morse_test_<tag>_r<rank>_p<pid>, removed with its
+/// content by the destructor. Not collective.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& tag)
+      : dir_(std::filesystem::path("/tmp") / cat("morse_test_", tag, "_r", world_rank(), "_p", getpid())) {
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
 
-  /// Path of rel inside the scratch directory.
+  const std::filesystem::path& dir() const { return dir_; }
+  /// Path of rel inside the directory.
   std::string path(const std::string& rel) const { return (dir_ / rel).string(); }
   /// Writes text (or bytes) to rel, creating subdirectories, and returns the path.
   std::string write(const std::string& rel, const std::string& text) const {
@@ -38,11 +46,107 @@ class ScratchDirTest : public ::testing::Test {
     return p.string();
   }
 
+ private:
+  std::filesystem::path dir_;
+};
+
+/// A fresh empty directory shared by the ranks of PETSC_COMM_WORLD, /tmp/morse_test_<tag>_p<pid
+/// of rank 0>: rank 0 creates it, and removes it once every rank is done with it (destructor).
+/// Collective (constructor, destructor and write()).
+class SharedScratchDir {
+ public:
+  explicit SharedScratchDir(const std::string& tag) {
+    long pid = getpid();
+    MPI_Bcast(&pid, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
+    dir_ = std::filesystem::path("/tmp") / cat("morse_test_", tag, "_p", pid);
+    if (world_rank() == 0) {
+      std::filesystem::remove_all(dir_);
+      std::filesystem::create_directories(dir_);
+    }
+    MPI_Barrier(PETSC_COMM_WORLD);
+  }
+  ~SharedScratchDir() {
+    MPI_Barrier(PETSC_COMM_WORLD);
+    std::error_code ec;
+    if (world_rank() == 0) std::filesystem::remove_all(dir_, ec);
+  }
+  SharedScratchDir(const SharedScratchDir&) = delete;
+  SharedScratchDir& operator=(const SharedScratchDir&) = delete;
+
+  const std::filesystem::path& dir() const { return dir_; }
+  /// Path of rel inside the directory.
+  std::string path(const std::string& rel) const { return (dir_ / rel).string(); }
+  /// Rank 0 writes text to rel (creating subdirectories); every rank returns its path once it
+  /// is written.
+  std::string write(const std::string& rel, const std::string& text) const {
+    const auto p = dir_ / rel;
+    if (world_rank() == 0) {
+      std::filesystem::create_directories(p.parent_path());
+      std::ofstream(p, std::ios::binary) << text;
+    }
+    MPI_Barrier(PETSC_COMM_WORLD);
+    return p.string();
+  }
+
+ private:
+  std::filesystem::path dir_;
+};
+
+/// Fixture: a ScratchDir per test and rank, /tmp/morse_test_<tag>_<test name>_r<rank>_p<pid>.
+class ScratchDirTest : public ::testing::Test {
+ protected:
+  explicit ScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
+  void SetUp() override {
+    scratch_ = std::make_unique<ScratchDir>(cat(tag_, "_", current_test_name()));
+    dir_ = scratch_->dir();
+  }
+  void TearDown() override { scratch_.reset(); }
+
+  /// Path of rel inside the scratch directory.
+  std::string path(const std::string& rel) const { return scratch_->path(rel); }
+  /// Writes text (or bytes) to rel, creating subdirectories, and returns the path.
+  std::string write(const std::string& rel, const std::string& text) const { return scratch_->write(rel, text); }
+
+  std::filesystem::path dir_;
+
+ private:
+  static std::string current_test_name() { return ::testing::UnitTest::GetInstance()->current_test_info()->name(); }
+  std::string tag_;
+  std::unique_ptr<ScratchDir> scratch_;
+};
+
+/// Fixture: a SharedScratchDir per test, /tmp/morse_test_<tag>_<test name>_p<pid of rank 0>.
+/// SetUp and TearDown are collective.
+class SharedScratchDirTest : public ::testing::Test {
+ protected:
+  explicit SharedScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
+  void SetUp() override {
+    scratch_ = std::make_unique<SharedScratchDir>(
+        cat(tag_, "_", ::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ = scratch_->dir();
+  }
+  void TearDown() override { scratch_.reset(); }
+
+  /// Path of rel inside the shared directory.
+  std::string path(const std::string& rel) const { return scratch_->path(rel); }
+  /// Rank 0 writes text to rel; every rank returns its path. Collective.
+  std::string write(const std::string& rel, const std::string& text) const { return scratch_->write(rel, text); }
+
   std::filesystem::path dir_;
 
  private:
   std::string tag_;
+  std::unique_ptr<SharedScratchDir> scratch_;
 };
+
+/// Path of rel in the shared data directory (the meshes that are not in the repository):
+/// $MORSE_SHARED_DIR (ctest sets it), else ../shared beside the source tree. The file may be
+/// absent: the tests that need it skip with a notice.
+inline std::string shared_data_path(const std::string& rel) {
+  const char* env = std::getenv("MORSE_SHARED_DIR");
+  const std::string dir = env && *env ? env : MORSE_SOURCE_DIR "/../shared";
+  return (std::filesystem::path(dir) / rel).string();
+}
 
 /// Expects f() to throw a morse::Error whose message contains every part; `what` names the call
 /// in the failure message.

@@ -452,12 +452,10 @@ TEST_F(AbaqusTest, ErrorUndefinedSetsAndMaterials) {
 // The real rotor 37 blade deck (CalculiX, C3D15), if the shared data directory is present.
 
 TEST_F(AbaqusTest, Rotor37BladeDeck) {
-  std::string shared;
-  if (const char* env = std::getenv("MORSE_SHARED_DIR")) shared = env;
-  if (shared.empty() && fs::exists("/work/shared")) shared = "/work/shared";
-  const fs::path deck = fs::path(shared) / "meshes" / "rotor37-nlstep" / "blade.inp";
-  if (shared.empty() || !fs::exists(deck))
-    GTEST_SKIP() << "rotor 37 deck not found (set MORSE_SHARED_DIR to the shared data directory)";
+  const fs::path deck = morse::test::shared_data_path("meshes/rotor37-nlstep/blade.inp");
+  if (!fs::exists(deck))
+    GTEST_SKIP() << "rotor 37 deck " << deck.string()
+                 << " not found (../shared beside the repository, or set MORSE_SHARED_DIR)";
 
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh m = read_abaqus(deck.string(), morse::world_rank() == 0);

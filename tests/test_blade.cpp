@@ -24,6 +24,7 @@
 #include "morse/fe/element.hpp"
 #include "morse/mesh/blade.hpp"
 #include "morse/mesh/gmsh.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -148,11 +149,10 @@ TEST(Blade, ReproducesCommittedMeshes) {
   for (const auto& [spec, path] : cases) {
     const std::string committed = read_bytes(path);
     ASSERT_FALSE(committed.empty()) << "cannot read " << path;
-    const std::string tmp =
-        ::testing::TempDir() + "morse_blade_regen_" + std::to_string(::getpid()) + ".msh";
+    const test::ScratchDir scratch("blade_regen");
+    const std::string tmp = scratch.path("regen.msh");
     mesh::write_gmsh(mesh::generate_blade(spec), tmp);
     const std::string regen = read_bytes(tmp);
-    std::remove(tmp.c_str());
     EXPECT_TRUE(regen == committed) << path << " differs from the regenerated mesh ("
                                     << regen.size() << " vs " << committed.size() << " bytes)";
   }

@@ -329,14 +329,11 @@ class ExportTest : public test::ScratchDirTest {
   ExportTest() : ScratchDirTest("export") {}
 
   static void SetUpTestSuite() {
-    int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
-    MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
-    base_ = cat("/tmp/morse_test_export_", pid);
-    mesh_ = base_ + "/box.msh";
-    free_ = base_ + "/free.h5";
-    grounded_ = base_ + "/grounded.h5";
+    base_ = std::make_unique<test::SharedScratchDir>("export");
+    mesh_ = base_->path("box.msh");
+    free_ = base_->path("free.h5");
+    grounded_ = base_->path("grounded.h5");
     if (world_rank() == 0) {
-      fs::create_directories(base_);
       auto m = mesh::generate_box(test::box_spec(mesh::ElementType::Hex20, kLx, kLy, kLz, 4, 2, 1));
       mesh::write_gmsh(m, mesh_);
     }
@@ -360,14 +357,13 @@ class ExportTest : public test::ScratchDirTest {
                         {"-cb_num_fixed_modes", "4"},
                         {"-out", grounded_}}));
   }
-  static void TearDownTestSuite() {
-    MPI_Barrier(PETSC_COMM_WORLD);
-    if (world_rank() == 0) fs::remove_all(base_);
-  }
+  static void TearDownTestSuite() { base_.reset(); }
 
-  static std::string base_, mesh_, free_, grounded_;
+  static std::unique_ptr<test::SharedScratchDir> base_;
+  static std::string mesh_, free_, grounded_;
 };
-std::string ExportTest::base_, ExportTest::mesh_, ExportTest::free_, ExportTest::grounded_;
+std::unique_ptr<test::SharedScratchDir> ExportTest::base_;
+std::string ExportTest::mesh_, ExportTest::free_, ExportTest::grounded_;
 
 TEST_F(ExportTest, ReadsTheRomOfTheFile) {
   const auto se = io::read_superelement(free_);
@@ -899,19 +895,17 @@ TEST(ExportRigidBody, RotationalDofsCarryTheirInertia) {
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(in.center[a], p[a] + d[a], 1e-14);
   for (int k = 0; k < 9; ++k) EXPECT_NEAR(in.inertia_cm[k], Jcm[k], 1e-13) << k;
   // The MBDyn file shows the rotations of the constraint modes (rx ry rz columns).
-  const std::string dir = cat("/tmp/morse_test_export_point_r", world_rank(), "_", getpid());
-  fs::create_directories(dir);
-  io::write_mbdyn_fem(dir + "/p.fem", se);
-  const Fem fem = read_fem(dir + "/p.fem");
+  const test::ScratchDir scratch("export_point");
+  io::write_mbdyn_fem(scratch.path("p.fem"), se);
+  const Fem fem = read_fem(scratch.path("p.fem"));
   for (int j = 0; j < 6; ++j)
     for (int c = 0; c < 6; ++c) EXPECT_EQ(fem.shapes[j * 6 + c], j == c ? 1.0 : 0.0);
   EXPECT_NEAR(fem.mass, m, 1e-14 * m);
-  fs::remove_all(dir);
 }
 
 // The command on every rank: rank 0 writes, errors are collective.
 TEST_F(ExportTest, CommandWritesTheChosenFormatsAndFailsCollectively) {
-  const std::string prefix = cat(base_, "/cli");
+  const std::string prefix = base_->path("cli");
   run("export", {{"-export_from", free_}, {"-export_format", "mbdyn,op4"}, {"-out", prefix}});
   for (const char* ext : {".fem", ".op4", "_dofs.txt"})
     EXPECT_TRUE(fs::exists(prefix + ext)) << ext;

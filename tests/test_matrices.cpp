@@ -15,6 +15,7 @@
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/matrices.hpp"
 #include "morse/io/op4.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -24,32 +25,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A directory shared by the ranks of PETSC_COMM_WORLD (named after rank 0's pid).
-class MatricesTest : public ::testing::Test {
+// A directory shared by the ranks of PETSC_COMM_WORLD, one per test.
+class MatricesTest : public test::SharedScratchDirTest {
  protected:
-  void SetUp() override {
-    long pid = getpid();
-    MPI_Bcast(&pid, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::path("/tmp") / cat("morse_test_matrices_p", pid, "_", info->name());
-    if (world_rank() == 0) {
-      fs::remove_all(dir_);
-      fs::create_directories(dir_);
-    }
-    MPI_Barrier(PETSC_COMM_WORLD);
-  }
-  void TearDown() override {
-    MPI_Barrier(PETSC_COMM_WORLD);
-    if (world_rank() == 0) fs::remove_all(dir_);
-  }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  // Rank 0 writes a text file; every rank returns its path.
-  std::string text(const std::string& name, const std::string& body) const {
-    if (world_rank() == 0) std::ofstream(path(name)) << body;
-    MPI_Barrier(PETSC_COMM_WORLD);
-    return path(name);
-  }
-  fs::path dir_;
+  MatricesTest() : SharedScratchDirTest("matrices") {}
 };
 
 // A cantilever with a non-square section (no repeated frequencies), slightly distorted.
@@ -211,11 +190,11 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
 // including rotations; the boundary order is node id, then component.
 TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
   // A chain of 3 nodes with 2 DOFs each (component 1 and 5), springs and masses: k = 1, m = 1.
-  auto K = text("k.mtx",
+  auto K = write("k.mtx",
                 "%%MatrixMarket matrix coordinate real symmetric\n6 6 10\n"
                 "1 1 2\n2 2 2\n3 1 -1\n3 3 2\n4 2 -1\n4 4 2\n5 3 -1\n5 5 1\n6 4 -1\n6 6 1\n");
-  auto M = text("m.mtx", "%%MatrixMarket matrix coordinate real general\n6 6 6\n1 1 1\n2 2 1\n3 3 1\n4 4 1\n5 5 1\n6 6 1\n");
-  auto map = text("map.txt", "# node component\n10 1\n10 5\n20 1\n20 5 # rotation\n30 1 tip\n30 5 tip\n");
+  auto M = write("m.mtx", "%%MatrixMarket matrix coordinate real general\n6 6 6\n1 1 1\n2 2 1\n3 3 1\n4 4 1\n5 5 1\n6 6 1\n");
+  auto map = write("map.txt", "# node component\n10 1\n10 5\n20 1\n20 5 # rotation\n30 1 tip\n30 5 tip\n");
   io::MatrixInput in;
   in.K = K;
   in.M = M;
@@ -247,21 +226,21 @@ TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
 
 // Bad input: each error names the file (and the line or the row) and says what is wrong.
 TEST_F(MatricesTest, BadInputIsRefusedClearly) {
-  auto good = text("good.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n3 3 2\n");
-  auto nonsym = text("nonsym.mtx",
+  auto good = write("good.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n3 3 2\n");
+  auto nonsym = write("nonsym.mtx",
                      "%%MatrixMarket matrix coordinate real general\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 -1\n2 1 -1.5\n");
-  auto big = text("big.mtx", "%%MatrixMarket matrix coordinate real symmetric\n4 4 4\n1 1 2\n2 2 2\n3 3 2\n4 4 2\n");
-  auto badline = text("badline.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 3\n1 1 2\n2 x 2\n3 3 2\n");
-  auto outside = text("outside.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n4 3 2\n");
-  auto twice = text("twice.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n");
-  auto twice2 = text("twice2.mtx",
+  auto big = write("big.mtx", "%%MatrixMarket matrix coordinate real symmetric\n4 4 4\n1 1 2\n2 2 2\n3 3 2\n4 4 2\n");
+  auto badline = write("badline.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 3\n1 1 2\n2 x 2\n3 3 2\n");
+  auto outside = write("outside.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n4 3 2\n");
+  auto twice = write("twice.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n");
+  auto twice2 = write("twice2.mtx",
                      "%%MatrixMarket matrix coordinate real symmetric\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n2 1 1\n");
-  auto complex = text("complex.mtx", "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n");
-  auto count = text("count.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n");
-  auto map_long = text("long.txt", "1 1\n1 2\n1 3\n2 1\n");
-  auto map_short = text("short.txt", "1 1\n1 2\n");
-  auto map_dup = text("dup.txt", "1 1\n1 2\n1 1\n");
-  auto map_comp = text("comp.txt", "1 1\n1 2\n1 7\n");
+  auto complex = write("complex.mtx", "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n");
+  auto count = write("count.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n");
+  auto map_long = write("long.txt", "1 1\n1 2\n1 3\n2 1\n");
+  auto map_short = write("short.txt", "1 1\n1 2\n");
+  auto map_dup = write("dup.txt", "1 1\n1 2\n1 1\n");
+  auto map_comp = write("comp.txt", "1 1\n1 2\n1 7\n");
   const MPI_Comm w = PETSC_COMM_WORLD;
   auto model = [&](const std::string& K, const std::string& M, const std::string& map) {
     io::MatrixInput in;
@@ -294,7 +273,7 @@ TEST_F(MatricesTest, BadInputIsRefusedClearly) {
   io::MatrixInput in;
   in.K = good;
   in.M = good;
-  in.dofmap = text("sets.txt", "1 1 a\n1 2\n1 3 a\n");
+  in.dofmap = write("sets.txt", "1 1 a\n1 2\n1 3 a\n");
   auto mm = io::read_matrix_model(w, in);
   cb::CBSettings cs;
   cs.boundary_set = "b";

@@ -19,6 +19,7 @@
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/mesh.hpp"
+#include "scratch.hpp"
 
 namespace {
 
@@ -30,10 +31,10 @@ using morse::mesh::Mesh;
 const ElementType kAllTypes[] = {ElementType::Tet4,    ElementType::Tet10, ElementType::Wedge6,
                                  ElementType::Wedge15, ElementType::Hex8,  ElementType::Hex20};
 
-/// A file name under /tmp unique to this rank and process.
+/// A file name in this rank's scratch directory (removed at exit).
 std::string temp_path(const std::string& name) {
-  return "/tmp/morse_test_mesh_io_r" + std::to_string(morse::world_rank()) + "_p" +
-         std::to_string(getpid()) + "_" + name;
+  static const morse::test::ScratchDir scratch("mesh_io");
+  return scratch.path(name);
 }
 
 /// Writes text to a temporary file, removed by the destructor.

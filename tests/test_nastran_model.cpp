@@ -16,6 +16,7 @@
 #include "morse/fe/element.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/nastran.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -24,30 +25,6 @@ using mesh::ElementType;
 namespace {
 
 namespace fs = std::filesystem;
-
-// A directory shared by the ranks (rank 0's pid), empty at the start and removed at the end of
-// the scope, once every rank is done with it.
-struct SharedDir {
-  std::string path;
-  explicit SharedDir(const std::string& test) {
-    long pid = getpid();
-    MPI_Bcast(&pid, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
-    auto d = fs::path("/tmp") / cat("morse_test_nastran_model_p", pid, "_", test);
-    if (world_rank() == 0) {
-      fs::remove_all(d);
-      fs::create_directories(d);
-    }
-    MPI_Barrier(PETSC_COMM_WORLD);
-    path = d.string();
-  }
-  ~SharedDir() {
-    MPI_Barrier(PETSC_COMM_WORLD);
-    std::error_code ec;
-    if (world_rank() == 0) fs::remove_all(path, ec);
-  }
-  SharedDir(const SharedDir&) = delete;
-  SharedDir& operator=(const SharedDir&) = delete;
-};
 
 // Abaqus node order of the quadratic elements, as vertex pairs of the mid-edge nodes (Abaqus
 // Analysis User's Guide, "three-dimensional solid element library"), independent of the Nastran
@@ -136,8 +113,8 @@ std::vector<double> lowest(const Assembled& a, PetscInt n) {
 // Gmsh, Abaqus and Nastran (free and large field) files of one distorted cantilever give the
 // same operators and frequencies, for each element type.
 TEST(NastranModel, SameOperatorsAsGmshAndAbaqus) {
-  const SharedDir shared("same");
-  const std::string& dir = shared.path;
+  const test::SharedScratchDir shared("nastran_model_same");
+  const std::string dir = shared.dir().string();
   for (auto t : {ElementType::Hex20, ElementType::Tet10, ElementType::Wedge15, ElementType::Hex8, ElementType::Tet4,
                  ElementType::Wedge6}) {
     SCOPED_TRACE(mesh::element_name(t));
@@ -188,8 +165,8 @@ TEST(NastranModel, SameOperatorsAsGmshAndAbaqus) {
 // the ratio of the frequencies with and without the mass is compared (1 %: the model error of
 // the coarse solid beam mostly cancels in the ratio).
 TEST(NastranModel, PointMassesAddTheirMass) {
-  const SharedDir shared("conm2");
-  const std::string& dir = shared.path;
+  const test::SharedScratchDir shared("nastran_model_conm2");
+  const std::string dir = shared.dir().string();
   const double L = 1.0, b = 0.08, h = 0.05, rho = 7800;
   auto spec = test::box_spec(ElementType::Hex20, L, b, h, 12, 2, 1);
   const std::string plain = dir + "/p.bdf", heavy = dir + "/h.bdf";

@@ -10,17 +10,14 @@
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/fe/element.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
 
 namespace {
 
-std::string deck_path() {
-  const char* env = std::getenv("MORSE_SHARED_DIR");
-  std::string dir = env ? env : MORSE_SOURCE_DIR "/../shared";
-  return dir + "/meshes/rotor37-nlstep/blade.inp";
-}
+std::string deck_path() { return test::shared_data_path("meshes/rotor37-nlstep/blade.inp"); }
 
 bool deck_exists() { return std::ifstream(deck_path()).good(); }
 

@@ -14,6 +14,7 @@
 #include "morse/core/session.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/select/select.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -231,9 +232,8 @@ TEST(Select, EbrLoadTable) {
   auto b = test::box_spec(ElementType::Hex20, 1.0, 0.08, 0.05, 4, 1, 1);
   auto s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", 4);
   const auto& ids = s.cb.boundary_node_ids;
-  long pid = static_cast<long>(getpid());
-  MPI_Bcast(&pid, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
-  const std::string path = "/tmp/morse_test_ebr_" + std::to_string(pid) + ".txt";
+  const test::SharedScratchDir scratch("ebr");
+  const std::string path = scratch.path("load.txt");
   auto write = [&](const std::string& text) {
     if (world_rank() == 0) {
       std::ofstream f(path);

@@ -10,6 +10,7 @@
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/session.hpp"
 #include "morse/mesh/gmsh.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -17,9 +18,8 @@ using namespace morse;
 TEST(SelectFrom, BasisFileRoundTrip) {
   MPI_Comm comm = PETSC_COMM_WORLD;
   int rank = world_rank();
-  int pid = rank == 0 ? static_cast<int>(getpid()) : 0;
-  MPI_Bcast(&pid, 1, MPI_INT, 0, comm);
-  const std::string base = "/tmp/morse_test_select_from_" + std::to_string(pid);
+  const test::SharedScratchDir scratch("select_from");
+  const std::string base = scratch.path("box");
   mesh::BoxSpec b;
   b.type = mesh::ElementType::Hex20;
   b.lx = 1.0;
@@ -71,10 +71,5 @@ TEST(SelectFrom, BasisFileRoundTrip) {
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(base + "_missing.h5"), std::string::npos) << e.what();
-  }
-  MPI_Barrier(comm);
-  if (rank == 0) {
-    std::remove((base + ".msh").c_str());
-    std::remove((base + ".h5").c_str());
   }
 }

@@ -23,6 +23,7 @@
 #include "morse/fe/element.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "morse/mesh/stator.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -39,16 +40,6 @@ StatorSpec coarse_spec() {
   return s;
 }
 
-int world_rank() {
-  int r = 0;
-  MPI_Comm_rank(PETSC_COMM_WORLD, &r);
-  return r;
-}
-
-std::string temp_path(const std::string& stem) {
-  return "/tmp/morse_test_stator_" + stem + "_" + std::to_string(getpid()) + "_" +
-         std::to_string(world_rank()) + ".msh";
-}
 
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -101,11 +92,11 @@ TEST(Stator, Deterministic) {
 // must reproduce it byte for byte (and the file must read back as the generated mesh).
 TEST(Stator, RegeneratesCommittedCoarseFile) {
   const std::string committed = std::string(MORSE_SOURCE_DIR) + "/meshes/stator_coarse.msh";
-  const std::string fresh = temp_path("coarse");
+  const morse::test::ScratchDir scratch("stator_coarse");
+  const std::string fresh = scratch.path("coarse.msh");
   const Mesh m = mesh::generate_stator(coarse_spec());
   mesh::write_gmsh(m, fresh);
   const std::string want = file_bytes(committed), got = file_bytes(fresh);
-  std::remove(fresh.c_str());
   EXPECT_FALSE(want.empty());
   EXPECT_TRUE(got == want) << "regenerate " << committed
                            << " with: morse mesh stator -stator_size coarse -out " << committed;

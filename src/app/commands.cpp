@@ -35,11 +35,6 @@ void print_stage_table(MPI_Comm comm) {
 
 }  // namespace
 
-const std::vector<std::string>& command_names() {
-  static const std::vector<std::string> names = {"modes", "reduce", "select", "static", "fom", "nlrom", "simulate", "sweep", "stress", "compare", "export", "mesh", "rampup"};
-  return names;
-}
-
 void run_command(MPI_Comm comm, const std::string& command, const std::vector<std::string>& args) {
   stage_records().clear();
   wall_seconds();

@@ -70,7 +70,7 @@ Loads::Loads(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::vecto
 
 double Loads::factor(std::size_t i, double t) const {
   const auto& l = loads_[i];
-  return l.omega == 0.0 ? l.amplitude : l.amplitude * std::sin(l.omega * t + l.phase);
+  return harmonic_factor(l.amplitude, l.omega, l.phase, t);
 }
 
 void Loads::evaluate(double t, Vec F) const {

@@ -26,12 +26,6 @@ double dot(const double* x, const double* y, PetscInt n) {
 }
 }  // namespace
 
-const char* method_name(Method m) {
-  for (const auto& x : kMethods)
-    if (x.m == m) return x.name;
-  return "?";
-}
-
 bool parse_method(const std::string& name, Method* m) {
   for (const auto& x : kMethods)
     if (name == x.name) {

@@ -16,9 +16,6 @@
 
 namespace morse::app {
 
-/// Names of the commands.
-const std::vector<std::string>& command_names();
-
 /// Runs a command (args are the words after the command name that are not options, e.g. "box"
 /// for `morse mesh box`). Collective. Throws morse::Error on bad input.
 void run_command(MPI_Comm comm, const std::string& command, const std::vector<std::string>& args);

@@ -27,6 +27,7 @@
 #include <petscmat.h>
 #include <petscvec.h>
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -49,6 +50,12 @@ struct NodalLoad {
   double omega = 0.0;      ///< rad/s
   double phase = 0.0;      ///< rad
 };
+
+/// The time law of a harmonic load, shared by the full model (Loads::factor) and the reduced one
+/// (sim::ReducedLoad): amplitude sin(omega t + phase), or amplitude if omega = 0. Not collective.
+inline double harmonic_factor(double amplitude, double omega, double phase, double t) {
+  return omega == 0.0 ? amplitude : amplitude * std::sin(omega * t + phase);
+}
 
 /// Parses a direction: x, y, z or vx,vy,vz. Returns "" or an error message.
 std::string parse_direction(const std::string& text, double dir[3]);

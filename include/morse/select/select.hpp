@@ -33,7 +33,6 @@ namespace morse::select {
 
 enum class Method { Frequency, LPF, EIM, VEIM, DEIM, OMR, CMSChi, EBR, IMR };
 
-const char* method_name(Method m);
 /// Parses frequency lpf eim veim deim omr cmschi ebr imr; false if unknown.
 bool parse_method(const std::string& name, Method* m);
 

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/dyn/dyn.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
@@ -23,7 +24,7 @@ namespace morse::sim {
 struct ReducedLoad {
   std::vector<double> p;  ///< r
   double amplitude = 0, omega = 0, phase = 0;
-  double factor(double t) const { return omega == 0.0 ? amplitude : amplitude * std::sin(omega * t + phase); }
+  double factor(double t) const { return dyn::harmonic_factor(amplitude, omega, phase, t); }
 };
 
 /// Storage of the reduced nonlinear force in the time loop.
