@@ -92,51 +92,38 @@ class SharedScratchDir {
   std::filesystem::path dir_;
 };
 
-/// Fixture: a ScratchDir per test and rank, /tmp/morse_test_<tag>_<test name>_r<rank>_p<pid>.
-class ScratchDirTest : public ::testing::Test {
+/// Fixture: a fresh scratch directory per test, `Dir` = ScratchDir (one per rank,
+/// /tmp/morse_test_<tag>_<test name>_r<rank>_p<pid>) or SharedScratchDir (shared by the ranks,
+/// /tmp/morse_test_<tag>_<test name>_p<pid of rank 0>; SetUp, TearDown and write() collective).
+template <class Dir>
+class BasicScratchDirTest : public ::testing::Test {
  protected:
-  explicit ScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
+  explicit BasicScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
   void SetUp() override {
-    scratch_ = std::make_unique<ScratchDir>(cat(tag_, "_", current_test_name()));
+    scratch_ = std::make_unique<Dir>(cat(tag_, "_", ::testing::UnitTest::GetInstance()->current_test_info()->name()));
     dir_ = scratch_->dir();
   }
   void TearDown() override { scratch_.reset(); }
 
   /// Path of rel inside the scratch directory.
   std::string path(const std::string& rel) const { return scratch_->path(rel); }
-  /// Writes text (or bytes) to rel, creating subdirectories, and returns the path.
+  /// Writes text (or bytes) to rel (Dir::write) and returns the path.
   std::string write(const std::string& rel, const std::string& text) const { return scratch_->write(rel, text); }
 
   std::filesystem::path dir_;
 
  private:
-  static std::string current_test_name() { return ::testing::UnitTest::GetInstance()->current_test_info()->name(); }
   std::string tag_;
-  std::unique_ptr<ScratchDir> scratch_;
+  std::unique_ptr<Dir> scratch_;
 };
 
-/// Fixture: a SharedScratchDir per test, /tmp/morse_test_<tag>_<test name>_p<pid of rank 0>.
-/// SetUp and TearDown are collective.
-class SharedScratchDirTest : public ::testing::Test {
+class ScratchDirTest : public BasicScratchDirTest<ScratchDir> {
  protected:
-  explicit SharedScratchDirTest(std::string tag) : tag_(std::move(tag)) {}
-  void SetUp() override {
-    scratch_ = std::make_unique<SharedScratchDir>(
-        cat(tag_, "_", ::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    dir_ = scratch_->dir();
-  }
-  void TearDown() override { scratch_.reset(); }
-
-  /// Path of rel inside the shared directory.
-  std::string path(const std::string& rel) const { return scratch_->path(rel); }
-  /// Rank 0 writes text to rel; every rank returns its path. Collective.
-  std::string write(const std::string& rel, const std::string& text) const { return scratch_->write(rel, text); }
-
-  std::filesystem::path dir_;
-
- private:
-  std::string tag_;
-  std::unique_ptr<SharedScratchDir> scratch_;
+  using BasicScratchDirTest::BasicScratchDirTest;
+};
+class SharedScratchDirTest : public BasicScratchDirTest<SharedScratchDir> {
+ protected:
+  using BasicScratchDirTest::BasicScratchDirTest;
 };
 
 /// Path of rel in the shared data directory (the meshes that are not in the repository):

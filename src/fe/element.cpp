@@ -344,24 +344,8 @@ const TypeData& type_data(ElementType t) {
 // ------------------------------------------------------------------------------------------------
 // Geometry kernels
 
-// J[i][j] = d x_i / d xi_j.
-void jacobian(int n, const double* dN, const double* xyz, double* J) {
-  for (int k = 0; k < 9; ++k) J[k] = 0.0;
-  for (int a = 0; a < n; ++a) {
-    const double* g = dN + 3 * a;
-    const double* p = xyz + 3 * a;
-    for (int i = 0; i < 3; ++i) {
-      J[3 * i + 0] += p[i] * g[0];
-      J[3 * i + 1] += p[i] * g[1];
-      J[3 * i + 2] += p[i] * g[2];
-    }
-  }
-}
-
-double det3(const double* J) {
-  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
-         J[2] * (J[3] * J[7] - J[4] * J[6]);
-}
+using mesh::det3;
+using mesh::jacobian;
 
 // Inverse of J given its (non-zero) determinant.
 void inverse3(const double* J, double det, double* Ji) {

@@ -123,17 +123,9 @@ double corner_jacobian(ElementType linear, const double* xyz) {
       dN[3 * i + 2] = 0.125 * f0 * f1 * s[2];
     }
   }
-  double J[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int a = 0; a < n; ++a) {
-    const double* g = dN + 3 * a;
-    const double* p = xyz + 3 * a;
-    for (int i = 0; i < 3; ++i) {
-      J[3 * i + 0] += p[i] * g[0];
-      J[3 * i + 1] += p[i] * g[1];
-      J[3 * i + 2] += p[i] * g[2];
-    }
-  }
-  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) + J[2] * (J[3] * J[7] - J[4] * J[6]);
+  double J[9];
+  jacobian(n, dN, xyz, J);
+  return det3(J);
 }
 
 }  // namespace morse::mesh

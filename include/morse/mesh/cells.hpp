@@ -49,4 +49,26 @@ const double* centroid(ElementType linear);
 /// xyz, centroid(linear)).
 double corner_jacobian(ElementType linear, const double* xyz);
 
+/// The Jacobian J[3i + j] = d x_i / d xi_j (3 x 3, row-major) of a cell of n nodes with
+/// coordinates xyz (n x 3) at a point where its shape-function derivatives are dN (n x 3):
+/// J = sum_a xyz_a dN_a^T. Not collective.
+inline void jacobian(int n, const double* dN, const double* xyz, double* J) {
+  for (int k = 0; k < 9; ++k) J[k] = 0.0;
+  for (int a = 0; a < n; ++a) {
+    const double* g = dN + 3 * a;
+    const double* p = xyz + 3 * a;
+    for (int i = 0; i < 3; ++i) {
+      J[3 * i + 0] += p[i] * g[0];
+      J[3 * i + 1] += p[i] * g[1];
+      J[3 * i + 2] += p[i] * g[2];
+    }
+  }
+}
+
+/// Determinant of a 3 x 3 row-major matrix. Not collective.
+inline double det3(const double* J) {
+  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
+         J[2] * (J[3] * J[7] - J[4] * J[6]);
+}
+
 }  // namespace morse::mesh
