@@ -21,7 +21,7 @@ namespace {
 
 struct Small {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 

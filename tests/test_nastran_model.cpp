@@ -101,7 +101,7 @@ void write_inp(const mesh::Mesh& m, const std::string& path, const std::string& 
 
 struct Assembled {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 

@@ -23,7 +23,7 @@ namespace {
 
 struct Problem {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
   cb::CBResult cb;
   select::InterfaceCoupling ic;

@@ -51,7 +51,7 @@ inline mesh::LocalMesh box_mesh(MPI_Comm comm, const mesh::BoxSpec& b) {
 /// A distributed box with its DOF map and assembled K, M.
 struct Model {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 
@@ -78,7 +78,7 @@ inline cb::CBResult cb_basis(const Model& m, const std::string& boundary, PetscI
 
 /// A DOF vector from a nodal field f(x, y, z, d) on the free DOFs.
 template <class F>
-UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofMap& dofs, F f) {
+UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, F f) {
   UVec v;
   MORSE_CALL(VecCreateMPI(lm.comm, dofs.n_owned, dofs.n_global, v.ptr()));
   PetscScalar* a;

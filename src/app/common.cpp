@@ -434,7 +434,7 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o) {
 }
 
 std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
-                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o) {
+                                                          const fe::DofLayout& dofs, const LoadHistoryOptions& o) {
   if (o.spec.empty()) return nullptr;
   StageTimer t(comm, "LoadHistory");
   dyn::LoadTable table;

@@ -64,7 +64,7 @@ bool help_requested();
 
 struct Model {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
   /// Matrix input (-matrices_*): no mesh; K and M are moved to ops, lm is empty, dofs holds the
   /// row layout only (node_dof empty), mm the row labels, sets and C.
@@ -137,7 +137,7 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o);
 /// Prints a one-line summary. Throws collectively on bad input (the reader's message, prefixed by
 /// the option). Collective.
 std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
-                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o);
+                                                          const fe::DofLayout& dofs, const LoadHistoryOptions& o);
 
 /// A comma-separated list of node sets from option `name` (empty if not given).
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,

@@ -22,7 +22,7 @@ struct BoundaryNode {
 };
 
 // Gathers the boundary nodes (owned copies) on every rank, sorted by node id.
-std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs,
+std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::DofLayout& dofs,
                                           const std::string& set) {
   const auto& m = lm.mesh;
   std::string err = set.empty() ? "no boundary set given (-boundary SET)"
@@ -97,7 +97,7 @@ void symmetrize(std::vector<double>& A, PetscInt n) {
 
 }  // namespace
 
-UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs) {
+UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
   UVec w;
   MORSE_CALL(VecCreateMPI(lm.comm, dofs.n_owned, dofs.n_global, w.ptr()));
   PetscScalar* a;
@@ -145,7 +145,7 @@ CBResult craig_bampton(const io::MatrixModel& mm, Mat K, Mat M, const CBSettings
   return craig_bampton(K, M, w.get(), s, std::move(b));
 }
 
-void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out) {
+void set_boundary(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& set, CBResult* out) {
   auto boundary = gather_boundary(lm, dofs, set);
   out->n_b = static_cast<PetscInt>(3 * boundary.size());
   out->boundary_node_ids.clear();
@@ -185,7 +185,7 @@ void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out) {
   }
 }
 
-CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
+CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat K, Mat M,
                        const CBSettings& s) {
   CBResult out;
   set_boundary(lm, dofs, s.boundary_set, &out);
@@ -195,7 +195,7 @@ CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K,
 
 CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  fe::DofMap dofs;  // the row layout of K
+  fe::DofLayout dofs;  // the row layout of K
   {
     PetscInt rend = 0;
     MORSE_CALL(MatGetOwnershipRange(K, &dofs.first, &rend));

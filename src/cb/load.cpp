@@ -88,7 +88,7 @@ void bcast(MPI_Comm comm, std::vector<T>& v, MPI_Datatype type) {
 
 }  // namespace
 
-CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
+CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat K, Mat M, const std::string& path,
                     const std::string& boundary_set, double damping) {
   MPI_Comm comm = lm.comm;
   int rank = 0;

@@ -42,7 +42,7 @@ void fetch_ghost_dofs(const mesh::LocalMesh& lm, std::vector<PetscInt>& node_dof
 
 }  // namespace
 
-DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets) {
+DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets) {
   int rank = 0;
   MPI_Comm_rank(lm.comm, &rank);
   const auto& m = lm.mesh;
@@ -65,7 +65,7 @@ DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& cl
   }
   collective_check(lm.comm, err);
 
-  DofMap dm;
+  DofLayout dm;
   dm.comm = lm.comm;
   dm.node_dof.assign(3 * n, -1);
   PetscInt count = 0;
@@ -102,7 +102,7 @@ struct Pattern {
 // The exact sparsity of K on the owned rows: DOFs (r, c) couple when their nodes share an
 // element. Ghost nodes' couplings found on other ranks are sent to the owners, with the
 // neighbours' DOF numbers (an owner need not know a remote neighbour).
-Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofMap& dofs) {
+Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofLayout& dofs) {
   int rank = 0, size = 1;
   MPI_Comm_rank(lm.comm, &rank);
   MPI_Comm_size(lm.comm, &size);
@@ -186,7 +186,7 @@ std::string check_material(const mesh::Material& m) {
 
 }  // namespace
 
-Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback) {
+Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback) {
   const auto& m = lm.mesh;
   const std::int64_t ne = m.num_elements();
   // Validate materials before any collective matrix work.

@@ -675,7 +675,7 @@ void write_dof_map(const std::string& path, const DofMapFile& map) {
   fs::rename(tmp, path);
 }
 
-DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofMap& dofs) {
+DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
   const int rank = comm_rank(lm.comm), size = comm_size(lm.comm);
   const auto& m = lm.mesh;
   // Owned free DOFs: (row, node id, component) and the set memberships, sent to rank 0.

@@ -292,7 +292,7 @@ std::vector<std::string> cb_labels(const cb::CBResult& c) {
 
 }  // namespace
 
-Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
+Basis build_basis(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const fe::Svk& svk, Mat M,
                   const BasisSettings& s) {
   MPI_Comm comm = lm.comm;
   const auto t0 = std::chrono::steady_clock::now();

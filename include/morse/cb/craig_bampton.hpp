@@ -55,7 +55,7 @@ struct CBResult {
 /// are already eliminated (dofs). Throws (collectively) for a missing or empty boundary set, a
 /// boundary node whose DOFs are clamped, a singular K_ii, or more modes than interior DOFs.
 /// Collective.
-CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
+CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat K, Mat M,
                        const CBSettings& s);
 
 /// The Craig–Bampton core on any operators: K and M are the free-DOF operators (MPIAIJ, same
@@ -76,7 +76,7 @@ UVec sign_reference(const io::MatrixModel& mm);
 /// Fills the boundary layout of out (n_b, boundary_node_ids, boundary_global_nodes,
 /// boundary_dofs) from a node set. Throws (collectively) for a missing or empty set or a clamped
 /// boundary node. Collective.
-void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out);
+void set_boundary(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& set, CBResult* out);
 
 /// Reduced operators from out->T (eq. 6): out->M = T^T M T, out->K = T^T K T (symmetrized) and
 /// the modal damping out->C. Collective.
@@ -87,7 +87,7 @@ void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out);
 /// The file's mesh (node ids) and boundary nodes must match. Reads on rank 0 and scatters one
 /// mode at a time. Throws (collectively) naming the file on any mismatch or missing dataset.
 /// Collective.
-CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
+CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat K, Mat M, const std::string& path,
                     const std::string& boundary_set, double damping);
 
 /// T^T A T for a sparse A and an MPIDENSE T (same row layout), symmetrized: row-major
@@ -100,6 +100,6 @@ std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B);
 
 /// Reference vector for eigenvector signs: w(node, d) depends only on the global node index and
 /// direction, so mode signs do not depend on the partition. Collective.
-UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs);
+UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofLayout& dofs);
 
 }  // namespace morse::cb

@@ -17,7 +17,7 @@
 namespace morse::fe {
 
 /// Global numbering of the free DOFs of a LocalMesh.
-struct DofMap {
+struct DofLayout {
   MPI_Comm comm = MPI_COMM_NULL;
   PetscInt n_owned = 0;   ///< free DOFs owned by this rank
   PetscInt first = 0;     ///< first global DOF owned by this rank
@@ -30,11 +30,11 @@ struct DofMap {
 /// Numbers the free DOFs. clamp_sets names node sets whose three translations are eliminated;
 /// the name mesh::kDeckBoundarySet stands for the DOFs fixed by *BOUNDARY in the deck.
 /// Throws (collectively) if a named set does not exist or is empty. Collective.
-DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets);
+DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets);
 
 /// Assembled operators.
 struct Operators {
-  UMat K;  ///< MPIAIJ stiffness on the free DOFs (owned rows as in DofMap)
+  UMat K;  ///< MPIAIJ stiffness on the free DOFs (owned rows as in DofLayout)
   UMat M;  ///< MPIAIJ consistent mass, same layout and non-zero pattern as K
   double volume = 0.0;  ///< total volume of the mesh
   double mass = 0.0;    ///< total mass, sum of rho * element volume
@@ -44,6 +44,6 @@ struct Operators {
 /// use `fallback`, which must then be valid (E > 0, -1 < nu < 0.5, rho > 0). Throws
 /// (collectively) on an inverted or degenerate element, naming its id and the mesh source, or
 /// on a missing/invalid material. Collective.
-Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback);
+Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback);
 
 }  // namespace morse::fe

@@ -74,7 +74,7 @@ void write_dof_map(const std::string& path, const DofMapFile& map);
 
 /// The DOF map of a mesh model's free DOFs (row = global free DOF: node id, component 1..3) with
 /// every node set as a row set, on rank 0 (other ranks get an empty map). Collective.
-DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofMap& dofs);
+DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs);
 
 /// What a matrix model is made of (the -matrices_* options).
 struct MatrixInput {

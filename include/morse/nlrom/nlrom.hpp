@@ -122,7 +122,7 @@ std::vector<double> project_vector(Mat V, Vec x);
 
 /// Builds the basis. Throws (collectively) for a basis larger than the model, a missing
 /// snapshot file, or missing training settings. Collective.
-Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
+Basis build_basis(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const fe::Svk& svk, Mat M,
                   const BasisSettings& s);
 
 /// The POD basis of a snapshot matrix X (n_free x n_s, MPIDENSE) by the method of snapshots:
