@@ -127,7 +127,7 @@ std::vector<double> lowest(const Assembled& a, PetscInt n) {
   cb::EigenSettings es;
   es.nev = n;
   es.prefix = "test_";
-  auto w = cb::sign_reference(a.lm, a.dofs);
+  auto w = cb::sign_reference(test::model_of(a.lm, a.dofs, a.ops));
   return cb::solve_eigen(a.ops.K.get(), a.ops.M.get(), es, w.get()).omega2;
 }
 
