@@ -16,17 +16,6 @@ namespace morse::io {
 
 namespace {
 
-int comm_rank(MPI_Comm comm) {
-  int r = 0;
-  MPI_Comm_rank(comm, &r);
-  return r;
-}
-int comm_size(MPI_Comm comm) {
-  int s = 1;
-  MPI_Comm_size(comm, &s);
-  return s;
-}
-
 /// Largest |entry| of A and where it is (global row, column), on every rank. Collective.
 struct MaxEntry {
   double value = 0;
@@ -46,7 +35,9 @@ MaxEntry max_entry(Mat A) {
       if (std::abs(vals[k]) > me.value) me = {std::abs(vals[k]), i, cols[k]};
     MORSE_CALL(MatRestoreRow(A, i, &nc, &cols, &vals));
   }
-  std::vector<MaxEntry> all(comm_size(comm));
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  std::vector<MaxEntry> all(size);
   MPI_Allgather(&me, sizeof me, MPI_BYTE, all.data(), sizeof me, MPI_BYTE, comm);
   for (const auto& e : all)
     if (e.value > me.value || (e.value == me.value && e.i >= 0 && (me.i < 0 || e.i < me.i))) me = e;
@@ -70,8 +61,10 @@ double symmetrize(UMat* A, double tol, const std::string& what, const DofMapFile
   std::string err;
   if (a.value == 0) err = cat(what, " is zero");
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(A->get()));
-  if (rel > tol && comm_rank(comm) != 0) err = "not symmetric";  // rank 0 holds the DOF map and says where
-  if (rel > tol && comm_rank(comm) == 0) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rel > tol && rank != 0) err = "not symmetric";  // rank 0 holds the DOF map and says where
+  if (rel > tol && rank == 0) {
     err = cat(what, " is not symmetric: |A(i,j) - A(j,i)| = ", d.value, " = ", rel, " x max|A| (tolerance ", tol,
               ", -matrices_symmetry_tol) at row ", label(map, d.i), ", column ", label(map, d.j));
   }
@@ -89,7 +82,9 @@ double symmetrize(UMat* A, double tol, const std::string& what, const DofMapFile
 
 fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in) {
   MORSE_CHECK(!in.K.empty() && !in.M.empty(), "give both -matrices_K and -matrices_M");
-  const int rank = comm_rank(comm), size = comm_size(comm);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
   fe::Model md;
   auto& dofs = md.dofs;
   dofs.comm = comm;
