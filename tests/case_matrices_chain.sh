@@ -6,8 +6,11 @@
 #  - the unclamped matrices with -clamp of a DOF-map row set give it too;
 #  - -matrices_C is projected like M (C = M gives /rom/C = /rom/M);
 #  - a Nastran deck written by `morse mesh box -out box.bdf` gives the same frequencies;
+#  - modes from the matrices give the frequencies and mode shapes (per row, labelled by /dofs) of
+#    modes from the mesh;
 #  - bad input (nonsymmetric K, size mismatch, a DOF map with a row too many, a basis request
-#    without a mesh, matrices given to a mesh-only command) fails cleanly and leaves no file.
+#    without a mesh, matrices given to a command that needs a mesh) fails cleanly and leaves no
+#    file.
 # usage: case_matrices_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
 . "$(dirname "$0")/case_common.sh" "$@"
@@ -96,7 +99,28 @@ expect_error 'size mismatch: -matrices_K .*box_K.mtx is 48 x 48 but -matrices_M 
 expect_error 'long_dofmap.txt:50: this line names row 49 but the matrices have only 48 rows' "$d/bad3.h5" \
   reduce -matrices_K "$d/box_K.mtx" -matrices_M "$d/box_M.mtx" -matrices_dofmap "$d/long_dofmap.txt" "${cb[@]}"
 expect_error '-cb_write_basis writes nodal mode shapes of a mesh' "$d/bad4.h5" reduce "${mtx[@]}" "${cb[@]}" -cb_write_basis
-expect_error 'read by reduce and select only' "$d/bad5.h5" modes "${mtx[@]}" -modes_nev 3
+expect_error 'morse static needs a mesh: its nonlinear (SVK) forces' "$d/bad5.h5" static "${mtx[@]}" \
+  -load_sets x1 -load_x1_dir y -load_x1_amplitude 1
 expect_error "boundary set 'x9' is not a row set" "$d/bad6.h5" reduce "${mtx[@]}" -boundary x9 -cb_num_fixed_modes 2
 expect_error 'give either -mesh or -matrices_K' "$d/bad7.h5" reduce "${model[@]}" "${mtx[@]}" "${cb[@]}"
+# modes from the matrices against modes from the mesh.
+run modes "${model[@]}" -modes_nev 6 -out "$d/modes_mesh.h5"
+run modes "${mtx[@]}" -modes_nev 6 -out "$d/modes_mtx.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+d = sys.argv[1]
+a, b = h5py.File(f"{d}/modes_mesh.h5", "r"), h5py.File(f"{d}/modes_mtx.h5", "r")
+fa, fb = a["/fom/frequencies_hz"][:], b["/fom/frequencies_hz"][:]
+assert fa.shape == fb.shape == (6,), (fa.shape, fb.shape)
+assert np.max(np.abs(fa - fb) / fa) < 1e-10, (fa, fb)
+assert "/mesh" not in b and "/dofs/node" in b
+node, comp = b["/dofs/node"][:], b["/dofs/component"][:]
+va, vb = a["/fom/mode_shapes"][:], b["/fom/mode_shapes"][:]
+assert vb.shape == (6, len(node)), vb.shape
+index = {int(i): k for k, i in enumerate(a["/mesh/node_ids"][:])}
+for j in range(6):
+    ref = np.array([va[j, index[int(n)], int(c) - 1] for n, c in zip(node, comp)])
+    s = np.sign(ref @ vb[j])
+    assert np.max(np.abs(s * vb[j] - ref)) < 1e-6 * np.max(np.abs(ref)), ("mode", j)
+PY
 echo "case_matrices_chain: OK"

@@ -18,7 +18,7 @@ namespace {
 
 struct Case {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 
@@ -46,7 +46,7 @@ cb::CBResult reduce(const Case& c, PetscInt n_fixed, bool keep = false, double f
   s.n_fixed = n_fixed;
   s.fmax_hz = fmax;
   s.keep_basis = keep;
-  return cb::craig_bampton(c.lm, c.dofs, c.ops.K.get(), c.ops.M.get(), s);
+  return cb::craig_bampton(test::model_of(c.lm, c.dofs, c.ops), s);
 }
 
 double max_abs(const std::vector<double>& v) {
@@ -272,7 +272,7 @@ TEST(CraigBampton, ModalDamping) {
   s.boundary_set = "x1";
   s.n_fixed = 4;
   s.damping = 0.02;
-  auto r = cb::craig_bampton(c.lm, c.dofs, c.ops.K.get(), c.ops.M.get(), s);
+  auto r = cb::craig_bampton(test::model_of(c.lm, c.dofs, c.ops), s);
   const PetscInt n = r.n();
   for (PetscInt i = 0; i < n; ++i)
     for (PetscInt j = 0; j < n; ++j) {
@@ -285,7 +285,7 @@ TEST(CraigBampton, BadInputIsACollectiveError) {
   auto c = beam(PETSC_COMM_WORLD, ElementType::Hex8, 4);
   auto expect_error = [&](cb::CBSettings s, const std::string& needle) {
     try {
-      cb::craig_bampton(c.lm, c.dofs, c.ops.K.get(), c.ops.M.get(), s);
+      cb::craig_bampton(test::model_of(c.lm, c.dofs, c.ops), s);
       ADD_FAILURE() << "no error for " << needle;
     } catch (const Error& e) {
       EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();

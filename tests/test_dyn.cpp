@@ -17,7 +17,7 @@ namespace {
 
 struct Beam {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
   mesh::Material mat;
 };

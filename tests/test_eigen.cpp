@@ -22,7 +22,7 @@ namespace {
 
 struct Small {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 
@@ -101,7 +101,7 @@ TEST(Eigen, CountBySlicingMatchesOneShift) {
   eigen::EigenSettings sliced = one;
   sliced.prefix = "test_sliced_";
   sliced.count_slicing = 10;
-  auto w = cb::sign_reference(s.lm, s.dofs);
+  auto w = cb::sign_reference(test::model_of(s.lm, s.dofs, s.ops));
   auto a = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), one, w.get());
   auto b = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), sliced, w.get());
   EXPECT_FALSE(a.slicing);
@@ -270,7 +270,7 @@ TEST(Eigen, BlockSolverMatchesKrylovSchur) {
   ks.nev = 20;
   ks.prefix = "test_ks_";
   ks.count_slicing = 0;
-  auto w = cb::sign_reference(s.lm, s.dofs);
+  auto w = cb::sign_reference(test::model_of(s.lm, s.dofs, s.ops));
   auto ref = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
   for (auto [block, dim] : {std::pair<int, int>{1, 0}, {4, 0}, {16, 0}, {4, 32}}) {
     SCOPED_TRACE(cat("block ", block, " max dim ", dim));
@@ -300,7 +300,7 @@ TEST(Eigen, BlockBasisCappedByMemory) {
   ks.nev = 20;
   ks.prefix = "test_mks_";
   ks.count_slicing = 0;
-  auto w = cb::sign_reference(s.lm, s.dofs);
+  auto w = cb::sign_reference(test::model_of(s.lm, s.dofs, s.ops));
   auto ref = eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), ks, w.get());
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(s.ops.K.get(), &n, nullptr));
@@ -422,7 +422,7 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
   EXPECT_LT(identity_deviation(M.get(), e.V.get(), e.V.get()), 1e-10);
 
   auto b = small_beam();
-  auto w = cb::sign_reference(b.lm, b.dofs);
+  auto w = cb::sign_reference(test::model_of(b.lm, b.dofs, b.ops));
   eigen::EigenSettings one;
   one.nev = 30;
   one.solver = "block";

@@ -44,7 +44,7 @@ std::vector<std::int64_t> set_ids(const mesh::LocalMesh& lm, const std::string& 
 }
 
 // Component d of F at the node with id `id` (0 for a clamped DOF), on every rank. Collective.
-double at_node(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec F, std::int64_t id, int d) {
+double at_node(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Vec F, std::int64_t id, int d) {
   const int rank = world_rank_of(lm.comm);
   const double* a;
   MORSE_CALL(VecGetArrayRead(F, &a));
@@ -59,7 +59,7 @@ double at_node(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec F, std::in
 }
 
 // Mean of component d of u over the nodes of a set. Collective.
-double set_mean(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec u, const std::string& set, int d) {
+double set_mean(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Vec u, const std::string& set, int d) {
   const int rank = world_rank_of(lm.comm);
   const double* a;
   MORSE_CALL(VecGetArrayRead(u, &a));

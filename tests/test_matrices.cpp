@@ -14,6 +14,7 @@
 #include "morse/core/session.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/matrices.hpp"
+#include "morse/io/matrix_model.hpp"
 #include "morse/io/op4.hpp"
 #include "scratch.hpp"
 #include "util.hpp"
@@ -138,7 +139,7 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
   cs.n_fixed = 12;
   // Reference: the mesh path.
   auto ref_model = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0"});
-  auto ref = cb::craig_bampton(ref_model.lm, ref_model.dofs, ref_model.ops.K.get(), ref_model.ops.M.get(), cs);
+  auto ref = cb::craig_bampton(test::model_of(ref_model), cs);
   // The free (unclamped) model written as files.
   auto free_model = test::assembled_box(PETSC_COMM_WORLD, spec, {});
   io::write_matrix(free_model.ops.K.get(), path("K.mtx"), true);
@@ -152,11 +153,11 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
   in.M = path("M.petsc");
   in.dofmap = path("dofs.txt");
   in.clamp = {"x0"};
-  auto mm = io::read_matrix_model(PETSC_COMM_WORLD, in);
-  EXPECT_EQ(mm.n_global, ref_model.dofs.n_global);
-  EXPECT_EQ(mm.n_rows_file, free_model.dofs.n_global);
+  auto mm = io::matrix_model(PETSC_COMM_WORLD, in);
+  EXPECT_EQ(mm.dofs.n_global, ref_model.dofs.n_global);
+  EXPECT_EQ(mm.dofs.n_global + mm.dofs.n_clamped_global, free_model.dofs.n_global);
   EXPECT_EQ(mm.asymmetry_K, 0.0);
-  auto res = cb::craig_bampton(mm, mm.K.get(), mm.M.get(), cs);
+  auto res = cb::craig_bampton(mm, cs);
 
   ASSERT_EQ(res.n_b, ref.n_b);
   ASSERT_EQ(res.n_phi, ref.n_phi);
@@ -200,8 +201,8 @@ TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
   in.M = M;
   in.dofmap = map;
   in.node_sets = {{"end", {20, 30}}};
-  auto mm = io::read_matrix_model(PETSC_COMM_WORLD, in);
-  auto rows = io::set_rows(mm, "end", "boundary set");
+  auto mm = io::matrix_model(PETSC_COMM_WORLD, in);
+  auto rows = fe::set_rows(mm.dofs, "end", "boundary set");
   ASSERT_EQ(rows.size(), 4u);
   const std::int64_t nodes[] = {20, 20, 30, 30};
   const int comps[] = {1, 5, 1, 5};
@@ -216,7 +217,7 @@ TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
   cb::CBSettings cs;
   cs.boundary_set = "tip";
   cs.n_fixed = 0;
-  auto res = cb::craig_bampton(mm, mm.K.get(), mm.M.get(), cs);
+  auto res = cb::craig_bampton(mm, cs);
   ASSERT_EQ(res.n_b, 2);
   EXPECT_NEAR(res.K[0], 1.0 / 3.0, 1e-14);
   EXPECT_NEAR(res.K[3], 1.0 / 3.0, 1e-14);
@@ -247,7 +248,7 @@ TEST_F(MatricesTest, BadInputIsRefusedClearly) {
     in.K = K;
     in.M = M;
     in.dofmap = map;
-    io::read_matrix_model(w, in);
+    io::matrix_model(w, in);
   };
   expect_error([&] { model(nonsym, good, ""); }, {"-matrices_K", "nonsym.mtx", "not symmetric", "column 2 (node 1 component 2)"});
   expect_error([&] { model(good, big, ""); }, {"size mismatch", "good.mtx", "big.mtx", "3 x 3", "4 x 4"});
@@ -274,14 +275,14 @@ TEST_F(MatricesTest, BadInputIsRefusedClearly) {
   in.K = good;
   in.M = good;
   in.dofmap = write("sets.txt", "1 1 a\n1 2\n1 3 a\n");
-  auto mm = io::read_matrix_model(w, in);
+  auto mm = io::matrix_model(w, in);
   cb::CBSettings cs;
   cs.boundary_set = "b";
   cs.n_fixed = 0;
-  expect_error([&] { cb::craig_bampton(mm, mm.K.get(), mm.M.get(), cs); }, {"boundary set 'b'", "sets: a"});
+  expect_error([&] { cb::craig_bampton(mm, cs); }, {"boundary set 'b'", "sets: a"});
   in.clamp = {"nope"};
-  expect_error([&] { io::read_matrix_model(w, in); }, {"-clamp nope", "sets: a"});
+  expect_error([&] { io::matrix_model(w, in); }, {"-clamp nope", "sets: a"});
   in.clamp = {};
   in.node_sets = {{"n", {1, 2}}};
-  expect_error([&] { io::read_matrix_model(w, in); }, {"-mesh_node_set_n", "node 2 has no row"});
+  expect_error([&] { io::matrix_model(w, in); }, {"-mesh_node_set_n", "node 2 has no row"});
 }

@@ -92,6 +92,46 @@ TEST(Model, NodeSetFromIds) {
   EXPECT_EQ(lm.mesh.node_sets.count("bad"), 0u);
 }
 
+// The layout of a mesh model labels every owned row by its node id and component 1..3 (the
+// inverse of node_dof), and holds every node set as a row set of its free rows: fe::set_rows
+// gives the set's rows on every rank by (node id, component), as the boundary of a superelement.
+TEST(Model, LayoutLabelsAndRowSets) {
+  mesh::BoxSpec b;
+  b.nx = 3;
+  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
+  auto dofs = fe::number_dofs(lm, {"x0"});
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  ASSERT_EQ(dofs.node.size(), static_cast<std::size_t>(dofs.n_owned));
+  ASSERT_EQ(dofs.component.size(), static_cast<std::size_t>(dofs.n_owned));
+  for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    for (int d = 0; d < 3; ++d) {
+      const PetscInt g = dofs.node_dof[3 * k + d];
+      if (g < 0) continue;
+      EXPECT_EQ(dofs.node[g - dofs.first], lm.mesh.node_ids[k]);
+      EXPECT_EQ(dofs.component[g - dofs.first], d + 1);
+    }
+  }
+  for (const auto& [name, nodes] : lm.mesh.node_sets) ASSERT_EQ(dofs.sets.count(name), 1u) << name;
+  EXPECT_TRUE(dofs.sets.at("x0").empty());  // clamped: no free row
+  auto rows = fe::set_rows(dofs, "x1", "boundary set");
+  ASSERT_EQ(static_cast<std::int64_t>(rows.size()), 3 * lm.node_set_sizes.at("x1"));
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].component, static_cast<int>(i % 3) + 1);
+    if (i > 0) {
+      EXPECT_TRUE(rows[i - 1].node < rows[i].node || (rows[i - 1].node == rows[i].node && i % 3 != 0));
+    }
+  }
+  for (const auto& [set, needle] : {std::pair<std::string, std::string>{"nosuchset", "sets: "}, {"x0", "is empty"}})
+    try {
+      fe::set_rows(dofs, set, "boundary set");
+      ADD_FAILURE() << "no error for set " << set;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+}
+
 class ModelByType : public ::testing::TestWithParam<ElementType> {};
 
 // Total translational mass: 1^T M_x 1 = rho V for a distorted box, to round-off.

@@ -78,7 +78,7 @@ void write_inp(const mesh::Mesh& m, const std::string& path, const std::string& 
 
 struct Assembled {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 
@@ -104,7 +104,7 @@ std::vector<double> lowest(const Assembled& a, PetscInt n) {
   eigen::EigenSettings es;
   es.nev = n;
   es.prefix = "test_";
-  auto w = cb::sign_reference(a.lm, a.dofs);
+  auto w = cb::sign_reference(test::model_of(a.lm, a.dofs, a.ops));
   return eigen::solve_eigen(a.ops.K.get(), a.ops.M.get(), es, w.get()).omega2;
 }
 

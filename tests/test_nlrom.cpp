@@ -291,7 +291,7 @@ TEST(Nlrom, ModalDerivativeBasis) {
   s.training = &loads;
   s.training_tfinal = 10 * 2 * M_PI / 2000.0;
   s.training_dt = 2e-5;
-  auto b = nlrom::build_basis(m.lm, m.dofs, svk, m.ops.M.get(), s);
+  auto b = nlrom::build_basis(test::model_of(m), svk, s);
   ASSERT_EQ(b.r(), b.n_b + 2 + 4);
   EXPECT_LT(boundary_defect(b.V.get(), b.cb.boundary_dofs), 1e-14);
   const PetscInt f0 = b.n_b;

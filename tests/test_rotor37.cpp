@@ -41,7 +41,7 @@ Result solve(MPI_Comm comm, int nev) {
   eigen::EigenSettings es;
   es.nev = nev;
   es.prefix = "test_r37_";
-  auto w = cb::sign_reference(lm, dofs);
+  auto w = cb::sign_reference(test::model_of(lm, dofs, ops));
   r.omega2 = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, w.get()).omega2;
   return r;
 }

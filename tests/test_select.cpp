@@ -24,7 +24,7 @@ namespace {
 
 struct Problem {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
   cb::CBResult cb;
   select::InterfaceCoupling ic;
@@ -41,7 +41,7 @@ Problem make(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::strin
   cs.n_fixed = n_fixed;
   cs.keep_basis = true;
   cs.prefix = "test_sel_";
-  s.cb = cb::craig_bampton(s.lm, s.dofs, s.ops.K.get(), s.ops.M.get(), cs);
+  s.cb = cb::craig_bampton(test::model_of(s.lm, s.dofs, s.ops), cs);
   s.ic = select::interface_coupling(comm, s.ops.K.get(), s.ops.M.get(), s.cb);
   return s;
 }
@@ -300,7 +300,7 @@ TEST(Select, StatorEimKeepsFewerModesThanFrequencyOrder) {
   cs.n_fixed = 40;
   cs.keep_basis = true;
   cs.prefix = "test_sel_";
-  auto res = cb::craig_bampton(lm, dofs, ops.K.get(), ops.M.get(), cs);
+  auto res = cb::craig_bampton(test::model_of(lm, dofs, ops), cs);
   auto ic = select::interface_coupling(PETSC_COMM_WORLD, ops.K.get(), ops.M.get(), res);
   auto eim = select::scores(PETSC_COMM_WORLD, select::Method::EIM, ic, res, {}, nullptr);
   auto by_eim = select::truncate(select::Method::EIM, eim, -1, 0.95);

@@ -48,8 +48,8 @@ TEST(SelectFrom, BasisFileRoundTrip) {
   cb::CBSettings s;
   s.boundary_set = "x1";
   s.n_fixed = 6;
-  auto direct = cb::craig_bampton(lm, dofs, ops.K.get(), ops.M.get(), s);
-  auto loaded = cb::load_basis(lm, dofs, ops.K.get(), ops.M.get(), base + ".h5", "x1", 0.0);
+  auto direct = cb::craig_bampton(test::model_of(lm, dofs, ops), s);
+  auto loaded = cb::load_basis(test::model_of(lm, dofs, ops), base + ".h5", "x1", 0.0);
   ASSERT_EQ(direct.n(), loaded.n());
   double kref = 0, mref = 0, kerr = 0, merr = 0;
   for (std::size_t i = 0; i < direct.K.size(); ++i) {
@@ -67,7 +67,7 @@ TEST(SelectFrom, BasisFileRoundTrip) {
     EXPECT_NEAR(direct.fixed_omega2[i], loaded.fixed_omega2[i], 1e-10 * std::abs(direct.fixed_omega2[i])) << i;
   // A missing file is refused, naming it.
   try {
-    cb::load_basis(lm, dofs, ops.K.get(), ops.M.get(), base + "_missing.h5", "x1", 0.0);
+    cb::load_basis(test::model_of(lm, dofs, ops), base + "_missing.h5", "x1", 0.0);
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(base + "_missing.h5"), std::string::npos) << e.what();

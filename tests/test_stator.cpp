@@ -374,7 +374,7 @@ struct Energy {
 
 /// Squared-displacement "energy" of column j of V by region (vane nodes: strictly between the
 /// hub and casing cylinders; hub nodes: on or inside the hub's outer cylinder). Collective.
-Energy region_energy(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat V, PetscInt j,
+Energy region_energy(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat V, PetscInt j,
                      const StatorSpec& s) {
   Vec x;
   MORSE_CALL(MatDenseGetColumnVecRead(V, j, &x));

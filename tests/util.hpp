@@ -51,7 +51,7 @@ inline mesh::LocalMesh box_mesh(MPI_Comm comm, const mesh::BoxSpec& b) {
 /// A distributed box with its DOF map and assembled K, M.
 struct Model {
   mesh::LocalMesh lm;
-  fe::DofMap dofs;
+  fe::DofLayout dofs;
   fe::Operators ops;
 };
 
@@ -66,6 +66,23 @@ inline Model assembled_box(MPI_Comm comm, const mesh::BoxSpec& b, const std::vec
   return m;
 }
 
+/// An fe::Model over a test's parts: copies of the mesh and layout, and new references to K and
+/// M (the same Mat objects). Not collective.
+inline fe::Model model_of(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const fe::Operators& ops) {
+  fe::Model md;
+  md.mesh = lm;
+  md.dofs = dofs;
+  for (Mat A : {ops.K.get(), ops.M.get()}) MORSE_CALL(PetscObjectReference(reinterpret_cast<PetscObject>(A)));
+  md.K = UMat(ops.K.get());
+  md.M = UMat(ops.M.get());
+  md.volume = ops.volume;
+  md.mass = ops.mass;
+  md.units = lm.mesh.units;
+  md.source = lm.mesh.source;
+  return md;
+}
+inline fe::Model model_of(const Model& m) { return model_of(m.lm, m.dofs, m.ops); }
+
 /// Craig–Bampton of an assembled model with the basis kept: `boundary` as the physical nodes and
 /// `n_fixed` fixed-interface modes. Collective.
 inline cb::CBResult cb_basis(const Model& m, const std::string& boundary, PetscInt n_fixed) {
@@ -73,12 +90,12 @@ inline cb::CBResult cb_basis(const Model& m, const std::string& boundary, PetscI
   cs.boundary_set = boundary;
   cs.n_fixed = n_fixed;
   cs.keep_basis = true;
-  return cb::craig_bampton(m.lm, m.dofs, m.ops.K.get(), m.ops.M.get(), cs);
+  return cb::craig_bampton(model_of(m), cs);
 }
 
 /// A DOF vector from a nodal field f(x, y, z, d) on the free DOFs.
 template <class F>
-UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofMap& dofs, F f) {
+UVec nodal_vector(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, F f) {
   UVec v;
   MORSE_CALL(VecCreateMPI(lm.comm, dofs.n_owned, dofs.n_global, v.ptr()));
   PetscScalar* a;

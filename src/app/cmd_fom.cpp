@@ -151,22 +151,22 @@ void run_fom(MPI_Comm comm) {
   check(fo);
   const int rank = rank_of(comm);
 
-  Model md = build_model(comm, o);
-  MORSE_CHECK(!(md.from_matrices && !ho.spec.empty()), "-load_history needs a mesh (node ids), not -matrices_* input");
-  dyn::Loads loads(md.lm, md.dofs, load_list);
+  Model md = build_model(
+      comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  dyn::Loads loads(*md.mesh, md.dofs, load_list);
   const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fo.s.t_final / fo.s.dt - 1e-9));
-  if (auto h = make_load_history(comm, md.lm, md.dofs, ho)) {
+  if (auto h = make_load_history(comm, *md.mesh, md.dofs, ho)) {
     h->check_covers(0.0, n_steps * fo.s.dt);
     loads.set_history(std::move(h));
   }
   std::vector<dyn::SetProbe> probes;
-  for (const auto& m : fo.monitor) probes.emplace_back(md.lm, md.dofs, m);
-  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
+  for (const auto& m : fo.monitor) probes.emplace_back(*md.mesh, md.dofs, m);
+  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
   UVec u0;
   if (!fo.initial.empty()) {
-    MORSE_CALL(MatCreateVecs(md.ops.K.get(), u0.ptr(), nullptr));
+    MORSE_CALL(MatCreateVecs(md.K.get(), u0.ptr(), nullptr));
     MORSE_CALL(VecSet(u0.get(), 0.0));
-    io::read_nodal_field(md.lm, md.dofs, fo.initial, fo.initial_dataset, u0.get());
+    io::read_nodal_field(*md.mesh, md.dofs, fo.initial, fo.initial_dataset, u0.get());
   }
   if (std::abs(n_steps * fo.s.dt - fo.s.t_final) > 1e-9 * fo.s.t_final)
     print0(comm, "morse fom: -fom_tfinal is not a multiple of -fom_dt: the run ends at t = %g (%lld steps)\n",
@@ -186,12 +186,12 @@ void run_fom(MPI_Comm comm) {
     snap_v = snaps->create("/fom/snapshots/v", rows);
     // The DOF map of the snapshot columns: node id and component of every free DOF.
     std::vector<std::int64_t> node_id(md.dofs.n_owned), comp(md.dofs.n_owned);
-    for (std::int64_t k = 0; k < md.lm.mesh.num_nodes(); ++k) {
-      if (md.lm.node_owner[k] != rank) continue;
+    for (std::int64_t k = 0; k < md.mesh->mesh.num_nodes(); ++k) {
+      if (md.mesh->node_owner[k] != rank) continue;
       for (int d = 0; d < 3; ++d) {
         const PetscInt g = md.dofs.node_dof[3 * k + d];
         if (g < 0) continue;
-        node_id[g - md.dofs.first] = md.lm.mesh.node_ids[k];
+        node_id[g - md.dofs.first] = md.mesh->mesh.node_ids[k];
         comp[g - md.dofs.first] = d;
       }
     }
@@ -205,7 +205,7 @@ void run_fom(MPI_Comm comm) {
   std::vector<double> time, e46, kin, sl, snl, wext, dloss, bal, res;
   std::vector<std::int64_t> its;
   std::vector<std::vector<double>> hist(probes.size());
-  auto stats = dyn::integrate(svk, md.ops.M.get(), loads, fo.s, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
+  auto stats = dyn::integrate(svk, md.M.get(), loads, fo.s, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
     time.push_back(i.t);
     e46.push_back(i.energy.eq46());
     kin.push_back(i.energy.kinetic);
@@ -249,8 +249,8 @@ void run_fom(MPI_Comm comm) {
   }
 
   StageTimer t(comm, "Write");
-  io::write_provenance(out, "fom", md.lm.mesh.units);
-  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_provenance(out, "fom", md.units);
+  auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
   out.write("/fom/time", time);
   out.write("/fom/energy", e46);

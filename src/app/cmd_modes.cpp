@@ -1,5 +1,6 @@
-// app/cmd_modes.cpp: `morse modes`, the lowest eigenpairs of the clamped full model, written
-// with the mesh (and an XDMF file for ParaView).
+// app/cmd_modes.cpp: `morse modes`, the lowest eigenpairs of the clamped full model (a mesh or
+// assembled matrices), written with the mesh (and an XDMF file for ParaView) or with the row
+// labels of the matrices (/dofs).
 #include <petscsys.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/mesh/mesh.hpp"
 #include "morse/mesh/partition.hpp"
 
 namespace morse::app::detail {
@@ -49,8 +51,8 @@ void run_modes(MPI_Comm comm) {
   es.prefix = "modes_";
   es.what = "full-model modes";
   es.keep_factor = false;  // nothing solves with it afterwards: the Sylvester check reuses it
-  auto w = cb::sign_reference(md.lm, md.dofs);
-  auto eig = eigen::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
+  auto w = cb::sign_reference(md);
+  auto eig = eigen::solve_eigen(md.K.get(), md.M.get(), es, w.get());
   check_options(comm, false);
 
   const std::vector<double> f_hz = hz(eig.omega2);
@@ -60,20 +62,27 @@ void run_modes(MPI_Comm comm) {
 
   StageTimer t(comm, "Write");
   io::H5Output out(comm, o.out);
-  io::write_provenance(out, "modes", md.lm.mesh.units);
-  auto gm = mesh::gather_to_rank0(md.lm);
-  io::write_mesh(out, gm);
+  io::write_provenance(out, "modes", md.units);
+  mesh::Mesh gm;
+  if (md.mesh) {
+    gm = mesh::gather_to_rank0(*md.mesh);
+    io::write_mesh(out, gm);
+  } else {
+    write_model(out, md);
+  }
   out.write("/fom/frequencies_hz", f_hz);
   out.write("/fom/eigenvalues", eig.omega2);
   write_modes_dataset(out, "/fom/mode_shapes", md, eig.V.get(), 0, static_cast<PetscInt>(f_hz.size()));
-  out.attribute("/fom/mode_shapes", "description", "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids");
+  out.attribute("/fom/mode_shapes", "description",
+                md.mesh ? "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids"
+                        : "[mode][row], mass-normalized, rows as /dofs/node and /dofs/component");
   out.attribute("/fom", "clamp", [&] {
     std::string s;
     for (auto& c : o.clamp) s += (s.empty() ? "" : ",") + c;
     return s;
   }());
   out.commit();
-  if (xdmf) write_xdmf_collective(comm, o.out, gm, {{"/fom/mode_shapes", "mode", (int)f_hz.size()}});
+  if (xdmf && md.mesh) write_xdmf_collective(comm, o.out, gm, {{"/fom/mode_shapes", "mode", (int)f_hz.size()}});
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }
 

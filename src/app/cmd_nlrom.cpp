@@ -97,8 +97,8 @@ PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
 
 // Nonlinear forces of the snapshots, POD-compressed (eq. 38): the filter basis Phi_f.
 UMat force_filter(const Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {
-  StageTimer t(md.lm.comm, "PodFilter");
-  auto X = io::read_dof_rows(md.lm, md.dofs, file, "/fom/snapshots/u");
+  StageTimer t(md.mesh->comm, "PodFilter");
+  auto X = io::read_dof_rows(*md.mesh, md.dofs, file, "/fom/snapshots/u");
   PetscInt ns = 0;
   MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
   MORSE_CHECK(n <= ns, "-nlrom_filter_pod ", n, " exceeds the ", ns, " snapshots of ", file);
@@ -128,19 +128,20 @@ void run_nlrom(MPI_Comm comm) {
               "-nlrom_damping_modal must be in [0, 1) and -nlrom_damping_modes >= 0");
   MORSE_CHECK(no.n_filter >= 0, "-nlrom_filter_pod must be >= 0");
   MORSE_CHECK(!(no.n_filter > 0 && no.b.snapshots.empty()), "-nlrom_filter_pod needs -nlrom_snapshots FILE.h5");
-  Model md = build_model(comm, o);
+  Model md = build_model(
+      comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   std::unique_ptr<dyn::Loads> training;
   if (!load_list.empty()) {
-    training = std::make_unique<dyn::Loads>(md.lm, md.dofs, load_list);
+    training = std::make_unique<dyn::Loads>(*md.mesh, md.dofs, load_list);
     no.b.training = training.get();
     if (no.b.training_dt <= 0) {
       const double w = training->max_omega();
       no.b.training_dt = w > 0 ? 2 * M_PI / w / 200 : no.b.training_tfinal / 1000;
     }
   }
-  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
-  auto basis = nlrom::build_basis(md.lm, md.dofs, svk, md.ops.M.get(), no.b);
+  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
+  auto basis = nlrom::build_basis(md, svk, no.b);
   const PetscInt r = basis.r();
   print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",
          no.basis.c_str(), (int)r, (int)basis.n_b, (int)basis.n_fixed, (int)basis.n_extra,
@@ -163,19 +164,19 @@ void run_nlrom(MPI_Comm comm) {
   }
   const double t2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2a).count();
   auto t3a = std::chrono::steady_clock::now();
-  auto rm = nlrom::project_model(comm, basis.V.get(), md.ops.K.get(), md.ops.M.get(), no.damping_xi, no.damping_modes);
+  auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.damping_xi, no.damping_modes);
   const double t3 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t3a).count();
   check_options(comm, false);
   print0(comm, "morse nlrom: offline times t1 (basis) %.2f s, t2 (forces) %.2f s, t3 (projection) %.2f s\n",
          basis.seconds, t2, t3);
 
   StageTimer t(comm, "Write");
-  io::write_provenance(out, "nlrom", md.lm.mesh.units);
-  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_provenance(out, "nlrom", md.units);
+  auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
   // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
   // owned members of every set, gathered on rank 0.
-  write_node_sets(out, md.lm, "/nlrom/node_sets");
+  write_node_sets(out, *md.mesh, "/nlrom/node_sets");
   const auto R = static_cast<hsize_t>(r);
   out.write("/nlrom/M", rm.M, {R, R});
   out.write("/nlrom/K", rm.K, {R, R});
@@ -189,11 +190,11 @@ void run_nlrom(MPI_Comm comm) {
   for (PetscInt j = 0; j < r; ++j) {
     Vec c;
     MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
-    auto col = io::gather_nodal(md.lm, md.dofs, c);
+    auto col = io::gather_nodal(*md.mesh, md.dofs, c);
     MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
     nodal.insert(nodal.end(), col.begin(), col.end());
   }
-  out.write("/nlrom/basis", nodal, {R, static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+  out.write("/nlrom/basis", nodal, {R, static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
   out.attribute("/nlrom/basis", "description", "[column][node][x,y,z] basis vectors, nodes as /mesh/node_ids");
   std::string labels;
   for (const auto& l : basis.labels) labels += l + "\n";

@@ -13,6 +13,7 @@
 #include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/io/matrices.hpp"
 #include "morse/mesh/partition.hpp"
 
 namespace morse::app::detail {
@@ -30,20 +31,20 @@ void run_reduce(MPI_Comm comm) {
   MORSE_CHECK(r.damping >= 0 && r.damping < 1, "-cb_damping must be in [0, 1) (got ", r.damping, ")");
   MORSE_CHECK(!(r.xdmf_set && r.xdmf && !r.write_basis),
               "-cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis");
-  Model md = build_model(comm, o, true);
-  MORSE_CHECK(!(md.from_matrices && r.write_basis),
+  Model md = build_model(comm, o);
+  MORSE_CHECK(!(!md.mesh && r.write_basis),
               "-cb_write_basis writes nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.mm.C && r.damping > 0), "give either -matrices_C (projected on the superelement) or -cb_damping "
+  MORSE_CHECK(!(md.C && r.damping > 0), "give either -matrices_C (projected on the superelement) or -cb_damping "
                                            "(modal damping of the fixed-interface modes), not both");
   MORSE_CHECK(r.write_format == "mtx" || r.write_format == "petsc", "-matrices_write_format ", r.write_format,
               ": expected mtx or petsc");
-  MORSE_CHECK(r.write_matrices.empty() || !md.from_matrices, "-matrices_write writes the matrices of a mesh model");
+  MORSE_CHECK(r.write_matrices.empty() || md.mesh.has_value(), "-matrices_write writes the matrices of a mesh model");
   if (!r.write_matrices.empty()) {
     StageTimer t(comm, "WriteMatrices");
     const std::string ext = r.write_format == "mtx" ? ".mtx" : ".petsc";
-    io::write_matrix(md.ops.K.get(), r.write_matrices + "_K" + ext, true);
-    io::write_matrix(md.ops.M.get(), r.write_matrices + "_M" + ext, true);
-    auto map = io::mesh_dof_map(md.lm, md.dofs);
+    io::write_matrix(md.K.get(), r.write_matrices + "_K" + ext, true);
+    io::write_matrix(md.M.get(), r.write_matrices + "_M" + ext, true);
+    auto map = io::mesh_dof_map(*md.mesh, md.dofs);
     std::string err;
     if (rank_of(comm) == 0) try {
         io::write_dof_map(r.write_matrices + "_dofmap.txt", map);
@@ -55,9 +56,9 @@ void run_reduce(MPI_Comm comm) {
            r.write_matrices.c_str(), ext.c_str(), r.write_matrices.c_str());
   }
   cb::CBSettings cs = cb_settings(r);
-  cs.keep_basis = cs.keep_basis || md.mm.C;
-  auto res = craig_bampton(md, cs);
-  if (md.mm.C) res.C = cb::project_symmetric(comm, md.mm.C.get(), res.T.get());
+  cs.keep_basis = cs.keep_basis || md.C;
+  auto res = cb::craig_bampton(md, cs);
+  if (md.C) res.C = cb::project_symmetric(comm, md.C.get(), res.T.get());
   check_options(comm, false);
 
   const int n = static_cast<int>(res.n());
@@ -79,11 +80,11 @@ void run_reduce(MPI_Comm comm) {
 
   StageTimer t(comm, "Write");
   io::H5Output out(comm, o.out);
-  io::write_provenance(out, "reduce", md.lm.mesh.units);
+  io::write_provenance(out, "reduce", md.units);
   write_model(out, md);
   out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
   out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
-  write_rom(out, res.M, res.K, r.damping > 0 || md.mm.C ? &res.C : nullptr, res, rom_f, r.damping);
+  write_rom(out, res.M, res.K, r.damping > 0 || md.C ? &res.C : nullptr, res, rom_f, r.damping);
   out.attribute("/cb", "boundary_set", r.boundary);
   std::vector<io::XdmfField> fields;
   if (r.write_basis) {
@@ -94,7 +95,7 @@ void run_reduce(MPI_Comm comm) {
     fields = {{"/cb/constraint_modes", "psi", (int)res.n_b}, {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};
   }
   out.commit();
-  if (r.xdmf && r.write_basis) write_xdmf_collective(comm, o.out, mesh::gather_to_rank0(md.lm), fields);
+  if (r.xdmf && r.write_basis) write_xdmf_collective(comm, o.out, mesh::gather_to_rank0(*md.mesh), fields);
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }
 

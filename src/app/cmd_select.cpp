@@ -174,18 +174,16 @@ void run_select(MPI_Comm comm) {
   MORSE_CHECK(std::find(so.methods.begin(), so.methods.end(), rom_name) != so.methods.end(), "-select_rom_method ",
               rom_name, " is not one of -select_method");
 
-  Model md = build_model(comm, o, true);
-  MORSE_CHECK(!(md.from_matrices && !so.from.empty()),
+  Model md = build_model(comm, o);
+  MORSE_CHECK(!(!md.mesh && !so.from.empty()),
               "-select_from reads nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.mm.C && r.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
+  MORSE_CHECK(!(md.C && r.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
                                            "-cb_damping (modal damping of the fixed-interface modes), not both");
   cb::CBSettings cs = cb_settings(r);
   cs.keep_basis = true;
-  auto res = so.from.empty() ? craig_bampton(md, cs)
-                             : cb::load_basis(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), so.from, r.boundary,
-                                              r.damping);
+  auto res = so.from.empty() ? cb::craig_bampton(md, cs) : cb::load_basis(md, so.from, r.boundary, r.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
-  if (md.mm.C) res.C = cb::project_symmetric(comm, md.mm.C.get(), res.T.get());  // T^T C T, restricted below
+  if (md.C) res.C = cb::project_symmetric(comm, md.C.get(), res.T.get());  // T^T C T, restricted below
   const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
   double f_an = so.fmax_analysis > 0 ? so.fmax_analysis
                 : r.fmax > 0       ? 0.5 * r.fmax
@@ -195,7 +193,7 @@ void run_select(MPI_Comm comm) {
   select::InterfaceCoupling ic;
   {
     StageTimer t(comm, "InterfaceCoupling");
-    ic = select::interface_coupling(comm, md.ops.K.get(), md.ops.M.get(), res);
+    ic = select::interface_coupling(comm, md.K.get(), md.M.get(), res);
   }
   // Full-model modes with the real boundary conditions (clamp only): MAC reference and IMR.
   eigen::Eigenpairs fom;
@@ -208,8 +206,8 @@ void run_select(MPI_Comm comm) {
       es.nev = so.fom_modes;
     else
       es.omega2_max = l_an;
-    auto w = sign_reference(md);
-    fom = eigen::solve_eigen(md.ops.K.get(), md.ops.M.get(), es, w.get());
+    auto w = cb::sign_reference(md);
+    fom = eigen::solve_eigen(md.K.get(), md.M.get(), es, w.get());
   }
   const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
 
@@ -242,11 +240,11 @@ void run_select(MPI_Comm comm) {
       imr->clamped_modes = modes;
     } else {
       eigen::Eigenpairs sys;
-      Mat Ks = md.ops.K.get();
+      Mat Ks = md.K.get();
       UMat Kspring;
       eigen::Eigenpairs* use = &fom;
       if (so.imr_support == "spring") {
-        MORSE_CALL(MatDuplicate(md.ops.K.get(), MAT_COPY_VALUES, Kspring.ptr()));
+        MORSE_CALL(MatDuplicate(md.K.get(), MAT_COPY_VALUES, Kspring.ptr()));
         for (auto g : res.boundary_dofs) {
           PetscInt rs, re;
           MORSE_CALL(MatGetOwnershipRange(Kspring.get(), &rs, &re));
@@ -260,7 +258,7 @@ void run_select(MPI_Comm comm) {
         es.stage = "Imr";
         es.what = "IMR system modes";
         es.omega2_max = l_an;
-        sys = eigen::solve_eigen(Ks, md.ops.M.get(), es, nullptr);
+        sys = eigen::solve_eigen(Ks, md.M.get(), es, nullptr);
         use = &sys;
       }
       const PetscInt n_sys = static_cast<PetscInt>(use->omega2.size());
@@ -271,7 +269,7 @@ void run_select(MPI_Comm comm) {
                     " system modes", so.fom_modes > 0 && so.imr_support == "free" ? "" : cat(" below ", f_an, " Hz"),
                     ")");
       imr = std::make_unique<select::ImrData>(
-          select::imr_data(comm, md.ops.M.get(), res, use->V.get(), use->omega2, modes, so.imr_shift));
+          select::imr_data(comm, md.M.get(), res, use->V.get(), use->omega2, modes, so.imr_shift));
     }
   }
   check_options(comm, false);
@@ -291,7 +289,7 @@ void run_select(MPI_Comm comm) {
   {
     StageTimer t(comm, "MacProjections");
     UMat MV;
-    MORSE_CALL(MatMatMult(md.ops.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+    MORSE_CALL(MatMatMult(md.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
     mac_basis = select::mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
   }
   auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
@@ -363,7 +361,7 @@ void run_select(MPI_Comm comm) {
 
   StageTimer t(comm, "Write");
   io::H5Output out(comm, o.out);
-  io::write_provenance(out, "select", md.lm.mesh.units);
+  io::write_provenance(out, "select", md.units);
   write_model(out, md);
   const std::vector<double> fom_hz = hz(fom.omega2);
   out.write("/cb/fixed_interface/frequencies_hz", hz(res.fixed_omega2));
@@ -372,7 +370,7 @@ void run_select(MPI_Comm comm) {
   out.attribute("/select", "fmax_analysis_hz", f_an);
   out.attribute("/select", "mac_threshold", so.mac_threshold);
   out.attribute_int("/select", "cb_modes_in_band", static_cast<std::int64_t>(cb_in_band));
-  out.write("/select/effective_mass/directional_fractions", select::directional_mass_fractions(ic, md.ops.mass),
+  out.write("/select/effective_mass/directional_fractions", select::directional_mass_fractions(ic, md.mass),
             {static_cast<hsize_t>(nphi), 3});
   out.attribute("/select/effective_mass/directional_fractions", "description",
                 "(P_i r_d)^2 / total mass for a rigid translation r_d of the interface in x, y, z");
@@ -406,7 +404,7 @@ void run_select(MPI_Comm comm) {
     out.attribute(g, "worst_frequency_error", mr.worst_err);
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      write_rom(out, mr.M, mr.K, r.damping > 0 || md.mm.C ? &C : nullptr, res, mr.rom_f, r.damping);
+      write_rom(out, mr.M, mr.K, r.damping > 0 || md.C ? &C : nullptr, res, mr.rom_f, r.damping);
       out.write("/rom/selected_modes", sel);
       out.attribute("/rom", "selection_method", mr.name);
     }

@@ -66,12 +66,13 @@ void run_static(MPI_Comm comm) {
   MORSE_CHECK(so.s.max_cutbacks >= 0, "-static_max_cutbacks must be >= 0 (got ", so.s.max_cutbacks, ")");
   MORSE_CHECK(so.s.rtol > 0 && so.s.max_it > 0, "-static_rtol and -static_max_it must be positive");
 
-  Model md = build_model(comm, o);
-  dyn::Loads loads(md.lm, md.dofs, load_list);
+  Model md = build_model(
+      comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  dyn::Loads loads(*md.mesh, md.dofs, load_list);
   std::vector<dyn::SetProbe> probes;
-  for (const auto& m : so.monitor) probes.emplace_back(md.lm, md.dofs, m);
+  for (const auto& m : so.monitor) probes.emplace_back(*md.mesh, md.dofs, m);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the solve
-  fe::Svk svk(md.lm, md.dofs, o.material, md.ops.K.get());
+  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
   auto res = dyn::solve_static(svk, loads, so.s);
   check_options(comm, false);
 
@@ -83,11 +84,11 @@ void run_static(MPI_Comm comm) {
   }
 
   StageTimer t(comm, "Write");
-  io::write_provenance(out, "static", md.lm.mesh.units);
-  auto gm = mesh::gather_to_rank0(md.lm);
+  io::write_provenance(out, "static", md.units);
+  auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
-  auto nodal = io::gather_nodal(md.lm, md.dofs, res.u.get());
-  out.write("/static/u", nodal, {1, static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+  auto nodal = io::gather_nodal(*md.mesh, md.dofs, res.u.get());
+  out.write("/static/u", nodal, {1, static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
   out.attribute("/static/u", "description", "[1][node][x,y,z] displacement [m], nodes as /mesh/node_ids");
   for (const auto& p : probes) {
     auto u = p.sample(res.u.get());

@@ -118,13 +118,14 @@ void run_stress(MPI_Comm comm) {
   const auto measure = so.measure.empty() ? (linear != 0.0 ? sim::StressMeasure::Linear : sim::StressMeasure::Nonlinear)
                        : so.measure == "linear" ? sim::StressMeasure::Linear
                                                 : sim::StressMeasure::Nonlinear;
-  Model md = build_model(comm, o);
+  Model md = build_model(
+      comm, o, "morse stress needs a mesh: stresses are recovered element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   const auto u = sm.field(q_step.data());
   sim::StressField f;
   {
     StageTimer t(comm, "Stress");
-    f = sim::recover_stress(md.lm, o.material, sm.node_ids, u, measure);
+    f = sim::recover_stress(*md.mesh, o.material, sm.node_ids, u, measure);
   }
   check_options(comm, false);
   const char* mname = measure == sim::StressMeasure::Linear ? "linear" : "nonlinear";
@@ -133,10 +134,10 @@ void run_stress(MPI_Comm comm) {
          so.time_set ? "" : cat(", largest |u_r| at ", so.monitor, ": ", ur, " m").c_str());
 
   StageTimer t(comm, "Write");
-  auto gm = mesh::gather_to_rank0(md.lm);
-  io::write_provenance(out, "stress", md.lm.mesh.units);
+  auto gm = mesh::gather_to_rank0(*md.mesh);
+  io::write_provenance(out, "stress", md.units);
   io::write_mesh(out, gm);
-  const auto nn = static_cast<hsize_t>(md.lm.n_global_nodes), ne = static_cast<hsize_t>(md.lm.n_global_elements);
+  const auto nn = static_cast<hsize_t>(md.mesh->n_global_nodes), ne = static_cast<hsize_t>(md.mesh->n_global_elements);
   std::vector<double> ug;  // u in the mesh's global node order (rank 0)
   std::int64_t max_node = -1;
   double max_nodal = 0.0;

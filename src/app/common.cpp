@@ -192,75 +192,52 @@ bool help_requested() {
   return h;
 }
 
-Model build_model(MPI_Comm comm, const CommonOptions& o, bool allow_matrices) {
+Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh) {
   MORSE_CHECK(o.error.empty(), o.error);
-  MORSE_CHECK(allow_matrices || !o.matrices_given(),
-              "-matrices_K/-matrices_M/-matrices_C/-matrices_dofmap are read by reduce and select only; this command "
-              "needs a mesh (-mesh)");
+  MORSE_CHECK(!needs_mesh || !o.matrices_given(),
+              needs_mesh, "; -matrices_K/-matrices_M/-matrices_C/-matrices_dofmap give none (use -mesh)");
   MORSE_CHECK(!(o.matrices_given() && !o.mesh.empty()), "give either -mesh or -matrices_K/-matrices_M, not both");
-  Model md;
   if (o.matrices_given()) {
     MORSE_CHECK(o.set_materials.empty() && o.material.E < 0 && o.material.nu < 0 && o.material.rho < 0,
                 "-material_* options need a mesh: the matrices already hold the material");
     io::MatrixInput in = o.matrices;
     in.clamp = o.clamp;
     in.node_sets = o.node_sets;
+    in.units = o.units;
+    Model md;
     {
       StageTimer t(comm, "ReadMatrices");
-      md.mm = io::read_matrix_model(comm, in);
+      md = io::matrix_model(comm, in);
     }
-    md.from_matrices = true;
-    md.ops.K = std::move(md.mm.K);
-    md.ops.M = std::move(md.mm.M);
-    md.dofs.comm = comm;
-    md.dofs.first = md.mm.first;
-    md.dofs.n_owned = md.mm.n_owned;
-    md.dofs.n_global = md.mm.n_global;
-    md.dofs.n_clamped_global = md.mm.n_rows_file - md.mm.n_global;
-    md.lm.comm = comm;
-    md.lm.mesh.units = o.units.empty() ? "unknown" : o.units;
-    md.lm.mesh.source = md.mm.source;
     MatInfo ik, im;
-    MORSE_CALL(MatGetInfo(md.ops.K.get(), MAT_GLOBAL_SUM, &ik));
-    MORSE_CALL(MatGetInfo(md.ops.M.get(), MAT_GLOBAL_SUM, &im));
+    MORSE_CALL(MatGetInfo(md.K.get(), MAT_GLOBAL_SUM, &ik));
+    MORSE_CALL(MatGetInfo(md.M.get(), MAT_GLOBAL_SUM, &im));
     print0(comm, "morse: matrices K %s (%.0f entries), M %s (%.0f entries)%s%s: %lld rows, %lld clamped, %lld free\n",
-           o.matrices.K.c_str(), ik.nz_used, o.matrices.M.c_str(), im.nz_used, md.mm.C ? ", C " : "",
-           md.mm.C ? o.matrices.C.c_str() : "", (long long)md.mm.n_rows_file, (long long)md.dofs.n_clamped_global,
-           (long long)md.dofs.n_global);
+           o.matrices.K.c_str(), ik.nz_used, o.matrices.M.c_str(), im.nz_used, md.C ? ", C " : "",
+           md.C ? o.matrices.C.c_str() : "", (long long)(md.dofs.n_global + md.dofs.n_clamped_global),
+           (long long)md.dofs.n_clamped_global, (long long)md.dofs.n_global);
     print0(comm, "morse: symmetry: max|K - K^T| / max|K| = %.3g, max|M - M^T| / max|M| = %.3g (symmetrized)\n",
-           md.mm.asymmetry_K, md.mm.asymmetry_M);
+           md.asymmetry_K, md.asymmetry_M);
     return md;
   }
-  MORSE_CHECK(!o.mesh.empty(), allow_matrices ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
-                                              : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
-  {
-    StageTimer t(comm, "ReadDistribute");
-    md.lm = mesh::read_and_distribute(comm, o.mesh, o.skip_unsupported);
-    if (!o.units.empty()) md.lm.mesh.units = o.units;
-    for (const auto& sm : o.set_materials) mesh::assign_set_material(&md.lm.mesh, sm);
-    for (const auto& [name, ids] : o.node_sets) mesh::add_node_set(&md.lm, name, ids, "-mesh_node_set_" + name);
-  }
-  {
-    StageTimer t(comm, "NumberDofs");
-    md.dofs = fe::number_dofs(md.lm, o.clamp);
-  }
-  md.ops = fe::assemble(md.lm, md.dofs, o.material);
+  MORSE_CHECK(!o.mesh.empty(), !needs_mesh ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
+                                           : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
+  fe::MeshInput in;
+  in.path = o.mesh;
+  in.units = o.units;
+  in.skip_unsupported = o.skip_unsupported;
+  in.clamp = o.clamp;
+  in.material = o.material;
+  in.set_materials = o.set_materials;
+  in.node_sets = o.node_sets;
+  Model md = fe::mesh_model(comm, in);
   int size = 1;
   MPI_Comm_size(comm, &size);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements on %d rank(s)\n", o.mesh.c_str(),
-         md.lm.mesh.units.c_str(), (long long)md.lm.n_global_nodes, (long long)md.lm.n_global_elements, size);
+         md.units.c_str(), (long long)md.mesh->n_global_nodes, (long long)md.mesh->n_global_elements, size);
   print0(comm, "morse: %lld free DOFs, %lld clamped; volume %.6g, mass %.6g\n", (long long)md.dofs.n_global,
-         (long long)md.dofs.n_clamped_global, md.ops.volume, md.ops.mass);
+         (long long)md.dofs.n_clamped_global, md.volume, md.mass);
   return md;
-}
-
-cb::CBResult craig_bampton(const Model& md, const cb::CBSettings& s) {
-  if (!md.from_matrices) return cb::craig_bampton(md.lm, md.dofs, md.ops.K.get(), md.ops.M.get(), s);
-  return cb::craig_bampton(md.mm, md.ops.K.get(), md.ops.M.get(), s);
-}
-
-UVec sign_reference(const Model& md) {
-  return md.from_matrices ? cb::sign_reference(md.mm) : cb::sign_reference(md.lm, md.dofs);
 }
 
 void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group) {
@@ -284,31 +261,54 @@ void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::st
 }
 
 void write_model(io::H5Output& out, const Model& md) {
-  if (!md.from_matrices) {
-    auto gm = mesh::gather_to_rank0(md.lm);
+  if (md.mesh) {
+    auto gm = mesh::gather_to_rank0(*md.mesh);
     io::write_mesh(out, gm);
-    write_node_sets(out, md.lm, "/mesh/node_sets");
+    write_node_sets(out, *md.mesh, "/mesh/node_sets");
     return;
   }
   std::vector<std::int64_t> node, comp;
-  io::gather_labels(md.mm, &node, &comp);
+  fe::gather_labels(md.dofs, &node, &comp);
   out.write("/dofs/node", node);
   out.write("/dofs/component", comp);
   out.attribute("/dofs", "description",
                 "matrix input: node id and component (1..6) of every free row of K and M, in row order");
-  out.attribute("/dofs", "source", md.mm.source);
-  out.attribute_int("/dofs", "n_rows_file", md.mm.n_rows_file);
+  out.attribute("/dofs", "source", md.source);
+  out.attribute_int("/dofs", "n_rows_file", md.dofs.n_global + md.dofs.n_clamped_global);
 }
 
 void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
                          PetscInt count) {
   // One mode at a time: rank 0 never holds more than one gathered mode (4 MB for 170k nodes,
   // against 4 GB for 1000 modes at once).
-  out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.lm.n_global_nodes), 3});
+  if (!md.mesh) {
+    out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.dofs.n_global)});
+    for (PetscInt j = 0; j < count; ++j) {
+      Vec x;
+      MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
+      VecScatter sc;
+      Vec all;
+      MORSE_CALL(VecScatterCreateToZero(x, &sc, &all));
+      MORSE_CALL(VecScatterBegin(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+      MORSE_CALL(VecScatterEnd(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
+      MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
+      PetscInt n = 0;
+      const PetscScalar* a;
+      MORSE_CALL(VecGetLocalSize(all, &n));
+      MORSE_CALL(VecGetArrayRead(all, &a));
+      std::vector<double> row(a, a + n);
+      MORSE_CALL(VecRestoreArrayRead(all, &a));
+      MORSE_CALL(VecScatterDestroy(&sc));
+      MORSE_CALL(VecDestroy(&all));
+      out.write_row(name, static_cast<hsize_t>(j), row);
+    }
+    return;
+  }
+  out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
   for (PetscInt j = 0; j < count; ++j) {
     Vec x;
     MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
-    auto nodal = io::gather_nodal(md.lm, md.dofs, x);
+    auto nodal = io::gather_nodal(*md.mesh, md.dofs, x);
     MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
     out.write_row(name, static_cast<hsize_t>(j), nodal);
   }
@@ -434,7 +434,7 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o) {
 }
 
 std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
-                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o) {
+                                                          const fe::DofLayout& dofs, const LoadHistoryOptions& o) {
   if (o.spec.empty()) return nullptr;
   StageTimer t(comm, "LoadHistory");
   dyn::LoadTable table;

@@ -20,7 +20,7 @@
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
-#include "morse/io/matrices.hpp"
+#include "morse/io/matrix_model.hpp"
 #include "morse/mesh/mesh.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/sim/sim.hpp"
@@ -39,7 +39,7 @@ struct CommonOptions {
   std::string error;  ///< a bad option value, raised by build_model (after -help)
   std::string out;
   /// Assembled operators instead of a mesh (-matrices_K, -matrices_M, -matrices_C,
-  /// -matrices_dofmap, -matrices_symmetry_tol); reduce and select only.
+  /// -matrices_dofmap, -matrices_symmetry_tol); the commands that need only K and M.
   io::MatrixInput matrices;
   bool matrices_given() const { return !matrices.K.empty() || !matrices.M.empty() || !matrices.C.empty() || !matrices.dofmap.empty(); }
 };
@@ -52,23 +52,12 @@ void check_options(MPI_Comm comm, bool early);
 
 bool help_requested();
 
-struct Model {
-  mesh::LocalMesh lm;
-  fe::DofMap dofs;
-  fe::Operators ops;
-  /// Matrix input (-matrices_*): no mesh; K and M are moved to ops, lm is empty, dofs holds the
-  /// row layout only (node_dof empty), mm the row labels, sets and C.
-  bool from_matrices = false;
-  io::MatrixModel mm;
-};
+using fe::Model;
 
-/// The model of a mesh (-mesh) or, if allow_matrices, of assembled operators (-matrices_*).
-Model build_model(MPI_Comm comm, const CommonOptions& o, bool allow_matrices = false);
-/// The Craig-Bampton superelement of either kind of model (boundary: a node set of the mesh, or a
-/// row set of the matrices). Collective.
-cb::CBResult craig_bampton(const Model& md, const cb::CBSettings& s);
-/// Sign-reference vector of the model's free DOFs (independent of the partition). Collective.
-UVec sign_reference(const Model& md);
+/// The model of a mesh (-mesh) or of assembled operators (-matrices_*), built by the library
+/// (fe::mesh_model, io::matrix_model) and described on rank 0. needs_mesh: why this command
+/// needs a mesh (then matrix input is refused with that reason), or null if matrices will do.
+Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh = nullptr);
 /// The model description of an output file: /mesh (mesh input) or /dofs (matrix input: the node
 /// id and component of every free row, and the matrix files). Collective.
 void write_model(io::H5Output& out, const Model& md);
@@ -77,6 +66,8 @@ void write_model(io::H5Output& out, const Model& md);
 /// /mesh/node_sets, read back by `morse rampup` for bearing and clamp nodes). Collective.
 void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group);
 
+/// Columns first .. first + count - 1 of V as dataset `name`: [mode][node][x,y,z] for a mesh
+/// model (0 at clamped DOFs), [mode][row] for a matrix model (rows as /dofs). Collective.
 void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
                          PetscInt count);
 
@@ -127,7 +118,7 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o);
 /// Prints a one-line summary. Throws collectively on bad input (the reader's message, prefixed by
 /// the option). Collective.
 std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
-                                                          const fe::DofMap& dofs, const LoadHistoryOptions& o);
+                                                          const fe::DofLayout& dofs, const LoadHistoryOptions& o);
 
 /// A comma-separated list of node sets from option `name` (empty if not given).
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,

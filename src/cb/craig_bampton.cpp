@@ -20,15 +20,14 @@ namespace {
 struct BoundaryNode {
   std::int64_t id;
   std::int64_t global;
-  PetscInt dof[3];
 };
 
-// Gathers the boundary nodes (owned copies) on every rank, sorted by node id.
-std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs,
-                                          const std::string& set) {
+// The nodes of a mesh's boundary set on every rank, sorted by id (owned copies gathered), after
+// the mesh's own checks: the set exists and is not empty, and no DOF of its nodes is clamped.
+std::vector<BoundaryNode> mesh_boundary_nodes(const mesh::LocalMesh& lm, const fe::DofLayout& dofs,
+                                              const std::string& set) {
   const auto& m = lm.mesh;
-  std::string err = set.empty() ? "no boundary set given (-boundary SET)"
-                                 : mesh::check_node_set(lm, set, "boundary node set");
+  std::string err = mesh::check_node_set(lm, set, "boundary node set");
   collective_check(lm.comm, err);
   auto it = m.node_sets.find(set);
   int rank = 0, size = 1;
@@ -37,14 +36,11 @@ std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::D
   std::vector<BoundaryNode> mine;
   for (auto k : it->second) {
     if (lm.node_owner[k] != rank) continue;
-    BoundaryNode b{m.node_ids[k], lm.global_node[k], {}};
-    for (int d = 0; d < 3; ++d) {
-      b.dof[d] = dofs.node_dof[3 * k + d];
-      if (b.dof[d] < 0 && err.empty())
-        err = cat("node ", b.id, " of boundary set '", set, "' has a clamped DOF (direction ", "xyz"[d],
+    for (int d = 0; d < 3; ++d)
+      if (dofs.node_dof[3 * k + d] < 0 && err.empty())
+        err = cat("node ", m.node_ids[k], " of boundary set '", set, "' has a clamped DOF (direction ", "xyz"[d],
                   "); a boundary node cannot be clamped");
-    }
-    mine.push_back(b);
+    mine.push_back({m.node_ids[k], lm.global_node[k]});
   }
   collective_check(lm.comm, err);
   int n = static_cast<int>(mine.size() * sizeof(BoundaryNode));
@@ -52,8 +48,7 @@ std::vector<BoundaryNode> gather_boundary(const mesh::LocalMesh& lm, const fe::D
   MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, lm.comm);
   for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
   std::vector<BoundaryNode> all((displs[size - 1] + counts[size - 1]) / sizeof(BoundaryNode));
-  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE,
-                 lm.comm);
+  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, lm.comm);
   std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   return all;
 }
@@ -99,70 +94,50 @@ void symmetrize(std::vector<double>& A, PetscInt n) {
 
 }  // namespace
 
-UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs) {
+UVec sign_reference(const fe::Model& md) {
+  const auto& dofs = md.dofs;
   UVec w;
-  MORSE_CALL(VecCreateMPI(lm.comm, dofs.n_owned, dofs.n_global, w.ptr()));
+  MORSE_CALL(VecCreateMPI(dofs.comm, dofs.n_owned, dofs.n_global, w.ptr()));
   PetscScalar* a;
   MORSE_CALL(VecGetArray(w.get(), &a));
-  int rank = 0;
-  MPI_Comm_rank(lm.comm, &rank);
-  for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
-    if (lm.node_owner[k] != rank) continue;
-    for (int d = 0; d < 3; ++d) {
-      PetscInt g = dofs.node_dof[3 * k + d];
-      if (g < 0) continue;
-      // A fixed, irregular positive weight (golden-ratio sequence) per (node, direction).
-      double x = std::fmod(0.6180339887498949 * static_cast<double>(3 * lm.global_node[k] + d + 1), 1.0);
-      a[g - dofs.first] = 0.5 + x;
+  if (md.mesh) {
+    const auto& lm = *md.mesh;
+    int rank = 0;
+    MPI_Comm_rank(lm.comm, &rank);
+    for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
+      if (lm.node_owner[k] != rank) continue;
+      for (int d = 0; d < 3; ++d) {
+        PetscInt g = dofs.node_dof[3 * k + d];
+        if (g < 0) continue;
+        // A fixed, irregular positive weight (golden-ratio sequence) per (node, direction).
+        double x = std::fmod(0.6180339887498949 * static_cast<double>(3 * lm.global_node[k] + d + 1), 1.0);
+        a[g - dofs.first] = 0.5 + x;
+      }
     }
+  } else {
+    for (PetscInt r = 0; r < dofs.n_owned; ++r)
+      a[r] = 0.5 + std::fmod(0.6180339887498949 * static_cast<double>(dofs.first + r + 1), 1.0);
   }
   MORSE_CALL(VecRestoreArray(w.get(), &a));
   return w;
 }
 
-UVec sign_reference(const io::MatrixModel& mm) {
-  UVec w;
-  MORSE_CALL(VecCreateMPI(mm.comm, mm.n_owned, mm.n_global, w.ptr()));
-  PetscScalar* a;
-  MORSE_CALL(VecGetArray(w.get(), &a));
-  for (PetscInt r = 0; r < mm.n_owned; ++r)
-    a[r] = 0.5 + std::fmod(0.6180339887498949 * static_cast<double>(mm.first + r + 1), 1.0);
-  MORSE_CALL(VecRestoreArray(w.get(), &a));
-  return w;
-}
-
-CBResult craig_bampton(const io::MatrixModel& mm, Mat K, Mat M, const CBSettings& s) {
-  std::string err = s.boundary_set.empty() ? "no boundary set given (-boundary SET)" : "";
-  collective_check(mm.comm, err);
-  auto rows = io::set_rows(mm, s.boundary_set, "boundary set");
-  CBResult b;
-  b.n_b = static_cast<PetscInt>(rows.size());
-  for (const auto& r : rows) {
-    b.boundary_dofs.push_back(r.row);
-    b.boundary_dof_node.push_back(r.node);
-    b.boundary_dof_component.push_back(r.component);
-    if (b.boundary_node_ids.empty() || b.boundary_node_ids.back() != r.node) b.boundary_node_ids.push_back(r.node);
-  }
-  UVec w = sign_reference(mm);
-  return craig_bampton(K, M, w.get(), s, std::move(b));
-}
-
-void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out) {
-  auto boundary = gather_boundary(lm, dofs, set);
-  out->n_b = static_cast<PetscInt>(3 * boundary.size());
-  out->boundary_node_ids.clear();
+void set_boundary(const fe::Model& md, const std::string& set, CBResult* out) {
+  collective_check(md.dofs.comm, set.empty() ? "no boundary set given (-boundary SET)" : "");
   out->boundary_global_nodes.clear();
+  if (md.mesh)
+    for (const auto& b : mesh_boundary_nodes(*md.mesh, md.dofs, set)) out->boundary_global_nodes.push_back(b.global);
+  const auto rows = fe::set_rows(md.dofs, set, "boundary set");
+  out->n_b = static_cast<PetscInt>(rows.size());
+  out->boundary_node_ids.clear();
   out->boundary_dofs.clear();
   out->boundary_dof_node.clear();
   out->boundary_dof_component.clear();
-  for (const auto& b : boundary) {
-    out->boundary_node_ids.push_back(b.id);
-    out->boundary_global_nodes.push_back(b.global);
-    out->boundary_dofs.insert(out->boundary_dofs.end(), b.dof, b.dof + 3);
-    for (int d = 0; d < 3; ++d) {
-      out->boundary_dof_node.push_back(b.id);
-      out->boundary_dof_component.push_back(d + 1);
-    }
+  for (const auto& r : rows) {
+    out->boundary_dofs.push_back(r.row);
+    out->boundary_dof_node.push_back(r.node);
+    out->boundary_dof_component.push_back(r.component);
+    if (out->boundary_node_ids.empty() || out->boundary_node_ids.back() != r.node) out->boundary_node_ids.push_back(r.node);
   }
 }
 
@@ -187,17 +162,13 @@ void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out) {
   }
 }
 
-CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
-                       const CBSettings& s) {
-  CBResult out;
-  set_boundary(lm, dofs, s.boundary_set, &out);
-  UVec w = sign_reference(lm, dofs);
-  return craig_bampton(K, M, w.get(), s, std::move(out));
-}
+namespace {
 
+// The Craig-Bampton core on the free-DOF operators K and M (same row layout), with the boundary
+// layout of out (set_boundary) and the sign-reference vector w. Collective.
 CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
-  fe::DofMap dofs;  // the row layout of K
+  fe::DofLayout dofs;  // the row layout of K
   {
     PetscInt rend = 0;
     MORSE_CALL(MatGetOwnershipRange(K, &dofs.first, &rend));
@@ -324,6 +295,15 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   project(comm, K, M, s.damping, &out);
   if (!s.keep_basis) out.T.reset();
   return out;
+}
+
+}  // namespace
+
+CBResult craig_bampton(const fe::Model& md, const CBSettings& s) {
+  CBResult out;
+  set_boundary(md, s.boundary_set, &out);
+  UVec w = sign_reference(md);
+  return craig_bampton(md.K.get(), md.M.get(), w.get(), s, std::move(out));
 }
 
 }  // namespace morse::cb

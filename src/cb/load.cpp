@@ -88,13 +88,15 @@ void bcast(MPI_Comm comm, std::vector<T>& v, MPI_Datatype type) {
 
 }  // namespace
 
-CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
-                    const std::string& boundary_set, double damping) {
+CBResult load_basis(const fe::Model& md, const std::string& path, const std::string& boundary_set, double damping) {
+  MORSE_CHECK(md.mesh, "a superelement basis file (", path, ") needs a mesh model");
+  const auto& lm = *md.mesh;
+  const auto& dofs = md.dofs;
   MPI_Comm comm = lm.comm;
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   CBResult out;
-  set_boundary(lm, dofs, boundary_set, &out);
+  set_boundary(md, boundary_set, &out);
   StageTimer t(comm, "LoadBasis");
   std::unique_ptr<Reader> rd;
   std::vector<std::int64_t> ids, bnodes;
@@ -155,7 +157,7 @@ CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Ma
   MORSE_CALL(MatDenseRestoreArrayWrite(out.T.get(), &tt));
   MORSE_CALL(MatAssemblyBegin(out.T.get(), MAT_FINAL_ASSEMBLY));
   MORSE_CALL(MatAssemblyEnd(out.T.get(), MAT_FINAL_ASSEMBLY));
-  project(comm, K, M, damping, &out);
+  project(comm, md.K.get(), md.M.get(), damping, &out);
   return out;
 }
 

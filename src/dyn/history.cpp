@@ -275,7 +275,7 @@ LoadTable read_load_table(MPI_Comm comm, const std::string& spec) {
   return t;
 }
 
-LoadHistory::LoadHistory(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const LoadTable& table, Outside outside,
+LoadHistory::LoadHistory(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const LoadTable& table, Outside outside,
                          double scale)
     : outside_(outside), n_nodes_(table.n_nodes()) {
   std::string err = table.validate();

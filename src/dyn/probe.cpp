@@ -6,7 +6,7 @@
 
 namespace morse::dyn {
 
-SetProbe::SetProbe(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set)
+SetProbe::SetProbe(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& set)
     : comm_(lm.comm), name_(set) {
   collective_check(lm.comm, mesh::check_node_set(lm, set, "monitored node set"));
   int rank = 0;

@@ -8,6 +8,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/fe/element.hpp"
+#include "morse/mesh/mesh.hpp"
 
 namespace morse::fe {
 
@@ -42,7 +43,7 @@ void fetch_ghost_dofs(const mesh::LocalMesh& lm, std::vector<PetscInt>& node_dof
 
 }  // namespace
 
-DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets) {
+DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& clamp_sets) {
   int rank = 0;
   MPI_Comm_rank(lm.comm, &rank);
   const auto& m = lm.mesh;
@@ -65,7 +66,7 @@ DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& cl
   }
   collective_check(lm.comm, err);
 
-  DofMap dm;
+  DofLayout dm;
   dm.comm = lm.comm;
   dm.node_dof.assign(3 * n, -1);
   PetscInt count = 0;
@@ -84,12 +85,89 @@ DofMap number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>& cl
   if (rank == 0) dm.first = 0;
   MPI_Allreduce(&count, &dm.n_global, 1, MPIU_INT, MPI_SUM, lm.comm);
   MPI_Allreduce(&n_clamped, &dm.n_clamped_global, 1, MPI_INT64_T, MPI_SUM, lm.comm);
+  dm.node.resize(count);
+  dm.component.resize(count);
   for (std::int64_t k = 0; k < n; ++k)
     if (lm.node_owner[k] == rank)
       for (int d = 0; d < 3; ++d)
-        if (dm.node_dof[3 * k + d] >= 0) dm.node_dof[3 * k + d] += dm.first;
+        if (PetscInt& g = dm.node_dof[3 * k + d]; g >= 0) {
+          dm.node[g] = m.node_ids[k];
+          dm.component[g] = d + 1;
+          g += dm.first;
+        }
+  for (const auto& [name, members] : m.node_sets) {
+    auto& rows = dm.sets[name];
+    for (auto k : members)
+      if (lm.node_owner[k] == rank)
+        for (int d = 0; d < 3; ++d)
+          if (dm.node_dof[3 * k + d] >= 0) rows.push_back(dm.node_dof[3 * k + d]);
+    std::sort(rows.begin(), rows.end());
+  }
   fetch_ghost_dofs(lm, dm.node_dof);
   return dm;
+}
+
+std::vector<LabeledRow> set_rows(const DofLayout& dofs, const std::string& set, const std::string& role) {
+  auto it = dofs.sets.find(set);
+  std::string list;
+  for (const auto& [s, rows] : dofs.sets) list += (list.empty() ? "" : ", ") + s;
+  MORSE_CHECK(it != dofs.sets.end(), role, " '", set,
+              "' is not a row set of the DOF map or a -mesh_node_set_ option (sets: ", list.empty() ? "none" : list,
+              ")");
+  std::vector<LabeledRow> mine;
+  for (auto r : it->second) mine.push_back({r, dofs.node[r - dofs.first], dofs.component[r - dofs.first]});
+  int size = 1;
+  MPI_Comm_size(dofs.comm, &size);
+  int bytes = static_cast<int>(mine.size() * sizeof(LabeledRow));
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Allgather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, dofs.comm);
+  for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+  std::vector<LabeledRow> all((displs[size - 1] + counts[size - 1]) / sizeof(LabeledRow));
+  MPI_Allgatherv(mine.data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, dofs.comm);
+  MORSE_CHECK(!all.empty(), role, " '", set, "' is empty (after the clamp)");
+  std::sort(all.begin(), all.end(), [](const LabeledRow& a, const LabeledRow& b) {
+    return a.node != b.node ? a.node < b.node : a.component < b.component;
+  });
+  return all;
+}
+
+void gather_labels(const DofLayout& dofs, std::vector<std::int64_t>* node, std::vector<std::int64_t>* component) {
+  int size = 1, rank = 0;
+  MPI_Comm_size(dofs.comm, &size);
+  MPI_Comm_rank(dofs.comm, &rank);
+  int m = static_cast<int>(dofs.n_owned);
+  std::vector<int> counts(size), displs(size, 0);
+  MPI_Gather(&m, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, dofs.comm);
+  for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+  node->assign(rank == 0 ? dofs.n_global : 0, 0);
+  component->assign(rank == 0 ? dofs.n_global : 0, 0);
+  std::vector<std::int64_t> comp(dofs.component.begin(), dofs.component.end());
+  MPI_Gatherv(dofs.node.data(), m, MPI_INT64_T, node->data(), counts.data(), displs.data(), MPI_INT64_T, 0, dofs.comm);
+  MPI_Gatherv(comp.data(), m, MPI_INT64_T, component->data(), counts.data(), displs.data(), MPI_INT64_T, 0,
+              dofs.comm);
+}
+
+Model mesh_model(MPI_Comm comm, const MeshInput& in) {
+  Model md;
+  md.source = in.path;
+  {
+    StageTimer t(comm, "ReadDistribute");
+    md.mesh = mesh::read_and_distribute(comm, in.path, in.skip_unsupported);
+    if (!in.units.empty()) md.mesh->mesh.units = in.units;
+    for (const auto& sm : in.set_materials) mesh::assign_set_material(&md.mesh->mesh, sm);
+    for (const auto& [name, ids] : in.node_sets) mesh::add_node_set(&*md.mesh, name, ids, "-mesh_node_set_" + name);
+  }
+  md.units = md.mesh->mesh.units;
+  {
+    StageTimer t(comm, "NumberDofs");
+    md.dofs = number_dofs(*md.mesh, in.clamp);
+  }
+  auto ops = assemble(*md.mesh, md.dofs, in.material);
+  md.K = std::move(ops.K);
+  md.M = std::move(ops.M);
+  md.volume = ops.volume;
+  md.mass = ops.mass;
+  return md;
 }
 
 namespace {
@@ -102,7 +180,7 @@ struct Pattern {
 // The exact sparsity of K on the owned rows: DOFs (r, c) couple when their nodes share an
 // element. Ghost nodes' couplings found on other ranks are sent to the owners, with the
 // neighbours' DOF numbers (an owner need not know a remote neighbour).
-Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofMap& dofs) {
+Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofLayout& dofs) {
   int rank = 0, size = 1;
   MPI_Comm_rank(lm.comm, &rank);
   MPI_Comm_size(lm.comm, &size);
@@ -186,7 +264,7 @@ std::string check_material(const mesh::Material& m) {
 
 }  // namespace
 
-Operators assemble(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback) {
+Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback) {
   const auto& m = lm.mesh;
   const std::int64_t ne = m.num_elements();
   // Validate materials before any collective matrix work.

@@ -103,7 +103,7 @@ void displacement_gradient(int n, const double* u, const double* g, double* H) {
 
 }  // namespace
 
-Svk::Svk(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback, Mat K)
+Svk::Svk(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback, Mat K)
     : comm_(lm.comm), K_(K) {
   StageTimer stage(comm_, "SvkSetup");
   const auto& m = lm.mesh;

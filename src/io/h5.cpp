@@ -334,7 +334,7 @@ void H5SliceWriter::close() {
   check(ok, "(parallel close)");
 }
 
-void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file,
                       const std::string& dataset, Vec x) {
   int rank = 0;
   MPI_Comm_rank(lm.comm, &rank);
@@ -510,7 +510,7 @@ bool read_double_row(const std::string& file, const std::string& name, std::int6
   return read_any(file, name, H5T_NATIVE_DOUBLE, out, &dims, error, row);
 }
 
-UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file,
                    const std::string& dataset) {
   int rank = 0;
   MPI_Comm_rank(lm.comm, &rank);
@@ -605,7 +605,7 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std:
   return X;
 }
 
-std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x) {
+std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Vec x) {
   int rank = 0, size = 1;
   MPI_Comm_rank(lm.comm, &rank);
   MPI_Comm_size(lm.comm, &size);

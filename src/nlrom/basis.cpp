@@ -292,8 +292,12 @@ std::vector<std::string> cb_labels(const cb::CBResult& c) {
 
 }  // namespace
 
-Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
-                  const BasisSettings& s) {
+Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& s) {
+  MORSE_CHECK(md.mesh, "nlrom: the nonlinear basis needs a mesh model");
+  MORSE_CHECK(svk.stiffness() == md.K.get(), "nlrom: the SVK forces must be built on the model's K");
+  const auto& lm = *md.mesh;
+  const auto& dofs = md.dofs;
+  Mat M = md.M.get();
   MPI_Comm comm = lm.comm;
   const auto t0 = std::chrono::steady_clock::now();
   StageTimer stage(comm, "Basis");
@@ -311,7 +315,7 @@ Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::S
   {
     // Size check before any work: r must not exceed the free DOFs.
     cb::CBResult probe;
-    cb::set_boundary(lm, dofs, s.boundary_set, &probe);
+    cb::set_boundary(md, s.boundary_set, &probe);
     const PetscInt r = probe.n_b + cs.n_fixed + want_extra;
     MORSE_CHECK(r <= dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", cs.n_fixed,
                 " fixed-interface modes + ", want_extra, " others) is larger than the model (", dofs.n_global,
@@ -326,7 +330,7 @@ Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::S
     MORSE_CHECK(s.training && !s.training->empty() && s.training_tfinal > 0 && s.training_dt > 0,
                 "nlrom: -nlrom_basis cbmd needs a training load (-load_sets ...) and -nlrom_training_tfinal T > 0");
   }
-  b.cb = cb::craig_bampton(lm, dofs, K, M, cs);
+  b.cb = cb::craig_bampton(md, cs);
   b.n_b = b.cb.n_b;
   b.n_fixed = b.cb.n_phi;
   const PetscInt rcb = b.cb.n();

@@ -1,7 +1,9 @@
 // morse/cb/craig_bampton.hpp: the Craig–Bampton superelement (seed 000 §2.1, eq. 1–6; seed 003
 // §3.2.2, eq. 17–19).
 //
-// The boundary (master) DOFs are the three translations of every node of a node set. With the
+// The boundary (master) DOFs are the free rows of a named set of the model's layout: the three
+// translations of every node of a node set of a mesh, or the rows of a row set of a matrix model
+// (fe::DofLayout::sets, components 4..6 included). With the
 // interior (slave) DOFs i and boundary DOFs b of the clamped model:
 //   constraint modes   Psi = -K_ii^{-1} K_ib       (eq. 3)  one MUMPS Cholesky factorization of
 //                                                   K_ii and one block solve (MatMatSolve)
@@ -17,12 +19,11 @@
 #include <vector>
 
 #include "morse/fe/model.hpp"
-#include "morse/io/matrices.hpp"
 
 namespace morse::cb {
 
 struct CBSettings {
-  std::string boundary_set;   ///< node set of the interface
+  std::string boundary_set;   ///< node set (mesh) or row set (matrices) of the interface
   PetscInt n_fixed = -1;      ///< number of fixed-interface modes (-cb_num_fixed_modes), or
   double fmax_hz = -1;        ///< all fixed-interface modes below this frequency (-cb_fmax)
   double damping = 0.0;       ///< modal damping ratio xi of the fixed-interface modes
@@ -50,44 +51,27 @@ struct CBResult {
   PetscInt n() const { return n_b + n_phi; }
 };
 
-/// Builds the superelement. K and M are the assembled operators of the model whose clamped DOFs
-/// are already eliminated (dofs). Throws (collectively) for a missing or empty boundary set, a
-/// boundary node whose DOFs are clamped, a singular K_ii, or more modes than interior DOFs.
-/// Collective.
-CBResult craig_bampton(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M,
-                       const CBSettings& s);
+/// Builds the superelement of a model (mesh or matrices) on the boundary set s.boundary_set.
+/// Throws (collectively) for a missing or empty boundary set, a boundary node whose DOFs are
+/// clamped (mesh), a singular K_ii, or more modes than interior DOFs. Collective.
+CBResult craig_bampton(const fe::Model& md, const CBSettings& s);
 
-/// The Craig–Bampton core on any operators: K and M are the free-DOF operators (MPIAIJ, same
-/// row layout), `boundary` holds the boundary layout (n_b, boundary_dofs in reduced order and
-/// their labels; the node-level fields may be empty), and w is the sign-reference vector (same
-/// layout as K; it must not depend on the partition). Collective.
-CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult boundary);
-
-/// The superelement of a model given by its matrices (io/matrices.hpp; K and M with mm's row
-/// layout): the boundary DOFs are the rows of row set s.boundary_set, ordered by node id then
-/// component (components 4..6 included). Collective.
-CBResult craig_bampton(const io::MatrixModel& mm, Mat K, Mat M, const CBSettings& s);
-
-/// Sign-reference vector of a matrix model: a weight per free row that depends on its global
-/// number only. Collective.
-UVec sign_reference(const io::MatrixModel& mm);
-
-/// Fills the boundary layout of out (n_b, boundary_node_ids, boundary_global_nodes,
-/// boundary_dofs) from a node set. Throws (collectively) for a missing or empty set or a clamped
-/// boundary node. Collective.
-void set_boundary(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set, CBResult* out);
+/// Fills the boundary layout of out (n_b, boundary_node_ids, boundary_dofs and their labels;
+/// boundary_global_nodes for a mesh model) from a named set of the model: the set's free rows
+/// ordered by node id then component. Throws (collectively) for a missing or empty set or
+/// (mesh) a clamped boundary node. Collective.
+void set_boundary(const fe::Model& md, const std::string& set, CBResult* out);
 
 /// Reduced operators from out->T (eq. 6): out->M = T^T M T, out->K = T^T K T (symmetrized) and
 /// the modal damping out->C. Collective.
 void project(MPI_Comm comm, Mat K, Mat M, double damping, CBResult* out);
 
 /// Rebuilds a superelement's basis from a `morse reduce -cb_write_basis` file (its constraint
-/// and fixed-interface modes as nodal fields) for the same mesh, and projects K and M on it.
-/// The file's mesh (node ids) and boundary nodes must match. Reads on rank 0 and scatters one
+/// and fixed-interface modes as nodal fields) for the same mesh model, and projects its K and M
+/// on it. The file's mesh (node ids) and boundary nodes must match. Reads on rank 0 and scatters one
 /// mode at a time. Throws (collectively) naming the file on any mismatch or missing dataset.
 /// Collective.
-CBResult load_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Mat K, Mat M, const std::string& path,
-                    const std::string& boundary_set, double damping);
+CBResult load_basis(const fe::Model& md, const std::string& path, const std::string& boundary_set, double damping);
 
 /// T^T A T for a sparse A and an MPIDENSE T (same row layout), symmetrized: row-major
 /// (cols of T)^2 on every rank. Collective.
@@ -97,8 +81,9 @@ std::vector<double> project_symmetric(MPI_Comm comm, Mat A, Mat T);
 /// ranks. Returns a row-major (cols of A) x (cols of B) matrix on every rank. Collective.
 std::vector<double> transpose_product(MPI_Comm comm, Mat A, Mat B);
 
-/// Reference vector for eigenvector signs: w(node, d) depends only on the global node index and
-/// direction, so mode signs do not depend on the partition. Collective.
-UVec sign_reference(const mesh::LocalMesh& lm, const fe::DofMap& dofs);
+/// Reference vector for eigenvector signs (layout of md.K): w(node, d) depends only on the
+/// global node index and direction (mesh model) or on the global row (matrix model), so mode
+/// signs do not depend on the partition. Collective.
+UVec sign_reference(const fe::Model& md);
 
 }  // namespace morse::cb

@@ -122,7 +122,7 @@ class LoadHistory {
   /// Collective. Throws (collectively) if the table does not validate or if a node id is not a
   /// node of the mesh (naming up to 10 of them and the table's source). Every rank keeps the
   /// columns of the nodes it owns only.
-  LoadHistory(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const LoadTable& table, Outside outside = Outside::Error,
+  LoadHistory(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const LoadTable& table, Outside outside = Outside::Error,
               double scale = 1.0);
   /// F += scale f(t) on the owned DOFs. Not collective (the same time on every rank gives the same
   /// verdict). Throws if t is outside the grid and outside() is Error.
@@ -152,7 +152,7 @@ class Loads {
  public:
   /// Throws (collectively) if a set does not exist (the message lists the sets), is empty, or
   /// a direction is zero. Loads on clamped DOFs are dropped (they are reactions).
-  Loads(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::vector<NodalLoad>& loads);
+  Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::vector<NodalLoad>& loads);
   /// F = f_e(t) (F has the DOF layout): the harmonic loads plus the tabulated history, if any.
   /// Collective.
   void evaluate(double t, Vec F) const;
@@ -180,7 +180,7 @@ class Loads {
 class SetProbe {
  public:
   /// Throws (collectively) if the set does not exist or is empty.
-  SetProbe(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& set);
+  SetProbe(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& set);
   /// Node ids of the set (file labels), ascending global node order. Rank 0 only.
   const std::vector<std::int64_t>& node_ids() const { return ids_; }
   /// x, y, z per node (n_nodes x 3, row-major) on rank 0; empty elsewhere. Clamped DOFs are 0.

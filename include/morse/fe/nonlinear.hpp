@@ -15,7 +15,7 @@
 // with g_a = grad N_a. Every integral uses the quadrature of the linear K (stiffness_rule), so
 // K_T(0) = K and g_nl(0) = 0 exactly. The strain energy is W = int (lambda/2 tr(E)^2 + mu E:E).
 //
-// Distribution: the same DOF numbering and clamp elimination as fe::assemble (DofMap), each rank
+// Distribution: the same DOF numbering and clamp elimination as fe::assemble (DofLayout), each rank
 // evaluates its own elements on its owned + ghost DOFs (one VecScatter) and contributions to
 // ghost DOFs are added to their owners. K_T reuses K's non-zero pattern.
 //
@@ -52,7 +52,7 @@ struct StrainEnergy {
 class Svk {
  public:
   /// Collective. Materials as in fe::assemble (mesh material, else `fallback`).
-  Svk(const mesh::LocalMesh& lm, const DofMap& dofs, const mesh::Material& fallback, Mat K);
+  Svk(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback, Mat K);
   ~Svk();
   Svk(const Svk&) = delete;
   Svk& operator=(const Svk&) = delete;

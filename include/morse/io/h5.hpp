@@ -105,7 +105,7 @@ class H5SliceWriter {
 /// DOFs of x by node id. Rank 0 reads and broadcasts (O(nodes) memory per rank). Throws
 /// (collectively) naming the file and dataset if either is missing, or if the file lacks a node
 /// of the mesh. Collective.
-void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file,
                       const std::string& dataset, Vec x);
 
 /// Reads the full-field rows of a `morse fom` snapshot dataset (e.g. /fom/snapshots/u, shaped
@@ -115,7 +115,7 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const s
 /// not matter. Every rank reads one row at a time (no rank holds the snapshot matrix). Throws
 /// (collectively) naming the file and dataset if either is missing or the file lacks a free DOF
 /// of the model. Collective.
-UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file,
+UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file,
                    const std::string& dataset);
 
 /// Serial reads of one dataset (any rank, no communication): the values and the shape. Return
@@ -141,7 +141,7 @@ bool read_double_row(const std::string& file, const std::string& name, std::int6
 
 /// Gathers a free-DOF vector into nodal displacements on rank 0: 3 values per global node in
 /// global node order, 0 for eliminated DOFs. Other ranks get an empty vector. Collective.
-std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofMap& dofs, Vec x);
+std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Vec x);
 
 /// Writes the standard provenance of every morse file: /meta (version, command line, options,
 /// units, date) and a units attribute at the root. Rank 0 data. Not collective.

@@ -1,6 +1,7 @@
-// morse/io/matrices.hpp: a model given by its assembled operators (Nastran DMAP export, another
-// FE code, or morse itself): parallel readers and writers of sparse matrices, the DOF map that
-// names each row, and the matrix model that `reduce` and `select` use instead of a mesh.
+// morse/io/matrices.hpp: the matrix formats of a model given by its assembled operators (Nastran
+// DMAP export, another FE code, or morse itself): parallel readers and writers of sparse
+// matrices and the DOF map that names each row. The model made of them (clamp, sets, symmetry
+// checks, labels) is io/matrix_model.hpp.
 //
 // Matrix files, chosen by extension (docs/user-guide.md "From Nastran"):
 //   .mtx .mm      MatrixMarket coordinate real|integer, general|symmetric (either triangle of a
@@ -29,7 +30,6 @@
 #include <cstdint>
 #include <map>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "morse/core/handle.hpp"
@@ -74,52 +74,6 @@ void write_dof_map(const std::string& path, const DofMapFile& map);
 
 /// The DOF map of a mesh model's free DOFs (row = global free DOF: node id, component 1..3) with
 /// every node set as a row set, on rank 0 (other ranks get an empty map). Collective.
-DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofMap& dofs);
-
-/// What a matrix model is made of (the -matrices_* options).
-struct MatrixInput {
-  std::string K, M, C;  ///< files (C optional)
-  std::string dofmap;   ///< DOF map file (optional)
-  std::vector<std::string> clamp;  ///< row sets (or node sets) whose rows are removed
-  /// Node sets given by node ids (-mesh_node_set_NAME): all rows of those nodes.
-  std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
-  double symmetry_tol = 1e-8;  ///< max |A - A^T| / max |A| accepted (then A is symmetrized)
-};
-
-/// A model given by its operators. K, M (and C) hold the free rows only (clamped rows removed),
-/// in contiguous row blocks; labels are those of the owned rows.
-struct MatrixModel {
-  MPI_Comm comm = MPI_COMM_NULL;
-  UMat K, M, C;
-  PetscInt first = 0, n_owned = 0, n_global = 0;
-  std::int64_t n_rows_file = 0;   ///< rows in the files (before the clamp)
-  std::vector<std::int64_t> node;  ///< node id per owned row
-  std::vector<int> component;      ///< component 1..6 per owned row
-  /// Row sets (free rows, global, ascending), known on every rank.
-  std::map<std::string, std::vector<PetscInt>> sets;
-  double asymmetry_K = 0, asymmetry_M = 0;  ///< measured max |A - A^T| / max |A|
-  std::string source;  ///< for messages and output
-};
-
-/// Reads K, M (and C), checks sizes and symmetry, reads the DOF map, applies the clamp and the
-/// node sets. Throws (collectively) naming the file or option on: a missing or malformed file,
-/// matrices of different sizes, a DOF map of another size, a nonsymmetric K or M (naming the worst
-/// entry by row, node and component), an unknown clamp set, a node set naming a node that has no
-/// row. Collective.
-MatrixModel read_matrix_model(MPI_Comm comm, const MatrixInput& in);
-
-/// Free rows of a named set with their labels, sorted by (node id, component): the boundary
-/// order of a superelement. Every rank gets the whole list. Throws (collectively) for an unknown
-/// or empty set, listing the sets. Collective.
-struct LabeledRow {
-  PetscInt row;
-  std::int64_t node;
-  int component;
-};
-std::vector<LabeledRow> set_rows(const MatrixModel& mm, const std::string& set, const std::string& role);
-
-/// Writes the labels of all free rows to rank 0 (in row order): node ids and components; other
-/// ranks get empty vectors. Collective.
-void gather_labels(const MatrixModel& mm, std::vector<std::int64_t>* node, std::vector<std::int64_t>* component);
+DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs);
 
 }  // namespace morse::io

@@ -120,10 +120,10 @@ UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& b
 /// V^T x, gathered on every rank (e.g. a reduced load pattern). Collective.
 std::vector<double> project_vector(Mat V, Vec x);
 
-/// Builds the basis. Throws (collectively) for a basis larger than the model, a missing
-/// snapshot file, or missing training settings. Collective.
-Basis build_basis(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const fe::Svk& svk, Mat M,
-                  const BasisSettings& s);
+/// Builds the basis of a mesh model; svk holds the model's forces (built on md.K). Throws
+/// (collectively) for a basis larger than the model, a missing snapshot file, or missing
+/// training settings. Collective.
+Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& s);
 
 /// The POD basis of a snapshot matrix X (n_free x n_s, MPIDENSE) by the method of snapshots:
 /// X^T X = U S^2 U^T (replicated, LAPACK), modes X U S^-1 for the n largest values, orthonormal

@@ -1,0 +1,38 @@
+// morse/io/matrix_model.hpp: a model given by its assembled operators instead of a mesh (Nastran
+// DMAP export, another FE code, or morse itself): K, M and optionally C in one of the matrix
+// formats of io/matrices.hpp, with the DOF map that names each row (docs/user-guide.md "From
+// Nastran"). The result is the same fe::Model as a mesh model's, without a mesh.
+#pragma once
+
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "morse/fe/model.hpp"
+
+namespace morse::io {
+
+/// What a matrix model is made of (the -matrices_* options).
+struct MatrixInput {
+  std::string K, M, C;  ///< files (C optional)
+  std::string dofmap;   ///< DOF map file (optional)
+  std::vector<std::string> clamp;  ///< row sets (or node sets) whose rows are removed
+  /// Node sets given by node ids (-mesh_node_set_NAME): all rows of those nodes.
+  std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
+  double symmetry_tol = 1e-8;  ///< max |A - A^T| / max |A| accepted (then A is symmetrized)
+  std::string units;           ///< unit system recorded in the output; empty: "unknown"
+};
+
+/// Reads K, M (and C), checks sizes and symmetry (then symmetrizes), reads the DOF map, applies
+/// the node sets and the clamp (the rows of the clamped sets are removed). The model's layout
+/// holds the free rows in contiguous blocks with their labels and row sets (the DOF map's sets,
+/// then the node sets); it has no mesh. Throws (collectively) naming the file or option on: a
+/// missing or malformed file, matrices of different sizes, a DOF map of another size, a
+/// nonsymmetric K or M (naming the worst entry by row, node and component), an unknown clamp set,
+/// a node set naming a node that has no row, a clamp that removes every row. Collective.
+fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in);
+
+}  // namespace morse::io
