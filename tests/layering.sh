@@ -15,9 +15,6 @@ set -u
 
 kOrder=(core mesh fe eigen cb io select dyn nlrom sim eval rampup app)
 
-# Includes that break the order today and are fixed by a pending change of issue 25, as
-# "<file> <module included>". Each line is removed when its change lands.
-kKnown=()
 
 check_tree() {
   local root=$1 fail=0 i m d
@@ -43,7 +40,7 @@ check_tree() {
   done
 
   # Every include of a module by a module.
-  local file line text rel from target used=()
+  local file line text rel from target
   while IFS= read -r hit; do
     file=${hit%%:*}
     hit=${hit#*:}
@@ -59,29 +56,10 @@ check_tree() {
     target=$(sed -E 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*("(morse\/)?|<morse\/)([^/">]+)\/.*/\3/' <<<"$text")
     [[ -n ${rank[$target]+x} && -n ${rank[$from]+x} ]] || continue
     ((rank[$target] <= rank[$from])) && continue
-    local known=0 k
-    for k in "${!kKnown[@]}"; do
-      if [[ ${kKnown[$k]} == "$rel $target" ]]; then
-        known=1
-        used[$k]=1
-      fi
-    done
-    if ((known)); then
-      echo "layering: known exception $rel:$line: $from includes $target (see kKnown)"
-      continue
-    fi
     echo "$rel:$line: module '$from' includes module '$target', which is above it in the order ${kOrder[*]}: $text"
     fail=1
   done < <(grep -rnE '^[[:space:]]*#[[:space:]]*include[[:space:]]*("[^/"]+/|<morse/)' --include='*.hpp' --include='*.h' \
              --include='*.cpp' "$root/src" "$root/include/morse" 2>/dev/null)
-
-  # An exception that no longer occurs must leave the list.
-  for k in "${!kKnown[@]}"; do
-    if [[ -z ${used[$k]+x} ]]; then
-      echo "layering: known exception '${kKnown[$k]}' no longer occurs: remove it from kKnown in tests/layering.sh"
-      fail=1
-    fi
-  done
   return $fail
 }
 
@@ -91,7 +69,7 @@ self_test() {
   trap 'rm -rf "$tmp"' RETURN
   for m in "${kOrder[@]}"; do mkdir -p "$tmp/src/$m" "$tmp/include/morse/$m"; done
   mkdir -p "$tmp/include/morse/cb" "$tmp/tests"
-  printf '#include "morse/io/matrices.hpp"\n' >"$tmp/include/morse/cb/craig_bampton.hpp"
+  printf '#include "morse/eigen/eigen.hpp"\n' >"$tmp/include/morse/cb/craig_bampton.hpp"
   printf '#include "morse/core/error.hpp"\n#include "eigen/detail/testing.hpp"\n' >"$tmp/src/cb/ok.cpp"
   printf '#include "morse/app/anything.hpp"\n' >"$tmp/tests/test_any.cpp"
   if ! out=$(check_tree "$tmp"); then
