@@ -12,6 +12,7 @@
 #include "morse/cb/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 
@@ -21,10 +22,10 @@ namespace {
 
 PetscErrorCode get_modes_options(MPI_Comm comm, PetscInt* nev, PetscReal* shift, PetscBool* xdmf) {
   PetscOptionsBegin(comm, nullptr, "morse modes options", "");
-  PetscCall(PetscOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
-  PetscCall(PetscOptionsReal("-modes_shift", "Shift-invert target (rad/s)^2; negative for free-free models", "",
+  PetscCall(MorseOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
+  PetscCall(MorseOptionsReal("-modes_shift", "Shift-invert target (rad/s)^2; negative for free-free models", "",
                              *shift, shift, nullptr));
-  PetscCall(PetscOptionsBool("-modes_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", *xdmf, xdmf,
+  PetscCall(MorseOptionsBool("-modes_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", *xdmf, xdmf,
                              nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;

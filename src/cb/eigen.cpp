@@ -9,6 +9,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 
 namespace morse::cb {
 
@@ -182,7 +183,7 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
+    PetscCall(MorseOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
                                  "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
                                  "", solver, solver, sizeof solver, nullptr));
     PetscOptionsEnd();
@@ -210,7 +211,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   PetscInt count_slicing = s.count_slicing;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsInt("-count_slicing",
+    PetscCall(MorseOptionsInt("-count_slicing",
                               "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
                               "", count_slicing, &count_slicing, nullptr));
     PetscOptionsEnd();
@@ -410,7 +411,7 @@ bool count_check_wanted(MPI_Comm comm, const EigenSettings& s) {
   PetscBool check = s.check_inertia ? PETSC_TRUE : PETSC_FALSE;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsBool("-check_inertia",
+    PetscCall(MorseOptionsBool("-check_inertia",
                                "Count mode: check by Sylvester's inertia that no eigenvalue nearer the shift than "
                                "those returned was missed (one LDL^T factorization)",
                                "", check, &check, nullptr));
