@@ -146,6 +146,7 @@ void run_fom(MPI_Comm comm) {
   FomOptions fo;
   MORSE_CALL(get_fom_options(comm, &fo));
   if (help_requested()) return;
+  dyn::add_option_prefixes(fo.s);
   check_options(comm, true);
   collective_check(comm, load_error);
   collective_check(comm, ho.error);

@@ -20,6 +20,8 @@ namespace morse::app::detail {
 
 namespace {
 
+const char* const kSolverPrefix = "modes_";  // options prefix of the eigen solver
+
 PetscErrorCode get_modes_options(MPI_Comm comm, PetscInt* nev, PetscReal* shift, PetscBool* xdmf) {
   PetscOptionsBegin(comm, nullptr, "morse modes options", "");
   PetscCall(MorseOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
@@ -41,13 +43,14 @@ void run_modes(MPI_Comm comm) {
   PetscBool xdmf = PETSC_TRUE;
   MORSE_CALL(get_modes_options(comm, &nev, &shift, &xdmf));
   if (help_requested()) return;
+  options::add_prefix(kSolverPrefix, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(nev > 0, "-modes_nev must be positive (got ", nev, ")");
   Model md = build_model(comm, o);
   cb::EigenSettings es;
   es.nev = nev;
   es.shift = shift;
-  es.prefix = "modes_";
+  es.prefix = kSolverPrefix;
   es.what = "full-model modes";
   es.keep_factor = false;  // nothing solves with it afterwards: the Sylvester check reuses it
   auto w = cb::sign_reference(md.lm, md.dofs);

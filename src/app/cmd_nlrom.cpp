@@ -36,10 +36,8 @@ struct NlromOptions {
 PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  PetscCall(get_boundary(comm, &o->b.boundary_set));
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
-  PetscCall(MorseOptionsString("-boundary", "Node set kept as physical DOFs (its x,y,z; the contact nodes)", "", buf, buf,
-                               sizeof buf, &set));
-  if (set) o->b.boundary_set = buf;
   PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
                                o->basis.c_str(), buf, sizeof buf, &set));
   if (set) o->basis = buf;
@@ -121,6 +119,7 @@ void run_nlrom(MPI_Comm comm) {
   NlromOptions no;
   MORSE_CALL(get_nlrom_options(comm, &no));
   if (help_requested()) return;
+  options::add_prefix(no.b.prefix, options::Solver::Eigen);
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(no.error.empty(), no.error);

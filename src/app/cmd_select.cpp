@@ -26,6 +26,10 @@ namespace morse::app::detail {
 
 namespace {
 
+// Options prefixes of the eigen solvers of the full-model check and of the IMR modes.
+const char* const kFomPrefix = "select_fom_";
+const char* const kImrPrefix = "select_imr_";
+
 struct SelectOptions {
   std::string from;
   std::vector<std::string> methods;
@@ -139,6 +143,8 @@ void run_select(MPI_Comm comm) {
   SelectOptions so;
   MORSE_CALL(get_select_options(comm, &so));
   if (help_requested()) return;
+  for (const std::string& p : {cb_settings(r).prefix, std::string(kFomPrefix), std::string(kImrPrefix)})
+    options::add_prefix(p, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
   MORSE_CHECK(!so.from.empty() || r.n_fixed >= 0 || r.fmax > 0,
@@ -202,7 +208,7 @@ void run_select(MPI_Comm comm) {
   cb::Eigenpairs fom;
   {
     cb::EigenSettings es;
-    es.prefix = "select_fom_";
+    es.prefix = kFomPrefix;
     es.stage = "Fom";
     es.what = "full-model modes";
     if (so.fom_modes > 0)
@@ -257,7 +263,7 @@ void run_select(MPI_Comm comm) {
         MORSE_CALL(MatAssemblyEnd(Kspring.get(), MAT_FINAL_ASSEMBLY));
         Ks = Kspring.get();
         cb::EigenSettings es;
-        es.prefix = "select_imr_";
+        es.prefix = kImrPrefix;
         es.stage = "Imr";
         es.what = "IMR system modes";
         es.omega2_max = l_an;

@@ -60,6 +60,7 @@ void run_static(MPI_Comm comm) {
   StaticOptions so;
   MORSE_CALL(get_static_options(comm, &so));
   if (help_requested()) return;
+  options::add_prefix(so.s.prefix, options::Solver::Nonlinear);
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");

@@ -7,7 +7,6 @@
 
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -22,19 +21,6 @@
 namespace morse::app::detail {
 
 namespace {
-
-// Options owned by inner PETSc/SLEPc objects of a command: accepted by the early check.
-bool inner_option(const std::string& name) {
-  // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
-  // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
-  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_krylov_", "fom_", "nlrom_"};
-  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "eigen_solver", "check_inertia", "block_", "snes_", "ksp_", "pc_", "mat_mumps_"};
-  for (const char* p : solvers)
-    if (name.rfind(p, 0) == 0)
-      for (const char* q : inner)
-        if (name.compare(std::strlen(p), std::strlen(q), q) == 0) return true;
-  return false;
-}
 
 // "1,2,10-12" -> {1, 2, 10, 11, 12}; "" on success, else the reason.
 std::string parse_id_list(const std::string& text, std::vector<std::int64_t>* ids) {
@@ -163,29 +149,7 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
   return PETSC_SUCCESS;
 }
 
-// Unknown-option check. early: only options with a morse prefix that no command option matched
-// (a typo of a morse option); final: every option nobody used.
-void check_options(MPI_Comm comm, bool early) {
-  PetscInt n = 0;
-  char** names = nullptr;
-  char** values = nullptr;
-  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
-  std::string bad;
-  static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
-                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_", "stress_",
-                                         "load_", "static_", "rampup_", "fom_krylov_", "fom_", "matrices_", "nastran_"};
-  for (PetscInt i = 0; i < n; ++i) {
-    std::string name = names[i];
-    if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
-    bool flag = !early;
-    if (early)
-      for (const char* p : morse_prefixes)
-        if (name.rfind(p, 0) == 0 && !inner_option(name)) flag = true;
-    if (flag) bad += " -" + name;
-  }
-  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &names, &values));
-  collective_check(comm, bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)"));
-}
+void check_options(MPI_Comm comm, bool early) { options::check_unknown(comm, early); }
 
 bool help_requested() {
   PetscBool h = PETSC_FALSE;
@@ -452,13 +416,24 @@ std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const m
   return h;
 }
 
+PetscErrorCode get_boundary(MPI_Comm comm, std::string* boundary) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse interface", "");
+  PetscCall(MorseOptionsString("-boundary",
+                               "Node set of the interface, kept as physical DOFs (its x,y,z: the boundary DOFs of the "
+                               "superelement; nlrom: the contact nodes)",
+                               "", buf, buf, sizeof buf, &set));
+  PetscOptionsEnd();
+  if (set) *boundary = buf;
+  return PETSC_SUCCESS;
+}
+
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  PetscCall(get_boundary(comm, &r->boundary));
   PetscOptionsBegin(comm, nullptr, "morse reduce (Craig-Bampton) options", "");
-  PetscCall(MorseOptionsString("-boundary", "Node set of the interface (boundary DOFs: its x,y,z)", "", buf, buf,
-                               sizeof buf, &set));
-  if (set) r->boundary = buf;
   PetscCall(MorseOptionsInt("-cb_num_fixed_modes", "Number of fixed-interface modes (0 = Guyan)", "", r->n_fixed,
                             &r->n_fixed, nullptr));
   PetscCall(MorseOptionsReal("-cb_fmax", "Keep every fixed-interface mode below this frequency [Hz] "

@@ -672,6 +672,7 @@ struct BlockOptions {
 BlockOptions block_options(MPI_Comm comm, const EigenSettings& s) {
   BlockOptions o;
   o.tol = s.tol;
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
     PetscCall(MorseOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "

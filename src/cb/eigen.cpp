@@ -179,6 +179,7 @@ PetscInt inertia_below(EPS eps, Mat K, Mat M, double a, double b, const std::str
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   char solver[32] = "";
   std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
@@ -243,6 +244,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   MORSE_CALL(EPSCreate(comm, out.eps.ptr()));
   EPS eps = out.eps.get();
   MORSE_CALL(EPSSetOptionsPrefix(eps, s.prefix.c_str()));
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   MORSE_CALL(EPSSetOperators(eps, K, M));
   MORSE_CALL(EPSSetProblemType(eps, EPS_GHEP));
   MORSE_CALL(EPSSetType(eps, EPSKRYLOVSCHUR));

@@ -150,17 +150,18 @@ void check_unknown(MPI_Comm comm, bool early) {
   char** left = nullptr;
   char** values = nullptr;
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &left, &values));
+  std::vector<std::string> unknown;
+  for (PetscInt i = 0; i < n; ++i)
+    if (!petsc_global(left[i]) && (!early || suspicious(left[i]))) unknown.emplace_back(left[i]);
+  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
+  std::sort(unknown.begin(), unknown.end());
   std::string bad;
-  for (PetscInt i = 0; i < n; ++i) {
-    const std::string name = left[i];
-    if (petsc_global(name)) continue;
-    if (early && !suspicious(name)) continue;
+  for (const auto& name : unknown) {
     bad += " -" + name;
     if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
   }
-  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
   std::string err = bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)");
-  if (early && err.empty() && !registry().conflicts.empty())
+  if (err.empty() && !registry().conflicts.empty())
     err = cat("internal error: ", registry().conflicts.front());
   collective_check(comm, err);
 }

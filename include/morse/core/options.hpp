@@ -79,9 +79,10 @@ bool suspicious(const std::string& name);
 bool petsc_global(const std::string& name);
 
 /// The unknown-option check. early (after the command has read its own options, before any
-/// work): refuses the options given but not read that suspicious() flags, and any registration
-/// conflict; final (end of the run): refuses every option nobody used. The message names each
-/// option and, when one is close, the registered option it probably meant: "unknown option(s):
+/// work): refuses the options given but not read that suspicious() flags; final (end of the run):
+/// refuses every option nobody used. Both refuse a registration conflict (conflicts(), a
+/// programming error: "internal error: -x registered with two help texts ..."). The message names each
+/// option (in alphabetical order) and, when one is close, the registered option it probably meant: "unknown option(s):
 /// -casing_clearence (did you mean -casing_clearance?) (see -help)". Collective on comm (every
 /// rank throws morse::Error).
 void check_unknown(MPI_Comm comm, bool early);
