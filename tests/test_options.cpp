@@ -103,6 +103,7 @@ TEST(Options, ClosestSuggestsOnlyNearNames) {
   EXPECT_EQ(opt::closest("contact_muu"), "-contact_mu");
   EXPECT_EQ(opt::closest("-export_fromat"), "-export_format");
   EXPECT_EQ(opt::closest("-ot"), "-out");
+  EXPECT_EQ(opt::closest("-Contact_MUU"), "-contact_mu");  // PETSc's names ignore case
   EXPECT_EQ(opt::closest("-casing_width"), "");
   EXPECT_EQ(opt::closest("-ksp_view"), "");
 }
@@ -117,6 +118,8 @@ TEST(Options, SuspiciousByFirstWordOrDistanceNotInnerNorGlobal) {
   EXPECT_TRUE(opt::suspicious("-casing_width"));         // first word casing
   EXPECT_TRUE(opt::suspicious("-cb_num_fixed_mode"));    // first word cb, not an inner object
   EXPECT_TRUE(opt::suspicious("-mesj"));                 // one edit from -mesh
+  EXPECT_TRUE(opt::suspicious("-Casing_width"));         // names ignore case
+  EXPECT_FALSE(opt::suspicious("-CB_EPS_TOL"));
   EXPECT_FALSE(opt::suspicious("-casing_clearance"));    // registered
   EXPECT_FALSE(opt::suspicious("-cb_eps_tol"));          // the eigen solver's EPS
   EXPECT_FALSE(opt::suspicious("-cb_st_mat_mumps_icntl_14"));

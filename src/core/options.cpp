@@ -3,7 +3,7 @@
 
 #include <algorithm>
 #include <cassert>
-#include <cstdio>
+#include <cctype>
 #include <map>
 #include <string>
 #include <utility>
@@ -27,6 +27,12 @@ Registry& registry() {
 }
 
 std::string bare(const std::string& name) { return name.empty() || name[0] != '-' ? name : name.substr(1); }
+
+// PETSc matches option names regardless of case: so do the suggestions and the early check.
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
 
 std::string first_word(const std::string& bare_name) { return bare_name.substr(0, bare_name.find('_')); }
 
@@ -79,9 +85,9 @@ std::string help(const std::string& name) {
 }
 
 bool inner(const std::string& name) {
-  const std::string b = bare(name);
+  const std::string b = lower(bare(name));
   for (const auto& [prefix, kind] : registry().prefixes) {
-    if (b.compare(0, prefix.size(), prefix) != 0) continue;
+    if (b.compare(0, prefix.size(), lower(prefix)) != 0) continue;
     const std::string rest = b.substr(prefix.size());
     for (const char* o : objects(kind))
       if (starts_with(rest, o)) return true;
@@ -114,11 +120,11 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 }
 
 std::string closest(const std::string& name) {
-  const std::string b = bare(name);
+  const std::string b = lower(bare(name));
   std::string best;
   std::size_t best_d = max_distance(b.size()) + 1;
   for (const auto& [n, h] : registry().help) {
-    const std::size_t d = edit_distance(b, n);
+    const std::size_t d = edit_distance(b, lower(n));
     if (d < best_d) best_d = d, best = n;  // the map's order breaks ties: the first name wins
   }
   return best.empty() ? best : "-" + best;
@@ -130,7 +136,7 @@ bool petsc_global(const std::string& name) {
                                   "on_error_", "no_signal_handler", "check_pointer_intensity", "objects_dump",
                                   "debugger", "start_in_debugger", "stop_for_debugger", "skip_petscrc", "nox",
                                   "use_gpu_aware_mpi", "viewer_", "saws_", "checkfunctionlist", "display"};
-  const std::string b = bare(name);
+  const std::string b = lower(bare(name));
   for (const char* g : globals)
     if (starts_with(b, g)) return true;
   return false;
@@ -139,9 +145,9 @@ bool petsc_global(const std::string& name) {
 bool suspicious(const std::string& name) {
   const std::string b = bare(name);
   if (petsc_global(b) || inner(b) || registered(b)) return false;
-  const std::string w = first_word(b);
+  const std::string w = lower(first_word(b));
   for (const auto& [n, h] : registry().help)
-    if (first_word(n) == w) return true;
+    if (lower(first_word(n)) == w) return true;
   return !closest(b).empty();
 }
 
