@@ -60,7 +60,9 @@ bool inner(const std::string& name);
 std::vector<std::string> names();
 /// The names registered twice with different help texts (a programming error), with both texts.
 std::vector<std::string> conflicts();
-/// Forgets every registration (for tests).
+/// Forgets every registration: a command starts with an empty registry (app::run_command), so
+/// that commands run one after the other in one process (tests) may give an option such as -out
+/// their own help text.
 void clear();
 
 /// Optimal-string-alignment (Damerau-Levenshtein) distance: insertions, deletions,
