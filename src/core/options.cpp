@@ -16,8 +16,8 @@ namespace morse::options {
 namespace {
 
 struct Registry {
-  std::map<std::string, std::string> help;                  // name without '-' -> help text
-  std::vector<std::pair<std::string, Solver>> prefixes;     // solver prefix, kind
+  std::map<std::string, std::string> help;               // name without '-' -> help text
+  std::vector<std::pair<std::string, Solver>> prefixes;  // solver prefix, kind
   std::vector<std::string> conflicts;
 };
 
@@ -26,7 +26,9 @@ Registry& registry() {
   return r;
 }
 
-std::string bare(const std::string& name) { return name.empty() || name[0] != '-' ? name : name.substr(1); }
+std::string bare(const std::string& name) {
+  return name.empty() || name[0] != '-' ? name : name.substr(1);
+}
 
 // PETSc matches option names regardless of case: so do the suggestions and the early check.
 std::string lower(std::string s) {
@@ -34,20 +36,26 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::string first_word(const std::string& bare_name) { return bare_name.substr(0, bare_name.find('_')); }
+std::string first_word(const std::string& bare_name) {
+  return bare_name.substr(0, bare_name.find('_'));
+}
 
 bool starts_with(const std::string& s, const char* p) { return s.rfind(p, 0) == 0; }
 
 // The objects of a solver kind: option prefixes (ending in '_') or whole names.
 const std::vector<const char*>& objects(Solver kind) {
-  static const std::vector<const char*> eigen = {"eps_",  "st_",          "bv_",           "ds_",          "rg_",
-                                                 "inertia_", "block_",    "eigen_solver", "count_slicing", "check_inertia"};
+  static const std::vector<const char*> eigen = {
+      "eps_",     "st_",    "bv_",          "ds_",           "rg_",
+      "inertia_", "block_", "eigen_solver", "count_slicing", "check_inertia"};
   static const std::vector<const char*> nonlinear = {"snes_", "ksp_", "pc_", "mat_mumps_"};
   static const std::vector<const char*> linear = {"ksp_", "pc_", "mat_mumps_"};
   switch (kind) {
-    case Solver::Eigen: return eigen;
-    case Solver::Nonlinear: return nonlinear;
-    case Solver::Linear: return linear;
+    case Solver::Eigen:
+      return eigen;
+    case Solver::Nonlinear:
+      return nonlinear;
+    case Solver::Linear:
+      return linear;
   }
   return linear;
 }
@@ -62,7 +70,8 @@ void add(const std::string& name, const std::string& text) {
   const std::string b = bare(name);
   auto [it, inserted] = r.help.emplace(b, text);
   if (!inserted && it->second != text) {
-    r.conflicts.push_back(cat("-", b, " registered with two help texts: \"", it->second, "\" and \"", text, "\""));
+    r.conflicts.push_back(
+        cat("-", b, " registered with two help texts: \"", it->second, "\" and \"", text, "\""));
     assert(!"an option registered twice with different help texts (morse/core/options.hpp)");
   }
 }
@@ -74,7 +83,8 @@ void add(const char* prefix, const char* name, const char* text) {
 
 void add_prefix(const std::string& prefix, Solver kind) {
   auto& p = registry().prefixes;
-  if (std::find(p.begin(), p.end(), std::make_pair(prefix, kind)) == p.end()) p.emplace_back(prefix, kind);
+  if (std::find(p.begin(), p.end(), std::make_pair(prefix, kind)) == p.end())
+    p.emplace_back(prefix, kind);
 }
 
 bool registered(const std::string& name) { return registry().help.count(bare(name)) > 0; }
@@ -114,7 +124,8 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
     for (std::size_t j = 1; j <= m; ++j) {
       const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
       d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
     }
   return d[n][m];
 }
@@ -132,10 +143,28 @@ std::string closest(const std::string& name) {
 
 bool petsc_global(const std::string& name) {
   // PETSc's options database, logging, memory, error and debugger options (PetscInitialize).
-  static const char* globals[] = {"help", "version", "info", "options_", "log", "malloc", "memory_view", "fp_trap",
-                                  "on_error_", "no_signal_handler", "check_pointer_intensity", "objects_dump",
-                                  "debugger", "start_in_debugger", "stop_for_debugger", "skip_petscrc", "nox",
-                                  "use_gpu_aware_mpi", "viewer_", "saws_", "checkfunctionlist", "display"};
+  static const char* globals[] = {"help",
+                                  "version",
+                                  "info",
+                                  "options_",
+                                  "log",
+                                  "malloc",
+                                  "memory_view",
+                                  "fp_trap",
+                                  "on_error_",
+                                  "no_signal_handler",
+                                  "check_pointer_intensity",
+                                  "objects_dump",
+                                  "debugger",
+                                  "start_in_debugger",
+                                  "stop_for_debugger",
+                                  "skip_petscrc",
+                                  "nox",
+                                  "use_gpu_aware_mpi",
+                                  "viewer_",
+                                  "saws_",
+                                  "checkfunctionlist",
+                                  "display"};
   const std::string b = lower(bare(name));
   for (const char* g : globals)
     if (starts_with(b, g)) return true;

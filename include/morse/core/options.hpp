@@ -83,10 +83,10 @@ bool petsc_global(const std::string& name);
 /// The unknown-option check. early (after the command has read its own options, before any
 /// work): refuses the options given but not read that suspicious() flags; final (end of the run):
 /// refuses every option nobody used. Both refuse a registration conflict (conflicts(), a
-/// programming error: "internal error: -x registered with two help texts ..."). The message names each
-/// option (in alphabetical order) and, when one is close, the registered option it probably meant: "unknown option(s):
-/// -casing_clearence (did you mean -casing_clearance?) (see -help)". Collective on comm (every
-/// rank throws morse::Error).
+/// programming error: "internal error: -x registered with two help texts ..."). The message names
+/// each option (in alphabetical order) and, when one is close, the registered option it probably
+/// meant: "unknown option(s): -casing_clearence (did you mean -casing_clearance?) (see -help)".
+/// Collective on comm (every rank throws morse::Error).
 void check_unknown(MPI_Comm comm, bool early);
 
 }  // namespace morse::options
@@ -94,18 +94,26 @@ void check_unknown(MPI_Comm comm, bool early);
 // Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same
 // arguments; each registers the option (under the block's prefix) with its help text, then calls
 // PETSc's. Use them as PETSc's: PetscCall(MorseOptionsReal("-x", "help", "", x, &x, nullptr)).
-#define MORSE_OPTIONS_ADD_(opt, text) ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
-#define MorseOptionsReal(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
-#define MorseOptionsInt(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
+#define MORSE_OPTIONS_ADD_(opt, text) \
+  ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
+#define MorseOptionsReal(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
+#define MorseOptionsInt(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
 #define MorseOptionsBoundedInt(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoundedInt(opt, text, __VA_ARGS__))
 #define MorseOptionsRangeInt(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRangeInt(opt, text, __VA_ARGS__))
-#define MorseOptionsBool(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
-#define MorseOptionsString(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
-#define MorseOptionsEnum(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
-#define MorseOptionsEList(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
-#define MorseOptionsName(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
+#define MorseOptionsBool(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
+#define MorseOptionsString(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
+#define MorseOptionsEnum(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
+#define MorseOptionsEList(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
+#define MorseOptionsName(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
 #define MorseOptionsRealArray(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRealArray(opt, text, __VA_ARGS__))
 #define MorseOptionsIntArray(opt, text, ...) \
