@@ -111,7 +111,7 @@ morse_add_error_case(reduce_too_many
 
 # --- command-line errors
 morse_add_error_case(unknown_option
-  "morse: error: unknown option\\(s\\): -cb_num_fixed_mode \\(see -help\\)"
+  "morse: error: unknown option\\(s\\): -cb_num_fixed_mode \\(did you mean -cb_num_fixed_modes\\?\\) \\(see -help\\)"
   unknown_option.h5 BOX
   ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_mode 3
        ${MORSE_CASE_MATERIAL})
@@ -120,6 +120,13 @@ morse_add_error_case(reduce_xdmf_without_basis
   "morse: error: -cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis"
   reduce_xdmf_without_basis.h5 BOX
   ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 3 -cb_xdmf
+       ${MORSE_CASE_MATERIAL})
+
+# A misspelled option of the Craig-Bampton eigen solver's prefix that is not an inner object's.
+morse_add_error_case(unknown_cb_option
+  "morse: error: unknown option\\(s\\): -cb_dampign \\(did you mean -cb_damping\\?\\) \\(see -help\\)"
+  unknown_cb_option.h5 BOX
+  ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 3 -cb_dampign 0.01
        ${MORSE_CASE_MATERIAL})
 
 morse_add_error_case(bad_box_type

@@ -59,6 +59,10 @@ morse_add_export_error_case(export_unknown_format
   "morse: error: -export_format nastran: unknown format \\(mbdyn, op4, dmig, mtx\\)"
   ARGS -export_from ${MORSE_EXPORT_SE} -export_format mbdyn,nastran)
 
+morse_add_export_error_case(export_misspelled_option
+  "morse: error: unknown option\\(s\\): -export_fromat \\(did you mean -export_format\\?\\)"
+  ARGS -export_from ${MORSE_EXPORT_SE} -export_fromat mtx)
+
 morse_add_export_error_case(export_all_nodes_without_basis
   "morse: error: .*export_se\\.h5: no dataset /cb/constraint_modes .*-cb_write_basis"
   ARGS -export_from ${MORSE_EXPORT_SE} -export_mbdyn_nodes all)

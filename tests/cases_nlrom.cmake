@@ -16,6 +16,16 @@ morse_add_error_case(nlrom_cbmd_without_training "morse: error: .*training load"
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 2)
 morse_add_error_case(simulate_missing_rom "morse: error: .*no_such_rom\\.h5" simulate_missing_rom.h5 BOX
   ARGS simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
+# Misspelled contact options are refused before any work (before the model file is even opened).
+morse_add_error_case(simulate_misspelled_casing
+  "morse: error: unknown option\\(s\\): -casing_clearence \\(did you mean -casing_clearance\\?\\)"
+  simulate_misspelled_casing.h5
+  ARGS simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4 -contact_set x1
+       -casing_clearence 2e-4)
+morse_add_error_case(sweep_misspelled_contact
+  "morse: error: unknown option\\(s\\): -contact_muu \\(did you mean -contact_mu\\?\\)"
+  sweep_misspelled_contact.h5
+  ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_revolutions 2 -contact_set x1 -contact_muu 0.1)
 morse_add_error_case(mesh_node_set_missing_id "morse: error: .*-mesh_node_set_tipx.*987654321" node_set_bad.h5 BOX
   ARGS modes ${MORSE_NLR_BOX} -mesh_node_sets tipx -mesh_node_set_tipx 1,987654321)
 

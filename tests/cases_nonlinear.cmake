@@ -19,6 +19,17 @@ morse_add_error_case(fom_bad_scheme "morse: error: .*-fom_scheme" fom_bad_scheme
   ARGS fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 1e-3 -fom_scheme euler)
 morse_add_error_case(fom_misspelled_option "morse: error: unknown option.*-fom_dtt" fom_typo.h5 BOX
   ARGS fom ${MORSE_NL_BOX} -fom_dtt 1e-4 -fom_tfinal 1e-3)
+# A misspelled set-list option is refused, and so are the per-set options it would have named; a
+# misspelled per-set option names the registered one.
+morse_add_error_case(fom_misspelled_load_sets
+  "morse: error: unknown option\\(s\\): -load_set \\(did you mean -load_sets\\?\\) -load_x1_amplitude -load_x1_dir \\(see -help\\)"
+  fom_typo_load_sets.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -load_set x1 -load_x1_dir z -load_x1_amplitude 1 -fom_dt 1e-4 -fom_tfinal 1e-3)
+morse_add_error_case(fom_misspelled_load_option
+  "morse: error: unknown option\\(s\\): -load_x1_amplitud \\(did you mean -load_x1_amplitude\\?\\)"
+  fom_typo_load_option.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitud 1 -load_x1_amplitude 1 -fom_dt 1e-4
+       -fom_tfinal 1e-3)
 morse_add_error_case(fom_diverges "morse: error: fom: .*last converged time" fom_diverges.h5 BOX
   ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1e15 -fom_dt 1e-3 -fom_tfinal 1e-2
        -fom_newton_max_it 5)

@@ -16,6 +16,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
@@ -37,18 +38,18 @@ PetscErrorCode get_compare_options(MPI_Comm comm, CompareOptions* o) {
   PetscReal w[4];
   PetscInt nw = 4;
   PetscOptionsBegin(comm, nullptr, "morse compare options", "");
-  PetscCall(PetscOptionsString("-compare_tip", "Node set of the blade tip (criteria e3, e4); monitored in both runs",
+  PetscCall(MorseOptionsString("-compare_tip", "Node set of the blade tip (criteria e3, e4); monitored in both runs",
                                "", o->tip.c_str(), buf, sizeof buf, &set));
   if (set) o->tip = buf;
-  PetscCall(PetscOptionsReal("-compare_tmax", "Time of e1 [s] (default: first maximum of the first harmonic -load_*)",
+  PetscCall(MorseOptionsReal("-compare_tmax", "Time of e1 [s] (default: first maximum of the first harmonic -load_*)",
                              "", o->tmax, &o->tmax, nullptr));
-  PetscCall(PetscOptionsRealArray("-compare_weights", "Weights w1,w2,w3,w4 of eq. 43 (sum 1)", "", w, &nw, &set));
+  PetscCall(MorseOptionsRealArray("-compare_weights", "Weights w1,w2,w3,w4 of eq. 43 (sum 1)", "", w, &nw, &set));
   if (set) {
     MORSE_CHECK(nw == 4, "-compare_weights takes four values w1,w2,w3,w4");
     o->w.assign(w, w + 4);
   }
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-compare_rom_model", "The nlrom file of the reduced run (default: /sim's 'rom')", "",
+  PetscCall(MorseOptionsString("-compare_rom_model", "The nlrom file of the reduced run (default: /sim's 'rom')", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->rom_model = buf;
   PetscOptionsEnd();

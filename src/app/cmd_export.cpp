@@ -11,6 +11,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/io/superelement.hpp"
 
 namespace morse::app::detail {
@@ -40,32 +41,32 @@ PetscErrorCode get_export_options(MPI_Comm comm, ExportCommandOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse export options", "");
-  PetscCall(PetscOptionsString("-export_from",
+  PetscCall(MorseOptionsString("-export_from",
                                "Superelement file of morse reduce or morse select (required)", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->from = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString(
+  PetscCall(MorseOptionsString(
       "-out",
       "Output prefix: PREFIX.fem, PREFIX.op4, PREFIX_dmig.bdf, PREFIX_grids.bdf, PREFIX_K.mtx, "
       "PREFIX_M.mtx, PREFIX_C.mtx, PREFIX_dofs.txt (default: -export_from without .h5)",
       "", buf, buf, sizeof buf, &set));
   if (set) o->out = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString(
+  PetscCall(MorseOptionsString(
       "-export_coordinates",
       "Text file 'node x y z' per line: interface node coordinates for a file without /mesh "
       "(matrix input); replaces those of /mesh",
       "", buf, buf, sizeof buf, &set));
   if (set) o->coordinates = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString(
+  PetscCall(MorseOptionsString(
       "-export_mbdyn_nodes",
       "Nodes of the MBDyn FEM file: interface, or all (every mesh node; needs a file of "
       "morse reduce -cb_write_basis)",
       "", o->nodes.c_str(), buf, sizeof buf, &set));
   if (set) o->nodes = buf;
-  PetscCall(PetscOptionsInt(
+  PetscCall(MorseOptionsInt(
       "-export_spoint_offset",
       "DMIG: modal coordinate k is SPOINT offset+k (default: the smallest power of ten above "
       "every node id of the file)",

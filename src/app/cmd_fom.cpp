@@ -12,6 +12,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
 #include "morse/io/h5.hpp"
@@ -40,22 +41,22 @@ PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
   PetscReal ray[2] = {0, 0};
   PetscInt n_ray = 2;
   PetscOptionsBegin(comm, nullptr, "morse fom options", "");
-  PetscCall(PetscOptionsReal("-fom_dt", "Time step [s] (fixed)", "", o->s.dt, &o->s.dt, nullptr));
-  PetscCall(PetscOptionsReal("-fom_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
-  PetscCall(PetscOptionsBool("-fom_linear", "Linear twin (g_nl = 0), same everything else", "", o->linear, &o->linear,
+  PetscCall(MorseOptionsReal("-fom_dt", "Time step [s] (fixed)", "", o->s.dt, &o->s.dt, nullptr));
+  PetscCall(MorseOptionsReal("-fom_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, nullptr));
+  PetscCall(MorseOptionsBool("-fom_linear", "Linear twin (g_nl = 0), same everything else", "", o->linear, &o->linear,
                              nullptr));
-  PetscCall(PetscOptionsString("-fom_scheme",
+  PetscCall(MorseOptionsString("-fom_scheme",
                                "energy: energy-conserving midpoint (Simo-Tarnow), trapezoidal: Newmark average "
                                "acceleration; identical for a linear model",
                                "", o->scheme.c_str(), buf, sizeof buf, &set));
   if (set) o->scheme = buf;
-  PetscCall(PetscOptionsInt("-fom_snapshot_every", "Write full-field snapshots of u and v every K steps (0: none)", "",
+  PetscCall(MorseOptionsInt("-fom_snapshot_every", "Write full-field snapshots of u and v every K steps (0: none)", "",
                             o->snapshot_every, &o->snapshot_every, nullptr));
-  PetscCall(PetscOptionsReal("-fom_damping_modal", "Modal damping ratio xi on the first -fom_damping_modes modes", "",
+  PetscCall(MorseOptionsReal("-fom_damping_modal", "Modal damping ratio xi on the first -fom_damping_modes modes", "",
                              o->s.modal_xi, &o->s.modal_xi, nullptr));
-  PetscCall(PetscOptionsInt("-fom_damping_modes", "Number of modes carrying -fom_damping_modal", "",
+  PetscCall(MorseOptionsInt("-fom_damping_modes", "Number of modes carrying -fom_damping_modal", "",
                             o->s.damping_modes, &o->s.damping_modes, nullptr));
-  PetscCall(PetscOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray,
+  PetscCall(MorseOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray,
                                   &n_ray, &set));
   if (set) {
     o->rayleigh_set = true;
@@ -63,36 +64,36 @@ PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
     o->s.rayleigh_alpha = ray[0];
     o->s.rayleigh_beta = ray[1];
   }
-  PetscCall(PetscOptionsReal("-fom_newton_rtol", "Newton tolerance: ||R|| <= rtol * force scale + atol", "",
+  PetscCall(MorseOptionsReal("-fom_newton_rtol", "Newton tolerance: ||R|| <= rtol * force scale + atol", "",
                              o->s.newton_rtol, &o->s.newton_rtol, nullptr));
-  PetscCall(PetscOptionsReal("-fom_newton_atol", "Newton absolute tolerance [N]", "", o->s.newton_atol,
+  PetscCall(MorseOptionsReal("-fom_newton_atol", "Newton absolute tolerance [N]", "", o->s.newton_atol,
                              &o->s.newton_atol, nullptr));
-  PetscCall(PetscOptionsInt("-fom_newton_max_it", "Newton iterations per step", "", o->s.newton_max_it,
+  PetscCall(MorseOptionsInt("-fom_newton_max_it", "Newton iterations per step", "", o->s.newton_max_it,
                             &o->s.newton_max_it, nullptr));
-  PetscCall(PetscOptionsInt("-fom_refactor_every",
+  PetscCall(MorseOptionsInt("-fom_refactor_every",
                             "Refactor the iteration matrix every N iterations (1: full Newton); 0: modified Newton, "
                             "refactor only when the residual falls by less than -fom_refactor_ratio",
                             "", o->s.refactor_every, &o->s.refactor_every, nullptr));
-  PetscCall(PetscOptionsReal("-fom_refactor_ratio", "Modified Newton: refactor when ||R_k+1|| > ratio ||R_k||", "",
+  PetscCall(MorseOptionsReal("-fom_refactor_ratio", "Modified Newton: refactor when ||R_k+1|| > ratio ||R_k||", "",
                              o->s.refactor_ratio, &o->s.refactor_ratio, nullptr));
-  PetscCall(PetscOptionsString("-fom_newton",
+  PetscCall(MorseOptionsString("-fom_newton",
                                "krylov: exact Newton by CG on the matrix-free tangent, preconditioned by a reused "
                                "MUMPS factor (trapezoidal scheme); modified: the reused factor is the Newton matrix",
                                "", o->newton.c_str(), buf, sizeof buf, &set));
   if (set) o->newton = buf;
-  PetscCall(PetscOptionsReal("-fom_krylov_rtol", "Newton-Krylov: smallest relative tolerance of a CG solve", "",
+  PetscCall(MorseOptionsReal("-fom_krylov_rtol", "Newton-Krylov: smallest relative tolerance of a CG solve", "",
                              o->s.krylov_rtol, &o->s.krylov_rtol, nullptr));
-  PetscCall(PetscOptionsInt("-fom_krylov_max_it", "Newton-Krylov: CG iterations before refactoring and retrying", "",
+  PetscCall(MorseOptionsInt("-fom_krylov_max_it", "Newton-Krylov: CG iterations before refactoring and retrying", "",
                             o->s.krylov_max_it, &o->s.krylov_max_it, nullptr));
-  PetscCall(PetscOptionsInt("-fom_krylov_refactor_its",
+  PetscCall(MorseOptionsInt("-fom_krylov_refactor_its",
                             "Newton-Krylov: refresh the factor when a CG solve needs more iterations than this", "",
                             o->s.krylov_refactor_its, &o->s.krylov_refactor_its, nullptr));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-fom_initial", "Initial displacement from a morse file (e.g. a morse static run)", "",
+  PetscCall(MorseOptionsString("-fom_initial", "Initial displacement from a morse file (e.g. a morse static run)", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->initial = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-fom_initial_dataset", "Nodal dataset read by -fom_initial", "",
+  PetscCall(MorseOptionsString("-fom_initial_dataset", "Nodal dataset read by -fom_initial", "",
                                o->initial_dataset.c_str(), buf, sizeof buf, &set));
   if (set) o->initial_dataset = buf;
   PetscOptionsEnd();
@@ -145,6 +146,7 @@ void run_fom(MPI_Comm comm) {
   FomOptions fo;
   MORSE_CALL(get_fom_options(comm, &fo));
   if (help_requested()) return;
+  dyn::add_option_prefixes(fo.s);
   check_options(comm, true);
   collective_check(comm, load_error);
   collective_check(comm, ho.error);

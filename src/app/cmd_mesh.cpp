@@ -12,6 +12,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/blade.hpp"
 #include "morse/mesh/generator.hpp"
@@ -28,17 +29,17 @@ namespace {
 PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len, std::string* type_out) {
   char type[64] = "hex20";
   PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
-  PetscCall(PetscOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
+  PetscCall(MorseOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
                                sizeof type, nullptr));
-  PetscCall(PetscOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
-  PetscCall(PetscOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
-  PetscCall(PetscOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
-  PetscCall(PetscOptionsInt("-box_nx", "Cells in x", "", b->nx, &b->nx, nullptr));
-  PetscCall(PetscOptionsInt("-box_ny", "Cells in y", "", b->ny, &b->ny, nullptr));
-  PetscCall(PetscOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
-  PetscCall(PetscOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
+  PetscCall(MorseOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
+  PetscCall(MorseOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
+  PetscCall(MorseOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
+  PetscCall(MorseOptionsInt("-box_nx", "Cells in x", "", b->nx, &b->nx, nullptr));
+  PetscCall(MorseOptionsInt("-box_ny", "Cells in y", "", b->ny, &b->ny, nullptr));
+  PetscCall(MorseOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
+  PetscCall(MorseOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
                              &b->distortion, nullptr));
-  PetscCall(PetscOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
+  PetscCall(MorseOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
                                out, out, len, nullptr));
   PetscOptionsEnd();
   *type_out = type;
@@ -47,7 +48,7 @@ PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_
 
 PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
   PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
-  PetscCall(PetscOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
+  PetscCall(MorseOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
                                out, out, len, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
@@ -57,7 +58,7 @@ PetscErrorCode get_mesh_in(MPI_Comm comm, std::string* path) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse mesh info options", "");
-  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "", buf,
+  PetscCall(MorseOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "", buf,
                                buf, sizeof buf, &set));
   PetscOptionsEnd();
   if (set) *path = buf;
@@ -122,14 +123,14 @@ void run_mesh_info(MPI_Comm comm) {
 PetscErrorCode get_nastran_options(MPI_Comm comm, mesh::Material* mat, char* fmt, size_t lf, char* aset, size_t la,
                                    char* spc, size_t ls) {
   PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
-  PetscCall(PetscOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat->E, &mat->E, nullptr));
-  PetscCall(PetscOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat->nu, &mat->nu, nullptr));
-  PetscCall(PetscOptionsReal("-material_rho", "Density written to MAT1", "", mat->rho, &mat->rho, nullptr));
-  PetscCall(PetscOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat->E, &mat->E, nullptr));
+  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat->nu, &mat->nu, nullptr));
+  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat->rho, &mat->rho, nullptr));
+  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
                                lf, nullptr));
-  PetscCall(PetscOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset, aset,
+  PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset, aset,
                                la, nullptr));
-  PetscCall(PetscOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
+  PetscCall(MorseOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
                                "", spc, spc, ls, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;

@@ -12,6 +12,7 @@
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/mesh.hpp"
@@ -21,12 +22,14 @@ namespace morse::app::detail {
 
 namespace {
 
+const char* const kSolverPrefix = "modes_";  // options prefix of the eigen solver
+
 PetscErrorCode get_modes_options(MPI_Comm comm, PetscInt* nev, PetscReal* shift, PetscBool* xdmf) {
   PetscOptionsBegin(comm, nullptr, "morse modes options", "");
-  PetscCall(PetscOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
-  PetscCall(PetscOptionsReal("-modes_shift", "Shift-invert target (rad/s)^2; negative for free-free models", "",
+  PetscCall(MorseOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
+  PetscCall(MorseOptionsReal("-modes_shift", "Shift-invert target (rad/s)^2; negative for free-free models", "",
                              *shift, shift, nullptr));
-  PetscCall(PetscOptionsBool("-modes_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", *xdmf, xdmf,
+  PetscCall(MorseOptionsBool("-modes_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", *xdmf, xdmf,
                              nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
@@ -42,13 +45,14 @@ void run_modes(MPI_Comm comm) {
   PetscBool xdmf = PETSC_TRUE;
   MORSE_CALL(get_modes_options(comm, &nev, &shift, &xdmf));
   if (help_requested()) return;
+  options::add_prefix(kSolverPrefix, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(nev > 0, "-modes_nev must be positive (got ", nev, ")");
   Model md = build_model(comm, o);
   eigen::EigenSettings es;
   es.nev = nev;
   es.shift = shift;
-  es.prefix = "modes_";
+  es.prefix = kSolverPrefix;
   es.what = "full-model modes";
   es.keep_factor = false;  // nothing solves with it afterwards: the Sylvester check reuses it
   auto w = cb::sign_reference(md);

@@ -14,6 +14,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/nlrom/nlrom.hpp"
@@ -35,51 +36,49 @@ struct NlromOptions {
 PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  PetscCall(get_boundary(comm, &o->b.boundary_set));
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
-  PetscCall(PetscOptionsString("-boundary", "Node set kept as physical DOFs (its x,y,z; the contact nodes)", "", buf, buf,
-                               sizeof buf, &set));
-  if (set) o->b.boundary_set = buf;
-  PetscCall(PetscOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
+  PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
                                o->basis.c_str(), buf, sizeof buf, &set));
   if (set) o->basis = buf;
-  PetscCall(PetscOptionsInt("-nlrom_num_fixed_modes", "Fixed-interface modes (cb, cbmd)", "", o->b.n_fixed,
+  PetscCall(MorseOptionsInt("-nlrom_num_fixed_modes", "Fixed-interface modes (cb, cbmd)", "", o->b.n_fixed,
                             &o->b.n_fixed, nullptr));
-  PetscCall(PetscOptionsInt("-nlrom_num_derivatives", "Modal derivatives kept (cbmd), by descending W_ij (eq. 24)", "",
+  PetscCall(MorseOptionsInt("-nlrom_num_derivatives", "Modal derivatives kept (cbmd), by descending W_ij (eq. 24)", "",
                             o->b.n_derivatives, &o->b.n_derivatives, nullptr));
-  PetscCall(PetscOptionsInt("-nlrom_num_pod", "POD vectors (pod)", "", o->b.n_pod, &o->b.n_pod, nullptr));
+  PetscCall(MorseOptionsInt("-nlrom_num_pod", "POD vectors (pod)", "", o->b.n_pod, &o->b.n_pod, nullptr));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-nlrom_snapshots", "morse fom file with snapshots (pod; POD filtering)", "", buf, buf,
+  PetscCall(MorseOptionsString("-nlrom_snapshots", "morse fom file with snapshots (pod; POD filtering)", "", buf, buf,
                                sizeof buf, &set));
   if (set) o->b.snapshots = buf;
-  PetscCall(PetscOptionsReal("-nlrom_training_tfinal", "Length of the linear training run of cbmd [s]", "",
+  PetscCall(MorseOptionsReal("-nlrom_training_tfinal", "Length of the linear training run of cbmd [s]", "",
                              o->b.training_tfinal, &o->b.training_tfinal, nullptr));
-  PetscCall(PetscOptionsReal("-nlrom_training_dt", "Time step of the training run [s] (default: 1/200 of the "
+  PetscCall(MorseOptionsReal("-nlrom_training_dt", "Time step of the training run [s] (default: 1/200 of the "
                              "fastest load period)", "", o->b.training_dt, &o->b.training_dt, nullptr));
-  PetscCall(PetscOptionsReal("-nlrom_mgs_tol", "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
+  PetscCall(MorseOptionsReal("-nlrom_mgs_tol", "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
                              "times its norm before projection", "", o->b.mgs_tol, &o->b.mgs_tol, nullptr));
   {
     const char* sel[] = {"weight", "random", "DerivativeSelection", "", nullptr};
     PetscEnum e = o->b.random_derivatives ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
-    PetscCall(PetscOptionsEnum("-nlrom_derivative_selection",
+    PetscCall(MorseOptionsEnum("-nlrom_derivative_selection",
                                "Order in which modal derivatives enter the basis: weight (descending W_ij, eq. 24) "
                                "or random (a seeded shuffle, the control of seed 003 Fig. 9)",
                                "", sel, e, &e, nullptr));
     o->b.random_derivatives = e == static_cast<PetscEnum>(1);
     PetscInt seed = static_cast<PetscInt>(o->b.derivative_seed);
-    PetscCall(PetscOptionsInt("-nlrom_derivative_seed", "Seed of -nlrom_derivative_selection random", "", seed, &seed,
+    PetscCall(MorseOptionsInt("-nlrom_derivative_seed", "Seed of -nlrom_derivative_selection random", "", seed, &seed,
                               nullptr));
     o->b.derivative_seed = static_cast<unsigned>(seed);
   }
-  PetscCall(PetscOptionsString("-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection)", "",
+  PetscCall(MorseOptionsString("-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection)", "",
                                o->forces.c_str(), buf, sizeof buf, &set));
   if (set) o->forces = buf;
-  PetscCall(PetscOptionsReal("-step_displacement", "STEP: target displacement of the imposed fields [m]", "",
+  PetscCall(MorseOptionsReal("-step_displacement", "STEP: target displacement of the imposed fields [m]", "",
                              o->step_displacement, &o->step_displacement, nullptr));
-  PetscCall(PetscOptionsInt("-nlrom_filter_pod", "POD filtering of g_nl (eq. 38-39): number of filter vectors from the "
+  PetscCall(MorseOptionsInt("-nlrom_filter_pod", "POD filtering of g_nl (eq. 38-39): number of filter vectors from the "
                             "snapshots' nonlinear forces (0: none)", "", o->n_filter, &o->n_filter, nullptr));
-  PetscCall(PetscOptionsReal("-nlrom_damping_modal", "Modal damping ratio on the first -nlrom_damping_modes modes of "
+  PetscCall(MorseOptionsReal("-nlrom_damping_modal", "Modal damping ratio on the first -nlrom_damping_modes modes of "
                              "the reduced model", "", o->damping_xi, &o->damping_xi, nullptr));
-  PetscCall(PetscOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "",
+  PetscCall(MorseOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "",
                             o->damping_modes, &o->damping_modes, nullptr));
   PetscOptionsEnd();
   if (o->basis == "cb")
@@ -120,6 +119,7 @@ void run_nlrom(MPI_Comm comm) {
   NlromOptions no;
   MORSE_CALL(get_nlrom_options(comm, &no));
   if (help_requested()) return;
+  options::add_prefix(no.b.prefix, options::Solver::Eigen);
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(no.error.empty(), no.error);

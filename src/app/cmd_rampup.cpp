@@ -14,6 +14,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/rampup/rampup.hpp"
 
@@ -65,7 +66,7 @@ PetscErrorCode get_list(PetscOptionItems* PetscOptionsObject, const std::string&
   char* v[256];
   PetscInt n = 256;
   PetscBool set = PETSC_FALSE;
-  PetscCall(PetscOptionsStringArray(name.c_str(), help, "", v, &n, &set));
+  PetscCall(MorseOptionsStringArray(name.c_str(), help, "", v, &n, &set));
   if (set)
     for (PetscInt i = 0; i < n; ++i) {
       out->emplace_back(v[i]);
@@ -77,14 +78,14 @@ PetscErrorCode get_list(PetscOptionItems* PetscOptionsObject, const std::string&
 PetscErrorCode get_reals(PetscOptionItems* PetscOptionsObject, const std::string& name, const char* help, std::vector<double>* out, PetscBool* set) {
   std::vector<PetscReal> v(4096);
   PetscInt n = static_cast<PetscInt>(v.size());
-  PetscCall(PetscOptionsRealArray(name.c_str(), help, "", v.data(), &n, set));
+  PetscCall(MorseOptionsRealArray(name.c_str(), help, "", v.data(), &n, set));
   if (*set) out->assign(v.begin(), v.begin() + n);
   return PETSC_SUCCESS;
 }
 
 PetscErrorCode get_string(PetscOptionItems* PetscOptionsObject, const std::string& name, const char* help, std::string* out, PetscBool* set) {
   char buf[PETSC_MAX_PATH_LEN] = "";
-  PetscCall(PetscOptionsString(name.c_str(), help, "", out->c_str(), buf, sizeof buf, set));
+  PetscCall(MorseOptionsString(name.c_str(), help, "", out->c_str(), buf, sizeof buf, set));
   if (*set) *out = buf;
   return PETSC_SUCCESS;
 }
@@ -107,12 +108,12 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
     PetscCall(get_string(PetscOptionsObject, p + "file", "Superelement file (/rom of morse reduce or select)", &so.file, &set));
     if (!set) fail(cat("stator ", s, ": give its superelement file with ", p, "file"));
     PetscCall(get_list(PetscOptionsObject, p + "clamp", "Interface nodes clamped in the assembly: node ids or node sets", &so.clamp));
-    PetscCall(PetscOptionsReal((p + "cut_hz").c_str(),
+    PetscCall(MorseOptionsReal((p + "cut_hz").c_str(),
                                "Truncation frequency of its modal basis [Hz] (default: -rampup_cut_factor x the top "
                                "spin frequency)",
                                "", so.cut_hz, &so.cut_hz, &set));
     if (set && !(so.cut_hz > 0)) fail(cat(p, "cut_hz ", so.cut_hz, " must be > 0"));
-    PetscCall(PetscOptionsReal((p + "damping_ratio").c_str(),
+    PetscCall(MorseOptionsReal((p + "damping_ratio").c_str(),
                                "Modal damping ratio of its modes (default: the superelement's C, 0 without)", "",
                                so.damping_ratio, &so.damping_ratio, &set));
     if (set && !(so.damping_ratio >= 0 && so.damping_ratio < 1))
@@ -129,10 +130,10 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
     if (!set && ro.z.size() > 1) fail(cat("rotor ", r, ": give its shaft diameter with ", p, "d_outer"));
     PetscCall(get_reals(PetscOptionsObject, p + "d_inner", "Inner diameter [m] (hollow shaft): one value or one per element",
                         &ro.d_inner, &set));
-    PetscCall(PetscOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E, nullptr));
-    PetscCall(PetscOptionsReal((p + "nu").c_str(), "Poisson ratio", "", ro.mat.nu, &ro.mat.nu, nullptr));
-    PetscCall(PetscOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho, nullptr));
-    PetscCall(PetscOptionsReal((p + "speed_ratio").c_str(), "Spin speed / driving speed (negative: counter-rotating)",
+    PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E, nullptr));
+    PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson ratio", "", ro.mat.nu, &ro.mat.nu, nullptr));
+    PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho, nullptr));
+    PetscCall(MorseOptionsReal((p + "speed_ratio").c_str(), "Spin speed / driving speed (negative: counter-rotating)",
                                "", ro.speed_ratio, &ro.speed_ratio, nullptr));
     std::vector<double> ab;
     PetscCall(get_reals(PetscOptionsObject, p + "rayleigh", "Rayleigh damping alpha [1/s],beta [s] of the rotor", &ab, &set));
@@ -148,12 +149,12 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
       DiskOpt dk;
       dk.name = d;
       const std::string q = "-rampup_disk_" + d + "_";
-      PetscCall(PetscOptionsReal((q + "z").c_str(), "Axial position [m] (a station of its rotor)", "", dk.z, &dk.z,
+      PetscCall(MorseOptionsReal((q + "z").c_str(), "Axial position [m] (a station of its rotor)", "", dk.z, &dk.z,
                                  &set));
       if (!set) fail(cat("disk ", d, ": give its position with ", q, "z"));
-      PetscCall(PetscOptionsReal((q + "mass").c_str(), "Mass [kg]", "", dk.mass, &dk.mass, nullptr));
-      PetscCall(PetscOptionsReal((q + "Ip").c_str(), "Polar moment of inertia [kg m^2]", "", dk.Ip, &dk.Ip, nullptr));
-      PetscCall(PetscOptionsReal((q + "Id").c_str(), "Diametral moment of inertia [kg m^2]", "", dk.Id, &dk.Id,
+      PetscCall(MorseOptionsReal((q + "mass").c_str(), "Mass [kg]", "", dk.mass, &dk.mass, nullptr));
+      PetscCall(MorseOptionsReal((q + "Ip").c_str(), "Polar moment of inertia [kg m^2]", "", dk.Ip, &dk.Ip, nullptr));
+      PetscCall(MorseOptionsReal((q + "Id").c_str(), "Diametral moment of inertia [kg m^2]", "", dk.Id, &dk.Id,
                                  nullptr));
       if (!(dk.mass >= 0 && dk.Ip >= 0 && dk.Id >= 0))
         fail(cat("disk ", d, ": ", q, "mass, ", q, "Ip and ", q, "Id must be >= 0"));
@@ -172,7 +173,7 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
     const std::string p = "-rampup_bearing_" + b + "_";
     PetscCall(get_string(PetscOptionsObject, p + "rotor", "Rotor", &bo.rotor, &set));
     if (!set) fail(cat("bearing ", b, ": give its rotor with ", p, "rotor"));
-    PetscCall(PetscOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "", bo.z, &bo.z,
+    PetscCall(MorseOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "", bo.z, &bo.z,
                                &set));
     if (!set) fail(cat("bearing ", b, ": give its position with ", p, "z"));
     PetscCall(get_string(PetscOptionsObject, p + "stator", "Stator it sits in, or ground", &bo.stator, &set));
@@ -183,24 +184,24 @@ PetscErrorCode get_rampup_options(MPI_Comm comm, RampupOptions* o) {
     if (bo.k.size() > 2 || bo.c.size() > 2) fail(cat("bearing ", b, ": ", p, "k and ", p, "c take 1 or 2 values"));
     o->bearings.push_back(bo);
   }
-  PetscCall(PetscOptionsReal("-rampup_rpm_max", "Top driving speed [rpm]", "", o->rpm_max, &o->rpm_max, nullptr));
-  PetscCall(PetscOptionsReal("-rampup_ramp_time", "Ramp duration 0 -> top speed [s]", "", o->ramp_time, &o->ramp_time,
+  PetscCall(MorseOptionsReal("-rampup_rpm_max", "Top driving speed [rpm]", "", o->rpm_max, &o->rpm_max, nullptr));
+  PetscCall(MorseOptionsReal("-rampup_ramp_time", "Ramp duration 0 -> top speed [s]", "", o->ramp_time, &o->ramp_time,
                              nullptr));
-  PetscCall(PetscOptionsBool("-rampup_constant_speed", "Constant top speed from t = 0 instead of the ramp", "",
+  PetscCall(MorseOptionsBool("-rampup_constant_speed", "Constant top speed from t = 0 instead of the ramp", "",
                              o->constant, &o->constant, nullptr));
-  PetscCall(PetscOptionsReal("-rampup_dt", "Time step [s]", "", o->dt, &o->dt, nullptr));
-  PetscCall(PetscOptionsReal("-rampup_t_final", "End time [s] (default: the ramp time)", "", o->t_final, &o->t_final,
+  PetscCall(MorseOptionsReal("-rampup_dt", "Time step [s]", "", o->dt, &o->dt, nullptr));
+  PetscCall(MorseOptionsReal("-rampup_t_final", "End time [s] (default: the ramp time)", "", o->t_final, &o->t_final,
                              nullptr));
-  PetscCall(PetscOptionsReal("-rampup_alpha", "HHT alpha in [-1/3, 0] (0: Newmark average acceleration)", "",
+  PetscCall(MorseOptionsReal("-rampup_alpha", "HHT alpha in [-1/3, 0] (0: Newmark average acceleration)", "",
                              o->alpha, &o->alpha, nullptr));
-  PetscCall(PetscOptionsInt("-rampup_output_every", "Write every K-th step", "", o->output_every, &o->output_every,
+  PetscCall(MorseOptionsInt("-rampup_output_every", "Write every K-th step", "", o->output_every, &o->output_every,
                             nullptr));
-  PetscCall(PetscOptionsReal("-rampup_cut_factor",
+  PetscCall(MorseOptionsReal("-rampup_cut_factor",
                              "Stator modal bases keep the modes below this factor x the top spin frequency", "",
                              o->cut_factor, &o->cut_factor, nullptr));
-  PetscCall(PetscOptionsBool("-rampup_dense", "Dense LU of the whole effective matrix every step (reference, O(n^3))",
+  PetscCall(MorseOptionsBool("-rampup_dense", "Dense LU of the whole effective matrix every step (reference, O(n^3))",
                              "", o->dense, &o->dense, nullptr));
-  PetscCall(PetscOptionsBool("-rampup_write_matrices", "Write the assembled M, C, K, G to /rampup/matrices", "",
+  PetscCall(MorseOptionsBool("-rampup_write_matrices", "Write the assembled M, C, K, G to /rampup/matrices", "",
                              o->write_matrices, &o->write_matrices, nullptr));
   PetscCall(get_string(PetscOptionsObject, "-rampup_reference",
                        "A morse rampup file of the same engine: report seed 000's eq. 24 errors against it",

@@ -11,6 +11,7 @@
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/matrices.hpp"
@@ -24,6 +25,7 @@ void run_reduce(MPI_Comm comm) {
   ReduceOptions r;
   MORSE_CALL(get_reduce_options(comm, &r));
   if (help_requested()) return;
+  options::add_prefix(cb_settings(r).prefix, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
   MORSE_CHECK(r.n_fixed >= 0 || r.fmax > 0, "give -cb_num_fixed_modes N or -cb_fmax HZ");

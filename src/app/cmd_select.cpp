@@ -16,6 +16,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
@@ -24,6 +25,10 @@
 namespace morse::app::detail {
 
 namespace {
+
+// Options prefixes of the eigen solvers of the full-model check and of the IMR modes.
+const char* const kFomPrefix = "select_fom_";
+const char* const kImrPrefix = "select_imr_";
 
 struct SelectOptions {
   std::string from;
@@ -52,13 +57,13 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
   PetscReal vals[256];
   PetscInt ivals[256];
   PetscOptionsBegin(comm, nullptr, "morse select options", "");
-  PetscCall(PetscOptionsString("-select_from",
+  PetscCall(MorseOptionsString("-select_from",
                                "Start from a `morse reduce -cb_write_basis` file of the same mesh and boundary instead "
                                "of computing the modes",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->from = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsStringArray("-select_method",
+  PetscCall(MorseOptionsStringArray("-select_method",
                                     "Ranking methods, comma separated: frequency lpf eim veim deim omr cmschi ebr imr",
                                     "", names, &n, &set));
   if (set)
@@ -68,59 +73,59 @@ PetscErrorCode get_select_options(MPI_Comm comm, SelectOptions* o) {
     }
   else
     o->methods = {"eim"};
-  PetscCall(PetscOptionsInt("-select_num_modes", "Keep this many fixed-interface modes (best first)", "",
+  PetscCall(MorseOptionsInt("-select_num_modes", "Keep this many fixed-interface modes (best first)", "",
                             o->num_modes, &o->num_modes, &o->num_modes_set));
-  PetscCall(PetscOptionsReal("-select_fraction",
+  PetscCall(MorseOptionsReal("-select_fraction",
                              "Keep the best modes up to this cumulative fraction of the method's total score "
                              "(default 0.95 when -select_num_modes is not given)",
                              "", o->fraction, &o->fraction, &o->fraction_set));
-  PetscCall(PetscOptionsReal("-select_fmax_analysis",
+  PetscCall(MorseOptionsReal("-select_fmax_analysis",
                              "Analysis cutoff [Hz] for superelement modes in band and the MAC check "
                              "(default: -cb_fmax / 2, seed 000's 2.5x vs 5x; or half the top candidate frequency)",
                              "", o->fmax_analysis, &o->fmax_analysis, nullptr));
-  PetscCall(PetscOptionsInt("-select_fom_modes",
+  PetscCall(MorseOptionsInt("-select_fom_modes",
                             "Number of full-model modes for the MAC check (default: all below the analysis cutoff)",
                             "", o->fom_modes, &o->fom_modes, nullptr));
-  PetscCall(PetscOptionsReal("-select_mac_threshold", "MAC above which a full-model mode counts as matched", "",
+  PetscCall(MorseOptionsReal("-select_mac_threshold", "MAC above which a full-model mode counts as matched", "",
                              o->mac_threshold, &o->mac_threshold, nullptr));
-  PetscCall(PetscOptionsString("-select_rom_method", "Method whose superelement is written to /rom (default: the first)",
+  PetscCall(MorseOptionsString("-select_rom_method", "Method whose superelement is written to /rom (default: the first)",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->rom_method = buf;
   PetscInt nv = 256;
-  PetscCall(PetscOptionsRealArray("-select_ebr_freq",
+  PetscCall(MorseOptionsRealArray("-select_ebr_freq",
                                   "EBR harmonic frequencies [Hz] (default: every boundary DOF loaded alone at 8 "
                                   "frequencies across the analysis band)",
                                   "", vals, &nv, &set));
   if (set) o->ebr_freq.assign(vals, vals + nv), o->ebr_given = true;
   nv = 256;
-  PetscCall(PetscOptionsRealArray("-select_ebr_amp", "EBR force amplitude per harmonic (on every boundary DOF)", "",
+  PetscCall(MorseOptionsRealArray("-select_ebr_amp", "EBR force amplitude per harmonic (on every boundary DOF)", "",
                                   vals, &nv, &set));
   if (set) o->ebr_amp.assign(vals, vals + nv), o->ebr_given = true;
   nv = 256;
-  PetscCall(PetscOptionsRealArray("-select_ebr_phase", "EBR phase per harmonic [deg] (uniform: no effect on the scores)",
+  PetscCall(MorseOptionsRealArray("-select_ebr_phase", "EBR phase per harmonic [deg] (uniform: no effect on the scores)",
                                   "", vals, &nv, &set));
   if (set) o->ebr_phase.assign(vals, vals + nv), o->ebr_given = true;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-select_ebr_load",
+  PetscCall(MorseOptionsString("-select_ebr_load",
                                "EBR load table: lines 'freq_hz node component amplitude [phase_deg]' on boundary "
                                "nodes, one harmonic per frequency (instead of -select_ebr_freq/amp/phase)",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->ebr_load = buf;
   buf[0] = 0;
   PetscCall(PetscStrncpy(buf, o->imr_support.c_str(), sizeof buf));
-  PetscCall(PetscOptionsString("-select_imr_support",
+  PetscCall(MorseOptionsString("-select_imr_support",
                                "IMR: full-system modes with the interface free, spring (-select_imr_support_stiffness) or "
                                "clamped",
                                "", buf, buf, sizeof buf, nullptr));
   o->imr_support = buf;
-  PetscCall(PetscOptionsReal("-select_imr_support_stiffness", "IMR: spring stiffness on every boundary DOF", "",
+  PetscCall(MorseOptionsReal("-select_imr_support_stiffness", "IMR: spring stiffness on every boundary DOF", "",
                              o->imr_stiffness, &o->imr_stiffness, nullptr));
   nv = 256;
-  PetscCall(PetscOptionsIntArray("-select_imr_modes",
+  PetscCall(MorseOptionsIntArray("-select_imr_modes",
                                  "IMR: full-system modes of interest, 1-based (default: all below the analysis cutoff)",
                                  "", ivals, &nv, &set));
   if (set) o->imr_modes.assign(ivals, ivals + nv);
-  PetscCall(PetscOptionsReal("-select_imr_shift", "IMR: relative frequency shift of the fictitious force", "",
+  PetscCall(MorseOptionsReal("-select_imr_shift", "IMR: relative frequency shift of the fictitious force", "",
                              o->imr_shift, &o->imr_shift, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
@@ -138,6 +143,8 @@ void run_select(MPI_Comm comm) {
   SelectOptions so;
   MORSE_CALL(get_select_options(comm, &so));
   if (help_requested()) return;
+  for (const std::string& p : {cb_settings(r).prefix, std::string(kFomPrefix), std::string(kImrPrefix)})
+    options::add_prefix(p, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
   MORSE_CHECK(!so.from.empty() || r.n_fixed >= 0 || r.fmax > 0,
@@ -199,7 +206,7 @@ void run_select(MPI_Comm comm) {
   eigen::Eigenpairs fom;
   {
     eigen::EigenSettings es;
-    es.prefix = "select_fom_";
+    es.prefix = kFomPrefix;
     es.stage = "Fom";
     es.what = "full-model modes";
     if (so.fom_modes > 0)
@@ -254,7 +261,7 @@ void run_select(MPI_Comm comm) {
         MORSE_CALL(MatAssemblyEnd(Kspring.get(), MAT_FINAL_ASSEMBLY));
         Ks = Kspring.get();
         eigen::EigenSettings es;
-        es.prefix = "select_imr_";
+        es.prefix = kImrPrefix;
         es.stage = "Imr";
         es.what = "IMR system modes";
         es.omega2_max = l_an;

@@ -15,6 +15,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/sim/sim.hpp"
 
@@ -43,40 +44,40 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse simulate options", "");
-  PetscCall(PetscOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf, sizeof buf, &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-out", "Output HDF5 file", "", o->out.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-out", "Output HDF5 file", "", o->out.c_str(), buf, sizeof buf, &set));
   if (set) o->out = buf;
-  PetscCall(PetscOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
                              nullptr));
-  PetscCall(PetscOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
+  PetscCall(MorseOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
   o->tfinal_set = set;
   const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
   PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
-  PetscCall(PetscOptionsEnum("-sim_scheme",
+  PetscCall(MorseOptionsEnum("-sim_scheme",
                              "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
                              "Newton on the reduced model: morse fom's scheme, any dt)",
                              "", schemes, scheme, &scheme, nullptr));
   o->s.scheme = static_cast<sim::Scheme>(scheme);
-  PetscCall(PetscOptionsReal("-sim_newton_rtol", "trapezoidal: Newton tolerance relative to the force scale", "",
+  PetscCall(MorseOptionsReal("-sim_newton_rtol", "trapezoidal: Newton tolerance relative to the force scale", "",
                              o->s.newton_rtol, &o->s.newton_rtol, nullptr));
   PetscInt max_it = o->s.newton_max_it;
-  PetscCall(PetscOptionsInt("-sim_newton_max_it", "trapezoidal: Newton iterations per step before the run stops", "",
+  PetscCall(MorseOptionsInt("-sim_newton_max_it", "trapezoidal: Newton iterations per step before the run stops", "",
                             max_it, &max_it, nullptr));
   o->s.newton_max_it = static_cast<int>(max_it);
   const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
   PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
-  PetscCall(PetscOptionsEnum("-sim_kernel",
+  PetscCall(MorseOptionsEnum("-sim_kernel",
                              "Nonlinear force in the time loop: folded (P3 [A;B] times the monomials), potential "
                              "(symmetric energy coefficients, ~4 times fewer bytes; exact or STEP tensors), auto "
                              "(potential when A, B derive from a potential and the folded matrix exceeds 12 MB)",
                              "", layouts, layout, &layout, nullptr));
   o->s.kernel = static_cast<sim::KernelLayout>(layout);
-  PetscCall(PetscOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
-  PetscCall(PetscOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
+  PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-sim_snapshots",
+  PetscCall(MorseOptionsString("-sim_snapshots",
                                "A morse fom file: write the full field u = Phi q (and v) at its snapshot times and "
                                "on its DOF map (/sim/snapshots)",
                                "", buf, buf, sizeof buf, &set));
@@ -88,12 +89,12 @@ PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
   std::vector<double>* dest[2] = {&o->s.q0, &o->s.v0};
   for (int i = 0; i < 2; ++i) {
     PetscInt n = static_cast<PetscInt>(v.size());
-    PetscCall(PetscOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
+    PetscCall(MorseOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
     if (set) dest[i]->assign(v.begin(), v.begin() + n);
   }
   PetscInt n3 = 3;
   PetscReal u3[3] = {0, 0, 0};
-  PetscCall(PetscOptionsRealArray("-sim_v0_uniform",
+  PetscCall(MorseOptionsRealArray("-sim_v0_uniform",
                                   "Initial velocity vx,vy,vz of every node [m/s], fitted on the basis by least squares "
                                   "(for impact tests; the fit residual is printed)",
                                   "", u3, &n3, &set));

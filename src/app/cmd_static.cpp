@@ -8,6 +8,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
 #include "morse/io/h5.hpp"
@@ -27,21 +28,21 @@ PetscErrorCode get_static_options(MPI_Comm comm, StaticOptions* o) {
   PetscCall(get_set_list(comm, "-static_monitor", "Node sets whose displacements are printed and written",
                          &o->monitor));
   PetscOptionsBegin(comm, nullptr, "morse static options", "");
-  PetscCall(PetscOptionsBool("-static_linear", "Linear solution K u = f (for comparison)", "", o->linear, &o->linear,
+  PetscCall(MorseOptionsBool("-static_linear", "Linear solution K u = f (for comparison)", "", o->linear, &o->linear,
                              nullptr));
-  PetscCall(PetscOptionsReal("-static_time", "Time at which the loads are evaluated [s]", "", o->s.time, &o->s.time,
+  PetscCall(MorseOptionsReal("-static_time", "Time at which the loads are evaluated [s]", "", o->s.time, &o->s.time,
                              nullptr));
-  PetscCall(PetscOptionsReal("-static_load_factor", "Final load factor on the loads", "", o->s.load_factor,
+  PetscCall(MorseOptionsReal("-static_load_factor", "Final load factor on the loads", "", o->s.load_factor,
                              &o->s.load_factor, nullptr));
-  PetscCall(PetscOptionsInt("-static_steps", "Initial number of equal load increments", "", o->s.steps, &o->s.steps,
+  PetscCall(MorseOptionsInt("-static_steps", "Initial number of equal load increments", "", o->s.steps, &o->s.steps,
                             nullptr));
-  PetscCall(PetscOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "",
+  PetscCall(MorseOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "",
                             o->s.max_cutbacks, &o->s.max_cutbacks, nullptr));
-  PetscCall(PetscOptionsReal("-static_rtol", "Newton tolerance: ||R|| <= rtol max(||lambda f||, ||K u||)", "",
+  PetscCall(MorseOptionsReal("-static_rtol", "Newton tolerance: ||R|| <= rtol max(||lambda f||, ||K u||)", "",
                              o->s.rtol, &o->s.rtol, nullptr));
-  PetscCall(PetscOptionsInt("-static_max_it", "Newton iterations per increment", "", o->s.max_it, &o->s.max_it,
+  PetscCall(MorseOptionsInt("-static_max_it", "Newton iterations per increment", "", o->s.max_it, &o->s.max_it,
                             nullptr));
-  PetscCall(PetscOptionsBool("-static_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+  PetscCall(MorseOptionsBool("-static_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
                              &o->xdmf, nullptr));
   PetscOptionsEnd();
   o->s.linear = o->linear;
@@ -59,6 +60,7 @@ void run_static(MPI_Comm comm) {
   StaticOptions so;
   MORSE_CALL(get_static_options(comm, &so));
   if (help_requested()) return;
+  options::add_prefix(so.s.prefix, options::Solver::Nonlinear);
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");

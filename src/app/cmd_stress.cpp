@@ -13,6 +13,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
@@ -29,26 +30,26 @@ PetscErrorCode get_stress_options(MPI_Comm comm, StressOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse stress options", "");
-  PetscCall(PetscOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "", buf, buf, sizeof buf,
+  PetscCall(MorseOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "", buf, buf, sizeof buf,
                                &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf, sizeof buf, &set));
   if (set) o->sim = buf;
-  PetscCall(PetscOptionsReal("-stress_time", "Time [s] of the stress (the nearest stored step); default: the time of "
+  PetscCall(MorseOptionsReal("-stress_time", "Time [s] of the stress (the nearest stored step); default: the time of "
                              "the largest |radial displacement| at -stress_monitor",
                              "", o->time, &o->time, &o->time_set));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-stress_monitor", "Node set of one node whose largest radial displacement picks the time",
+  PetscCall(MorseOptionsString("-stress_monitor", "Node set of one node whose largest radial displacement picks the time",
                                "", o->monitor.c_str(), buf, sizeof buf, &set));
   if (set) o->monitor = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-stress_measure",
+  PetscCall(MorseOptionsString("-stress_measure",
                                "linear (small strain) | nonlinear (Cauchy stress of St Venant-Kirchhoff); default: "
                                "as the simulation (its /sim attribute linear)",
                                "", "", buf, sizeof buf, &set));
   if (set) o->measure = buf;
-  PetscCall(PetscOptionsBool("-stress_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+  PetscCall(MorseOptionsBool("-stress_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
                              &o->xdmf, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;

@@ -13,6 +13,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/sim/sim.hpp"
 
@@ -32,32 +33,32 @@ PetscErrorCode get_sweep_options(MPI_Comm comm, SweepOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse sweep options", "");
-  PetscCall(PetscOptionsString("-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "",
+  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-out", "Sweep file (HDF5), rewritten after every speed; resumed if it exists", "",
+  PetscCall(MorseOptionsString("-out", "Sweep file (HDF5), rewritten after every speed; resumed if it exists", "",
                                o->out.c_str(), buf, sizeof buf, &set));
   if (set) o->out = buf;
-  PetscCall(PetscOptionsReal("-sweep_omega_min", "Lowest rotation speed [rad/s]", "", o->omega_min, &o->omega_min, nullptr));
-  PetscCall(PetscOptionsReal("-sweep_omega_max", "Highest rotation speed [rad/s]", "", o->omega_max, &o->omega_max, nullptr));
-  PetscCall(PetscOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step, &o->omega_step, nullptr));
-  PetscCall(PetscOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt, &o->dt, nullptr));
-  PetscCall(PetscOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_min", "Lowest rotation speed [rad/s]", "", o->omega_min, &o->omega_min, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_max", "Highest rotation speed [rad/s]", "", o->omega_max, &o->omega_max, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step, &o->omega_step, nullptr));
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt, &o->dt, nullptr));
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-sweep_monitor", "Node set of one node whose radial displacement is recorded", "",
+  PetscCall(MorseOptionsString("-sweep_monitor", "Node set of one node whose radial displacement is recorded", "",
                                o->monitor.c_str(), buf, sizeof buf, &set));
   if (set) o->monitor = buf;
-  PetscCall(PetscOptionsReal("-sweep_spectrum_fmax", "Highest frequency of the spectrum [Hz]", "", o->fmax, &o->fmax, nullptr));
-  PetscCall(PetscOptionsInt("-sweep_spectrum_bins", "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "",
+  PetscCall(MorseOptionsReal("-sweep_spectrum_fmax", "Highest frequency of the spectrum [Hz]", "", o->fmax, &o->fmax, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_spectrum_bins", "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "",
                             o->bins, &o->bins, nullptr));
-  PetscCall(PetscOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
+  PetscCall(MorseOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
                             o->batch, &o->batch, nullptr));
-  PetscCall(PetscOptionsBool("-sweep_batched",
+  PetscCall(MorseOptionsBool("-sweep_batched",
                              "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
                              "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
                              "", o->batched, &o->batched, nullptr));
-  PetscCall(PetscOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
+  PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
   PetscOptionsEnd();
   return get_contact_options(comm, &o->contact);

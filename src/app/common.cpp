@@ -7,12 +7,12 @@
 
 #include <cstdint>
 #include <cstdlib>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/mesh.hpp"
@@ -21,19 +21,6 @@
 namespace morse::app::detail {
 
 namespace {
-
-// Options owned by inner PETSc/SLEPc objects of a command: accepted by the early check.
-bool inner_option(const std::string& name) {
-  // The eigen solvers' prefixes, followed by SLEPc's objects, the inertia factorization of the
-  // count-by-slicing search and its threshold (cb/eigen.hpp); these are read by the solvers.
-  static const char* solvers[] = {"cb_", "modes_", "select_fom_", "select_imr_", "fom_damping_", "static_", "fom_krylov_", "fom_", "nlrom_"};
-  static const char* inner[] = {"eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "count_slicing", "eigen_solver", "check_inertia", "block_", "snes_", "ksp_", "pc_", "mat_mumps_"};
-  for (const char* p : solvers)
-    if (name.rfind(p, 0) == 0)
-      for (const char* q : inner)
-        if (name.compare(std::strlen(p), std::strlen(q), q) == 0) return true;
-  return false;
-}
 
 // "1,2,10-12" -> {1, 2, 10, 11, 12}; "" on success, else the reason.
 std::string parse_id_list(const std::string& text, std::vector<std::int64_t>* ids) {
@@ -74,20 +61,20 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
   o->material.name = "options";
   o->material.E = o->material.nu = o->material.rho = -1;
   PetscOptionsBegin(comm, nullptr, "morse model options", "");
-  PetscCall(PetscOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
+  PetscCall(MorseOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
                                buf, buf, sizeof buf, &set));
   if (set) o->mesh = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-mesh_units",
+  PetscCall(MorseOptionsString("-mesh_units",
                                "Unit system of the mesh, recorded in the output (e.g. SI, mm-t-s); "
                                "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->units = buf;
-  PetscCall(PetscOptionsBool("-mesh_skip_unsupported",
+  PetscCall(MorseOptionsBool("-mesh_skip_unsupported",
                              "Nastran: skip element cards morse cannot represent (CQUAD4, CBAR, CELAS, ...) with a warning "
                              "instead of an error (their stiffness and mass are then missing)",
                              "", o->skip_unsupported, &o->skip_unsupported, nullptr));
-  PetscCall(PetscOptionsStringArray("-clamp",
+  PetscCall(MorseOptionsStringArray("-clamp",
                                     "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
                                     "the DOFs fixed by *BOUNDARY in the deck",
                                     "", sets, &n_sets, &set));
@@ -96,14 +83,14 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
       o->clamp.emplace_back(sets[i]);
       PetscCall(PetscFree(sets[i]));
     }
-  PetscCall(PetscOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "",
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "",
                              o->material.E, &o->material.E, nullptr));
-  PetscCall(PetscOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh",
+  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh",
                              "", o->material.nu, &o->material.nu, nullptr));
-  PetscCall(PetscOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
+  PetscCall(MorseOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
                              o->material.rho, &o->material.rho, nullptr));
   n_sets = 16;
-  PetscCall(PetscOptionsStringArray("-material_sets",
+  PetscCall(MorseOptionsStringArray("-material_sets",
                                     "Element sets given their own material by -material_<set>_E, _nu, _rho "
                                     "(overrides the mesh's material for those elements)",
                                     "", sets, &n_sets, &set));
@@ -114,13 +101,13 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
       m.E = m.nu = m.rho = -1;
       PetscCall(PetscFree(sets[i]));
       const std::string p = "-material_" + m.name + "_";
-      PetscCall(PetscOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
-      PetscCall(PetscOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
-      PetscCall(PetscOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
+      PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
+      PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
+      PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
       o->set_materials.push_back(m);
     }
   n_sets = 16;
-  PetscCall(PetscOptionsStringArray("-mesh_node_sets",
+  PetscCall(MorseOptionsStringArray("-mesh_node_sets",
                                     "Node sets added to the mesh, comma separated; their nodes are given by "
                                     "-mesh_node_set_<name> id,id,a-b,... (external node ids, a-b = a range)",
                                     "", sets, &n_sets, &set));
@@ -131,7 +118,7 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
       const std::string opt = "-mesh_node_set_" + name;
       char list[4096] = "";
       PetscBool has = PETSC_FALSE;
-      PetscCall(PetscOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
+      PetscCall(MorseOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
       std::vector<std::int64_t> ids;
       std::string err = has ? parse_id_list(list, &ids) : cat("give the node ids of set ", name, " with ", opt);
       if (!err.empty() && o->error.empty()) o->error = has ? cat(opt, ": ", err) : err;
@@ -150,41 +137,19 @@ PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions*
   };
   for (auto& f : files) {
     buf[0] = 0;
-    PetscCall(PetscOptionsString(f.name, f.help, "", buf, buf, sizeof buf, &set));
+    PetscCall(MorseOptionsString(f.name, f.help, "", buf, buf, sizeof buf, &set));
     if (set) *f.dest = buf;
   }
-  PetscCall(PetscOptionsReal("-matrices_symmetry_tol", "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)",
+  PetscCall(MorseOptionsReal("-matrices_symmetry_tol", "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)",
                              "", o->matrices.symmetry_tol, &o->matrices.symmetry_tol, nullptr));
   PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
-  PetscCall(PetscOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
+  PetscCall(MorseOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
   o->out = buf;
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }
 
-// Unknown-option check. early: only options with a morse prefix that no command option matched
-// (a typo of a morse option); final: every option nobody used.
-void check_options(MPI_Comm comm, bool early) {
-  PetscInt n = 0;
-  char** names = nullptr;
-  char** values = nullptr;
-  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &names, &values));
-  std::string bad;
-  static const char* morse_prefixes[] = {"cb_", "modes_", "material_", "mesh", "box_", "clamp", "boundary", "out", "rom",
-                                         "blade_", "stator_", "select_", "nlrom_", "step_", "sim_", "compare_", "sweep_", "stress_",
-                                         "load_", "static_", "rampup_", "fom_krylov_", "fom_", "matrices_", "nastran_"};
-  for (PetscInt i = 0; i < n; ++i) {
-    std::string name = names[i];
-    if (name == "help" || name == "options_left" || name.rfind("log_", 0) == 0) continue;
-    bool flag = !early;
-    if (early)
-      for (const char* p : morse_prefixes)
-        if (name.rfind(p, 0) == 0 && !inner_option(name)) flag = true;
-    if (flag) bad += " -" + name;
-  }
-  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &names, &values));
-  collective_check(comm, bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)"));
-}
+void check_options(MPI_Comm comm, bool early) { options::check_unknown(comm, early); }
 
 bool help_requested() {
   PetscBool h = PETSC_FALSE;
@@ -363,7 +328,7 @@ PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, s
   PetscInt n = 64;
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, prefix, "morse set list", "");
-  PetscCall(PetscOptionsStringArray(name, help, "", v, &n, &set));
+  PetscCall(MorseOptionsStringArray(name, help, "", v, &n, &set));
   PetscOptionsEnd();
   if (set)
     for (PetscInt i = 0; i < n; ++i) {
@@ -385,13 +350,13 @@ PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std:
     const std::string p = "-load_" + name + "_";
     char buf[256] = "";
     PetscBool has_dir = PETSC_FALSE, has_amp = PETSC_FALSE;
-    PetscCall(PetscOptionsString((p + "dir").c_str(), "Direction: x, y, z or vx,vy,vz (normalized)", "", buf, buf,
+    PetscCall(MorseOptionsString((p + "dir").c_str(), "Direction: x, y, z or vx,vy,vz (normalized)", "", buf, buf,
                                  sizeof buf, &has_dir));
-    PetscCall(PetscOptionsReal((p + "amplitude").c_str(), "Force per node [N] (not a traction)", "", l.amplitude,
+    PetscCall(MorseOptionsReal((p + "amplitude").c_str(), "Force per node [N] (not a traction)", "", l.amplitude,
                                &l.amplitude, &has_amp));
-    PetscCall(PetscOptionsReal((p + "omega").c_str(), "Angular frequency [rad/s]; 0 = constant load", "", l.omega,
+    PetscCall(MorseOptionsReal((p + "omega").c_str(), "Angular frequency [rad/s]; 0 = constant load", "", l.omega,
                                &l.omega, nullptr));
-    PetscCall(PetscOptionsReal((p + "phase").c_str(), "Phase [rad]", "", l.phase, &l.phase, nullptr));
+    PetscCall(MorseOptionsReal((p + "phase").c_str(), "Phase [rad]", "", l.phase, &l.phase, nullptr));
     if (error->empty()) {
       if (!has_dir)
         *error = cat("load on set ", name, ": give its direction with ", pre, p.substr(1), "dir x|y|z|vx,vy,vz");
@@ -413,18 +378,18 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o) {
   PetscBool set = PETSC_FALSE, outside_set = PETSC_FALSE;
   std::string outside = "error";
   PetscOptionsBegin(comm, nullptr, "morse tabulated load history (linear interpolation in time)", "");
-  PetscCall(PetscOptionsString("-load_history",
+  PetscCall(MorseOptionsString("-load_history",
                                "FILE[:/GROUP]: nodal forces on a time grid, added to the -load_* loads: a CSV "
                                "(time,node_id,fx,fy,fz), an HDF5 table (/load_history: time, node_ids, forces) or the "
                                "contact forces of a morse simulate file (/sim/contact)",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->spec = buf;
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-load_history_outside",
+  PetscCall(MorseOptionsString("-load_history_outside",
                                "Outside the table's time grid: error (checked before the run), zero or hold (end values)",
                                "", outside.c_str(), buf, sizeof buf, &outside_set));
   if (outside_set) outside = buf;
-  PetscCall(PetscOptionsReal("-load_history_scale", "Factor on every force of the table", "", o->scale, &o->scale,
+  PetscCall(MorseOptionsReal("-load_history_scale", "Factor on every force of the table", "", o->scale, &o->scale,
                              nullptr));
   PetscOptionsEnd();
   if (auto why = dyn::parse_outside(outside, &o->outside); !why.empty()) o->error = cat("-load_history_outside: ", why);
@@ -451,32 +416,43 @@ std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const m
   return h;
 }
 
+PetscErrorCode get_boundary(MPI_Comm comm, std::string* boundary) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse interface", "");
+  PetscCall(MorseOptionsString("-boundary",
+                               "Node set of the interface, kept as physical DOFs (its x,y,z: the boundary DOFs of the "
+                               "superelement; nlrom: the contact nodes)",
+                               "", buf, buf, sizeof buf, &set));
+  PetscOptionsEnd();
+  if (set) *boundary = buf;
+  return PETSC_SUCCESS;
+}
+
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  PetscCall(get_boundary(comm, &r->boundary));
   PetscOptionsBegin(comm, nullptr, "morse reduce (Craig-Bampton) options", "");
-  PetscCall(PetscOptionsString("-boundary", "Node set of the interface (boundary DOFs: its x,y,z)", "", buf, buf,
-                               sizeof buf, &set));
-  if (set) r->boundary = buf;
-  PetscCall(PetscOptionsInt("-cb_num_fixed_modes", "Number of fixed-interface modes (0 = Guyan)", "", r->n_fixed,
+  PetscCall(MorseOptionsInt("-cb_num_fixed_modes", "Number of fixed-interface modes (0 = Guyan)", "", r->n_fixed,
                             &r->n_fixed, nullptr));
-  PetscCall(PetscOptionsReal("-cb_fmax", "Keep every fixed-interface mode below this frequency [Hz] "
+  PetscCall(MorseOptionsReal("-cb_fmax", "Keep every fixed-interface mode below this frequency [Hz] "
                              "(spectrum slicing; seed 000 uses 5x the top frequency of interest)",
                              "", r->fmax, &r->fmax, nullptr));
-  PetscCall(PetscOptionsReal("-cb_damping", "Modal damping ratio xi of the fixed-interface modes", "", r->damping,
+  PetscCall(MorseOptionsReal("-cb_damping", "Modal damping ratio xi of the fixed-interface modes", "", r->damping,
                              &r->damping, nullptr));
-  PetscCall(PetscOptionsBool("-cb_write_basis", "Write the constraint and fixed-interface modes (Psi, Phi)", "",
+  PetscCall(MorseOptionsBool("-cb_write_basis", "Write the constraint and fixed-interface modes (Psi, Phi)", "",
                              r->write_basis, &r->write_basis, nullptr));
-  PetscCall(PetscOptionsBool("-cb_xdmf", "Write an XDMF file for ParaView (with -cb_write_basis)", "", r->xdmf,
+  PetscCall(MorseOptionsBool("-cb_xdmf", "Write an XDMF file for ParaView (with -cb_write_basis)", "", r->xdmf,
                              &r->xdmf, &r->xdmf_set));
   buf[0] = 0;
-  PetscCall(PetscOptionsString("-matrices_write",
+  PetscCall(MorseOptionsString("-matrices_write",
                                "Also write the model's free-DOF K and M and its DOF map as PREFIX_K.EXT, PREFIX_M.EXT, "
                                "PREFIX_dofmap.txt (mesh input)",
                                "", buf, buf, sizeof buf, &set));
   if (set) r->write_matrices = buf;
   PetscCall(PetscStrncpy(buf, r->write_format.c_str(), sizeof buf));
-  PetscCall(PetscOptionsString("-matrices_write_format", "Format of -matrices_write: mtx (MatrixMarket) or petsc (binary)",
+  PetscCall(MorseOptionsString("-matrices_write_format", "Format of -matrices_write: mtx (MatrixMarket) or petsc (binary)",
                                "", buf, buf, sizeof buf, nullptr));
   r->write_format = buf;
   PetscOptionsEnd();
@@ -505,26 +481,26 @@ PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o) {
   };
   auto& c = o->casing;
   PetscOptionsBegin(comm, nullptr, "morse contact (seed 003 §3.4: blade tip against a rigid obstacle)", "");
-  PetscCall(PetscOptionsString("-contact_set",
+  PetscCall(MorseOptionsString("-contact_set",
                                "Node set in contact (physical boundary nodes of the reduced model: its -boundary set "
                                "or a subset); no contact if not given",
                                "", buf, buf, sizeof buf, &set));
   if (set) o->set = buf;
   const char* obstacles[] = {"plane", "casing", "Obstacle", "", nullptr};
   PetscEnum ob = static_cast<PetscEnum>(o->obstacle);
-  PetscCall(PetscOptionsEnum("-contact_obstacle",
+  PetscCall(MorseOptionsEnum("-contact_obstacle",
                              "casing (rigid, of revolution about z, two-lobe distortion growing in time: eq. 52-53) or "
                              "plane (-contact_plane_point, -contact_plane_normal)",
                              "", obstacles, ob, &ob, nullptr));
   o->obstacle = static_cast<sim::Obstacle>(ob);
-  PetscCall(PetscOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
+  PetscCall(MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
   if (!(o->mu >= 0)) bad(cat("-contact_mu must be >= 0 (got ", o->mu, ")"));
   PetscInt n = 3;
-  PetscCall(PetscOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
+  PetscCall(MorseOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
   if (set && n != 3) bad("-contact_plane_point needs 3 values x,y,z");
   o->plane_given = set;
   n = 3;
-  PetscCall(PetscOptionsRealArray("-contact_plane_normal", "Normal of the plane x,y,z, pointing to the free side", "",
+  PetscCall(MorseOptionsRealArray("-contact_plane_normal", "Normal of the plane x,y,z, pointing to the free side", "",
                                   o->plane.normal, &n, &set));
   if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
   o->plane_given = o->plane_given || set;
@@ -533,26 +509,26 @@ PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o) {
   if (!(nn > 0)) bad("-contact_plane_normal must not be zero");
   else
     for (double& x : o->plane.normal) x /= nn;
-  PetscCall(PetscOptionsReal("-casing_clearance", "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
+  PetscCall(MorseOptionsReal("-casing_clearance", "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
                              c.clearance, &c.clearance, nullptr));
   c.bump_height = 2.0 * c.clearance;
-  PetscCall(PetscOptionsReal("-casing_bump_height", "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)", "",
+  PetscCall(MorseOptionsReal("-casing_bump_height", "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)", "",
                              c.bump_height, &c.bump_height, &bump_set));
   if (!bump_set) c.bump_height = 2.0 * c.clearance;
   PetscInt lobes = c.lobes;
-  PetscCall(PetscOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)", "", lobes, &lobes,
+  PetscCall(MorseOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)", "", lobes, &lobes,
                             nullptr));
   c.lobes = static_cast<int>(lobes);
-  PetscCall(PetscOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)", "", c.width, &c.width,
+  PetscCall(MorseOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)", "", c.width, &c.width,
                              nullptr));
-  PetscCall(PetscOptionsReal("-casing_alpha",
+  PetscCall(MorseOptionsReal("-casing_alpha",
                              "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "",
                              c.alpha, &c.alpha, nullptr));
   PetscBool omega_set = PETSC_FALSE;
-  PetscCall(PetscOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)", "", c.omega, &c.omega,
+  PetscCall(MorseOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)", "", c.omega, &c.omega,
                              &omega_set));
   o->omega_given = omega_set;
-  PetscCall(PetscOptionsReal("-sim_revolutions", "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
+  PetscCall(MorseOptionsReal("-sim_revolutions", "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
                              o->revolutions, &o->revolutions, &set));
   if (set && !(o->revolutions > 0)) bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
   PetscOptionsEnd();

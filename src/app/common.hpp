@@ -46,8 +46,10 @@ struct CommonOptions {
 
 PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o);
 
-// Unknown-option check. early: only options with a morse prefix that no command option matched
-// (a typo of a morse option); final: every option nobody used.
+// Unknown-option check (options::check_unknown, derived from the options registered so far).
+// early, once the command has read its own options and registered the prefixes of the solvers it
+// will run (options::add_prefix): the options not read that look like a misspelled morse option;
+// final: every option nobody used. Collective.
 void check_options(MPI_Comm comm, bool early);
 
 bool help_requested();
@@ -93,6 +95,11 @@ struct ReduceOptions {
   std::string write_format = "mtx";  ///< -matrices_write_format mtx|petsc
 };
 
+/// -boundary SET (unchanged if not given): the node set of the interface, read by reduce, select
+/// (get_reduce_options) and nlrom.
+PetscErrorCode get_boundary(MPI_Comm comm, std::string* boundary);
+
+/// -boundary and the -cb_* and -matrices_write* options of reduce and select.
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
 
 /// The Craig-Bampton settings of the -boundary / -cb_* options (keep_basis as -cb_write_basis).

@@ -21,6 +21,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/eigen/eigen.hpp"
 
@@ -124,6 +125,12 @@ PetscErrorCode shell_apply(PC pc, Vec x, Vec y) {
 
 }  // namespace
 
+void add_option_prefixes(const FomSettings& s) {
+  options::add_prefix(s.prefix, options::Solver::Linear);
+  options::add_prefix(s.prefix + "krylov_", options::Solver::Linear);
+  options::add_prefix(s.prefix + "damping_", options::Solver::Eigen);
+}
+
 FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSettings& s, Vec u_init, Vec v_init,
                    const std::function<void(const StepInfo&)>& callback) {
   MPI_Comm comm;
@@ -156,6 +163,7 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
     MORSE_CALL(VecSet(v0.get(), 0.0));
 
   // Damping: Rayleigh (C = alpha M + beta K) and modal (C = sum 2 xi w_k (M phi_k)(M phi_k)^T).
+  add_option_prefixes(s);
   IterationSolver solver(comm, s.prefix);
   std::vector<UVec> Uk;
   std::vector<double> ck;

@@ -6,6 +6,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 
 namespace morse::dyn {
@@ -103,6 +104,7 @@ StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSe
   MORSE_CALL(VecDuplicate(F.get(), u_prev.ptr()));
   MORSE_CALL(SNESCreate(comm, snes.ptr()));
   MORSE_CALL(SNESSetOptionsPrefix(snes.get(), s.prefix.c_str()));
+  options::add_prefix(s.prefix, options::Solver::Nonlinear);
   MORSE_CALL(SNESSetFunction(snes.get(), r.get(), residual, &ctx));
   MORSE_CALL(SNESSetJacobian(snes.get(), J.get(), J.get(), jacobian, &ctx));
   MORSE_CALL(SNESSetType(snes.get(), s.linear ? SNESKSPONLY : SNESNEWTONLS));

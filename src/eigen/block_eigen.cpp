@@ -25,6 +25,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
 
@@ -674,27 +675,28 @@ struct BlockOptions {
 BlockOptions block_options(MPI_Comm comm, const EigenSettings& s) {
   BlockOptions o;
   o.tol = s.tol;
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
-    PetscCall(PetscOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
+    PetscCall(MorseOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
                               "modes, else 16)", "", o.b, &o.b, nullptr));
-    PetscCall(PetscOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
+    PetscCall(MorseOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
                               o.kmax, &o.kmax, nullptr));
-    PetscCall(PetscOptionsReal("-block_memory_gb",
+    PetscCall(MorseOptionsReal("-block_memory_gb",
                                "Memory for the basis (Q and M Q) per node [GB] when -block_max_dim is not given "
                                "(default: 70% of the memory available after the factorization)",
                                "", o.memory_gb, &o.memory_gb, nullptr));
-    PetscCall(PetscOptionsInt("-block_max_restarts", "Restarts before giving up", "", o.max_restarts, &o.max_restarts, nullptr));
-    PetscCall(PetscOptionsInt("-block_check_every", "Rayleigh-Ritz every N blocks (default 0: adaptive, extrapolated "
+    PetscCall(MorseOptionsInt("-block_max_restarts", "Restarts before giving up", "", o.max_restarts, &o.max_restarts, nullptr));
+    PetscCall(MorseOptionsInt("-block_check_every", "Rayleigh-Ritz every N blocks (default 0: adaptive, extrapolated "
                               "from the converged counts)", "", o.check_every, &o.check_every, nullptr));
-    PetscCall(PetscOptionsBool("-block_monitor", "Print the converged count at every Rayleigh-Ritz", "", o.monitor,
+    PetscCall(MorseOptionsBool("-block_monitor", "Print the converged count at every Rayleigh-Ritz", "", o.monitor,
                                &o.monitor, nullptr));
-    PetscCall(PetscOptionsInt("-block_slices", "Spectrum slicing: solve [0, cutoff] in this many slices, one shift and "
+    PetscCall(MorseOptionsInt("-block_slices", "Spectrum slicing: solve [0, cutoff] in this many slices, one shift and "
                               "one Sylvester count each (default 1: one shift; -block_partitions if that is larger)", "",
                               o.slices, &o.slices, nullptr));
-    PetscCall(PetscOptionsInt("-block_partitions", "Subcommunicators solving slices side by side (each holds a copy of "
+    PetscCall(MorseOptionsInt("-block_partitions", "Subcommunicators solving slices side by side (each holds a copy of "
                               "K and M and its own factorizations)", "", o.partitions, &o.partitions, nullptr));
-    PetscCall(PetscOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", o.tol, &o.tol, nullptr));
+    PetscCall(MorseOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", o.tol, &o.tol, nullptr));
     PetscOptionsEnd();
     return PETSC_SUCCESS;
   };

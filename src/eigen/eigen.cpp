@@ -9,6 +9,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/core/units.hpp"
 
 #include "eigen/detail/testing.hpp"
@@ -186,11 +187,12 @@ PetscInt inertia_below(EPS eps, Mat K, Mat M, double a, double b, const std::str
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)K, &comm));
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   char solver[32] = "";
   std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
+    PetscCall(MorseOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
                                  "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
                                  "", solver, solver, sizeof solver, nullptr));
     PetscOptionsEnd();
@@ -218,7 +220,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   PetscInt count_slicing = s.count_slicing;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsInt("-count_slicing",
+    PetscCall(MorseOptionsInt("-count_slicing",
                               "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
                               "", count_slicing, &count_slicing, nullptr));
     PetscOptionsEnd();
@@ -250,6 +252,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   MORSE_CALL(EPSCreate(comm, out.eps.ptr()));
   EPS eps = out.eps.get();
   MORSE_CALL(EPSSetOptionsPrefix(eps, s.prefix.c_str()));
+  options::add_prefix(s.prefix, options::Solver::Eigen);
   MORSE_CALL(EPSSetOperators(eps, K, M));
   MORSE_CALL(EPSSetProblemType(eps, EPS_GHEP));
   MORSE_CALL(EPSSetType(eps, EPSKRYLOVSCHUR));
@@ -418,7 +421,7 @@ bool count_check_wanted(MPI_Comm comm, const EigenSettings& s) {
   PetscBool check = s.check_inertia ? PETSC_TRUE : PETSC_FALSE;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(PetscOptionsBool("-check_inertia",
+    PetscCall(MorseOptionsBool("-check_inertia",
                                "Count mode: check by Sylvester's inertia that no eigenvalue nearer the shift than "
                                "those returned was missed (one LDL^T factorization)",
                                "", check, &check, nullptr));

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 
 namespace morse::mesh {
 
@@ -431,20 +432,20 @@ PetscErrorCode blade_spec_from_options(MPI_Comm comm, BladeSpec* spec) {
   PetscFunctionBeginUser;
   PetscCall(PetscStrncpy(size, spec->size.c_str(), sizeof size));
   PetscOptionsBegin(comm, nullptr, "Blade generator options (morse mesh blade)", "");
-  PetscCall(PetscOptionsString("-blade_size",
+  PetscCall(MorseOptionsString("-blade_size",
                                "Mesh size: default (40x4x22 cells, ~20k nodes) or coarse (16x2x7 "
                                "cells, ~1.6k nodes)",
                                "", size, size, sizeof size, nullptr));
-  PetscCall(PetscOptionsBoundedInt("-blade_n_chord",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_chord",
                                    "Cells along the chord (0 = from -blade_size: 40 / 16)", "",
                                    n_chord, &n_chord, nullptr, 0));
-  PetscCall(PetscOptionsBoundedInt("-blade_n_thick",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_thick",
                                    "Cells across the thickness (0 = from -blade_size: 4 / 2)", "",
                                    n_thick, &n_thick, nullptr, 0));
-  PetscCall(PetscOptionsBoundedInt("-blade_n_span",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_span",
                                    "Cells along the span, >= 7 (0 = from -blade_size: 22 / 7)", "",
                                    n_span, &n_span, nullptr, 0));
-  PetscCall(PetscOptionsReal("-blade_thickness_scale",
+  PetscCall(MorseOptionsReal("-blade_thickness_scale",
                              "Factor on the published thickness-to-chord ratios (calibrated "
                              "default)",
                              "", scale, &scale, nullptr));

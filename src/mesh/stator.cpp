@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 
 namespace morse::mesh {
 
@@ -362,17 +363,17 @@ PetscErrorCode stator_spec_from_options(MPI_Comm comm, StatorSpec* spec) {
   PetscInt n_vanes = spec->n_vanes, n_thick = spec->n_thick;
   PetscReal h = spec->h, vane_thickness = spec->vane_thickness;
   PetscOptionsBegin(comm, nullptr, "morse mesh stator options", "");
-  PetscCall(PetscOptionsString("-stator_size",
+  PetscCall(MorseOptionsString("-stator_size",
                                "Mesh size preset: default (100-200k DOFs) or coarse (~10k DOFs)",
                                "", size, size, sizeof size, nullptr));
-  PetscCall(PetscOptionsInt("-stator_n_vanes", "Number of radial vanes (0 = 14, coarse: 8)", "",
+  PetscCall(MorseOptionsInt("-stator_n_vanes", "Number of radial vanes (0 = 14, coarse: 8)", "",
                             n_vanes, &n_vanes, nullptr));
-  PetscCall(PetscOptionsReal("-stator_h",
+  PetscCall(MorseOptionsReal("-stator_h",
                              "Target element edge length along the walls [m] (0 = from the size)",
                              "", h, &h, nullptr));
-  PetscCall(PetscOptionsInt("-stator_n_thick", "Elements through each wall thickness (0 = 1)", "",
+  PetscCall(MorseOptionsInt("-stator_n_thick", "Elements through each wall thickness (0 = 1)", "",
                             n_thick, &n_thick, nullptr));
-  PetscCall(PetscOptionsReal("-stator_vane_thickness", "Vane thickness [m]", "", vane_thickness,
+  PetscCall(MorseOptionsReal("-stator_vane_thickness", "Vane thickness [m]", "", vane_thickness,
                              &vane_thickness, nullptr));
   PetscOptionsEnd();
   PetscCheck(n_vanes >= 0 && n_vanes <= kMaxLattice, comm, PETSC_ERR_ARG_OUTOFRANGE,

@@ -304,4 +304,10 @@ struct FomStats {
 FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSettings& s, Vec u0, Vec v0,
                    const std::function<void(const StepInfo&)>& callback);
 
+/// Registers the options prefixes of the solvers integrate() creates (core/options.hpp): the
+/// iteration KSP/PC under s.prefix, the Krylov (CG) KSP under <prefix>krylov_ and the modal
+/// damping eigen solve under <prefix>damping_. integrate() calls it; a command calls it before its
+/// early unknown-option check. Not collective.
+void add_option_prefixes(const FomSettings& s);
+
 }  // namespace morse::dyn

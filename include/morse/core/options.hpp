@@ -1,0 +1,126 @@
+// morse/core/options.hpp: the registry of the options morse reads, and the unknown-option check
+// derived from it.
+//
+// Every option morse reads is registered where it is read, with its help text: the MorseOptions*
+// wrappers below replace PETSc's PetscOptions* calls inside a PetscOptionsBegin/End block, take
+// the block's prefix into account, register the full name and then call PETSc. Options read later
+// by PETSc/SLEPc objects (an EPS, a SNES, a KSP and the objects below them) are not registered one
+// by one: their solver's options prefix is (add_prefix), where the solver is given that prefix.
+//
+// check_unknown(comm, true), called by a command once it has read its own options and before any
+// work, refuses every option given but not read that looks like a morse option: it shares its
+// first word (the text up to the first '_') with a registered option, or is a few edits away from
+// one, and is not under a registered solver prefix. check_unknown(comm, false), at the end of a
+// run, refuses every option nobody used. Both name the closest registered option when it is close
+// ("did you mean ...?"). PETSc's own global options (-help, -options_left, -log_*, -malloc_*,
+// -info, ...) are never refused.
+//
+// The registry is per process and not thread-safe; every rank registers the same names, since
+// every rank reads the same options.
+#pragma once
+
+#include <mpi.h>
+#include <petscsys.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace morse::options {
+
+/// Registers option `name` (with its leading '-' and its prefix, as given on the command line)
+/// with its help text. Registering a name again with the same help text does nothing; with
+/// another help text it is a programming error: recorded (see conflicts()), and an assertion in
+/// debug builds. Not collective.
+void add(const std::string& name, const std::string& help);
+/// The same for a name as PETSc forms it inside a PetscOptionsBegin block: "-" + prefix +
+/// name without its '-' (prefix may be null or empty). Not collective.
+void add(const char* prefix, const char* name, const char* help);
+
+/// The options-reading objects of a solver given an options prefix.
+enum class Solver {
+  Eigen,      ///< morse's eigen solvers (cb/eigen.hpp): SLEPc's eps_ st_ bv_ ds_ rg_, the inertia_
+              ///< and block_ factorizations, eigen_solver, count_slicing, check_inertia
+  Nonlinear,  ///< a SNES with its KSP, PC and MUMPS factor: snes_ ksp_ pc_ mat_mumps_
+  Linear,     ///< a KSP with its PC and MUMPS factor: ksp_ pc_ mat_mumps_
+};
+
+/// Registers the options prefix of a solver (e.g. "cb_", Solver::Eigen: -cb_eps_tol,
+/// -cb_st_mat_mumps_icntl_14, -cb_block_size, ... are options of inner objects, read when the
+/// solver runs, and not refused by the early check). Not collective.
+void add_prefix(const std::string& prefix, Solver kind);
+
+/// Whether `name` (with or without its leading '-') is registered.
+bool registered(const std::string& name);
+/// The help text of a registered option ("" if it is not registered).
+std::string help(const std::string& name);
+/// Whether `name` (with or without its leading '-') is an option of a registered solver prefix.
+bool inner(const std::string& name);
+/// The registered names, sorted, with their leading '-'.
+std::vector<std::string> names();
+/// The names registered twice with different help texts (a programming error), with both texts.
+std::vector<std::string> conflicts();
+/// Forgets every registration: a command starts with an empty registry (app::run_command), so
+/// that commands run one after the other in one process (tests) may give an option such as -out
+/// their own help text.
+void clear();
+
+/// Optimal-string-alignment (Damerau-Levenshtein) distance: insertions, deletions,
+/// substitutions and transpositions of adjacent characters each count 1.
+std::size_t edit_distance(const std::string& a, const std::string& b);
+/// The registered option nearest to `name` (with or without '-'), with its '-', if it is close
+/// enough to be a misspelling of it (at most 1 edit for short names, 2 up to 10 characters,
+/// 3 beyond); "" otherwise.
+std::string closest(const std::string& name);
+/// Whether an option not read by morse should be refused by the early check: `name` (with or
+/// without '-') shares its first word with a registered option or is close to one (closest()), is
+/// not under a registered solver prefix and is not one of PETSc's global options.
+bool suspicious(const std::string& name);
+/// Whether `name` is one of PETSc's global options (-help, -options_left, -log_*, -malloc_*,
+/// -info, -options_file, ...), never refused.
+bool petsc_global(const std::string& name);
+
+/// The unknown-option check. early (after the command has read its own options, before any
+/// work): refuses the options given but not read that suspicious() flags; final (end of the run):
+/// refuses every option nobody used. Both refuse a registration conflict (conflicts(), a
+/// programming error: "internal error: -x registered with two help texts ..."). The message names
+/// each option (in alphabetical order) and, when one is close, the registered option it probably
+/// meant: "unknown option(s): -casing_clearence (did you mean -casing_clearance?) (see -help)".
+/// Collective on comm (every rank throws morse::Error).
+void check_unknown(MPI_Comm comm, bool early);
+
+}  // namespace morse::options
+
+// Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same
+// arguments; each registers the option (under the block's prefix) with its help text, then calls
+// PETSc's. Use them as PETSc's: PetscCall(MorseOptionsReal("-x", "help", "", x, &x, nullptr)).
+#define MORSE_OPTIONS_ADD_(opt, text) \
+  ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
+#define MorseOptionsReal(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
+#define MorseOptionsInt(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
+#define MorseOptionsBoundedInt(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoundedInt(opt, text, __VA_ARGS__))
+#define MorseOptionsRangeInt(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRangeInt(opt, text, __VA_ARGS__))
+#define MorseOptionsBool(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
+#define MorseOptionsString(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
+#define MorseOptionsEnum(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
+#define MorseOptionsEList(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
+#define MorseOptionsName(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
+#define MorseOptionsRealArray(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRealArray(opt, text, __VA_ARGS__))
+#define MorseOptionsIntArray(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsIntArray(opt, text, __VA_ARGS__))
+#define MorseOptionsBoolArray(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoolArray(opt, text, __VA_ARGS__))
+#define MorseOptionsStringArray(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsStringArray(opt, text, __VA_ARGS__))
+#define MorseOptionsEnumArray(opt, text, ...) \
+  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnumArray(opt, text, __VA_ARGS__))

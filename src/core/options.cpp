@@ -1,0 +1,204 @@
+// core/options.cpp: the option registry and the unknown-option check (morse/core/options.hpp).
+#include "morse/core/options.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cctype>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "morse/core/error.hpp"
+
+namespace morse::options {
+
+namespace {
+
+struct Registry {
+  std::map<std::string, std::string> help;               // name without '-' -> help text
+  std::vector<std::pair<std::string, Solver>> prefixes;  // solver prefix, kind
+  std::vector<std::string> conflicts;
+};
+
+Registry& registry() {
+  static Registry r;
+  return r;
+}
+
+std::string bare(const std::string& name) {
+  return name.empty() || name[0] != '-' ? name : name.substr(1);
+}
+
+// PETSc matches option names regardless of case: so do the suggestions and the early check.
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string first_word(const std::string& bare_name) {
+  return bare_name.substr(0, bare_name.find('_'));
+}
+
+bool starts_with(const std::string& s, const char* p) { return s.rfind(p, 0) == 0; }
+
+// The objects of a solver kind: option prefixes (ending in '_') or whole names.
+const std::vector<const char*>& objects(Solver kind) {
+  static const std::vector<const char*> eigen = {
+      "eps_",     "st_",    "bv_",          "ds_",           "rg_",
+      "inertia_", "block_", "eigen_solver", "count_slicing", "check_inertia"};
+  static const std::vector<const char*> nonlinear = {"snes_", "ksp_", "pc_", "mat_mumps_"};
+  static const std::vector<const char*> linear = {"ksp_", "pc_", "mat_mumps_"};
+  switch (kind) {
+    case Solver::Eigen:
+      return eigen;
+    case Solver::Nonlinear:
+      return nonlinear;
+    case Solver::Linear:
+      return linear;
+  }
+  return linear;
+}
+
+// The largest edit distance at which a registered name is suggested for a name of this length.
+std::size_t max_distance(std::size_t length) { return length <= 4 ? 1 : length <= 10 ? 2 : 3; }
+
+}  // namespace
+
+void add(const std::string& name, const std::string& text) {
+  auto& r = registry();
+  const std::string b = bare(name);
+  auto [it, inserted] = r.help.emplace(b, text);
+  if (!inserted && it->second != text) {
+    r.conflicts.push_back(
+        cat("-", b, " registered with two help texts: \"", it->second, "\" and \"", text, "\""));
+    assert(!"an option registered twice with different help texts (morse/core/options.hpp)");
+  }
+}
+
+void add(const char* prefix, const char* name, const char* text) {
+  const std::string n = bare(name ? name : "");
+  add("-" + std::string(prefix ? prefix : "") + n, text ? text : "");
+}
+
+void add_prefix(const std::string& prefix, Solver kind) {
+  auto& p = registry().prefixes;
+  if (std::find(p.begin(), p.end(), std::make_pair(prefix, kind)) == p.end())
+    p.emplace_back(prefix, kind);
+}
+
+bool registered(const std::string& name) { return registry().help.count(bare(name)) > 0; }
+
+std::string help(const std::string& name) {
+  auto it = registry().help.find(bare(name));
+  return it == registry().help.end() ? std::string() : it->second;
+}
+
+bool inner(const std::string& name) {
+  const std::string b = lower(bare(name));
+  for (const auto& [prefix, kind] : registry().prefixes) {
+    if (b.compare(0, prefix.size(), lower(prefix)) != 0) continue;
+    const std::string rest = b.substr(prefix.size());
+    for (const char* o : objects(kind))
+      if (starts_with(rest, o)) return true;
+  }
+  return false;
+}
+
+std::vector<std::string> names() {
+  std::vector<std::string> out;
+  for (const auto& [n, h] : registry().help) out.push_back("-" + n);
+  return out;
+}
+
+std::vector<std::string> conflicts() { return registry().conflicts; }
+
+void clear() { registry() = Registry{}; }
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  const std::size_t n = a.size(), m = b.size();
+  std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= n; ++i)
+    for (std::size_t j = 1; j <= m; ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[n][m];
+}
+
+std::string closest(const std::string& name) {
+  const std::string b = lower(bare(name));
+  std::string best;
+  std::size_t best_d = max_distance(b.size()) + 1;
+  for (const auto& [n, h] : registry().help) {
+    const std::size_t d = edit_distance(b, lower(n));
+    if (d < best_d) best_d = d, best = n;  // the map's order breaks ties: the first name wins
+  }
+  return best.empty() ? best : "-" + best;
+}
+
+bool petsc_global(const std::string& name) {
+  // PETSc's options database, logging, memory, error and debugger options (PetscInitialize).
+  static const char* globals[] = {"help",
+                                  "version",
+                                  "info",
+                                  "options_",
+                                  "log",
+                                  "malloc",
+                                  "memory_view",
+                                  "fp_trap",
+                                  "on_error_",
+                                  "no_signal_handler",
+                                  "check_pointer_intensity",
+                                  "objects_dump",
+                                  "debugger",
+                                  "start_in_debugger",
+                                  "stop_for_debugger",
+                                  "skip_petscrc",
+                                  "nox",
+                                  "use_gpu_aware_mpi",
+                                  "viewer_",
+                                  "saws_",
+                                  "checkfunctionlist",
+                                  "display"};
+  const std::string b = lower(bare(name));
+  for (const char* g : globals)
+    if (starts_with(b, g)) return true;
+  return false;
+}
+
+bool suspicious(const std::string& name) {
+  const std::string b = bare(name);
+  if (petsc_global(b) || inner(b) || registered(b)) return false;
+  const std::string w = lower(first_word(b));
+  for (const auto& [n, h] : registry().help)
+    if (lower(first_word(n)) == w) return true;
+  return !closest(b).empty();
+}
+
+void check_unknown(MPI_Comm comm, bool early) {
+  PetscInt n = 0;
+  char** left = nullptr;
+  char** values = nullptr;
+  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &left, &values));
+  std::vector<std::string> unknown;
+  for (PetscInt i = 0; i < n; ++i)
+    if (!petsc_global(left[i]) && (!early || suspicious(left[i]))) unknown.emplace_back(left[i]);
+  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
+  std::sort(unknown.begin(), unknown.end());
+  std::string bad;
+  for (const auto& name : unknown) {
+    bad += " -" + name;
+    if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
+  }
+  std::string err = bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)");
+  if (err.empty() && !registry().conflicts.empty())
+    err = cat("internal error: ", registry().conflicts.front());
+  collective_check(comm, err);
+}
+
+}  // namespace morse::options
