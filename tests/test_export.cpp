@@ -1,4 +1,4 @@
-// Superelement export (io/superelement.hpp, `morse export`): a real Craig-Bampton superelement of
+// Superelement export (io/export.hpp, `morse export`): a real Craig-Bampton superelement of
 // a box, made by `morse reduce` (app::run_command, on every rank), is exported in every format and
 // read back by small readers written here, independent of the writers:
 //   - the MBDyn FEM file by a reader that follows MBDyn's ReadModal (mbdyn/struct/modal.cc): record
@@ -29,7 +29,7 @@
 #include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/op4.hpp"
-#include "morse/io/superelement.hpp"
+#include "morse/io/export.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "scratch.hpp"
 #include "util.hpp"

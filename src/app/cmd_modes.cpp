@@ -65,7 +65,7 @@ void run_modes(MPI_Comm comm) {
   io::write_mesh(out, gm);
   out.write("/fom/frequencies_hz", f_hz);
   out.write("/fom/eigenvalues", eig.omega2);
-  write_modes_dataset(out, "/fom/mode_shapes", md, eig.V.get(), 0, static_cast<PetscInt>(f_hz.size()));
+  io::write_modes_dataset(out, "/fom/mode_shapes", md.lm, md.dofs, eig.V.get(), 0, static_cast<PetscInt>(f_hz.size()));
   out.attribute("/fom/mode_shapes", "description", "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids");
   out.attribute("/fom", "clamp", [&] {
     std::string s;

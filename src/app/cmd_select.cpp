@@ -406,9 +406,10 @@ void run_select(MPI_Comm comm) {
     out.attribute(g, "worst_frequency_error", mr.worst_err);
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      write_rom(out, mr.M, mr.K, r.damping > 0 || md.mm.C ? &C : nullptr, res, mr.rom_f, r.damping);
-      out.write("/rom/selected_modes", sel);
-      out.attribute("/rom", "selection_method", mr.name);
+      auto se = rom_superelement(res, mr.M, mr.K, r.damping > 0 || md.mm.C ? &C : nullptr, mr.rom_f, r.damping);
+      se.selected_modes = sel;
+      se.selection_method = mr.name;
+      io::write_superelement(out, se);
     }
   }
   out.attribute("/cb", "boundary_set", r.boundary);
