@@ -16,6 +16,7 @@
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/dyn/dyn.hpp"
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
@@ -120,18 +121,32 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   for (double x : co.w) ws += x;
   MORSE_CHECK(std::abs(ws - 1.0) < 1e-12 && *std::min_element(co.w.begin(), co.w.end()) >= 0,
               "-compare_weights must be >= 0 and sum to 1");
-  if (co.tmax < 0)
-    for (const auto& l : load_list)
-      if (l.omega > 0) {
-        double ph = std::fmod(M_PI / 2 - l.phase, 2 * M_PI);
-        if (ph < 0) ph += 2 * M_PI;
-        co.tmax = ph / l.omega;
-        break;
-      }
-  MORSE_CHECK(co.tmax >= 0, "compare: give -compare_tmax T or the harmonic load (-load_*) that defines t_max");
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::string err;
+  if (co.tmax < 0) {
+    // t_max from the load: the -load_* options if given (they override the load the files
+    // store), else the load stored in the fom file (/fom/load), else in the simulate file.
+    double tmax = -1;
+    std::string stored;  // the file whose stored load is used or overridden
+    if (rank == 0) try {
+        dyn::LoadDescription ld;
+        if (dyn::read_load_description(fom, "/fom/load", &ld))
+          stored = fom;
+        else if (dyn::read_load_description(rom, "/sim/load", &ld))
+          stored = rom;
+        tmax = dyn::first_maximum(load_list.empty() ? ld.loads : load_list);
+      } catch (const std::exception& e) {
+        err = e.what();
+      }
+    collective_check(comm, err);
+    MPI_Bcast(&tmax, 1, MPI_DOUBLE, 0, comm);
+    co.tmax = tmax;
+    if (!load_list.empty() && !stored.empty())
+      print0(comm, "morse compare: the -load_* options override the load stored in %s\n", stored.c_str());
+    MORSE_CHECK(co.tmax >= 0, "compare: give -compare_tmax T or the harmonic load (-load_*) that defines t_max",
+                load_list.empty() ? " (neither file stores a harmonic load: /fom/load, /sim/load)" : "");
+  }
   eval::Indicator ind;
   double tsnap = 0;
   if (rank == 0) {

@@ -298,6 +298,14 @@ void run_fom(MPI_Comm comm) {
   out.attribute_int("/fom", "modal_damping_modes", fo.s.damping_modes);
   out.attribute("/fom", "rayleigh_alpha", fo.s.rayleigh_alpha);
   out.attribute("/fom", "rayleigh_beta", fo.s.rayleigh_beta);
+  dyn::LoadDescription ld;
+  ld.loads = load_list;
+  if (loads.history()) {
+    ld.history = ho.spec;
+    ld.history_scale = ho.scale;
+    ld.history_outside = ho.outside;
+  }
+  dyn::write_load_description(out, "/fom/load", ld);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }

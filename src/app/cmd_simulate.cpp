@@ -294,6 +294,9 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   out.attribute("/sim", "kernel", stats.kernel);
   out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
   if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
+  dyn::LoadDescription ld;
+  ld.loads = c.loads;
+  dyn::write_load_description(out, "/sim/load", ld);
   out.commit();
   print0(PETSC_COMM_SELF, "morse: wrote %s\n", c.out.c_str());
 }

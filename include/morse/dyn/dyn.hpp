@@ -38,6 +38,10 @@
 #include "morse/fe/nonlinear.hpp"
 #include "morse/mesh/partition.hpp"
 
+namespace morse::io {
+class H5Output;
+}
+
 namespace morse::dyn {
 
 /// One nodal load: F(t) = amplitude * sin(omega t + phase) * dir on every node of `set`
@@ -167,6 +171,33 @@ class Loads {
   std::vector<UVec> patterns_;  // unit-amplitude spatial pattern of each load
   std::shared_ptr<const LoadHistory> history_;
 };
+
+// ------------------------------------------------------------------------------------------
+// The load description stored with a run (/fom/load of `morse fom`, /sim/load of `morse
+// simulate`; docs/hdf5-schema.md), so that `morse compare` reads the load of the runs it compares
+// instead of taking it on the command line again.
+
+struct LoadDescription {
+  std::vector<NodalLoad> loads;  ///< the harmonic (and constant) nodal loads, in option order
+  std::string history;           ///< the tabulated history (-load_history FILE[:/GROUP]), "" if none
+  double history_scale = 1.0;    ///< -load_history_scale
+  Outside history_outside = Outside::Error;  ///< -load_history_outside
+};
+
+/// t_max of seed 003's criterion e1: the first maximum (t >= 0) of the first harmonic load
+/// (omega > 0), (pi/2 - phase mod 2 pi) / omega; -1 if no load is harmonic.
+double first_maximum(const std::vector<NodalLoad>& loads);
+
+/// Writes d into `group` (e.g. "/fom/load"): the attribute n_loads; if n_loads > 0 the datasets
+/// sets (the set names, one per line), direction [n][3] (as given; Loads normalizes it), amplitude,
+/// omega and phase [n]; with a history the attributes history, history_scale and history_outside.
+/// Rank 0 data (io::H5Output); not collective.
+void write_load_description(io::H5Output& out, const std::string& group, const LoadDescription& d);
+
+/// Reads what write_load_description wrote. Returns false (d untouched) if the file has no
+/// `group` (a file written before the load was stored); throws naming the file and the dataset if
+/// the group is inconsistent. Serial, any rank.
+bool read_load_description(const std::string& file, const std::string& group, LoadDescription* d);
 
 /// The displacements of the nodes of one node set, sampled from distributed vectors onto rank 0
 /// (one small reduction per sample; the set's nodes only). Collective.
