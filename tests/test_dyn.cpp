@@ -3,11 +3,15 @@
 // response in closed form, modal damping decay exp(-xi w t), exact energy balance of the energy
 // scheme, and the independence of the rank count.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "elastica.hpp"
+#include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/io/h5.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -274,4 +278,56 @@ TEST(Fom, NewtonKrylovMatchesModifiedNewton) {
   EXPECT_GT(sk.krylov_iterations, 0);
   EXPECT_LT(sk.newton_iterations, sm.newton_iterations);
   EXPECT_EQ(sm.krylov_iterations, 0);
+}
+
+// The load description of a run (/fom/load, /sim/load) reads back as written; a file without it
+// (written before morse stored it) reads as "not stored"; t_max is the first maximum of the first
+// harmonic load. Each rank writes and reads its own file (serial HDF5).
+TEST(RunFile, LoadDescriptionRoundTrips) {
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_load_", pid, "_r", world_rank(), ".h5");
+  dyn::LoadDescription d;
+  d.loads.resize(3);
+  d.loads[0].set = "x1", d.loads[0].dir[2] = 1, d.loads[0].amplitude = 5;  // constant
+  d.loads[1].set = "tip", d.loads[1].dir[0] = 0.6, d.loads[1].dir[1] = 0.8, d.loads[1].amplitude = 1e6;
+  d.loads[1].omega = 300, d.loads[1].phase = 0.25;
+  d.loads[2].set = "x1", d.loads[2].dir[1] = -1, d.loads[2].amplitude = 2, d.loads[2].omega = 900;
+  d.history = "forces.csv";
+  d.history_scale = 0.5;
+  d.history_outside = dyn::Outside::Hold;
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    out.write("/fom/time", std::vector<double>{0.0, 1.0});
+    dyn::write_load_description(out, "/fom/load", d);
+    out.commit();
+  }
+  dyn::LoadDescription back;
+  ASSERT_TRUE(dyn::read_load_description(file, "/fom/load", &back));
+  ASSERT_EQ(back.loads.size(), d.loads.size());
+  for (std::size_t k = 0; k < d.loads.size(); ++k) {
+    EXPECT_EQ(back.loads[k].set, d.loads[k].set);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(back.loads[k].dir[c], d.loads[k].dir[c]);
+    EXPECT_EQ(back.loads[k].amplitude, d.loads[k].amplitude);
+    EXPECT_EQ(back.loads[k].omega, d.loads[k].omega);
+    EXPECT_EQ(back.loads[k].phase, d.loads[k].phase);
+  }
+  EXPECT_EQ(back.history, d.history);
+  EXPECT_EQ(back.history_scale, d.history_scale);
+  EXPECT_EQ(back.history_outside, dyn::Outside::Hold);
+  // The first harmonic load's first maximum: 300 t + 0.25 = pi/2.
+  EXPECT_NEAR(dyn::first_maximum(back.loads), (M_PI / 2 - 0.25) / 300, 1e-15);
+  EXPECT_EQ(dyn::first_maximum({d.loads[0]}), -1);
+  // No stored load: false, the description untouched; no load at all: stored, empty.
+  EXPECT_FALSE(dyn::read_load_description(file, "/sim/load", &back));
+  EXPECT_EQ(back.loads.size(), 3u);
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    dyn::write_load_description(out, "/sim/load", dyn::LoadDescription{});
+    out.commit();
+  }
+  ASSERT_TRUE(dyn::read_load_description(file, "/sim/load", &back));
+  EXPECT_TRUE(back.loads.empty());
+  EXPECT_TRUE(back.history.empty());
+  std::remove(file.c_str());
 }
