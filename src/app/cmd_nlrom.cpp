@@ -98,7 +98,7 @@ PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
 // Nonlinear forces of the snapshots, POD-compressed (eq. 38): the filter basis Phi_f.
 UMat force_filter(const Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {
   StageTimer t(md.lm.comm, "PodFilter");
-  auto X = io::read_dof_rows(md.lm, md.dofs, file, "/fom/snapshots/u");
+  auto X = dyn::read_fom_snapshots(md.lm, md.dofs, file);
   PetscInt ns = 0;
   MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
   MORSE_CHECK(n <= ns, "-nlrom_filter_pod ", n, " exceeds the ", ns, " snapshots of ", file);

@@ -40,6 +40,7 @@
 
 namespace morse::io {
 class H5Output;
+class H5SliceWriter;
 }
 
 namespace morse::dyn {
@@ -179,7 +180,7 @@ class Loads {
 
 struct LoadDescription {
   std::vector<NodalLoad> loads;  ///< the harmonic (and constant) nodal loads, in option order
-  std::string history;           ///< the tabulated history (-load_history FILE[:/GROUP]), "" if none
+  std::string history;           ///< the tabulated history's source (FILE or FILE:/GROUP, as -load_history takes it), "" if none
   double history_scale = 1.0;    ///< -load_history_scale
   Outside history_outside = Outside::Error;  ///< -load_history_outside
 };
@@ -327,5 +328,62 @@ struct FomStats {
 /// Collective.
 FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSettings& s, Vec u0, Vec v0,
                    const std::function<void(const StepInfo&)>& callback);
+
+// ------------------------------------------------------------------------------------------
+// The file of a full-order run (/fom of `morse fom`, docs/hdf5-schema.md), written and read here.
+
+/// The histories of a run, one entry per step from the initial state.
+struct FomHistory {
+  std::vector<double> time, energy;  ///< energy: seed 003 eq. 46 (Energies::eq46)
+  std::vector<double> kinetic, strain_linear, strain_nonlinear, external_work, damping_loss, balance;
+  std::vector<std::int64_t> newton_iterations;
+  std::vector<double> residual;
+  /// Displacements of monitored node sets: u is [time][node][x,y,z] (SetProbe::sample per step).
+  struct Set {
+    std::string name;
+    std::vector<std::int64_t> node_ids;
+    std::vector<double> u;
+  };
+  std::vector<Set> sets;
+  /// Appends step i: its time, energies, Newton iterations and residual (not the sets). Not
+  /// collective.
+  void record(const StepInfo& i);
+};
+
+/// Full-field snapshots of a run, /fom/snapshots/{u,v} ([snapshot][free DOF], with the DOF map
+/// dof_node_ids, dof_components), written in parallel into the temporary file of `out` while the
+/// run goes on (no rank holds more than its own rows). Collective throughout.
+class FomSnapshotWriter {
+ public:
+  /// Suspends out (io::H5Output::suspend) and creates the datasets for `rows` snapshots.
+  FomSnapshotWriter(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofMap& dofs, std::int64_t rows);
+  ~FomSnapshotWriter();
+  FomSnapshotWriter(const FomSnapshotWriter&) = delete;
+  FomSnapshotWriter& operator=(const FomSnapshotWriter&) = delete;
+  /// Writes u and v of step i as the next snapshot.
+  void write(const StepInfo& i);
+  /// Closes the parallel file and resumes out. Call once, before write_fom.
+  void close();
+  /// The times of the snapshots written (for write_fom).
+  const std::vector<double>& times() const { return times_; }
+
+ private:
+  io::H5Output* out_;
+  std::unique_ptr<io::H5SliceWriter> w_;
+  int u_ = -1, v_ = -1;
+  std::vector<double> times_;
+};
+
+/// Writes /fom: the histories h (time, energy, energies/*, newton_iterations, residual,
+/// sets/<SET>/{node_ids,u}), the snapshot times (snapshot_every > 0: /fom/snapshots/time and
+/// @every), the damped frequencies of stats, the load description (/fom/load and, with a history,
+/// /fom@load_history, @load_history_scale) and the settings and statistics of the run as
+/// attributes. /meta and /mesh are the command's. Rank 0 data; not collective.
+void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>& snapshot_times,
+               PetscInt snapshot_every, const FomSettings& s, const FomStats& stats, const LoadDescription& load);
+
+/// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
+/// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
+UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file);
 
 }  // namespace morse::dyn
