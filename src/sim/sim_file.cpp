@@ -1,0 +1,89 @@
+// sim/sim_file.cpp: the file of a reduced run (/sim of `morse simulate`; sim/sim.hpp,
+// docs/hdf5-schema.md).
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "morse/io/h5.hpp"
+#include "morse/sim/sim.hpp"
+
+namespace morse::sim {
+
+void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const Stats& stats) {
+  const bool implicit = s.scheme == Scheme::Trapezoidal;
+  const auto nt = static_cast<hsize_t>(rec.time.size());
+  out.write("/sim/time", rec.time);
+  out.write("/sim/energy", rec.energy);
+  out.attribute("/sim/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
+  out.write("/sim/q", rec.q, {nt, static_cast<hsize_t>(rec.final_q.size())});
+  out.write("/sim/final/q", rec.final_q);
+  out.write("/sim/final/v", rec.final_v);
+  out.attribute("/sim/final", "time", rec.final_time);
+  for (const auto& m : rec.sets) {
+    out.write("/sim/sets/" + m.name + "/node_ids", m.node_ids);
+    out.write("/sim/sets/" + m.name + "/u", m.u, {nt, m.node_ids.size(), 3});
+    out.attribute("/sim/sets/" + m.name + "/u", "description", "[time][node][x,y,z] displacement u = Phi q [m]");
+  }
+  if (!rec.snapshots_fom.empty()) {
+    const auto ns = static_cast<hsize_t>(rec.snapshot_time.size()), nd = static_cast<hsize_t>(rec.snapshot_node_ids.size());
+    out.write("/sim/snapshots/time", rec.snapshot_time);
+    out.write("/sim/snapshots/u", rec.snapshot_u, {ns, nd});
+    out.write("/sim/snapshots/v", rec.snapshot_v, {ns, nd});
+    out.write("/sim/snapshots/dof_node_ids", rec.snapshot_node_ids);
+    out.write("/sim/snapshots/dof_components", rec.snapshot_components);
+    out.attribute("/sim/snapshots", "fom", rec.snapshots_fom);
+  }
+  if (!s.contact.nodes.empty()) {
+    const auto& c = rec.contact;
+    const auto nn = static_cast<hsize_t>(s.contact.nodes.size());
+    out.write("/sim/contact/node_ids", c.node_ids);
+    out.write("/sim/contact/normal", c.normal, {nt, nn});
+    out.attribute("/sim/contact/normal", "description", "[time][node] normal contact force lambda >= 0 [N]");
+    out.write("/sim/contact/tangential", c.tangential, {nt, nn, 3});
+    out.attribute("/sim/contact/tangential", "description", "[time][node][x,y,z] Coulomb friction force [N]");
+    out.write("/sim/contact/normals", c.normals, {nn, 3});
+    out.attribute("/sim/contact/normals", "description",
+                  "[node][x,y,z] unit normal n_k to the free side (constant): the force on node k is "
+                  "normal n_k + tangential");
+    out.write("/sim/contact/mean_force", c.mean_force, {nt, nn, 3});
+    out.attribute("/sim/contact/mean_force", "description",
+                  "[time][node][x,y,z] mean contact force (normal n_k + tangential) over the steps since the "
+                  "previous output row [N], global axes; row 0 is 0; at mean_force_time");
+    out.write("/sim/contact/mean_force_time", c.mean_force_time);
+    out.attribute("/sim/contact/mean_force_time", "description",
+                  "centre of each row's output interval [s] (0 for row 0): the time grid of mean_force");
+    out.write("/sim/contact/gap", c.gap, {nt, nn});
+    out.attribute("/sim/contact/gap", "description", "[time][node] gap after the correction [m] (>= 0)");
+    out.write("/sim/contact/active", c.active);
+    out.write("/sim/contact/radial_displacement", c.radial_displacement, {nt, nn});
+    out.attribute("/sim/contact/radial_displacement", "description",
+                  "[time][node] e_r . u, e_r = (x, y, 0) / |(x, y)| of the node's reference position [m]");
+    out.attribute("/sim/contact", "obstacle", s.contact.obstacle == Obstacle::Casing ? "casing" : "plane");
+    out.attribute("/sim/contact", "mu", s.contact.mu);
+    out.attribute("/sim/contact", "max_normal_force", c.max_normal_force);
+    out.attribute("/sim/contact", "time_of_max_normal_force", c.time_of_max_normal_force);
+    if (s.contact.obstacle == Obstacle::Casing) {
+      const auto& cs = s.contact.casing;
+      out.attribute("/sim/contact", "omega", cs.omega);
+      out.attribute("/sim/contact", "clearance", cs.clearance);
+      out.attribute("/sim/contact", "bump_height", cs.bump_height);
+      out.attribute_int("/sim/contact", "lobes", cs.lobes);
+      out.attribute("/sim/contact", "width", cs.width);
+      out.attribute("/sim/contact", "alpha", cs.alpha > 0 ? cs.alpha : std::log(100.0) / (0.2 * s.t_final));
+    }
+  }
+  out.attribute("/sim", "rom", rec.rom);
+  if (!rec.case_name.empty()) out.attribute("/sim", "case", rec.case_name);
+  out.attribute_int("/sim", "linear", s.linear ? 1 : 0);
+  out.attribute("/sim", "dt", s.dt);
+  out.attribute_int("/sim", "steps", stats.steps);
+  out.attribute("/sim", "seconds", stats.seconds);
+  out.attribute("/sim", "critical_dt", stats.critical_dt);
+  out.attribute("/sim", "kernel", stats.kernel);
+  out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
+  if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
+  dyn::write_load_description(out, "/sim/load", rec.load);
+}
+
+}  // namespace morse::sim
