@@ -12,6 +12,7 @@
 #include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/io/h5.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -330,4 +331,89 @@ TEST(RunFile, LoadDescriptionRoundTrips) {
   EXPECT_TRUE(back.loads.empty());
   EXPECT_TRUE(back.history.empty());
   std::remove(file.c_str());
+}
+
+// dyn::write_fom and the snapshot writer write what read_fom and read_fom_snapshots read: the
+// histories and monitored sets to the last bit, the snapshots as the distributed vectors written,
+// on 1 and 2 ranks.
+TEST(RunFile, FomFileRoundTrips) {
+  auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.2, 0.2, 3, 1, 1));
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_fom_", pid, ".h5");
+  std::vector<UVec> us, vs;
+  for (int k = 0; k < 3; ++k) {
+    us.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double y, double z, int d) { return (k + 1) * x + y * d - z; }));
+    vs.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double, double z, int d) { return std::sin(k + x + d * z); }));
+  }
+  dyn::FomHistory h;
+  dyn::SetProbe probe(m.lm, m.dofs, "x1");
+  h.sets.push_back({"x1", probe.node_ids(), {}});
+  dyn::FomSettings s;
+  s.dt = 0.5;
+  s.scheme = dyn::Scheme::Energy;
+  dyn::FomStats stats;
+  stats.steps = 2;
+  stats.damping_omega = {3.0};
+  dyn::LoadDescription ld;
+  ld.loads.resize(1);
+  ld.loads[0].set = "x1", ld.loads[0].dir[1] = 1, ld.loads[0].amplitude = 10, ld.loads[0].omega = 7;
+  std::vector<double> snap_times;
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    dyn::FomSnapshotWriter snaps(out, m.lm, m.dofs, 3);
+    for (int k = 0; k < 3; ++k) {
+      dyn::StepInfo i;
+      i.step = k, i.t = 0.5 * k, i.u = us[k].get(), i.v = vs[k].get();
+      i.energy.kinetic = 1 + k, i.energy.strain_linear = 2 * k, i.energy.strain_nonlinear = 0.1 * k;
+      i.energy.external_work = 3 * k, i.energy.damping_loss = 0.01 * k;
+      i.newton_iterations = k + 2, i.residual = 1e-9 * k;
+      h.record(i);
+      auto u = probe.sample(i.u);
+      h.sets[0].u.insert(h.sets[0].u.end(), u.begin(), u.end());
+      snaps.write(i);
+    }
+    snaps.close();
+    snap_times = snaps.times();
+    dyn::write_fom(out, h, snap_times, 1, s, stats, ld);
+    out.commit();
+  }
+  EXPECT_EQ(snap_times, (std::vector<double>{0.0, 0.5, 1.0}));
+  if (world_rank() == 0) {
+    const auto back = dyn::read_fom(file, {"x1"});
+    EXPECT_EQ(back.time, h.time);
+    EXPECT_EQ(back.energy, h.energy);
+    EXPECT_EQ(back.kinetic, h.kinetic);
+    EXPECT_EQ(back.strain_linear, h.strain_linear);
+    EXPECT_EQ(back.strain_nonlinear, h.strain_nonlinear);
+    EXPECT_EQ(back.external_work, h.external_work);
+    EXPECT_EQ(back.damping_loss, h.damping_loss);
+    EXPECT_EQ(back.balance, h.balance);
+    EXPECT_EQ(back.newton_iterations, h.newton_iterations);
+    EXPECT_EQ(back.residual, h.residual);
+    ASSERT_EQ(back.sets.size(), 1u);
+    EXPECT_EQ(back.sets[0].node_ids, h.sets[0].node_ids);
+    EXPECT_EQ(back.sets[0].u, h.sets[0].u);
+    EXPECT_EQ(io::read_string_attribute(file, "/fom", "scheme"), "energy");
+    EXPECT_EQ(io::read_string_attribute(file, "/fom", "newton"), "modified");
+    dyn::LoadDescription lb;
+    ASSERT_TRUE(dyn::read_load_description(file, "/fom/load", &lb));
+    ASSERT_EQ(lb.loads.size(), 1u);
+    EXPECT_EQ(lb.loads[0].omega, 7.0);
+    test::expect_error_parts([&] { dyn::read_fom(file, {"tip"}); }, {file, "/fom/sets/tip"}, "read_fom of a missing set");
+  }
+  auto X = dyn::read_fom_snapshots(m.lm, m.dofs, file);
+  PetscInt n_snap = 0;
+  MORSE_CALL(MatGetSize(X.get(), nullptr, &n_snap));
+  ASSERT_EQ(n_snap, 3);
+  for (int k = 0; k < 3; ++k) {
+    Vec c;
+    PetscBool same = PETSC_FALSE;
+    MORSE_CALL(MatDenseGetColumnVecRead(X.get(), k, &c));
+    MORSE_CALL(VecEqual(c, us[k].get(), &same));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(X.get(), k, &c));
+    EXPECT_TRUE(same) << "snapshot " << k;
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(file.c_str());
 }

@@ -20,6 +20,7 @@
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
 
@@ -157,14 +158,14 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       auto need = [&](bool ok) {
         if (!ok) throw Error(err);
       };
-      need(io::read_doubles(fom, "/fom/time", &tf, &d, &err));
-      need(io::read_doubles(fom, "/fom/energy", &ef, &d, &err));
-      need(io::read_doubles(rom, "/sim/time", &tr, &d, &err));
-      need(io::read_doubles(rom, "/sim/energy", &er, &d, &err));
-      need(io::read_ints(fom, "/fom/sets/" + co.tip + "/node_ids", &tip_f, &d, &err));
-      need(io::read_ints(rom, "/sim/sets/" + co.tip + "/node_ids", &tip_r, &d, &err));
-      need(io::read_doubles(fom, "/fom/sets/" + co.tip + "/u", &uf, &d, &err));
-      need(io::read_doubles(rom, "/sim/sets/" + co.tip + "/u", &ur, &d, &err));
+      auto fh = dyn::read_fom(fom, {co.tip});
+      auto sr = sim::read_sim(rom, {co.tip});
+      tf = std::move(fh.time), ef = std::move(fh.energy), tip_f = std::move(fh.sets[0].node_ids);
+      uf = std::move(fh.sets[0].u);
+      tr = std::move(sr.time), er = std::move(sr.energy), tip_r = std::move(sr.sets[0].node_ids);
+      ur = std::move(sr.sets[0].u);
+      q = std::move(sr.q);
+      const std::size_t r = sr.final_q.size();
       {  // Match the ROM's tip rows to the FOM's by node id (the two files may order them differently).
         auto a = tip_f, b = tip_r;
         std::sort(a.begin(), a.end());
@@ -190,7 +191,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       ind.e[2] = eval::peak_to_peak_criterion(uf, ur_f, ntip);
       ind.e[3] = eval::displacement_criterion(uf, ur_f);
       // e1: full fields at the snapshot nearest to t_max.
-      std::string model = co.rom_model.empty() ? io::read_string_attribute(rom, "/sim", "rom") : co.rom_model;
+      std::string model = co.rom_model.empty() ? sr.rom : co.rom_model;
       MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
       if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
         throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));
@@ -210,8 +211,6 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       sm.file = model;
       need(io::read_doubles(model, "/nlrom/basis", &sm.basis, &d, &err));
       need(io::read_ints(model, "/mesh/node_ids", &sm.node_ids, &d, &err));
-      need(io::read_doubles(rom, "/sim/q", &q, &d, &err));
-      const std::size_t r = d.size() == 2 ? d[1] : 0;
       MORSE_CHECK(r > 0 && sm.basis.size() == r * sm.node_ids.size() * 3, "compare: ", model,
                   "'s basis does not match ", rom, "'s q");
       sm.model.r = static_cast<PetscInt>(r);

@@ -118,6 +118,41 @@ void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>
   write_load_description(out, "/fom/load", load);
 }
 
+FomHistory read_fom(const std::string& file, const std::vector<std::string>& sets) {
+  FomHistory h;
+  std::string err;
+  std::vector<hsize_t> d;
+  auto doubles = [&](const std::string& name, std::vector<double>* v) {
+    MORSE_CHECK(io::read_doubles(file, name, v, &d, &err), err);
+  };
+  doubles("/fom/time", &h.time);
+  doubles("/fom/energy", &h.energy);
+  doubles("/fom/energies/kinetic", &h.kinetic);
+  doubles("/fom/energies/strain_linear", &h.strain_linear);
+  doubles("/fom/energies/strain_nonlinear", &h.strain_nonlinear);
+  doubles("/fom/energies/external_work", &h.external_work);
+  doubles("/fom/energies/damping_loss", &h.damping_loss);
+  doubles("/fom/energies/balance", &h.balance);
+  MORSE_CHECK(io::read_ints(file, "/fom/newton_iterations", &h.newton_iterations, &d, &err), err);
+  doubles("/fom/residual", &h.residual);
+  const std::size_t nt = h.time.size();
+  for (const auto* v : {&h.energy, &h.kinetic, &h.strain_linear, &h.strain_nonlinear, &h.external_work,
+                        &h.damping_loss, &h.balance, &h.residual})
+    MORSE_CHECK(v->size() == nt, file, ": a /fom history has ", v->size(), " values for ", nt, " times");
+  MORSE_CHECK(h.newton_iterations.size() == nt, file, ": /fom/newton_iterations has ", h.newton_iterations.size(),
+              " values for ", nt, " times");
+  for (const auto& name : sets) {
+    FomHistory::Set set;
+    set.name = name;
+    MORSE_CHECK(io::read_ints(file, "/fom/sets/" + name + "/node_ids", &set.node_ids, &d, &err), err);
+    doubles("/fom/sets/" + name + "/u", &set.u);
+    MORSE_CHECK(set.u.size() == nt * set.node_ids.size() * 3, file, ": /fom/sets/", name, "/u has ", set.u.size(),
+                " values for ", nt, " times and ", set.node_ids.size(), " nodes");
+    h.sets.push_back(std::move(set));
+  }
+  return h;
+}
+
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file) {
   return io::read_dof_rows(lm, dofs, file, "/fom/snapshots/u");
 }

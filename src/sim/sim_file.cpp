@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/core/error.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/sim/sim.hpp"
 
@@ -84,6 +85,63 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
   out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
   if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
   dyn::write_load_description(out, "/sim/load", rec.load);
+}
+
+SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets) {
+  SimRecord rec;
+  std::string err;
+  std::vector<hsize_t> d;
+  auto doubles = [&](const std::string& name, std::vector<double>* v) {
+    MORSE_CHECK(io::read_doubles(file, name, v, &d, &err), err);
+  };
+  auto ints = [&](const std::string& name, std::vector<std::int64_t>* v) {
+    MORSE_CHECK(io::read_ints(file, name, v, &d, &err), err);
+  };
+  doubles("/sim/time", &rec.time);
+  doubles("/sim/energy", &rec.energy);
+  doubles("/sim/q", &rec.q);
+  doubles("/sim/final/q", &rec.final_q);
+  doubles("/sim/final/v", &rec.final_v);
+  MORSE_CHECK(io::read_attribute(file, "/sim/final", "time", &rec.final_time, &err), err);
+  const std::size_t nt = rec.time.size(), r = rec.final_q.size();
+  MORSE_CHECK(rec.energy.size() == nt && rec.q.size() == nt * r && rec.final_v.size() == r, file,
+              ": /sim/energy, /sim/q or /sim/final do not match ", nt, " times of ", r, " coordinates");
+  for (const auto& name : sets) {
+    SimRecord::Set set;
+    set.name = name;
+    ints("/sim/sets/" + name + "/node_ids", &set.node_ids);
+    doubles("/sim/sets/" + name + "/u", &set.u);
+    MORSE_CHECK(set.u.size() == nt * set.node_ids.size() * 3, file, ": /sim/sets/", name, "/u has ", set.u.size(),
+                " values for ", nt, " times and ", set.node_ids.size(), " nodes");
+    rec.sets.push_back(std::move(set));
+  }
+  if (io::has_object(file, "/sim/snapshots")) {
+    rec.snapshots_fom = io::read_string_attribute(file, "/sim/snapshots", "fom");
+    doubles("/sim/snapshots/time", &rec.snapshot_time);
+    doubles("/sim/snapshots/u", &rec.snapshot_u);
+    doubles("/sim/snapshots/v", &rec.snapshot_v);
+    ints("/sim/snapshots/dof_node_ids", &rec.snapshot_node_ids);
+    ints("/sim/snapshots/dof_components", &rec.snapshot_components);
+  }
+  if (io::has_object(file, "/sim/contact")) {
+    auto& c = rec.contact;
+    ints("/sim/contact/node_ids", &c.node_ids);
+    doubles("/sim/contact/normal", &c.normal);
+    doubles("/sim/contact/tangential", &c.tangential);
+    doubles("/sim/contact/normals", &c.normals);
+    doubles("/sim/contact/mean_force", &c.mean_force);
+    doubles("/sim/contact/mean_force_time", &c.mean_force_time);
+    doubles("/sim/contact/gap", &c.gap);
+    ints("/sim/contact/active", &c.active);
+    doubles("/sim/contact/radial_displacement", &c.radial_displacement);
+    MORSE_CHECK(io::read_attribute(file, "/sim/contact", "max_normal_force", &c.max_normal_force, &err), err);
+    MORSE_CHECK(io::read_attribute(file, "/sim/contact", "time_of_max_normal_force", &c.time_of_max_normal_force, &err),
+                err);
+  }
+  rec.rom = io::read_string_attribute(file, "/sim", "rom");
+  rec.case_name = io::read_string_attribute(file, "/sim", "case");
+  dyn::read_load_description(file, "/sim/load", &rec.load);
+  return rec;
 }
 
 }  // namespace morse::sim

@@ -382,6 +382,11 @@ class FomSnapshotWriter {
 void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>& snapshot_times,
                PetscInt snapshot_every, const FomSettings& s, const FomStats& stats, const LoadDescription& load);
 
+/// Reads the histories of a fom file (what write_fom writes of h) with the monitored sets `sets`
+/// (each must be in /fom/sets). Throws naming the file and the missing or inconsistent dataset.
+/// Serial, any rank.
+FomHistory read_fom(const std::string& file, const std::vector<std::string>& sets);
+
 /// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
 /// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofMap& dofs, const std::string& file);

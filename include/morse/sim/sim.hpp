@@ -359,6 +359,12 @@ struct SimRecord {
 /// serial H5Output, as `morse simulate` runs one case per rank); not collective.
 void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const Stats& stats);
 
+/// Reads a simulate file back: the histories, the final state, the monitored sets `sets` (each
+/// must be in /sim/sets), the snapshots and the contact histories if the file has them, the model
+/// (/sim@rom), the case and the stored load (empty for a file written before it was stored).
+/// Throws naming the file and the missing or inconsistent dataset. Serial, any rank.
+SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets);
+
 // ------------------------------------------------------------------------------------------
 // Stress recovery (seed 003 Figs. 11 and 25): the stress of a displacement field u = Phi q.
 
