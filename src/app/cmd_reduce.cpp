@@ -81,8 +81,7 @@ void run_reduce(MPI_Comm comm) {
   io::H5Output out(comm, o.out);
   io::write_provenance(out, "reduce", md.lm.mesh.units);
   write_model(out, md);
-  out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
-  out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
+  io::write_fixed_interface(out, res.fixed_omega2);
   io::write_superelement(out, rom_superelement(res, res.M, res.K, r.damping > 0 || md.mm.C ? &res.C : nullptr, rom_f, r.damping));
   out.attribute("/cb", "boundary_set", r.boundary);
   std::vector<io::XdmfField> fields;

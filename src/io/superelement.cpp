@@ -183,6 +183,13 @@ void write_superelement(H5Output& out, const Superelement& se) {
   }
 }
 
+void write_fixed_interface(H5Output& out, const std::vector<double>& omega2) {
+  std::vector<double> f;
+  for (double l : omega2) f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  out.write("/cb/fixed_interface/frequencies_hz", f);
+  out.write("/cb/fixed_interface/eigenvalues", omega2);
+}
+
 void set_boundary_coordinates(Superelement* se, const std::string& path) {
   std::ifstream in(path);
   MORSE_CHECK(in, path, ": cannot open (coordinates: one 'node x y z' per line)");

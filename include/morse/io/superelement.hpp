@@ -78,6 +78,11 @@ class H5Output;
 /// read_superelement(out.path()) reads back what is written here.
 void write_superelement(H5Output& out, const Superelement& se);
 
+/// Writes the candidate fixed-interface modes of a Craig-Bampton superelement (reduce, select):
+/// /cb/fixed_interface/frequencies_hz and /cb/fixed_interface/eigenvalues (omega2, ascending).
+/// Rank 0 data; not collective.
+void write_fixed_interface(H5Output& out, const std::vector<double>& omega2);
+
 /// Reads boundary node coordinates from a text file (one `node x y z` per line, '#' starts a
 /// comment; other nodes are ignored) into se->boundary_xyz, replacing those of /mesh. Throws
 /// naming the file and line for a malformed line or a node given twice, and naming the node if a
