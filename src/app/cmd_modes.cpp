@@ -63,10 +63,7 @@ void run_modes(MPI_Comm comm) {
   io::write_provenance(out, "modes", md.lm.mesh.units);
   auto gm = mesh::gather_to_rank0(md.lm);
   io::write_mesh(out, gm);
-  out.write("/fom/frequencies_hz", f_hz);
-  out.write("/fom/eigenvalues", eig.omega2);
-  io::write_modes_dataset(out, "/fom/mode_shapes", md.lm, md.dofs, eig.V.get(), 0, static_cast<PetscInt>(f_hz.size()));
-  out.attribute("/fom/mode_shapes", "description", "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids");
+  io::write_modes(out, "/fom", md.lm, md.dofs, eig.omega2, eig.V.get());
   out.attribute("/fom", "clamp", [&] {
     std::string s;
     for (auto& c : o.clamp) s += (s.empty() ? "" : ",") + c;

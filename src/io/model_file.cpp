@@ -1,6 +1,7 @@
 // io/model_file.cpp: the model parts of an output file: node sets, mode shapes, the DOF labels of
 // matrix input (io/h5.hpp, docs/hdf5-schema.md).
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,6 +43,17 @@ void write_modes_dataset(H5Output& out, const std::string& name, const mesh::Loc
     MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
     out.write_row(name, static_cast<hsize_t>(j), nodal);
   }
+}
+
+void write_modes(H5Output& out, const std::string& group, const mesh::LocalMesh& lm, const fe::DofMap& dofs,
+                 const std::vector<double>& omega2, Mat V) {
+  constexpr double kTwoPi = 6.283185307179586;
+  std::vector<double> f;
+  for (double l : omega2) f.push_back(std::sqrt(std::max(0.0, l)) / kTwoPi);
+  out.write(group + "/frequencies_hz", f);
+  out.write(group + "/eigenvalues", omega2);
+  write_modes_dataset(out, group + "/mode_shapes", lm, dofs, V, 0, static_cast<PetscInt>(f.size()));
+  out.attribute(group + "/mode_shapes", "description", "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids");
 }
 
 void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node,

@@ -1,5 +1,6 @@
 // sim/sim_file.cpp: the file of a reduced run (/sim of `morse simulate`; sim/sim.hpp,
 // docs/hdf5-schema.md).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -142,6 +143,41 @@ SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets
   rec.case_name = io::read_string_attribute(file, "/sim", "case");
   dyn::read_load_description(file, "/sim/load", &rec.load);
   return rec;
+}
+
+void write_stress(io::H5Output& out, const StressField& f, const StressRecord& r) {
+  const auto nn = static_cast<hsize_t>(r.n_nodes), ne = static_cast<hsize_t>(r.n_elements);
+  out.write("/stress/displacement", r.displacement, {1, nn, 3});
+  out.attribute("/stress/displacement", "description", "[1][node][x,y,z] u = Phi q [m], nodes as /mesh/node_ids");
+  out.write("/stress/von_mises", f.nodal_mises, {1, nn});
+  out.attribute("/stress/von_mises", "description", "[1][node] von Mises stress of /stress/stress [Pa]");
+  // In the component order of XDMF's Tensor6 as ParaView reads it (xx, xy, xz, yy, yz, zz).
+  std::vector<double> t6(f.nodal_stress.size());
+  for (std::size_t k = 0; k < t6.size(); k += 6) {
+    const double* s = &f.nodal_stress[k];
+    const double v[6] = {s[0], s[5], s[4], s[1], s[3], s[2]};
+    std::copy(v, v + 6, &t6[k]);
+  }
+  out.write("/stress/stress", t6, {1, nn, 6});
+  out.attribute("/stress/stress", "description",
+                "[1][node][xx,xy,xz,yy,yz,zz] stress at the node, mean over its elements [Pa]");
+  out.write("/stress/von_mises_element", f.element_mises, {1, ne});
+  out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
+  out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});
+  out.attribute("/stress/von_mises_element_max", "description", "[1][element] max of von Mises at its quadrature points [Pa]");
+  out.attribute("/stress", "time", r.time);
+  out.attribute_int("/stress", "step", r.step);
+  out.attribute("/stress", "measure", r.measure == StressMeasure::Linear ? "linear" : "nonlinear");
+  out.attribute("/stress", "max_von_mises", f.max_mises);
+  out.attribute_int("/stress", "max_element_id", f.max_element_id);
+  out.attribute("/stress", "max_nodal_von_mises", r.max_nodal_von_mises);
+  out.attribute_int("/stress", "max_node_id", r.max_node_id);
+  out.attribute("/stress", "rom", r.rom);
+  out.attribute("/stress", "sim", r.sim);
+  if (!r.monitor.empty()) {
+    out.attribute("/stress", "monitor", r.monitor);
+    out.attribute("/stress", "monitor_radial_displacement", r.monitor_radial_displacement);
+  }
 }
 
 }  // namespace morse::sim

@@ -253,6 +253,13 @@ struct StaticResult {
 /// still fails after max_cutbacks halvings, naming the load factor reached. Collective.
 StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSettings& s);
 
+/// Writes /static (docs/hdf5-schema.md): the displacement at every node (/static/u, [1][node][3],
+/// nodes in global order), the displacements of the probes' sets (/static/sets/<SET>), the
+/// increments tried (/static/history) and the settings as attributes. /meta and /mesh are the
+/// command's. Collective (gathers u).
+void write_static(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofMap& dofs, const StaticResult& res,
+                  const std::vector<SetProbe>& probes, const StaticSettings& s);
+
 // ------------------------------------------------------------------------------------------
 // Dynamics
 

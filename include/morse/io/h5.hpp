@@ -164,6 +164,12 @@ void write_node_sets(H5Output& out, const mesh::LocalMesh& lm, const std::string
 void write_modes_dataset(H5Output& out, const std::string& name, const mesh::LocalMesh& lm,
                          const fe::DofMap& dofs, Mat V, PetscInt first, PetscInt count);
 
+/// The modes of the full model (`morse modes`): <group>/frequencies_hz, <group>/eigenvalues
+/// (omega2, ascending) and <group>/mode_shapes (the columns of V as in write_modes_dataset,
+/// mass-normalized). Collective.
+void write_modes(H5Output& out, const std::string& group, const mesh::LocalMesh& lm, const fe::DofMap& dofs,
+                 const std::vector<double>& omega2, Mat V);
+
 /// /dofs of a model given by its matrices (matrix input, docs/hdf5-schema.md): the node id and
 /// component (1..6) of every free row in row order (gathered on rank 0), the matrix files
 /// (source) and the number of rows of the files. Rank 0 data; not collective.

@@ -402,4 +402,22 @@ struct StressField {
 StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fallback,
                            const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, StressMeasure m);
 
+/// What `morse stress` writes besides the field (/stress, docs/hdf5-schema.md).
+struct StressRecord {
+  std::int64_t n_nodes = 0, n_elements = 0;  ///< of the global mesh
+  std::vector<double> displacement;  ///< [node][3] u = Phi q in global node order (rank 0)
+  double time = 0.0;                 ///< of the state
+  std::int64_t step = 0;             ///< its output row in the simulate file
+  StressMeasure measure = StressMeasure::Nonlinear;
+  double max_nodal_von_mises = 0.0;  ///< largest nodal von Mises and its node's id
+  std::int64_t max_node_id = -1;
+  std::string rom, sim;              ///< the nlrom and simulate files
+  std::string monitor;               ///< the set whose radial displacement chose the state ("" if a time did)
+  double monitor_radial_displacement = 0.0;
+};
+/// Writes /stress: the displacement, the nodal stress (in XDMF Tensor6 order xx, xy, xz, yy, yz,
+/// zz) and von Mises, the element von Mises (mean and max) of f, and the attributes of r. /meta
+/// and /mesh are the command's. Rank 0 data; not collective.
+void write_stress(io::H5Output& out, const StressField& f, const StressRecord& r);
+
 }  // namespace morse::sim
