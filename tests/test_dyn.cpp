@@ -417,3 +417,43 @@ TEST(RunFile, FomFileRoundTrips) {
   MPI_Barrier(PETSC_COMM_WORLD);
   if (world_rank() == 0) std::remove(file.c_str());
 }
+
+// dyn::write_static writes what -fom_initial reads back (io::read_nodal_field of /static/u): the
+// displacement on every free DOF to the last bit; and the history of the increments.
+TEST(RunFile, StaticFileRoundTrips) {
+  auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.2, 0.2, 3, 1, 1));
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_static_", pid, ".h5");
+  dyn::StaticResult res;
+  res.u = test::nodal_vector(m.lm, m.dofs, [](double x, double y, double z, int d) { return x * x + 0.1 * y - z * d; });
+  res.history = {{0.5, 3, 1e-10, true, ""}, {1.0, 4, 2e-10, true, ""}};
+  res.load_norm = 7.0;
+  dyn::StaticSettings s;
+  std::vector<dyn::SetProbe> probes;
+  probes.emplace_back(m.lm, m.dofs, "x1");
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    io::write_mesh(out, mesh::gather_to_rank0(m.lm));  // the command's part: the node ids
+    dyn::write_static(out, m.lm, m.dofs, res, probes, s);
+    out.commit();
+  }
+  UVec back;
+  MORSE_CALL(VecDuplicate(res.u.get(), back.ptr()));
+  MORSE_CALL(VecSet(back.get(), 0.0));
+  io::read_nodal_field(m.lm, m.dofs, file, "/static/u", back.get());
+  PetscBool same = PETSC_FALSE;
+  MORSE_CALL(VecEqual(back.get(), res.u.get(), &same));
+  EXPECT_TRUE(same);
+  if (world_rank() == 0) {
+    std::vector<double> lambda;
+    std::vector<hsize_t> d;
+    std::string err;
+    EXPECT_TRUE(io::read_doubles(file, "/static/history/load_factor", &lambda, &d, &err)) << err;
+    EXPECT_EQ(lambda, (std::vector<double>{0.5, 1.0}));
+    double norm = 0;
+    EXPECT_TRUE(io::read_attribute(file, "/static", "load_norm", &norm, &err) && norm == 7.0) << err;
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(file.c_str());
+}

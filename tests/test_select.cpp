@@ -46,6 +46,16 @@ Problem make(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::strin
   return s;
 }
 
+// A distorted box clamped at x0 with the boundary at x1, keeping all its n_i interior modes.
+Problem all_interior_modes(PetscInt* n_i) {
+  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
+  b.distortion = 0.1;
+  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
+  auto dofs = fe::number_dofs(lm, {"x0"});
+  *n_i = dofs.n_global - 3 * lm.node_set_sizes.at("x1");
+  return make(PETSC_COMM_WORLD, b, {"x0"}, "x1", *n_i);
+}
+
 }  // namespace
 
 // A slender cantilever (L = 50 h) whose interface is its clamped end face: the effective mass of
@@ -73,12 +83,8 @@ TEST(Select, CantileverEffectiveMassFractions) {
 // and (eq. 17) EIM = lambda VEIM = lambda^2 DEIM = lambda CMSchi = OMR / lambda per mode, OMR being
 // evaluated from its own formula (eq. 15) with K_sm.
 TEST(Select, IdentitiesWithAllInteriorModes) {
-  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
-  b.distortion = 0.1;
-  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  auto dofs = fe::number_dofs(lm, {"x0"});
-  const PetscInt n_i = dofs.n_global - 3 * lm.node_set_sizes.at("x1");
-  Problem s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", n_i);
+  PetscInt n_i = 0;
+  Problem s = all_interior_modes(&n_i);
   const PetscInt nb = s.cb.n_b;
   auto P = s.ic.P();
   std::vector<double> sum(nb * nb, 0.0);
@@ -319,12 +325,8 @@ TEST(Select, StatorEimKeepsFewerModesThanFrequencyOrder) {
 // the full-model eigenvalues (SLEPc on K, M) equal those of the dense reduced pair (LAPACK on
 // K_CB, M_CB) computed here, and a method truncated to two modes matches fewer.
 TEST(Select, VerifyMatchesExactSuperelement) {
-  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
-  b.distortion = 0.1;
-  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  auto dofs = fe::number_dofs(lm, {"x0"});
-  const PetscInt n_i = dofs.n_global - 3 * lm.node_set_sizes.at("x1");
-  Problem s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", n_i);
+  PetscInt n_i = 0;
+  Problem s = all_interior_modes(&n_i);
   auto lam = cb::dense_eigenvalues(static_cast<int>(s.cb.n()), s.cb.K, s.cb.M);
   auto hz = [](double l) { return std::sqrt(l) / (2 * M_PI); };
   select::VerifySettings vs;

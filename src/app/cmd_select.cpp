@@ -1,6 +1,6 @@
 // app/cmd_select.cpp: `morse select`, the ranking of the fixed-interface modes by one or more
-// methods, their truncated superelements checked against the full model (MAC), and the
-// superelement of one method written to /rom.
+// methods, their truncated superelements checked against the full model (MAC; select::verify),
+// and the superelement of one method written to /rom.
 #include <petscsys.h>
 
 #include <algorithm>
