@@ -68,6 +68,51 @@ f = h5py.File(sys.argv[1], "r")
 e, I = f["/compare/e"][:], f["/compare/I"][0]
 assert all(0 <= x <= 1 for x in e) and 0.5 < I <= 1, (e, I)
 PY
+# The fom and simulate files store their load (/fom/load, /sim/load): compare without -load_* takes
+# t_max from it and gives the same /compare as with the -load_* options, which still override the
+# stored load with a notice. A file without a stored load (written before) needs -load_*. (A
+# faster load than the chain's, so that its first maximum, t_max = pi/2/1000, is inside the run.)
+fast=(-load_sets x1 -load_x1_dir y -load_x1_amplitude 1e6 -load_x1_omega 1000)
+run fom "${model[@]}" "${fast[@]}" -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_snapshot_every 2 -fom_monitor x1 \
+  -out "$d/fom_fast.h5"
+run simulate -rom "$d/pod.h5" "${fast[@]}" -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_monitor x1 -sim_output_every 100 \
+  -out "$d/sim_fast.h5"
+cp "$d/sim_fast.h5" "$d/sim_stored.h5"
+cp "$d/sim_fast.h5" "$d/sim_given.h5"
+run compare "$d/fom_fast.h5" "$d/sim_stored.h5" -compare_tip x1 | tee "$d/compare_stored.txt"
+if grep -q 'override' "$d/compare_stored.txt"; then echo "override notice without -load_*"; exit 1; fi
+run compare "$d/fom_fast.h5" "$d/sim_given.h5" "${fast[@]}" -compare_tip x1 | tee "$d/compare_given.txt"
+grep -q "the -load_\* options override the load stored in $d/fom_fast.h5" "$d/compare_given.txt"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+d = sys.argv[1]
+a, b = (h5py.File(d + "/sim_%s.h5" % k, "r")["/compare"] for k in ("stored", "given"))
+for k in ("e", "I", "t_max", "t_snapshot"):
+    assert np.array_equal(a[k][:], b[k][:]), (k, a[k][:], b[k][:])
+assert abs(a["t_max"][0] - np.pi / 2 / 1000) < 1e-15, a["t_max"][0]
+for f, g in (("fom.h5", "/fom/load"), ("sim_long.h5", "/sim/load")):
+    l = h5py.File(d + "/" + f, "r")[g]
+    assert l.attrs["n_loads"] == 1 and l["sets"][()].decode() == "x1\n", f
+    assert np.array_equal(l["direction"][:], [[0, 1, 0]]) and l["amplitude"][0] == 1e6 and l["omega"][0] == 300
+    assert l["phase"][0] == 0
+# Files of an older morse: no stored load.
+for f, g in (("fom_fast.h5", "/fom/load"), ("sim_fast.h5", "/sim/load")):
+    with h5py.File(d + "/" + f, "r") as src, h5py.File(d + "/old_" + f, "w") as dst:
+        for k in src:
+            src.copy(k, dst)
+        del dst[g]
+PY
+if [ -e "$d/old_fom_fast.h5" ]; then
+  run compare "$d/old_fom_fast.h5" "$d/old_sim_fast.h5" "${fast[@]}" -compare_tip x1 | tee "$d/compare_old.txt"
+  if grep -q 'override' "$d/compare_old.txt"; then echo "override notice without a stored load"; exit 1; fi
+  set +e
+  out=$(run compare "$d/old_fom_fast.h5" "$d/old_sim_fast.h5" -compare_tip x1 2>&1)
+  rc=$?
+  set -e
+  test $rc -ne 0
+  echo "$out" | grep -q -- 'give -compare_tmax T or the harmonic load (-load_\*).*neither file stores' \
+    || { echo "missing the no-load message in: $out"; exit 1; }
+fi
 # Three load cases spread over the ranks (one file each), with full-field snapshots at the fom's
 # snapshot times: case a repeats the single run above, so its q is the same to the last bit.
 run simulate -rom "$d/pod.h5" -sim_cases a,b,c -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_monitor x1 -sim_output_every 100 \

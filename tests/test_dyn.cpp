@@ -3,11 +3,16 @@
 // response in closed form, modal damping decay exp(-xi w t), exact energy balance of the energy
 // scheme, and the independence of the rank count.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "elastica.hpp"
+#include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/io/h5.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -274,4 +279,181 @@ TEST(Fom, NewtonKrylovMatchesModifiedNewton) {
   EXPECT_GT(sk.krylov_iterations, 0);
   EXPECT_LT(sk.newton_iterations, sm.newton_iterations);
   EXPECT_EQ(sm.krylov_iterations, 0);
+}
+
+// The load description of a run (/fom/load, /sim/load) reads back as written; a file without it
+// (written before morse stored it) reads as "not stored"; t_max is the first maximum of the first
+// harmonic load. Each rank writes and reads its own file (serial HDF5).
+TEST(RunFile, LoadDescriptionRoundTrips) {
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_load_", pid, "_r", world_rank(), ".h5");
+  dyn::LoadDescription d;
+  d.loads.resize(3);
+  d.loads[0].set = "x1", d.loads[0].dir[2] = 1, d.loads[0].amplitude = 5;  // constant
+  d.loads[1].set = "tip", d.loads[1].dir[0] = 0.6, d.loads[1].dir[1] = 0.8, d.loads[1].amplitude = 1e6;
+  d.loads[1].omega = 300, d.loads[1].phase = 0.25;
+  d.loads[2].set = "x1", d.loads[2].dir[1] = -1, d.loads[2].amplitude = 2, d.loads[2].omega = 900;
+  d.history = "forces.csv";
+  d.history_scale = 0.5;
+  d.history_outside = dyn::Outside::Hold;
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    out.write("/fom/time", std::vector<double>{0.0, 1.0});
+    dyn::write_load_description(out, "/fom/load", d);
+    out.commit();
+  }
+  dyn::LoadDescription back;
+  ASSERT_TRUE(dyn::read_load_description(file, "/fom/load", &back));
+  ASSERT_EQ(back.loads.size(), d.loads.size());
+  for (std::size_t k = 0; k < d.loads.size(); ++k) {
+    EXPECT_EQ(back.loads[k].set, d.loads[k].set);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(back.loads[k].dir[c], d.loads[k].dir[c]);
+    EXPECT_EQ(back.loads[k].amplitude, d.loads[k].amplitude);
+    EXPECT_EQ(back.loads[k].omega, d.loads[k].omega);
+    EXPECT_EQ(back.loads[k].phase, d.loads[k].phase);
+  }
+  EXPECT_EQ(back.history, d.history);
+  EXPECT_EQ(back.history_scale, d.history_scale);
+  EXPECT_EQ(back.history_outside, dyn::Outside::Hold);
+  // The first harmonic load's first maximum: 300 t + 0.25 = pi/2.
+  EXPECT_NEAR(dyn::first_maximum(back.loads), (M_PI / 2 - 0.25) / 300, 1e-15);
+  EXPECT_EQ(dyn::first_maximum({d.loads[0]}), -1);
+  // No stored load: false, the description untouched; no load at all: stored, empty.
+  EXPECT_FALSE(dyn::read_load_description(file, "/sim/load", &back));
+  EXPECT_EQ(back.loads.size(), 3u);
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    dyn::write_load_description(out, "/sim/load", dyn::LoadDescription{});
+    out.commit();
+  }
+  ASSERT_TRUE(dyn::read_load_description(file, "/sim/load", &back));
+  EXPECT_TRUE(back.loads.empty());
+  EXPECT_TRUE(back.history.empty());
+  std::remove(file.c_str());
+}
+
+// dyn::write_fom and the snapshot writer write what read_fom and read_fom_snapshots read: the
+// histories and monitored sets to the last bit, the snapshots as the distributed vectors written,
+// on 1 and 2 ranks.
+TEST(RunFile, FomFileRoundTrips) {
+  auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.2, 0.2, 3, 1, 1));
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_fom_", pid, ".h5");
+  std::vector<UVec> us, vs;
+  for (int k = 0; k < 3; ++k) {
+    us.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double y, double z, int d) { return (k + 1) * x + y * d - z; }));
+    vs.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double, double z, int d) { return std::sin(k + x + d * z); }));
+  }
+  dyn::FomHistory h;
+  dyn::SetProbe probe(m.lm, m.dofs, "x1");
+  h.sets.push_back({"x1", probe.node_ids(), {}});
+  dyn::FomSettings s;
+  s.dt = 0.5;
+  s.scheme = dyn::Scheme::Energy;
+  dyn::FomStats stats;
+  stats.steps = 2;
+  stats.damping_omega = {3.0};
+  dyn::LoadDescription ld;
+  ld.loads.resize(1);
+  ld.loads[0].set = "x1", ld.loads[0].dir[1] = 1, ld.loads[0].amplitude = 10, ld.loads[0].omega = 7;
+  std::vector<double> snap_times;
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    dyn::FomSnapshotWriter snaps(out, m.lm, m.dofs, 3);
+    for (int k = 0; k < 3; ++k) {
+      dyn::StepInfo i;
+      i.step = k, i.t = 0.5 * k, i.u = us[k].get(), i.v = vs[k].get();
+      i.energy.kinetic = 1 + k, i.energy.strain_linear = 2 * k, i.energy.strain_nonlinear = 0.1 * k;
+      i.energy.external_work = 3 * k, i.energy.damping_loss = 0.01 * k;
+      i.newton_iterations = k + 2, i.residual = 1e-9 * k;
+      h.record(i);
+      auto u = probe.sample(i.u);
+      h.sets[0].u.insert(h.sets[0].u.end(), u.begin(), u.end());
+      snaps.write(i);
+    }
+    snaps.close();
+    snap_times = snaps.times();
+    dyn::write_fom(out, h, snap_times, 1, s, stats, ld);
+    out.commit();
+  }
+  EXPECT_EQ(snap_times, (std::vector<double>{0.0, 0.5, 1.0}));
+  if (world_rank() == 0) {
+    const auto back = dyn::read_fom(file, {"x1"});
+    EXPECT_EQ(back.time, h.time);
+    EXPECT_EQ(back.energy, h.energy);
+    EXPECT_EQ(back.kinetic, h.kinetic);
+    EXPECT_EQ(back.strain_linear, h.strain_linear);
+    EXPECT_EQ(back.strain_nonlinear, h.strain_nonlinear);
+    EXPECT_EQ(back.external_work, h.external_work);
+    EXPECT_EQ(back.damping_loss, h.damping_loss);
+    EXPECT_EQ(back.balance, h.balance);
+    EXPECT_EQ(back.newton_iterations, h.newton_iterations);
+    EXPECT_EQ(back.residual, h.residual);
+    ASSERT_EQ(back.sets.size(), 1u);
+    EXPECT_EQ(back.sets[0].node_ids, h.sets[0].node_ids);
+    EXPECT_EQ(back.sets[0].u, h.sets[0].u);
+    EXPECT_EQ(io::read_string_attribute(file, "/fom", "scheme"), "energy");
+    EXPECT_EQ(io::read_string_attribute(file, "/fom", "newton"), "modified");
+    dyn::LoadDescription lb;
+    ASSERT_TRUE(dyn::read_load_description(file, "/fom/load", &lb));
+    ASSERT_EQ(lb.loads.size(), 1u);
+    EXPECT_EQ(lb.loads[0].omega, 7.0);
+    test::expect_error_parts([&] { dyn::read_fom(file, {"tip"}); }, {file, "/fom/sets/tip"}, "read_fom of a missing set");
+  }
+  auto X = dyn::read_fom_snapshots(m.lm, m.dofs, file);
+  PetscInt n_snap = 0;
+  MORSE_CALL(MatGetSize(X.get(), nullptr, &n_snap));
+  ASSERT_EQ(n_snap, 3);
+  for (int k = 0; k < 3; ++k) {
+    Vec c;
+    PetscBool same = PETSC_FALSE;
+    MORSE_CALL(MatDenseGetColumnVecRead(X.get(), k, &c));
+    MORSE_CALL(VecEqual(c, us[k].get(), &same));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(X.get(), k, &c));
+    EXPECT_TRUE(same) << "snapshot " << k;
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(file.c_str());
+}
+
+// dyn::write_static writes what -fom_initial reads back (io::read_nodal_field of /static/u): the
+// displacement on every free DOF to the last bit; and the history of the increments.
+TEST(RunFile, StaticFileRoundTrips) {
+  auto m = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, 1.0, 0.2, 0.2, 3, 1, 1));
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_dyn_static_", pid, ".h5");
+  dyn::StaticResult res;
+  res.u = test::nodal_vector(m.lm, m.dofs, [](double x, double y, double z, int d) { return x * x + 0.1 * y - z * d; });
+  res.history = {{0.5, 3, 1e-10, true, ""}, {1.0, 4, 2e-10, true, ""}};
+  res.load_norm = 7.0;
+  dyn::StaticSettings s;
+  std::vector<dyn::SetProbe> probes;
+  probes.emplace_back(m.lm, m.dofs, "x1");
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    io::write_mesh(out, mesh::gather_to_rank0(m.lm));  // the command's part: the node ids
+    dyn::write_static(out, m.lm, m.dofs, res, probes, s);
+    out.commit();
+  }
+  UVec back;
+  MORSE_CALL(VecDuplicate(res.u.get(), back.ptr()));
+  MORSE_CALL(VecSet(back.get(), 0.0));
+  io::read_nodal_field(m.lm, m.dofs, file, "/static/u", back.get());
+  PetscBool same = PETSC_FALSE;
+  MORSE_CALL(VecEqual(back.get(), res.u.get(), &same));
+  EXPECT_TRUE(same);
+  if (world_rank() == 0) {
+    std::vector<double> lambda;
+    std::vector<hsize_t> d;
+    std::string err;
+    EXPECT_TRUE(io::read_doubles(file, "/static/history/load_factor", &lambda, &d, &err)) << err;
+    EXPECT_EQ(lambda, (std::vector<double>{0.5, 1.0}));
+    double norm = 0;
+    EXPECT_TRUE(io::read_attribute(file, "/static", "load_norm", &norm, &err) && norm == 7.0) << err;
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(file.c_str());
 }

@@ -1,10 +1,17 @@
 // The performance indicator (eval/indicator.hpp, seed 003 eq. 43–51): 1 for identical signals,
 // hand-computed values for a tiny case, and monotone decrease as a signal is perturbed.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
 
+#include "morse/core/error.hpp"
+#include "morse/core/session.hpp"
 #include "morse/eval/indicator.hpp"
+#include "morse/io/h5.hpp"
 
 using namespace morse;
 
@@ -57,4 +64,41 @@ TEST(Indicator, FallsAsTheSignalIsPerturbed) {
   EXPECT_DOUBLE_EQ(y[2], 4.0);
   EXPECT_DOUBLE_EQ(y[3], 14.0);
   EXPECT_DOUBLE_EQ(y[4], 6.0);
+}
+
+// eval::write_compare adds /compare to a simulate file (replacing an earlier one) and keeps what
+// the file held; the values read back are those written. Each rank uses its own file.
+TEST(Indicator, WriteCompareRoundTrips) {
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_eval_compare_", pid, "_r", world_rank(), ".h5");
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    out.write("/sim/time", std::vector<double>{0.0, 1.0});
+    out.commit();
+  }
+  eval::Indicator ind;
+  ind.e = {0.9, 0.8, 0.7, 0.6};
+  ind.w = {0.1, 0.2, 0.3, 0.4};
+  eval::write_compare(file, ind, 2.5e-3, 2.4e-3, "fom.h5", "tip");
+  ind.e[0] = 0.95;
+  eval::write_compare(file, ind, 2.5e-3, 2.4e-3, "fom.h5", "tip");  // replaces /compare
+  std::vector<double> e, w, I, tmax, tsnap, time;
+  std::vector<hsize_t> d;
+  std::string err;
+  ASSERT_TRUE(io::read_doubles(file, "/compare/e", &e, &d, &err)) << err;
+  ASSERT_TRUE(io::read_doubles(file, "/compare/weights", &w, &d, &err)) << err;
+  ASSERT_TRUE(io::read_doubles(file, "/compare/I", &I, &d, &err)) << err;
+  ASSERT_TRUE(io::read_doubles(file, "/compare/t_max", &tmax, &d, &err)) << err;
+  ASSERT_TRUE(io::read_doubles(file, "/compare/t_snapshot", &tsnap, &d, &err)) << err;
+  ASSERT_TRUE(io::read_doubles(file, "/sim/time", &time, &d, &err)) << err;
+  EXPECT_EQ(e, (std::vector<double>{0.95, 0.8, 0.7, 0.6}));
+  EXPECT_EQ(w, (std::vector<double>{0.1, 0.2, 0.3, 0.4}));
+  EXPECT_EQ(I, std::vector<double>{ind.I()});
+  EXPECT_EQ(tmax, std::vector<double>{2.5e-3});
+  EXPECT_EQ(tsnap, std::vector<double>{2.4e-3});
+  EXPECT_EQ(time, (std::vector<double>{0.0, 1.0}));
+  EXPECT_EQ(io::read_string_attribute(file, "/compare", "fom"), "fom.h5");
+  EXPECT_EQ(io::read_string_attribute(file, "/compare", "tip_set"), "tip");
+  std::remove(file.c_str());
 }

@@ -1,4 +1,4 @@
-// Superelement export (io/superelement.hpp, `morse export`): a real Craig-Bampton superelement of
+// Superelement export (io/export.hpp, `morse export`): a real Craig-Bampton superelement of
 // a box, made by `morse reduce` (app::run_command, on every rank), is exported in every format and
 // read back by small readers written here, independent of the writers:
 //   - the MBDyn FEM file by a reader that follows MBDyn's ReadModal (mbdyn/struct/modal.cc): record
@@ -29,7 +29,7 @@
 #include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/op4.hpp"
-#include "morse/io/superelement.hpp"
+#include "morse/io/export.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "scratch.hpp"
 #include "util.hpp"
@@ -385,6 +385,58 @@ TEST_F(ExportTest, ReadsTheRomOfTheFile) {
   // Modal frequencies from the diagonal of the fixed-interface block equal the file's.
   const auto fi = h5(free_, "/cb/fixed_interface/frequencies_hz");
   for (int k = 0; k < se.n_modes(); ++k) EXPECT_NEAR(se.modal_frequency_hz(k), fi[k], 1e-9 * fi[k]);
+}
+
+// io::write_superelement writes what read_superelement reads: every /rom dataset of the file of
+// `morse reduce` the same to the last bit, and the fields of a select file (selected modes,
+// selection method). Each rank writes and reads its own file (serial HDF5, PETSC_COMM_SELF).
+TEST_F(ExportTest, WriteSuperelementRoundTrips) {
+  const auto se = io::read_superelement(free_);
+  EXPECT_EQ(se.frequencies_hz, h5(free_, "/rom/frequencies_hz"));
+  EXPECT_EQ(se.damping_ratio, 0.02);
+  EXPECT_TRUE(se.selected_modes.empty());
+  auto written = se;
+  written.selection_method = "EIM";
+  written.selected_modes = {4, 0, 2, 1, 3, 5};
+  const std::string file = path("rom.h5");
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    io::write_superelement(out, written);
+    out.commit();
+  }
+  const auto back = io::read_superelement(file);
+  EXPECT_EQ(back.n, se.n);
+  EXPECT_EQ(back.n_b, se.n_b);
+  EXPECT_EQ(back.K, se.K);
+  EXPECT_EQ(back.M, se.M);
+  EXPECT_EQ(back.C, se.C);
+  EXPECT_EQ(back.dof_node, se.dof_node);
+  EXPECT_EQ(back.dof_component, se.dof_component);
+  EXPECT_EQ(back.boundary_nodes, se.boundary_nodes);
+  EXPECT_EQ(back.frequencies_hz, se.frequencies_hz);
+  EXPECT_EQ(back.damping_ratio, se.damping_ratio);
+  EXPECT_EQ(back.selection_method, "EIM");
+  EXPECT_EQ(back.selected_modes, written.selected_modes);
+  for (const char* name : {"/rom/K", "/rom/M", "/rom/C", "/rom/frequencies_hz"}) EXPECT_EQ(h5(file, name), h5(free_, name)) << name;
+  for (const char* name : {"/rom/boundary_dofs", "/rom/boundary_nodes"}) EXPECT_EQ(h5i(file, name), h5i(free_, name)) << name;
+  for (const char* a : {"n_boundary_dofs", "n_modes", "damping_ratio"}) {
+    double x = -1, y = -2;
+    std::string err;
+    EXPECT_TRUE(io::read_attribute(file, "/rom", a, &x, &err)) << err;
+    EXPECT_TRUE(io::read_attribute(free_, "/rom", a, &y, &err)) << err;
+    EXPECT_EQ(x, y) << a;
+  }
+  EXPECT_EQ(io::read_string_attribute(file, "/rom", "dof_order"), io::read_string_attribute(free_, "/rom", "dof_order"));
+  // Without C (no damping), no /rom/C.
+  written.C.clear();
+  const std::string undamped = path("undamped.h5");
+  {
+    io::H5Output out(PETSC_COMM_SELF, undamped);
+    io::write_superelement(out, written);
+    out.commit();
+  }
+  EXPECT_FALSE(io::has_object(undamped, "/rom/C"));
+  EXPECT_TRUE(io::read_superelement(undamped).C.empty());
 }
 
 TEST_F(ExportTest, EveryFormatRoundTrips) {

@@ -4,11 +4,16 @@
 // same tensors as the exact projection to round-off (St Venant–Kirchhoff is exactly cubic), also
 // with POD filtering, where the reference is Phi^T Phi_f Phi_f^T g_nl.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/session.hpp"
+#include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
 #include "util.hpp"
 
@@ -405,4 +410,84 @@ TEST(Nlrom, PodRecoversKnownSingularValues) {
   EXPECT_GT(ex.max_abs_B(), 0.0);
   EXPECT_LT(da, 1e-8 * ex.max_abs_A());
   EXPECT_LT(db, 1e-8 * ex.max_abs_B());
+}
+
+// nlrom::write_stored_model writes what read_stored_model reads: the reduced matrices and tensors
+// to the last bit, the basis at every node (the gathered columns of V), the node sets and the
+// boundary nodes; and the attributes of StoredInfo.
+TEST(Nlrom, StoredModelRoundTrips) {
+  auto m = box(ElementType::Hex8);
+  const int r = 4;
+  nlrom::Basis basis;
+  basis.V = smooth_basis(m, r, 1e-3);
+  basis.n_b = 3;
+  basis.n_fixed = 1;
+  basis.labels = {"u_x", "u_y", "u_z", "phi_1"};
+  basis.cb.boundary_node_ids = {7};
+  basis.seconds = 1.5;
+  nlrom::ReducedModel rm;
+  auto fill = [](std::size_t n, double s) {
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = s * std::sin(0.37 * (k + 1)) + 1e-3 * k;
+    return v;
+  };
+  rm.M = fill(r * r, 1.0), rm.K = fill(r * r, 1e6), rm.C = fill(r * r, 3.0);
+  rm.g.A = fill(nlrom::n_quadratic(r) * r, 1e9);
+  rm.g.B = fill(nlrom::n_cubic(r) * r, 1e12);
+  rm.damping_omega = {10.0, 20.0};
+  nlrom::StoredInfo info;
+  info.boundary_set = "x1";
+  info.forces = "exact";
+  info.t2_forces_seconds = 2.5;
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_nlrom_stored_", pid, ".h5");
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    io::write_provenance(out, "nlrom", "SI");
+    nlrom::write_stored_model(out, m.lm, m.dofs, basis, rm, info);
+    out.commit();
+  }
+  const auto sm = nlrom::read_stored_model(PETSC_COMM_WORLD, file, {"x1"});
+  EXPECT_EQ(sm.model.r, r);
+  EXPECT_EQ(sm.model.M, rm.M);
+  EXPECT_EQ(sm.model.K, rm.K);
+  EXPECT_EQ(sm.model.C, rm.C);
+  EXPECT_EQ(sm.model.g.A, rm.g.A);
+  EXPECT_EQ(sm.model.g.B, rm.g.B);
+  EXPECT_EQ(sm.boundary_nodes, basis.cb.boundary_node_ids);
+  EXPECT_EQ(sm.units, "SI");
+  ASSERT_EQ(sm.node_ids.size(), static_cast<std::size_t>(m.lm.n_global_nodes));
+  // The basis: the gathered columns of V, in the order of /mesh/node_ids.
+  for (int j = 0; j < r; ++j) {
+    Vec c;
+    MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
+    auto col = io::gather_nodal(m.lm, m.dofs, c);
+    MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
+    if (world_rank() == 0) {
+      EXPECT_TRUE(std::equal(col.begin(), col.end(), sm.basis.begin() + j * col.size())) << "column " << j;
+    }
+  }
+  // The set x1: its owned nodes on every rank are the set read back (count and sum of ids).
+  std::int64_t mine[2] = {0, 0}, all[2];
+  for (auto k : m.lm.mesh.node_sets.at("x1"))
+    if (m.lm.node_owner[k] == world_rank()) ++mine[0], mine[1] += m.lm.mesh.node_ids[k];
+  MPI_Allreduce(mine, all, 2, MPI_INT64_T, MPI_SUM, PETSC_COMM_WORLD);
+  std::int64_t sum = 0;
+  for (auto row : sm.sets.at("x1")) sum += sm.node_ids[row];
+  EXPECT_EQ(static_cast<std::int64_t>(sm.sets.at("x1").size()), all[0]);
+  EXPECT_EQ(sum, all[1]);
+  if (world_rank() == 0) {
+    double x = 0;
+    std::string err;
+    EXPECT_TRUE(io::read_attribute(file, "/nlrom", "r", &x, &err) && x == r) << err;
+    EXPECT_TRUE(io::read_attribute(file, "/nlrom", "t1_basis_seconds", &x, &err) && x == 1.5) << err;
+    EXPECT_TRUE(io::read_attribute(file, "/nlrom", "t2_forces_seconds", &x, &err) && x == 2.5) << err;
+    EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "forces"), "exact");
+    EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "boundary_set"), "x1");
+    std::vector<double> w;
+    std::vector<hsize_t> d;
+    EXPECT_TRUE(io::read_doubles(file, "/nlrom/damping/omega", &w, &d, &err) && w == rm.damping_omega) << err;
+    std::remove(file.c_str());
+  }
 }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "morse/eigen/eigen.hpp"
 #include "morse/core/session.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/select/select.hpp"
@@ -46,6 +47,16 @@ Problem make(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::strin
   return s;
 }
 
+// A distorted box clamped at x0 with the boundary at x1, keeping all its n_i interior modes.
+Problem all_interior_modes(PetscInt* n_i) {
+  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
+  b.distortion = 0.1;
+  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
+  auto dofs = fe::number_dofs(lm, {"x0"});
+  *n_i = dofs.n_global - 3 * lm.node_set_sizes.at("x1");
+  return make(PETSC_COMM_WORLD, b, {"x0"}, "x1", *n_i);
+}
+
 }  // namespace
 
 // A slender cantilever (L = 50 h) whose interface is its clamped end face: the effective mass of
@@ -73,12 +84,8 @@ TEST(Select, CantileverEffectiveMassFractions) {
 // and (eq. 17) EIM = lambda VEIM = lambda^2 DEIM = lambda CMSchi = OMR / lambda per mode, OMR being
 // evaluated from its own formula (eq. 15) with K_sm.
 TEST(Select, IdentitiesWithAllInteriorModes) {
-  auto b = test::box_spec(ElementType::Hex8, 1.0, 0.3, 0.2, 5, 1, 1);
-  b.distortion = 0.1;
-  auto lm = test::box_mesh(PETSC_COMM_WORLD, b);
-  auto dofs = fe::number_dofs(lm, {"x0"});
-  const PetscInt n_i = dofs.n_global - 3 * lm.node_set_sizes.at("x1");
-  Problem s = make(PETSC_COMM_WORLD, b, {"x0"}, "x1", n_i);
+  PetscInt n_i = 0;
+  Problem s = all_interior_modes(&n_i);
   const PetscInt nb = s.cb.n_b;
   auto P = s.ic.P();
   std::vector<double> sum(nb * nb, 0.0);
@@ -311,4 +318,49 @@ TEST(Select, StatorEimKeepsFewerModesThanFrequencyOrder) {
   EXPECT_LT(2 * by_eim.selected.size(), by_freq.selected.size() + 2);  // at most about half
   // The dropped modes together carry at most 5 % of the effective interface mass.
   EXPECT_GE(by_eim.retained, 0.95);
+}
+
+// select::verify on a superelement that keeps every interior mode: the superelement is exact, so
+// each full-model mode below the cutoff is matched with MAC 1 to round-off and no frequency error,
+// the full-model eigenvalues (SLEPc on K, M) equal those of the dense reduced pair (LAPACK on
+// K_CB, M_CB) computed here, and a method truncated to two modes matches fewer.
+TEST(Select, VerifyMatchesExactSuperelement) {
+  PetscInt n_i = 0;
+  Problem s = all_interior_modes(&n_i);
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(s.cb.n()), s.cb.K, s.cb.M);
+  auto hz = [](double l) { return std::sqrt(l) / (2 * M_PI); };
+  select::VerifySettings vs;
+  vs.methods = {select::Method::EIM, select::Method::Frequency};
+  vs.names = {"eim", "frequency"};
+  vs.fmax_analysis_hz = 0.5 * (hz(lam[5]) + hz(lam[6]));
+  auto w = cb::sign_reference(test::model_of(s.lm, s.dofs, s.ops));
+  // All candidates for every method (a count of n_i), then two for the frequency order.
+  vs.num_modes = n_i;
+  const auto all = select::verify(PETSC_COMM_WORLD, s.ops.K.get(), s.ops.M.get(), s.cb, w.get(), vs);
+  ASSERT_EQ(all.fom_omega2.size(), 6u);
+  for (int j = 0; j < 6; ++j) EXPECT_NEAR(all.fom_omega2[j] / lam[j], 1.0, 1e-8) << "full-model mode " << j;
+  EXPECT_EQ(all.cb_in_band, 6);
+  ASSERT_EQ(all.methods.size(), 2u);
+  for (const auto& m : all.methods) {
+    EXPECT_EQ(static_cast<PetscInt>(m.sel.selected.size()), n_i) << m.name;
+    EXPECT_EQ(m.in_band, 6) << m.name;
+    EXPECT_EQ(m.matches, 6) << m.name;
+    EXPECT_EQ(m.subspace_matches, 6) << m.name;
+    EXPECT_LT(m.worst_err, 1e-8) << m.name;
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_NEAR(m.best_mac[j], 1.0, 1e-8) << m.name << " mode " << j;
+      EXPECT_NEAR(m.subspace_mac[j], 1.0, 1e-8) << m.name << " mode " << j;
+      EXPECT_NEAR(m.rom_f[j] / hz(lam[j]), 1.0, 1e-12) << m.name << " mode " << j;
+    }
+  }
+  double eim_sum = 0;
+  for (double f : all.eim_fractions) eim_sum += f;
+  EXPECT_NEAR(eim_sum, 1.0, 1e-12);
+  vs.num_modes = 2;
+  const auto two = select::verify(PETSC_COMM_WORLD, s.ops.K.get(), s.ops.M.get(), s.cb, w.get(), vs);
+  const auto& f2 = two.methods[1];
+  EXPECT_EQ(f2.sel.selected, (std::vector<PetscInt>{0, 1}));
+  // Rayleigh-Ritz on a smaller space: some mode unmatched or a matched frequency above its own.
+  EXPECT_TRUE(f2.matches < 6 || f2.worst_err > 1e-10) << f2.matches << " " << f2.worst_err;
+  EXPECT_LE(f2.in_band, static_cast<PetscInt>(s.cb.n_b + 2));
 }

@@ -3,11 +3,13 @@
 // convergence in dt, the critical step refusal, and bounded energy of the undamped, unforced
 // nonlinear reduced model over 10^6 steps.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
 #include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include "morse/cb/craig_bampton.hpp"
@@ -15,6 +17,8 @@
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "morse/core/session.hpp"
+#include "morse/io/h5.hpp"
 #include "morse/sim/sim.hpp"
 #include "util.hpp"
 
@@ -834,4 +838,87 @@ TEST(Sim, StressRecoveryMatchesClosedForms) {
     EXPECT_EQ(fb.element_mises, fb1.element_mises);
     EXPECT_EQ(fb.element_mises_max, fb1.element_mises_max);
   }
+}
+
+// sim::write_sim writes what read_sim reads: the histories, final state, sets, snapshots, contact
+// histories and the stored load to the last bit. Each rank writes and reads its own file (a
+// simulate case is serial).
+TEST(SimFile, RoundTrips) {
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string file = cat("/tmp/morse_test_sim_file_", pid, "_r", world_rank(), ".h5");
+  auto seq = [](std::size_t n, double a) {
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = a * std::cos(0.3 * k) + k;
+    return v;
+  };
+  const std::size_t nt = 4, r = 3, nn = 2, nd = 5;
+  sim::SimRecord rec;
+  rec.time = seq(nt, 0.1), rec.energy = seq(nt, 2.0), rec.q = seq(nt * r, 1e-3);
+  rec.final_q = seq(r, 1.0), rec.final_v = seq(r, -1.0), rec.final_time = 0.3;
+  rec.sets.push_back({"tip", {4, 9}, seq(nt * 2 * 3, 1e-4)});
+  rec.snapshots_fom = "fom.h5";
+  rec.snapshot_time = {0.0, 0.2}, rec.snapshot_u = seq(2 * nd, 1.0), rec.snapshot_v = seq(2 * nd, 3.0);
+  rec.snapshot_node_ids = {1, 1, 2, 2, 3}, rec.snapshot_components = {0, 1, 0, 2, 1};
+  auto& c = rec.contact;
+  c.node_ids = {4, 9}, c.normal = seq(nt * nn, 5.0), c.tangential = seq(nt * nn * 3, 0.5);
+  c.normals = seq(nn * 3, 1.0), c.mean_force = seq(nt * nn * 3, 7.0), c.mean_force_time = seq(nt, 0.05);
+  c.gap = seq(nt * nn, 1e-5), c.active = {0, 1, 2, 1}, c.radial_displacement = seq(nt * nn, 1e-6);
+  c.max_normal_force = 12.5, c.time_of_max_normal_force = 0.2;
+  rec.rom = "rom.h5", rec.case_name = "b";
+  rec.load.loads.resize(1);
+  rec.load.loads[0].set = "tip", rec.load.loads[0].dir[2] = 1, rec.load.loads[0].amplitude = 3, rec.load.loads[0].omega = 9;
+  sim::Settings s;
+  s.dt = 1e-3, s.t_final = 0.3;
+  s.contact.nodes.resize(nn);
+  s.contact.obstacle = sim::Obstacle::Casing;
+  s.contact.casing.omega = 100;
+  sim::Stats stats;
+  stats.steps = 300;
+  {
+    io::H5Output out(PETSC_COMM_SELF, file);
+    sim::write_sim(out, rec, s, stats);
+    out.commit();
+  }
+  const auto back = sim::read_sim(file, {"tip"});
+  EXPECT_EQ(back.time, rec.time);
+  EXPECT_EQ(back.energy, rec.energy);
+  EXPECT_EQ(back.q, rec.q);
+  EXPECT_EQ(back.final_q, rec.final_q);
+  EXPECT_EQ(back.final_v, rec.final_v);
+  EXPECT_EQ(back.final_time, rec.final_time);
+  ASSERT_EQ(back.sets.size(), 1u);
+  EXPECT_EQ(back.sets[0].name, "tip");
+  EXPECT_EQ(back.sets[0].node_ids, rec.sets[0].node_ids);
+  EXPECT_EQ(back.sets[0].u, rec.sets[0].u);
+  EXPECT_EQ(back.snapshots_fom, rec.snapshots_fom);
+  EXPECT_EQ(back.snapshot_time, rec.snapshot_time);
+  EXPECT_EQ(back.snapshot_u, rec.snapshot_u);
+  EXPECT_EQ(back.snapshot_v, rec.snapshot_v);
+  EXPECT_EQ(back.snapshot_node_ids, rec.snapshot_node_ids);
+  EXPECT_EQ(back.snapshot_components, rec.snapshot_components);
+  const auto& b = back.contact;
+  EXPECT_EQ(b.node_ids, c.node_ids);
+  EXPECT_EQ(b.normal, c.normal);
+  EXPECT_EQ(b.tangential, c.tangential);
+  EXPECT_EQ(b.normals, c.normals);
+  EXPECT_EQ(b.mean_force, c.mean_force);
+  EXPECT_EQ(b.mean_force_time, c.mean_force_time);
+  EXPECT_EQ(b.gap, c.gap);
+  EXPECT_EQ(b.active, c.active);
+  EXPECT_EQ(b.radial_displacement, c.radial_displacement);
+  EXPECT_EQ(b.max_normal_force, c.max_normal_force);
+  EXPECT_EQ(b.time_of_max_normal_force, c.time_of_max_normal_force);
+  EXPECT_EQ(back.rom, "rom.h5");
+  EXPECT_EQ(back.case_name, "b");
+  ASSERT_EQ(back.load.loads.size(), 1u);
+  EXPECT_EQ(back.load.loads[0].set, "tip");
+  EXPECT_EQ(back.load.loads[0].omega, 9.0);
+  // The contact group also reads as a load history (dyn::read_load_table, the -load_history of
+  // morse fom): the mean forces at their times.
+  dyn::LoadTable table;
+  EXPECT_EQ(dyn::read_load_table(file, &table), "");
+  EXPECT_EQ(table.time, c.mean_force_time);
+  EXPECT_EQ(table.forces, c.mean_force);
+  std::remove(file.c_str());
 }

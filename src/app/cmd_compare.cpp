@@ -1,6 +1,7 @@
 // app/cmd_compare.cpp: `morse compare FOM.h5 ROM.h5`, the performance indicator of seed 003
 // (eq. 43–51; eval/indicator.hpp) of a `morse simulate` run against a `morse fom` run of the same
-// case. Serial (rank 0). Prints a table and writes /compare into ROM.h5 (atomically: a copy is
+// case. Serial (rank 0). t_max comes from the load stored in the files (/fom/load, /sim/load;
+// -load_* overrides it). Prints a table and writes /compare into ROM.h5 (atomically: a copy is
 // modified, then renamed).
 #include <hdf5.h>
 #include <petscsys.h>
@@ -17,9 +18,11 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
+#include "morse/dyn/dyn.hpp"
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
 
@@ -56,54 +59,6 @@ PetscErrorCode get_compare_options(MPI_Comm comm, CompareOptions* o) {
   return PETSC_SUCCESS;
 }
 
-// Writes /compare into a copy of `file`, then renames the copy over it.
-void write_compare(const std::string& file, const eval::Indicator& ind, double tmax, double tsnap,
-                   const std::string& fom, const std::string& tip) {
-  const std::string tmp = file + ".tmp";
-  std::filesystem::copy_file(file, tmp, std::filesystem::copy_options::overwrite_existing);
-  hid_t f = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
-  MORSE_CHECK(f >= 0, "compare: cannot open ", tmp, " for writing");
-  if (H5Lexists(f, "/compare", H5P_DEFAULT) > 0) H5Ldelete(f, "/compare", H5P_DEFAULT);
-  hid_t g = H5Gcreate2(f, "/compare", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  bool ok = g >= 0;
-  auto put = [&](const char* name, const double* v, hsize_t n) {
-    hid_t sp = H5Screate_simple(1, &n, nullptr);
-    hid_t d = H5Dcreate2(g, name, H5T_NATIVE_DOUBLE, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-    ok = ok && d >= 0 && H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0;
-    if (d >= 0) H5Dclose(d);
-    H5Sclose(sp);
-  };
-  auto attr = [&](const char* name, const std::string& v) {
-    hid_t t = H5Tcopy(H5T_C_S1);
-    H5Tset_size(t, v.size() + 1);
-    hid_t sp = H5Screate(H5S_SCALAR);
-    hid_t a = H5Acreate2(g, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
-    ok = ok && a >= 0 && H5Awrite(a, t, v.c_str()) >= 0;
-    if (a >= 0) H5Aclose(a);
-    H5Sclose(sp);
-    H5Tclose(t);
-  };
-  if (ok) {
-    const double I = ind.I();
-    put("e", ind.e.data(), 4);
-    put("weights", ind.w.data(), 4);
-    put("I", &I, 1);
-    put("t_max", &tmax, 1);
-    put("t_snapshot", &tsnap, 1);
-    attr("fom", fom);
-    attr("tip_set", tip);
-    attr("description", "seed 003 eq. 43-51: e = (e1 covariance at t_max, e2 energy, e3 tip peak-to-peak, "
-                        "e4 tip displacement), I = sum w e");
-  }
-  if (g >= 0) H5Gclose(g);
-  H5Fclose(f);
-  if (!ok) {
-    std::remove(tmp.c_str());
-    throw Error(cat("compare: cannot write /compare into ", file));
-  }
-  std::filesystem::rename(tmp, file);
-}
-
 }  // namespace
 
 void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
@@ -121,18 +76,32 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   for (double x : co.w) ws += x;
   MORSE_CHECK(std::abs(ws - 1.0) < 1e-12 && *std::min_element(co.w.begin(), co.w.end()) >= 0,
               "-compare_weights must be >= 0 and sum to 1");
-  if (co.tmax < 0)
-    for (const auto& l : load_list)
-      if (l.omega > 0) {
-        double ph = std::fmod(M_PI / 2 - l.phase, 2 * M_PI);
-        if (ph < 0) ph += 2 * M_PI;
-        co.tmax = ph / l.omega;
-        break;
-      }
-  MORSE_CHECK(co.tmax >= 0, "compare: give -compare_tmax T or the harmonic load (-load_*) that defines t_max");
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::string err;
+  if (co.tmax < 0) {
+    // t_max from the load: the -load_* options if given (they override the load the files
+    // store), else the load stored in the fom file (/fom/load), else in the simulate file.
+    double tmax = -1;
+    std::string stored;  // the file whose stored load is used or overridden
+    if (rank == 0) try {
+        dyn::LoadDescription ld;
+        if (dyn::read_load_description(fom, "/fom/load", &ld))
+          stored = fom;
+        else if (dyn::read_load_description(rom, "/sim/load", &ld))
+          stored = rom;
+        tmax = dyn::first_maximum(load_list.empty() ? ld.loads : load_list);
+      } catch (const std::exception& e) {
+        err = e.what();
+      }
+    collective_check(comm, err);
+    MPI_Bcast(&tmax, 1, MPI_DOUBLE, 0, comm);
+    co.tmax = tmax;
+    if (!load_list.empty() && !stored.empty())
+      print0(comm, "morse compare: the -load_* options override the load stored in %s\n", stored.c_str());
+    MORSE_CHECK(co.tmax >= 0, "compare: give -compare_tmax T or the harmonic load (-load_*) that defines t_max",
+                load_list.empty() ? " (neither file stores a harmonic load: /fom/load, /sim/load)" : "");
+  }
   eval::Indicator ind;
   double tsnap = 0;
   if (rank == 0) {
@@ -143,14 +112,14 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       auto need = [&](bool ok) {
         if (!ok) throw Error(err);
       };
-      need(io::read_doubles(fom, "/fom/time", &tf, &d, &err));
-      need(io::read_doubles(fom, "/fom/energy", &ef, &d, &err));
-      need(io::read_doubles(rom, "/sim/time", &tr, &d, &err));
-      need(io::read_doubles(rom, "/sim/energy", &er, &d, &err));
-      need(io::read_ints(fom, "/fom/sets/" + co.tip + "/node_ids", &tip_f, &d, &err));
-      need(io::read_ints(rom, "/sim/sets/" + co.tip + "/node_ids", &tip_r, &d, &err));
-      need(io::read_doubles(fom, "/fom/sets/" + co.tip + "/u", &uf, &d, &err));
-      need(io::read_doubles(rom, "/sim/sets/" + co.tip + "/u", &ur, &d, &err));
+      auto fh = dyn::read_fom(fom, {co.tip});
+      auto sr = sim::read_sim(rom, {co.tip});
+      tf = std::move(fh.time), ef = std::move(fh.energy), tip_f = std::move(fh.sets[0].node_ids);
+      uf = std::move(fh.sets[0].u);
+      tr = std::move(sr.time), er = std::move(sr.energy), tip_r = std::move(sr.sets[0].node_ids);
+      ur = std::move(sr.sets[0].u);
+      q = std::move(sr.q);
+      const std::size_t r = sr.final_q.size();
       {  // Match the ROM's tip rows to the FOM's by node id (the two files may order them differently).
         auto a = tip_f, b = tip_r;
         std::sort(a.begin(), a.end());
@@ -176,7 +145,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       ind.e[2] = eval::peak_to_peak_criterion(uf, ur_f, ntip);
       ind.e[3] = eval::displacement_criterion(uf, ur_f);
       // e1: full fields at the snapshot nearest to t_max.
-      std::string model = co.rom_model.empty() ? io::read_string_attribute(rom, "/sim", "rom") : co.rom_model;
+      std::string model = co.rom_model.empty() ? sr.rom : co.rom_model;
       MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
       if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
         throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));
@@ -196,8 +165,6 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
       sm.file = model;
       need(io::read_doubles(model, "/nlrom/basis", &sm.basis, &d, &err));
       need(io::read_ints(model, "/mesh/node_ids", &sm.node_ids, &d, &err));
-      need(io::read_doubles(rom, "/sim/q", &q, &d, &err));
-      const std::size_t r = d.size() == 2 ? d[1] : 0;
       MORSE_CHECK(r > 0 && sm.basis.size() == r * sm.node_ids.size() * 3, "compare: ", model,
                   "'s basis does not match ", rom, "'s q");
       sm.model.r = static_cast<PetscInt>(r);
@@ -219,7 +186,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   print0(comm, "  (t_max %.6g s, nearest snapshot %.6g s)\n", co.tmax, tsnap);
   std::string werr;
   if (rank == 0) try {
-      write_compare(rom, ind, co.tmax, tsnap, fom, co.tip);
+      eval::write_compare(rom, ind, co.tmax, tsnap, fom, co.tip);
     } catch (const std::exception& e) {
       werr = e.what();
     }

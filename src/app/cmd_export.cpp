@@ -1,6 +1,6 @@
 // app/cmd_export.cpp: `morse export`, a superelement file of `morse reduce` / `morse select`
 // written for other codes: MBDyn's modal joint (.fem), Nastran (OP4 and a DMIG deck) and
-// MatrixMarket (io/superelement.hpp, docs/export.md). Serial: rank 0 reads and writes; its
+// MatrixMarket (io/export.hpp, docs/export.md). Serial: rank 0 reads and writes; its
 // errors reach every rank through collective_check, so no rank waits alone.
 #include <petscsys.h>
 
@@ -12,6 +12,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
+#include "morse/io/export.hpp"
 #include "morse/io/superelement.hpp"
 
 namespace morse::app::detail {

@@ -151,7 +151,6 @@ void run_fom(MPI_Comm comm) {
   collective_check(comm, load_error);
   collective_check(comm, ho.error);
   check(fo);
-  const int rank = rank_of(comm);
 
   Model md = build_model(
       comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
@@ -177,63 +176,26 @@ void run_fom(MPI_Comm comm) {
          fo.scheme.c_str(), fo.s.dt, (long long)n_steps, n_steps * fo.s.dt);
 
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the run; removed if the run fails
-  std::unique_ptr<io::H5SliceWriter> snaps;
-  int snap_u = -1, snap_v = -1;
-  std::vector<double> snap_times;
-  if (fo.snapshot_every > 0) {
-    out.suspend();
-    snaps = std::make_unique<io::H5SliceWriter>(comm, out.tmp_path(), md.dofs.n_global, md.dofs.first, md.dofs.n_owned);
-    const std::int64_t rows = n_steps / fo.snapshot_every + 1;
-    snap_u = snaps->create("/fom/snapshots/u", rows);
-    snap_v = snaps->create("/fom/snapshots/v", rows);
-    // The DOF map of the snapshot columns: node id and component of every free DOF.
-    std::vector<std::int64_t> node_id(md.dofs.n_owned), comp(md.dofs.n_owned);
-    for (std::int64_t k = 0; k < md.mesh->mesh.num_nodes(); ++k) {
-      if (md.mesh->node_owner[k] != rank) continue;
-      for (int d = 0; d < 3; ++d) {
-        const PetscInt g = md.dofs.node_dof[3 * k + d];
-        if (g < 0) continue;
-        node_id[g - md.dofs.first] = md.mesh->mesh.node_ids[k];
-        comp[g - md.dofs.first] = d;
-      }
-    }
-    snaps->write_int("/fom/snapshots/dof_node_ids", node_id);
-    snaps->write_int("/fom/snapshots/dof_components", comp);
-    snaps->attribute("/fom/snapshots/u", "description",
-                     "[snapshot][free DOF] displacement [m]; column j is component dof_components[j] (0=x) of node "
-                     "dof_node_ids[j]; times in /fom/snapshots/time");
-  }
+  std::unique_ptr<dyn::FomSnapshotWriter> snaps;
+  if (fo.snapshot_every > 0)
+    snaps = std::make_unique<dyn::FomSnapshotWriter>(out, *md.mesh, md.dofs, n_steps / fo.snapshot_every + 1);
 
-  std::vector<double> time, e46, kin, sl, snl, wext, dloss, bal, res;
-  std::vector<std::int64_t> its;
-  std::vector<std::vector<double>> hist(probes.size());
+  dyn::FomHistory hist;
+  for (const auto& p : probes) hist.sets.push_back({p.name(), p.node_ids(), {}});
   auto stats = dyn::integrate(svk, md.M.get(), loads, fo.s, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
-    time.push_back(i.t);
-    e46.push_back(i.energy.eq46());
-    kin.push_back(i.energy.kinetic);
-    sl.push_back(i.energy.strain_linear);
-    snl.push_back(i.energy.strain_nonlinear);
-    wext.push_back(i.energy.external_work);
-    dloss.push_back(i.energy.damping_loss);
-    bal.push_back(i.energy.balance());
-    its.push_back(i.newton_iterations);
-    res.push_back(i.residual);
+    hist.record(i);
     for (std::size_t p = 0; p < probes.size(); ++p) {
       auto u = probes[p].sample(i.u);
-      hist[p].insert(hist[p].end(), u.begin(), u.end());
+      hist.sets[p].u.insert(hist.sets[p].u.end(), u.begin(), u.end());
     }
-    if (snaps && i.step % fo.snapshot_every == 0) {
-      const auto row = static_cast<std::int64_t>(snap_times.size());
-      snaps->write_row(snap_u, row, i.u);
-      snaps->write_row(snap_v, row, i.v);
-      snap_times.push_back(i.t);
-    }
+    if (snaps && i.step % fo.snapshot_every == 0) snaps->write(i);
   });
   check_options(comm, false);
+  std::vector<double> snap_times;
   if (snaps) {
     snaps->close();
+    snap_times = snaps->times();
     snaps.reset();
-    out.resume();
   }
 
   const double per_step = stats.seconds_total / std::max<PetscInt>(1, stats.steps);
@@ -246,7 +208,7 @@ void run_fom(MPI_Comm comm) {
          stats.seconds_total);
   for (std::size_t p = 0; p < probes.size(); ++p) {
     double peak = 0;
-    for (double v : hist[p]) peak = std::max(peak, std::abs(v));
+    for (double v : hist.sets[p].u) peak = std::max(peak, std::abs(v));
     print0(comm, "  set %s: max |u| component %.6e m\n", probes[p].name().c_str(), peak);
   }
 
@@ -254,52 +216,14 @@ void run_fom(MPI_Comm comm) {
   io::write_provenance(out, "fom", md.units);
   auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
-  out.write("/fom/time", time);
-  out.write("/fom/energy", e46);
-  out.attribute("/fom/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy, u'^T M u'/2 + u^T K u/2 [J]");
-  out.write("/fom/energies/kinetic", kin);
-  out.write("/fom/energies/strain_linear", sl);
-  out.write("/fom/energies/strain_nonlinear", snl);
-  out.write("/fom/energies/external_work", wext);
-  out.write("/fom/energies/damping_loss", dloss);
-  out.write("/fom/energies/balance", bal);
-  out.attribute("/fom/energies/balance", "description",
-                "kinetic + strain (linear + nonlinear) + damping loss - external work: constant for an exact balance");
-  out.write("/fom/newton_iterations", its);
-  out.write("/fom/residual", res);
-  for (std::size_t p = 0; p < probes.size(); ++p) {
-    const std::string g = "/fom/sets/" + probes[p].name();
-    const auto n = static_cast<hsize_t>(probes[p].node_ids().size());
-    out.write(g + "/node_ids", probes[p].node_ids());
-    out.write(g + "/u", hist[p], {static_cast<hsize_t>(time.size()), n, 3});
-    out.attribute(g + "/u", "description", "[time][node][x,y,z] displacement [m] in the mesh frame");
-  }
-  if (fo.snapshot_every > 0) {
-    out.write("/fom/snapshots/time", snap_times);
-    out.attribute_int("/fom/snapshots", "every", fo.snapshot_every);
-  }
-  if (!stats.damping_omega.empty()) out.write("/fom/damping/omega", stats.damping_omega);
+  dyn::LoadDescription ld;
+  ld.loads = load_list;
   if (const auto* h = loads.history()) {
-    out.attribute("/fom", "load_history", h->source());
-    out.attribute("/fom", "load_history_scale", ho.scale);
+    ld.history = h->source();
+    ld.history_scale = ho.scale;
+    ld.history_outside = ho.outside;
   }
-  out.attribute_int("/fom", "linear", fo.linear ? 1 : 0);
-  out.attribute("/fom", "scheme", fo.scheme);
-  out.attribute("/fom", "dt", fo.s.dt);
-  out.attribute_int("/fom", "steps", stats.steps);
-  out.attribute_int("/fom", "newton_iterations", stats.newton_iterations);
-  out.attribute_int("/fom", "factorizations", stats.factorizations);
-  out.attribute_int("/fom", "krylov_iterations", stats.krylov_iterations);
-  out.attribute("/fom", "newton", fo.s.linear || fo.s.scheme == dyn::Scheme::Energy ? std::string("modified") : fo.newton);
-  out.attribute("/fom", "seconds_total", stats.seconds_total);
-  out.attribute("/fom", "seconds_force", stats.seconds_force);
-  out.attribute("/fom", "seconds_tangent", stats.seconds_tangent);
-  out.attribute("/fom", "seconds_factor", stats.seconds_factor);
-  out.attribute("/fom", "seconds_solve", stats.seconds_solve);
-  out.attribute("/fom", "modal_damping_ratio", fo.s.modal_xi);
-  out.attribute_int("/fom", "modal_damping_modes", fo.s.damping_modes);
-  out.attribute("/fom", "rayleigh_alpha", fo.s.rayleigh_alpha);
-  out.attribute("/fom", "rayleigh_beta", fo.s.rayleigh_beta);
+  dyn::write_fom(out, hist, snap_times, fo.snapshot_every, fo.s, stats, ld);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }

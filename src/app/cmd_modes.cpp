@@ -72,14 +72,9 @@ void run_modes(MPI_Comm comm) {
     gm = mesh::gather_to_rank0(*md.mesh);
     io::write_mesh(out, gm);
   } else {
-    write_model(out, md);
+    io::write_model(out, md);
   }
-  out.write("/fom/frequencies_hz", f_hz);
-  out.write("/fom/eigenvalues", eig.omega2);
-  write_modes_dataset(out, "/fom/mode_shapes", md, eig.V.get(), 0, static_cast<PetscInt>(f_hz.size()));
-  out.attribute("/fom/mode_shapes", "description",
-                md.mesh ? "[mode][node][x,y,z], mass-normalized, nodes as /mesh/node_ids"
-                        : "[mode][row], mass-normalized, rows as /dofs/node and /dofs/component");
+  io::write_modes(out, "/fom", md, eig.omega2, eig.V.get());
   out.attribute("/fom", "clamp", [&] {
     std::string s;
     for (auto& c : o.clamp) s += (s.empty() ? "" : ",") + c;

@@ -97,7 +97,7 @@ PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
 // Nonlinear forces of the snapshots, POD-compressed (eq. 38): the filter basis Phi_f.
 UMat force_filter(const Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {
   StageTimer t(md.mesh->comm, "PodFilter");
-  auto X = io::read_dof_rows(*md.mesh, md.dofs, file, "/fom/snapshots/u");
+  auto X = dyn::read_fom_snapshots(*md.mesh, md.dofs, file);
   PetscInt ns = 0;
   MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
   MORSE_CHECK(n <= ns, "-nlrom_filter_pod ", n, " exceeds the ", ns, " snapshots of ", file);
@@ -172,61 +172,18 @@ void run_nlrom(MPI_Comm comm) {
 
   StageTimer t(comm, "Write");
   io::write_provenance(out, "nlrom", md.units);
-  auto gm = mesh::gather_to_rank0(*md.mesh);
-  io::write_mesh(out, gm);
-  // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
-  // owned members of every set, gathered on rank 0.
-  write_node_sets(out, *md.mesh, "/nlrom/node_sets");
-  const auto R = static_cast<hsize_t>(r);
-  out.write("/nlrom/M", rm.M, {R, R});
-  out.write("/nlrom/K", rm.K, {R, R});
-  out.write("/nlrom/C", rm.C, {R, R});
-  out.write("/nlrom/A", g.A, {static_cast<hsize_t>(nlrom::n_quadratic(r)), R});
-  out.write("/nlrom/B", g.B, {static_cast<hsize_t>(nlrom::n_cubic(r)), R});
-  out.attribute("/nlrom/A", "description", "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
-  out.attribute("/nlrom/B", "description",
-                "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
-  std::vector<double> nodal;
-  for (PetscInt j = 0; j < r; ++j) {
-    Vec c;
-    MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
-    auto col = io::gather_nodal(*md.mesh, md.dofs, c);
-    MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
-    nodal.insert(nodal.end(), col.begin(), col.end());
-  }
-  out.write("/nlrom/basis", nodal, {R, static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
-  out.attribute("/nlrom/basis", "description", "[column][node][x,y,z] basis vectors, nodes as /mesh/node_ids");
-  std::string labels;
-  for (const auto& l : basis.labels) labels += l + "\n";
-  out.write_string("/nlrom/labels", labels);
-  out.write("/nlrom/boundary_nodes", basis.cb.boundary_node_ids);
-  if (!basis.md_pairs.empty()) {
-    std::vector<std::int64_t> pairs, sel;
-    for (std::size_t k = 0; k < basis.md_pairs.size(); ++k) {
-      pairs.push_back(basis.md_pairs[k].first + 1);
-      pairs.push_back(basis.md_pairs[k].second + 1);
-      sel.push_back(basis.md_selected[k]);
-    }
-    out.write("/nlrom/derivatives/pairs", pairs, {basis.md_pairs.size(), 2});
-    out.write("/nlrom/derivatives/weights", basis.md_weights);
-    out.write("/nlrom/derivatives/selected", sel);
-    out.attribute("/nlrom/derivatives", "selection", no.b.random_derivatives ? "random" : "weight");
-  }
-  if (!basis.pod_singular_values.empty()) out.write("/nlrom/pod/singular_values", basis.pod_singular_values);
-  if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);
-  out.attribute("/nlrom", "basis", no.basis);
-  out.attribute("/nlrom", "forces", no.forces);
-  out.attribute("/nlrom", "boundary_set", no.b.boundary_set);
-  out.attribute_int("/nlrom", "r", r);
-  out.attribute_int("/nlrom", "n_boundary_dofs", basis.n_b);
-  out.attribute_int("/nlrom", "n_fixed_modes", basis.n_fixed);
-  out.attribute_int("/nlrom", "n_extra", basis.n_extra);
-  out.attribute("/nlrom", "step_displacement", no.step_displacement);
-  out.attribute_int("/nlrom", "filter_pod", no.n_filter);
-  out.attribute("/nlrom", "modal_damping_ratio", no.damping_xi);
-  out.attribute("/nlrom", "t1_basis_seconds", basis.seconds);
-  out.attribute("/nlrom", "t2_forces_seconds", t2);
-  out.attribute("/nlrom", "t3_projection_seconds", t3);
+  nlrom::StoredInfo info;
+  info.basis = no.basis;
+  info.forces = no.forces;
+  info.boundary_set = no.b.boundary_set;
+  info.derivative_selection = no.b.random_derivatives ? "random" : "weight";
+  info.step_displacement = no.step_displacement;
+  info.filter_pod = no.n_filter;
+  info.modal_damping_ratio = no.damping_xi;
+  info.t2_forces_seconds = t2;
+  info.t3_projection_seconds = t3;
+  rm.g = std::move(g);
+  nlrom::write_stored_model(out, *md.mesh, md.dofs, basis, rm, info);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }

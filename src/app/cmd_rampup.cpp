@@ -414,49 +414,10 @@ void run_rampup(MPI_Comm comm) {
     out.attribute_int("/rampup", "n_dofs", a.n());
     out.attribute_int("/rampup", "n_stator_modes", a.n_stator());
     out.attribute_int("/rampup", "n_rotor_dofs", a.n_rotor());
-    for (std::size_t s = 0; s < e.stators.size(); ++s) {
-      const auto& sm = e.stators[s];
-      const std::string g = "/rampup/stators/" + sm.name;
-      std::vector<double> f;
-      for (double w : sm.omega) f.push_back(w / kTwoPi);
-      out.write(g + "/frequencies_hz", f);
-      out.write(g + "/clamped_nodes", sm.clamped_nodes);
-      out.attribute(g, "file", o.stators[s].file);
-      out.attribute_int(g, "n_modes", sm.n_modes);
-      out.attribute_int(g, "n_total", sm.n_total);
-      out.attribute_int(g, "n_boundary_dofs", e.stator_n_b[s]);
-      out.attribute(g, "f_cut_hz", sm.f_cut_hz);
-      out.attribute(g, "damping_offdiag", sm.damping_offdiag);
-    }
-    if (o.write_matrices) {
-      const auto A = a.dense();
-      const auto n = static_cast<hsize_t>(A.n);
-      out.write("/rampup/matrices/M", A.M, {n, n});
-      out.write("/rampup/matrices/C", A.C, {n, n});
-      out.write("/rampup/matrices/K", A.K, {n, n});
-      out.write("/rampup/matrices/G", A.G, {n, n});
-      out.attribute("/rampup/matrices", "description",
-                    "M x'' + (C + Omega G) x' + K x = f: x = stator modal coordinates, then rotor DOFs "
-                    "(u_x, u_y, theta_x, theta_y per station); G per unit driving speed [rad/s]");
-      out.attribute_int("/rampup/matrices", "n_stator_modes", A.n_stator);
-    }
-    if (!o.reference.empty()) {
-      const auto nb = static_cast<hsize_t>(e.bearings.size());
-      out.write("/rampup/error/bearing_force", he.force, {nb, 2});
-      out.write("/rampup/error/displacement", he.displacement, {nb, 2});
-      out.attribute("/rampup/error", "reference", o.reference);
-      out.attribute("/rampup/error", "description",
-                    "seed 000 eq. 24: max over the run of |x - x_ref| / (max x_ref - min x_ref), per bearing "
-                    "and direction (fractions, not %)");
-      const std::pair<const char*, double> sums[] = {
-          {"force_worst", he.force_worst},
-          {"force_best", he.force_best},
-          {"force_mean", he.force_mean},
-          {"displacement_worst", he.displacement_worst},
-          {"displacement_best", he.displacement_best},
-          {"displacement_mean", he.displacement_mean}};
-      for (const auto& [k, v] : sums) out.attribute("/rampup/error", k, v);
-    }
+    for (std::size_t s = 0; s < e.stators.size(); ++s)
+      rampup::write_stator(out, "/rampup", e.stators[s], o.stators[s].file, e.stator_n_b[s]);
+    if (o.write_matrices) rampup::write_matrices(out, "/rampup", a.dense());
+    if (!o.reference.empty()) rampup::write_errors(out, "/rampup", he, o.reference);
   }
   out.commit();
   print0(comm, "morse: wrote %s\n", o.out.c_str());

@@ -83,15 +83,14 @@ void run_reduce(MPI_Comm comm) {
   StageTimer t(comm, "Write");
   io::H5Output out(comm, o.out);
   io::write_provenance(out, "reduce", md.units);
-  write_model(out, md);
-  out.write("/cb/fixed_interface/frequencies_hz", fi_hz);
-  out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
-  write_rom(out, res.M, res.K, r.damping > 0 || md.C ? &res.C : nullptr, res, rom_f, r.damping);
+  io::write_model(out, md);
+  io::write_fixed_interface(out, res.fixed_omega2);
+  io::write_superelement(out, rom_superelement(res, res.M, res.K, r.damping > 0 || md.C ? &res.C : nullptr, rom_f, r.damping));
   out.attribute("/cb", "boundary_set", r.boundary);
   std::vector<io::XdmfField> fields;
   if (r.write_basis) {
-    write_modes_dataset(out, "/cb/constraint_modes", md, res.T.get(), 0, res.n_b);
-    write_modes_dataset(out, "/cb/fixed_interface/mode_shapes", md, res.T.get(), res.n_b, res.n_phi);
+    io::write_modes_dataset(out, "/cb/constraint_modes", md, res.T.get(), 0, res.n_b);
+    io::write_modes_dataset(out, "/cb/fixed_interface/mode_shapes", md, res.T.get(), res.n_b, res.n_phi);
     out.attribute("/cb/constraint_modes", "description", "Psi: [boundary DOF][node][x,y,z]");
     out.attribute("/cb/fixed_interface/mode_shapes", "description", "Phi: [mode][node][x,y,z], M_ii-normalized");
     fields = {{"/cb/constraint_modes", "psi", (int)res.n_b}, {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};

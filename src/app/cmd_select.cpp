@@ -1,6 +1,6 @@
 // app/cmd_select.cpp: `morse select`, the ranking of the fixed-interface modes by one or more
-// methods, their truncated superelements checked against the full model (MAC), and the
-// superelement of one method written to /rom.
+// methods, their truncated superelements checked against the full model (MAC; select::verify),
+// and the superelement of one method written to /rom.
 #include <petscsys.h>
 
 #include <algorithm>
@@ -195,165 +195,27 @@ void run_select(MPI_Comm comm) {
   double f_an = so.fmax_analysis > 0 ? so.fmax_analysis
                 : r.fmax > 0       ? 0.5 * r.fmax
                                    : 0.5 * std::sqrt(res.fixed_omega2.back()) / kTwoPi;
-  const double l_an = std::pow(kTwoPi * f_an, 2);
 
-  select::InterfaceCoupling ic;
-  {
-    StageTimer t(comm, "InterfaceCoupling");
-    ic = select::interface_coupling(comm, md.K.get(), md.M.get(), res);
-  }
-  // Full-model modes with the real boundary conditions (clamp only): MAC reference and IMR.
-  eigen::Eigenpairs fom;
-  {
-    eigen::EigenSettings es;
-    es.prefix = kFomPrefix;
-    es.stage = "Fom";
-    es.what = "full-model modes";
-    if (so.fom_modes > 0)
-      es.nev = so.fom_modes;
-    else
-      es.omega2_max = l_an;
-    auto w = cb::sign_reference(md);
-    fom = eigen::solve_eigen(md.K.get(), md.M.get(), es, w.get());
-  }
-  const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
-
-  select::Excitation ex;
-  if (!so.ebr_load.empty()) {
-    ex = select::read_ebr_load(comm, so.ebr_load, res);
-  } else if (so.ebr_given) {
-    ex.freq_hz = so.ebr_freq;
-    ex.amplitude = so.ebr_amp.empty() ? std::vector<double>(ex.freq_hz.size(), 1.0) : so.ebr_amp;
-    ex.phase_deg = so.ebr_phase.empty() ? std::vector<double>(ex.freq_hz.size(), 0.0) : so.ebr_phase;
-    ex.all_components = false;
-  } else {
-    for (int k = 1; k <= 8; ++k) ex.freq_hz.push_back(f_an * (k - 0.5) / 8.0);
-    ex.amplitude.assign(8, 1.0);
-    ex.phase_deg.assign(8, 0.0);
-  }
-  std::unique_ptr<select::ImrData> imr;
-  if (std::find(methods.begin(), methods.end(), select::Method::IMR) != methods.end()) {
-    StageTimer t(comm, "ImrSystemModes");
-    std::vector<PetscInt> modes;
-    for (auto m1 : so.imr_modes) modes.push_back(m1 - 1);
-    if (so.imr_support == "clamped") {
-      imr = std::make_unique<select::ImrData>();
-      imr->clamped = true;
-      if (modes.empty())
-        for (PetscInt i = 0; i < nphi && res.fixed_omega2[i] <= l_an; ++i) modes.push_back(i);
-      for (auto m : modes)
-        MORSE_CHECK(m >= 0 && m < nphi, "-select_imr_modes ", m + 1, " is out of range (1..", nphi,
-                    " fixed-interface modes)");
-      imr->clamped_modes = modes;
-    } else {
-      eigen::Eigenpairs sys;
-      Mat Ks = md.K.get();
-      UMat Kspring;
-      eigen::Eigenpairs* use = &fom;
-      if (so.imr_support == "spring") {
-        MORSE_CALL(MatDuplicate(md.K.get(), MAT_COPY_VALUES, Kspring.ptr()));
-        for (auto g : res.boundary_dofs) {
-          PetscInt rs, re;
-          MORSE_CALL(MatGetOwnershipRange(Kspring.get(), &rs, &re));
-          if (g >= rs && g < re) MORSE_CALL(MatSetValue(Kspring.get(), g, g, so.imr_stiffness, ADD_VALUES));
-        }
-        MORSE_CALL(MatAssemblyBegin(Kspring.get(), MAT_FINAL_ASSEMBLY));
-        MORSE_CALL(MatAssemblyEnd(Kspring.get(), MAT_FINAL_ASSEMBLY));
-        Ks = Kspring.get();
-        eigen::EigenSettings es;
-        es.prefix = kImrPrefix;
-        es.stage = "Imr";
-        es.what = "IMR system modes";
-        es.omega2_max = l_an;
-        sys = eigen::solve_eigen(Ks, md.M.get(), es, nullptr);
-        use = &sys;
-      }
-      const PetscInt n_sys = static_cast<PetscInt>(use->omega2.size());
-      if (modes.empty())
-        for (PetscInt i = 0; i < n_sys; ++i) modes.push_back(i);
-      for (auto m : modes)
-        MORSE_CHECK(m >= 0 && m < n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys,
-                    " system modes", so.fom_modes > 0 && so.imr_support == "free" ? "" : cat(" below ", f_an, " Hz"),
-                    ")");
-      imr = std::make_unique<select::ImrData>(
-          select::imr_data(comm, md.M.get(), res, use->V.get(), use->omega2, modes, so.imr_shift));
-    }
-  }
+  select::VerifySettings vs;
+  vs.methods = methods;
+  vs.names = so.methods;
+  vs.num_modes = so.num_modes;
+  vs.fraction = so.fraction;
+  vs.fmax_analysis_hz = f_an;
+  vs.fom_modes = so.fom_modes;
+  vs.mac_threshold = so.mac_threshold;
+  vs.ebr_load = so.ebr_load;
+  vs.ebr_given = so.ebr_given;
+  vs.ebr_freq = so.ebr_freq, vs.ebr_amp = so.ebr_amp, vs.ebr_phase = so.ebr_phase;
+  vs.imr_support = so.imr_support;
+  vs.imr_stiffness = so.imr_stiffness;
+  vs.imr_modes = so.imr_modes;
+  vs.imr_shift = so.imr_shift;
+  auto w = cb::sign_reference(md);
+  const auto vr = select::verify(comm, md.K.get(), md.M.get(), res, w.get(), vs);
   check_options(comm, false);
-
-  struct MethodResult {
-    std::string name;
-    std::vector<double> score;
-    select::Selection sel;
-    std::vector<double> rom_f;
-    PetscInt in_band = 0, matches = 0, subspace_matches = 0;
-    double worst_err = 0;
-    std::vector<double> mac, best_mac, subspace_mac;
-    std::vector<double> M, K;
-  };
-  std::vector<MethodResult> results;
-  select::MacBasis mac_basis;
-  {
-    StageTimer t(comm, "MacProjections");
-    UMat MV;
-    MORSE_CALL(MatMatMult(md.M.get(), fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
-    mac_basis = select::mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
-  }
-  auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
-  for (std::size_t mi = 0; mi < methods.size(); ++mi) {
-    MethodResult mr;
-    mr.name = so.methods[mi];
-    {
-      // The ranking proper: scores, ranking, truncation.
-      StageTimer ts(comm, cat("Select_", so.methods[mi]));
-      mr.score = select::scores(comm, methods[mi], ic, res, ex, imr.get());
-      mr.sel = select::truncate(methods[mi], mr.score, so.num_modes, so.fraction);
-    }
-    // Its check: the restricted superelement's modes against the full model's.
-    StageTimer t(comm, cat("Check_", so.methods[mi]));
-    mr.M = select::restrict_operator(res.M, nb, nr, mr.sel.selected);
-    mr.K = select::restrict_operator(res.K, nb, nr, mr.sel.selected);
-    const int n = static_cast<int>(nb + mr.sel.selected.size());
-    std::vector<double> vec;
-    auto lam = eigen::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
-    mr.rom_f = hz(lam);
-    while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
-    // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
-    const PetscInt nq = std::max<PetscInt>(mr.in_band, 1);
-    std::vector<double> Q(static_cast<std::size_t>(nr) * nq, 0.0);
-    std::vector<PetscInt> idx(nb);
-    std::iota(idx.begin(), idx.end(), 0);
-    for (auto sidx : mr.sel.selected) idx.push_back(nb + sidx);
-    for (PetscInt k = 0; k < mr.in_band; ++k)
-      for (int row = 0; row < n; ++row) Q[idx[row] * nq + k] = vec[static_cast<std::size_t>(row) * n + k];
-    mr.mac = select::mac_matrix(mac_basis, Q, nq);
-    auto wmac = select::mac_matrix(mac_basis, Q, nq, &res.M);
-    mr.best_mac.assign(n_fom, 0.0);
-    mr.subspace_mac.assign(n_fom, 0.0);
-    for (PetscInt j = 0; j < n_fom; ++j) {
-      // Near-repeated modes (cyclic parts) mix freely inside their cluster, which pairwise MAC
-      // cannot follow: the mass-weighted MAC summed over the in-band superelement modes is the
-      // squared projection of the full-model mode on the superelement's in-band modal space.
-      for (PetscInt k = 0; k < mr.in_band; ++k) mr.subspace_mac[j] += wmac[j * nq + k];
-      if (mr.subspace_mac[j] > so.mac_threshold) ++mr.subspace_matches;
-      PetscInt best = -1;
-      for (PetscInt k = 0; k < mr.in_band; ++k)
-        if (mr.mac[j * nq + k] > mr.best_mac[j]) mr.best_mac[j] = mr.mac[j * nq + k], best = k;
-      if (best >= 0 && mr.best_mac[j] > so.mac_threshold) {
-        ++mr.matches;
-        mr.worst_err = std::max(mr.worst_err, std::abs(mr.rom_f[best] / f_fom(j) - 1.0));
-      }
-    }
-    if (mr.in_band == 0) mr.mac.assign(n_fom, 0.0);
-    results.push_back(std::move(mr));
-  }
-
-  // Plain frequency-ordered Craig-Bampton for the same candidate set: reference row.
-  PetscInt cb_in_band = 0;
-  {
-    auto lam = eigen::dense_eigenvalues(static_cast<int>(nr), res.K, res.M);
-    while (cb_in_band < nr && lam[cb_in_band] <= l_an) ++cb_in_band;
-  }
+  const auto& results = vr.methods;
+  const PetscInt n_fom = static_cast<PetscInt>(vr.fom_omega2.size()), cb_in_band = vr.cb_in_band;
   print0(comm, "\nmorse select: %d candidate fixed-interface modes (%s .. %s Hz), %d boundary DOFs; analysis band "
                "%.6g Hz: %d full-model modes\n",
          (int)nphi, hz_of(res.fixed_omega2.front()).c_str(), hz_of(res.fixed_omega2.back()).c_str(), (int)nb, f_an,
@@ -370,52 +232,16 @@ void run_select(MPI_Comm comm) {
   io::H5Output out(comm, o.out);
   io::write_provenance(out, "select", md.units);
   write_model(out, md);
-  const std::vector<double> fom_hz = hz(fom.omega2);
-  out.write("/cb/fixed_interface/frequencies_hz", hz(res.fixed_omega2));
-  out.write("/cb/fixed_interface/eigenvalues", res.fixed_omega2);
-  out.write("/select/fom/frequencies_hz", fom_hz);
-  out.attribute("/select", "fmax_analysis_hz", f_an);
-  out.attribute("/select", "mac_threshold", so.mac_threshold);
-  out.attribute_int("/select", "cb_modes_in_band", static_cast<std::int64_t>(cb_in_band));
-  out.write("/select/effective_mass/directional_fractions", select::directional_mass_fractions(ic, md.mass),
-            {static_cast<hsize_t>(nphi), 3});
-  out.attribute("/select/effective_mass/directional_fractions", "description",
-                "(P_i r_d)^2 / total mass for a rigid translation r_d of the interface in x, y, z");
-  auto eim = select::scores(comm, select::Method::EIM, ic, res, ex, nullptr);
-  double eim_total = 0;
-  for (double v : eim) eim_total += v;
-  std::vector<double> eim_frac;
-  for (double v : eim) eim_frac.push_back(v / eim_total);
-  out.write("/select/effective_mass/trace_fractions", eim_frac);
-  for (const auto& mr : results) {
-    const std::string g = "/select/" + mr.name;
-    const double total = std::accumulate(mr.score.begin(), mr.score.end(), 0.0);
-    std::vector<double> frac;
-    for (double v : mr.score) frac.push_back(total > 0 ? v / total : 0.0);
-    std::vector<std::int64_t> rank(mr.sel.ranking.begin(), mr.sel.ranking.end()),
-        sel(mr.sel.selected.begin(), mr.sel.selected.end());
-    out.write(g + "/scores", mr.score);
-    out.write(g + "/score_fractions", frac);
-    out.write(g + "/ranking", rank);
-    out.write(g + "/cumulative", mr.sel.cumulative);
-    out.write(g + "/selected", sel);
-    out.write(g + "/rom_frequencies_hz", mr.rom_f);
-    out.write(g + "/mac", mr.mac, {static_cast<hsize_t>(n_fom), static_cast<hsize_t>(std::max<PetscInt>(mr.in_band, 1))});
-    out.write(g + "/best_mac", mr.best_mac);
-    out.write(g + "/subspace_mac", mr.subspace_mac);
-    out.attribute(g, "retained_fraction", mr.sel.retained);
-    out.attribute_int(g, "n_selected", static_cast<std::int64_t>(mr.sel.selected.size()));
-    out.attribute_int(g, "n_rom_modes_in_band", static_cast<std::int64_t>(mr.in_band));
-    out.attribute_int(g, "n_mac_matches", static_cast<std::int64_t>(mr.matches));
-    out.attribute_int(g, "n_subspace_mac_matches", static_cast<std::int64_t>(mr.subspace_matches));
-    out.attribute(g, "worst_frequency_error", mr.worst_err);
+  io::write_fixed_interface(out, res.fixed_omega2);
+  select::write_selection(out, vr, so.mac_threshold, md.mass);
+  for (const auto& mr : results)
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      write_rom(out, mr.M, mr.K, r.damping > 0 || md.C ? &C : nullptr, res, mr.rom_f, r.damping);
-      out.write("/rom/selected_modes", sel);
-      out.attribute("/rom", "selection_method", mr.name);
+      auto se = rom_superelement(res, mr.M, mr.K, r.damping > 0 || md.C ? &C : nullptr, mr.rom_f, r.damping);
+      se.selected_modes.assign(mr.sel.selected.begin(), mr.sel.selected.end());
+      se.selection_method = mr.name;
+      io::write_superelement(out, se);
     }
-  }
   out.attribute("/cb", "boundary_set", r.boundary);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());

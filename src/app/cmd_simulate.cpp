@@ -148,19 +148,19 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
   std::vector<long> snap_step;
   for (double t : plan.time)
     if (t <= so.s.t_final * (1 + 1e-12)) snap_step.push_back(std::lround(t / so.s.dt));
-  std::vector<double> time, energy, qh, su, sv, st, qf, vf;
+  sim::SimRecord rec;
   std::map<std::string, std::vector<double>> hist;
   // Contact at the output steps: normal force, friction vector, gap, radial displacement e_r . u.
   const auto& cn = so.s.contact.nodes;
   const std::size_t nc = cn.size();
-  std::vector<double> c_n, c_t, c_g, c_ur, e_r(3 * nc, 0.0);
-  std::vector<std::int64_t> c_act;
-  double c_max = 0.0, c_tmax = 0.0;
+  auto& cr = rec.contact;
+  std::vector<double> e_r(3 * nc, 0.0);
   // The contact forces act for one step each: the mean force of every output interval (its
   // impulse over its length) keeps what the output samples alone would miss, so that the
   // history can drive another model (-load_history).
-  const std::vector<double> c_normal = nc ? sim::contact_normals(so.s.contact) : std::vector<double>{};
-  std::vector<double> c_sum(3 * nc, 0.0), c_mean, c_mean_t;
+  if (nc) cr.normals = sim::contact_normals(so.s.contact);
+  const std::vector<double>& c_normal = cr.normals;
+  std::vector<double> c_sum(3 * nc, 0.0);
   long c_count = 0;
   double t_prev_out = 0.0;
   for (std::size_t k = 0; k < nc; ++k) {
@@ -168,19 +168,18 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     if (rho > 0) e_r[3 * k] = cn[k].x[0] / rho, e_r[3 * k + 1] = cn[k].x[1] / rho;
   }
   std::size_t next_snap = 0;
-  double tf = 0.0;
   auto stats = sim::integrate(sm.model, loads, so.s, [&](const sim::StepState& x) {
     while (next_snap < snap_step.size() && snap_step[next_snap] == x.step) {
-      st.push_back(x.t);
-      sm.dof_values(plan.rows, x.q, &su);
-      sm.dof_values(plan.rows, x.v, &sv);
+      rec.snapshot_time.push_back(x.t);
+      sm.dof_values(plan.rows, x.q, &rec.snapshot_u);
+      sm.dof_values(plan.rows, x.v, &rec.snapshot_v);
       ++next_snap;
     }
-    qf.assign(x.q, x.q + r);
-    vf.assign(x.v, x.v + r);
-    tf = x.t;
+    rec.final_q.assign(x.q, x.q + r);
+    rec.final_v.assign(x.v, x.v + r);
+    rec.final_time = x.t;
     for (std::size_t k = 0; k < nc; ++k)
-      if (x.contact_normal[k] > c_max) c_max = x.contact_normal[k], c_tmax = x.t;
+      if (x.contact_normal[k] > cr.max_normal_force) cr.max_normal_force = x.contact_normal[k], cr.time_of_max_normal_force = x.t;
     if (nc && x.step > 0) {
       for (std::size_t k = 0; k < nc; ++k)
         for (int d = 0; d < 3; ++d)
@@ -190,23 +189,23 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
     if (x.step % so.every != 0) return;
     if (nc) {
       // Row 0 (the initial state) has no force; row i the mean over the steps since row i - 1.
-      for (std::size_t j = 0; j < 3 * nc; ++j) c_mean.push_back(c_count ? c_sum[j] / c_count : 0.0);
-      c_mean_t.push_back(x.step == 0 ? 0.0 : 0.5 * (t_prev_out + x.t));
+      for (std::size_t j = 0; j < 3 * nc; ++j) cr.mean_force.push_back(c_count ? c_sum[j] / c_count : 0.0);
+      cr.mean_force_time.push_back(x.step == 0 ? 0.0 : 0.5 * (t_prev_out + x.t));
       std::fill(c_sum.begin(), c_sum.end(), 0.0);
       c_count = 0;
       t_prev_out = x.t;
-      c_n.insert(c_n.end(), x.contact_normal, x.contact_normal + nc);
-      c_t.insert(c_t.end(), x.contact_friction, x.contact_friction + 3 * nc);
-      c_g.insert(c_g.end(), x.gap, x.gap + nc);
-      c_act.push_back(x.active);
+      cr.normal.insert(cr.normal.end(), x.contact_normal, x.contact_normal + nc);
+      cr.tangential.insert(cr.tangential.end(), x.contact_friction, x.contact_friction + 3 * nc);
+      cr.gap.insert(cr.gap.end(), x.gap, x.gap + nc);
+      cr.active.push_back(x.active);
       for (std::size_t k = 0; k < nc; ++k) {
         const double* u = x.q + cn[k].dof;
-        c_ur.push_back(e_r[3 * k] * u[0] + e_r[3 * k + 1] * u[1]);
+        cr.radial_displacement.push_back(e_r[3 * k] * u[0] + e_r[3 * k + 1] * u[1]);
       }
     }
-    time.push_back(x.t);
-    energy.push_back(x.energy());
-    qh.insert(qh.end(), x.q, x.q + r);
+    rec.time.push_back(x.t);
+    rec.energy.push_back(x.energy());
+    rec.q.insert(rec.q.end(), x.q, x.q + r);
     for (const auto& m : so.monitor) sm.displacements(m, x.q, &hist[m]);
   });
   const double sps = stats.seconds > 0 ? stats.steps / stats.seconds : 0.0;
@@ -221,80 +220,25 @@ void run_case(const SimOptions& so, const nlrom::StoredModel& sm, const Snapshot
            sps * stats.kernel_bytes * 1e-9);
   io::H5Output out(PETSC_COMM_SELF, c.out);
   io::write_provenance(out, "simulate", sm.units);
-  out.write("/sim/time", time);
-  out.write("/sim/energy", energy);
-  out.attribute("/sim/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
-  out.write("/sim/q", qh, {static_cast<hsize_t>(time.size()), static_cast<hsize_t>(r)});
-  out.write("/sim/final/q", qf);
-  out.write("/sim/final/v", vf);
-  out.attribute("/sim/final", "time", tf);
   for (const auto& m : so.monitor) {
     std::vector<std::int64_t> ids;
     for (auto k : sm.sets.at(m)) ids.push_back(sm.node_ids[k]);
-    out.write("/sim/sets/" + m + "/node_ids", ids);
-    out.write("/sim/sets/" + m + "/u", hist[m], {static_cast<hsize_t>(time.size()), ids.size(), 3});
-    out.attribute("/sim/sets/" + m + "/u", "description", "[time][node][x,y,z] displacement u = Phi q [m]");
+    rec.sets.push_back({m, std::move(ids), hist[m]});
   }
   if (!so.snapshots.empty()) {
-    const auto ns = static_cast<hsize_t>(st.size()), nd = static_cast<hsize_t>(plan.rows.size());
-    out.write("/sim/snapshots/time", st);
-    out.write("/sim/snapshots/u", su, {ns, nd});
-    out.write("/sim/snapshots/v", sv, {ns, nd});
-    out.write("/sim/snapshots/dof_node_ids", plan.ids);
-    out.write("/sim/snapshots/dof_components", plan.comps);
-    out.attribute("/sim/snapshots", "fom", so.snapshots);
+    rec.snapshots_fom = so.snapshots;
+    rec.snapshot_node_ids = plan.ids;
+    rec.snapshot_components = plan.comps;
   }
   if (nc) {
-    const auto nt = static_cast<hsize_t>(time.size()), nn = static_cast<hsize_t>(nc);
-    std::vector<std::int64_t> ids;
-    for (auto k : sm.sets.at(so.contact.set)) ids.push_back(sm.node_ids[k]);
-    out.write("/sim/contact/node_ids", ids);
-    out.write("/sim/contact/normal", c_n, {nt, nn});
-    out.attribute("/sim/contact/normal", "description", "[time][node] normal contact force lambda >= 0 [N]");
-    out.write("/sim/contact/tangential", c_t, {nt, nn, 3});
-    out.attribute("/sim/contact/tangential", "description", "[time][node][x,y,z] Coulomb friction force [N]");
-    out.write("/sim/contact/normals", c_normal, {nn, 3});
-    out.attribute("/sim/contact/normals", "description",
-                  "[node][x,y,z] unit normal n_k to the free side (constant): the force on node k is "
-                  "normal n_k + tangential");
-    out.write("/sim/contact/mean_force", c_mean, {nt, nn, 3});
-    out.attribute("/sim/contact/mean_force", "description",
-                  "[time][node][x,y,z] mean contact force (normal n_k + tangential) over the steps since the "
-                  "previous output row [N], global axes; row 0 is 0; at mean_force_time");
-    out.write("/sim/contact/mean_force_time", c_mean_t);
-    out.attribute("/sim/contact/mean_force_time", "description",
-                  "centre of each row's output interval [s] (0 for row 0): the time grid of mean_force");
-    out.write("/sim/contact/gap", c_g, {nt, nn});
-    out.attribute("/sim/contact/gap", "description", "[time][node] gap after the correction [m] (>= 0)");
-    out.write("/sim/contact/active", c_act);
-    out.write("/sim/contact/radial_displacement", c_ur, {nt, nn});
-    out.attribute("/sim/contact/radial_displacement", "description",
-                  "[time][node] e_r . u, e_r = (x, y, 0) / |(x, y)| of the node's reference position [m]");
-    out.attribute("/sim/contact", "obstacle", so.contact.obstacle == sim::Obstacle::Casing ? "casing" : "plane");
-    out.attribute("/sim/contact", "mu", so.s.contact.mu);
-    out.attribute("/sim/contact", "max_normal_force", c_max);
-    out.attribute("/sim/contact", "time_of_max_normal_force", c_tmax);
-    if (so.contact.obstacle == sim::Obstacle::Casing) {
-      const auto& cs = so.s.contact.casing;
-      out.attribute("/sim/contact", "omega", cs.omega);
-      out.attribute("/sim/contact", "clearance", cs.clearance);
-      out.attribute("/sim/contact", "bump_height", cs.bump_height);
-      out.attribute_int("/sim/contact", "lobes", cs.lobes);
-      out.attribute("/sim/contact", "width", cs.width);
-      out.attribute("/sim/contact", "alpha", cs.alpha > 0 ? cs.alpha : std::log(100.0) / (0.2 * so.s.t_final));
-    }
-    print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", nc, c_max, c_tmax);
+    for (auto k : sm.sets.at(so.contact.set)) cr.node_ids.push_back(sm.node_ids[k]);
+    print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", nc, cr.max_normal_force,
+           cr.time_of_max_normal_force);
   }
-  out.attribute("/sim", "rom", so.rom);
-  if (!c.name.empty()) out.attribute("/sim", "case", c.name);
-  out.attribute_int("/sim", "linear", so.s.linear ? 1 : 0);
-  out.attribute("/sim", "dt", so.s.dt);
-  out.attribute_int("/sim", "steps", stats.steps);
-  out.attribute("/sim", "seconds", stats.seconds);
-  out.attribute("/sim", "critical_dt", stats.critical_dt);
-  out.attribute("/sim", "kernel", stats.kernel);
-  out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
-  if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
+  rec.rom = so.rom;
+  rec.case_name = c.name;
+  rec.load.loads = c.loads;
+  sim::write_sim(out, rec, so.s, stats);
   out.commit();
   print0(PETSC_COMM_SELF, "morse: wrote %s\n", c.out.c_str());
 }

@@ -89,30 +89,7 @@ void run_static(MPI_Comm comm) {
   io::write_provenance(out, "static", md.units);
   auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
-  auto nodal = io::gather_nodal(*md.mesh, md.dofs, res.u.get());
-  out.write("/static/u", nodal, {1, static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
-  out.attribute("/static/u", "description", "[1][node][x,y,z] displacement [m], nodes as /mesh/node_ids");
-  for (const auto& p : probes) {
-    auto u = p.sample(res.u.get());
-    out.write("/static/sets/" + p.name() + "/node_ids", p.node_ids());
-    out.write("/static/sets/" + p.name() + "/u", u, {static_cast<hsize_t>(p.node_ids().size()), 3});
-  }
-  std::vector<double> lambda, residual;
-  std::vector<std::int64_t> iterations, converged;
-  for (const auto& h : res.history) {
-    lambda.push_back(h.lambda);
-    residual.push_back(h.residual);
-    iterations.push_back(h.newton_iterations);
-    converged.push_back(h.converged);
-  }
-  out.write("/static/history/load_factor", lambda);
-  out.write("/static/history/newton_iterations", iterations);
-  out.write("/static/history/residual", residual);
-  out.write("/static/history/converged", converged);
-  out.attribute_int("/static", "linear", so.linear ? 1 : 0);
-  out.attribute("/static", "time", so.s.time);
-  out.attribute("/static", "load_factor", so.s.load_factor);
-  out.attribute("/static", "load_norm", res.load_norm);
+  dyn::write_static(out, *md.mesh, md.dofs, res, probes, so.s);
   out.commit();
   if (so.xdmf) write_xdmf_collective(comm, o.out, gm, {{"/static/u", "displacement", 1}});
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());

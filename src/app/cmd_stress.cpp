@@ -138,7 +138,7 @@ void run_stress(MPI_Comm comm) {
   auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_provenance(out, "stress", md.units);
   io::write_mesh(out, gm);
-  const auto nn = static_cast<hsize_t>(md.mesh->n_global_nodes), ne = static_cast<hsize_t>(md.mesh->n_global_elements);
+  const auto nn = static_cast<hsize_t>(md.mesh->n_global_nodes);
   std::vector<double> ug;  // u in the mesh's global node order (rank 0)
   std::int64_t max_node = -1;
   double max_nodal = 0.0;
@@ -154,37 +154,14 @@ void run_stress(MPI_Comm comm) {
     print0(PETSC_COMM_SELF, "  max von Mises %.4g MPa (quadrature point, element %lld), %.4g MPa at nodes (node %lld)\n",
            f.max_mises / 1e6, (long long)f.max_element_id, max_nodal / 1e6, (long long)max_node);
   }
-  out.write("/stress/displacement", ug, {1, nn, 3});
-  out.attribute("/stress/displacement", "description", "[1][node][x,y,z] u = Phi q [m], nodes as /mesh/node_ids");
-  out.write("/stress/von_mises", f.nodal_mises, {1, nn});
-  out.attribute("/stress/von_mises", "description", "[1][node] von Mises stress of /stress/stress [Pa]");
-  // In the component order of XDMF's Tensor6 as ParaView reads it (xx, xy, xz, yy, yz, zz).
-  std::vector<double> t6(f.nodal_stress.size());
-  for (std::size_t k = 0; k < t6.size(); k += 6) {
-    const double* s = &f.nodal_stress[k];
-    const double v[6] = {s[0], s[5], s[4], s[1], s[3], s[2]};
-    std::copy(v, v + 6, &t6[k]);
-  }
-  out.write("/stress/stress", t6, {1, nn, 6});
-  out.attribute("/stress/stress", "description",
-                "[1][node][xx,xy,xz,yy,yz,zz] stress at the node, mean over its elements [Pa]");
-  out.write("/stress/von_mises_element", f.element_mises, {1, ne});
-  out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
-  out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});
-  out.attribute("/stress/von_mises_element_max", "description", "[1][element] max of von Mises at its quadrature points [Pa]");
-  out.attribute("/stress", "time", t_step);
-  out.attribute_int("/stress", "step", step);
-  out.attribute("/stress", "measure", mname);
-  out.attribute("/stress", "max_von_mises", f.max_mises);
-  out.attribute_int("/stress", "max_element_id", f.max_element_id);
-  out.attribute("/stress", "max_nodal_von_mises", max_nodal);
-  out.attribute_int("/stress", "max_node_id", max_node);
-  out.attribute("/stress", "rom", so.rom);
-  out.attribute("/stress", "sim", so.sim);
-  if (!so.time_set) {
-    out.attribute("/stress", "monitor", so.monitor);
-    out.attribute("/stress", "monitor_radial_displacement", ur);
-  }
+  sim::StressRecord rec;
+  rec.n_nodes = md.mesh->n_global_nodes, rec.n_elements = md.mesh->n_global_elements;
+  rec.displacement = std::move(ug);
+  rec.time = t_step, rec.step = step, rec.measure = measure;
+  rec.max_nodal_von_mises = max_nodal, rec.max_node_id = max_node;
+  rec.rom = so.rom, rec.sim = so.sim;
+  if (!so.time_set) rec.monitor = so.monitor, rec.monitor_radial_displacement = ur;
+  sim::write_stress(out, f, rec);
   out.commit();
   if (so.xdmf)
     write_xdmf_collective(comm, o.out, gm,

@@ -205,80 +205,6 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh)
   return md;
 }
 
-void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(lm.comm, &rank);
-  MPI_Comm_size(lm.comm, &size);
-  // Every rank knows every set name (partition.hpp), in the same (map) order.
-  for (const auto& [name, nodes] : lm.mesh.node_sets) {
-    std::vector<std::int64_t> mine;
-    for (auto k : nodes)
-      if (lm.node_owner[k] == rank) mine.push_back(lm.mesh.node_ids[k]);
-    int n = static_cast<int>(mine.size());
-    std::vector<int> counts(size), displs(size, 0);
-    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, lm.comm);
-    for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
-    std::vector<std::int64_t> all(rank == 0 ? displs[size - 1] + counts[size - 1] : 0);
-    MPI_Gatherv(mine.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, lm.comm);
-    std::sort(all.begin(), all.end());
-    out.write(group + "/" + name, all);
-  }
-}
-
-void write_model(io::H5Output& out, const Model& md) {
-  if (md.mesh) {
-    auto gm = mesh::gather_to_rank0(*md.mesh);
-    io::write_mesh(out, gm);
-    write_node_sets(out, *md.mesh, "/mesh/node_sets");
-    return;
-  }
-  std::vector<std::int64_t> node, comp;
-  fe::gather_labels(md.dofs, &node, &comp);
-  out.write("/dofs/node", node);
-  out.write("/dofs/component", comp);
-  out.attribute("/dofs", "description",
-                "matrix input: node id and component (1..6) of every free row of K and M, in row order");
-  out.attribute("/dofs", "source", md.source);
-  out.attribute_int("/dofs", "n_rows_file", md.dofs.n_global + md.dofs.n_clamped_global);
-}
-
-void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
-                         PetscInt count) {
-  // One mode at a time: rank 0 never holds more than one gathered mode (4 MB for 170k nodes,
-  // against 4 GB for 1000 modes at once).
-  if (!md.mesh) {
-    out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.dofs.n_global)});
-    for (PetscInt j = 0; j < count; ++j) {
-      Vec x;
-      MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
-      VecScatter sc;
-      Vec all;
-      MORSE_CALL(VecScatterCreateToZero(x, &sc, &all));
-      MORSE_CALL(VecScatterBegin(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
-      MORSE_CALL(VecScatterEnd(sc, x, all, INSERT_VALUES, SCATTER_FORWARD));
-      MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
-      PetscInt n = 0;
-      const PetscScalar* a;
-      MORSE_CALL(VecGetLocalSize(all, &n));
-      MORSE_CALL(VecGetArrayRead(all, &a));
-      std::vector<double> row(a, a + n);
-      MORSE_CALL(VecRestoreArrayRead(all, &a));
-      MORSE_CALL(VecScatterDestroy(&sc));
-      MORSE_CALL(VecDestroy(&all));
-      out.write_row(name, static_cast<hsize_t>(j), row);
-    }
-    return;
-  }
-  out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
-  for (PetscInt j = 0; j < count; ++j) {
-    Vec x;
-    MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
-    auto nodal = io::gather_nodal(*md.mesh, md.dofs, x);
-    MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
-    out.write_row(name, static_cast<hsize_t>(j), nodal);
-  }
-}
-
 int rank_of(MPI_Comm comm) {
   int r = 0;
   MPI_Comm_rank(comm, &r);
@@ -296,30 +222,20 @@ void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mes
   collective_check(comm, err);
 }
 
-// /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
-void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
-               const std::vector<double>* C, const cb::CBResult& cb, const std::vector<double>& freq_hz,
-               double damping) {
-  const auto n = static_cast<hsize_t>(freq_hz.size());
-  const PetscInt n_b = cb.n_b;
-  out.write("/rom/M", M, {n, n});
-  out.write("/rom/K", K, {n, n});
-  if (C) out.write("/rom/C", *C, {n, n});
-  out.write("/rom/boundary_nodes", cb.boundary_node_ids);
-  std::vector<std::int64_t> labels;
-  for (PetscInt j = 0; j < n_b; ++j) {
-    labels.push_back(cb.boundary_dof_node[j]);
-    labels.push_back(cb.boundary_dof_component[j]);
-  }
-  out.write("/rom/boundary_dofs", labels, {static_cast<hsize_t>(n_b), 2});
-  out.attribute("/rom/boundary_dofs", "description",
-                "[boundary DOF][node id, component 1..6 (1..3 = x, y, z; 4..6 = rotations, matrix input only)]");  out.write("/rom/frequencies_hz", freq_hz);
-  out.attribute_int("/rom", "n_boundary_dofs", n_b);
-  out.attribute_int("/rom", "n_modes", static_cast<std::int64_t>(n) - n_b);
-  out.attribute("/rom", "damping_ratio", damping);
-  out.attribute("/rom", "dof_order",
-                "boundary DOFs first (those of /rom/boundary_dofs: nodes by ascending id, then components), then "
-                "the fixed-interface modal coordinates by ascending frequency (select: those of /rom/selected_modes)");
+io::Superelement rom_superelement(const cb::CBResult& cb, const std::vector<double>& M, const std::vector<double>& K,
+                                  const std::vector<double>* C, const std::vector<double>& freq_hz, double damping) {
+  io::Superelement se;
+  se.n = static_cast<int>(freq_hz.size());
+  se.n_b = static_cast<int>(cb.n_b);
+  se.M = M;
+  se.K = K;
+  if (C) se.C = *C;
+  se.boundary_nodes = cb.boundary_node_ids;
+  se.dof_node.assign(cb.boundary_dof_node.begin(), cb.boundary_dof_node.begin() + cb.n_b);
+  se.dof_component.assign(cb.boundary_dof_component.begin(), cb.boundary_dof_component.begin() + cb.n_b);
+  se.frequencies_hz = freq_hz;
+  se.damping_ratio = damping;
+  return se;
 }
 
 PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,

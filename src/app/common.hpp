@@ -1,6 +1,6 @@
 // app/common.hpp (private): what several commands of the morse executable share: the model
 // options (-mesh, -clamp, -material_*, -out) and the Craig-Bampton options, the unknown-option
-// check, building the model, and the writers of mode shapes, XDMF and /rom. Each command is in
+// check, building the model, and the writers of mode shapes and XDMF. Each command is in
 // cmd_<name>.cpp; run_command (commands.cpp) dispatches to them.
 #pragma once
 
@@ -21,6 +21,7 @@
 #include "morse/fe/model.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/matrix_model.hpp"
+#include "morse/io/superelement.hpp"
 #include "morse/mesh/mesh.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/sim/sim.hpp"
@@ -60,28 +61,16 @@ using fe::Model;
 /// (fe::mesh_model, io::matrix_model) and described on rank 0. needs_mesh: why this command
 /// needs a mesh (then matrix input is refused with that reason), or null if matrices will do.
 Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh = nullptr);
-/// The model description of an output file: /mesh (mesh input) or /dofs (matrix input: the node
-/// id and component of every free row, and the matrix files). Collective.
-void write_model(io::H5Output& out, const Model& md);
-
-/// Every node set of the mesh as a dataset <group>/<SET> of external node ids, ascending (e.g.
-/// /mesh/node_sets, read back by `morse rampup` for bearing and clamp nodes). Collective.
-void write_node_sets(io::H5Output& out, const mesh::LocalMesh& lm, const std::string& group);
-
-/// Columns first .. first + count - 1 of V as dataset `name`: [mode][node][x,y,z] for a mesh
-/// model (0 at clamped DOFs), [mode][row] for a matrix model (rows as /dofs). Collective.
-void write_modes_dataset(io::H5Output& out, const std::string& name, const Model& md, Mat V, PetscInt first,
-                         PetscInt count);
 
 int rank_of(MPI_Comm comm);
 
 void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mesh& gm,
                            const std::vector<io::XdmfField>& fields);
 
-// /rom as every superelement-writing command writes it (docs/hdf5-schema.md).
-void write_rom(io::H5Output& out, const std::vector<double>& M, const std::vector<double>& K,
-               const std::vector<double>* C, const cb::CBResult& cb, const std::vector<double>& freq_hz,
-               double damping);
+/// The superelement of a Craig-Bampton result as io::write_superelement writes it (/rom): the
+/// reduced M, K, C (null: no /rom/C), the boundary labels of cb, the frequencies and the damping.
+io::Superelement rom_superelement(const cb::CBResult& cb, const std::vector<double>& M, const std::vector<double>& K,
+                                  const std::vector<double>* C, const std::vector<double>& freq_hz, double damping);
 
 struct ReduceOptions {
   std::string boundary;

@@ -378,7 +378,7 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
       b.labels.push_back(cat("psi ", b.md_pairs[k].first + 1, ",", b.md_pairs[k].second + 1));
     }
   } else {
-    auto X = io::read_dof_rows(lm, dofs, s.snapshots, "/fom/snapshots/u");
+    auto X = dyn::read_fom_snapshots(lm, dofs, s.snapshots);
     PetscInt ns = 0;
     MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
     MORSE_CHECK(s.n_pod <= ns, "nlrom: -nlrom_num_pod ", s.n_pod, " exceeds the ", ns, " snapshots of ", s.snapshots);

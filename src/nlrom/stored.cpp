@@ -4,10 +4,13 @@
 
 #include <cmath>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "core/detail/pack.hpp"
 #include "morse/core/error.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/mesh/partition.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
 namespace morse::nlrom {
@@ -218,6 +221,66 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     }
   }
   return s;
+}
+
+void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const Basis& basis,
+                        const ReducedModel& rm, const StoredInfo& info) {
+  auto gm = mesh::gather_to_rank0(lm);
+  io::write_mesh(out, gm);
+  // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
+  // owned members of every set, gathered on rank 0.
+  io::write_node_sets(out, lm, "/nlrom/node_sets");
+  const PetscInt r = basis.r();
+  const auto R = static_cast<hsize_t>(r);
+  out.write("/nlrom/M", rm.M, {R, R});
+  out.write("/nlrom/K", rm.K, {R, R});
+  out.write("/nlrom/C", rm.C, {R, R});
+  out.write("/nlrom/A", rm.g.A, {static_cast<hsize_t>(n_quadratic(r)), R});
+  out.write("/nlrom/B", rm.g.B, {static_cast<hsize_t>(n_cubic(r)), R});
+  out.attribute("/nlrom/A", "description", "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
+  out.attribute("/nlrom/B", "description",
+                "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
+  std::vector<double> nodal;
+  for (PetscInt j = 0; j < r; ++j) {
+    Vec c;
+    MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
+    auto col = io::gather_nodal(lm, dofs, c);
+    MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
+    nodal.insert(nodal.end(), col.begin(), col.end());
+  }
+  out.write("/nlrom/basis", nodal, {R, static_cast<hsize_t>(lm.n_global_nodes), 3});
+  out.attribute("/nlrom/basis", "description", "[column][node][x,y,z] basis vectors, nodes as /mesh/node_ids");
+  std::string labels;
+  for (const auto& l : basis.labels) labels += l + "\n";
+  out.write_string("/nlrom/labels", labels);
+  out.write("/nlrom/boundary_nodes", basis.cb.boundary_node_ids);
+  if (!basis.md_pairs.empty()) {
+    std::vector<std::int64_t> pairs, sel;
+    for (std::size_t k = 0; k < basis.md_pairs.size(); ++k) {
+      pairs.push_back(basis.md_pairs[k].first + 1);
+      pairs.push_back(basis.md_pairs[k].second + 1);
+      sel.push_back(basis.md_selected[k]);
+    }
+    out.write("/nlrom/derivatives/pairs", pairs, {basis.md_pairs.size(), 2});
+    out.write("/nlrom/derivatives/weights", basis.md_weights);
+    out.write("/nlrom/derivatives/selected", sel);
+    out.attribute("/nlrom/derivatives", "selection", info.derivative_selection);
+  }
+  if (!basis.pod_singular_values.empty()) out.write("/nlrom/pod/singular_values", basis.pod_singular_values);
+  if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);
+  out.attribute("/nlrom", "basis", info.basis);
+  out.attribute("/nlrom", "forces", info.forces);
+  out.attribute("/nlrom", "boundary_set", info.boundary_set);
+  out.attribute_int("/nlrom", "r", r);
+  out.attribute_int("/nlrom", "n_boundary_dofs", basis.n_b);
+  out.attribute_int("/nlrom", "n_fixed_modes", basis.n_fixed);
+  out.attribute_int("/nlrom", "n_extra", basis.n_extra);
+  out.attribute("/nlrom", "step_displacement", info.step_displacement);
+  out.attribute_int("/nlrom", "filter_pod", info.filter_pod);
+  out.attribute("/nlrom", "modal_damping_ratio", info.modal_damping_ratio);
+  out.attribute("/nlrom", "t1_basis_seconds", basis.seconds);
+  out.attribute("/nlrom", "t2_forces_seconds", info.t2_forces_seconds);
+  out.attribute("/nlrom", "t3_projection_seconds", info.t3_projection_seconds);
 }
 
 }  // namespace morse::nlrom

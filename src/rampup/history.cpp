@@ -119,4 +119,52 @@ double score(double error_mean, double t, double t_ref) {
   return s1 + s2;
 }
 
+void write_errors(io::H5Output& out, const std::string& group, const HistoryErrors& he, const std::string& reference) {
+  const std::string g = group + "/error";
+  const auto nb = static_cast<hsize_t>(he.force.size() / 2);
+  out.write(g + "/bearing_force", he.force, {nb, 2});
+  out.write(g + "/displacement", he.displacement, {nb, 2});
+  out.attribute(g, "reference", reference);
+  out.attribute(g, "description",
+                "seed 000 eq. 24: max over the run of |x - x_ref| / (max x_ref - min x_ref), per bearing "
+                "and direction (fractions, not %)");
+  const std::pair<const char*, double> sums[] = {
+      {"force_worst", he.force_worst},
+      {"force_best", he.force_best},
+      {"force_mean", he.force_mean},
+      {"displacement_worst", he.displacement_worst},
+      {"displacement_best", he.displacement_best},
+      {"displacement_mean", he.displacement_mean}};
+  for (const auto& [k, v] : sums) out.attribute(g, k, v);
+}
+
+void write_stator(io::H5Output& out, const std::string& group, const StatorModes& sm, const std::string& file,
+                  std::int64_t n_boundary_dofs) {
+  constexpr double kTwoPi = 6.283185307179586;
+  const std::string g = group + "/stators/" + sm.name;
+  std::vector<double> f;
+  for (double w : sm.omega) f.push_back(w / kTwoPi);
+  out.write(g + "/frequencies_hz", f);
+  out.write(g + "/clamped_nodes", sm.clamped_nodes);
+  out.attribute(g, "file", file);
+  out.attribute_int(g, "n_modes", sm.n_modes);
+  out.attribute_int(g, "n_total", sm.n_total);
+  out.attribute_int(g, "n_boundary_dofs", n_boundary_dofs);
+  out.attribute(g, "f_cut_hz", sm.f_cut_hz);
+  out.attribute(g, "damping_offdiag", sm.damping_offdiag);
+}
+
+void write_matrices(io::H5Output& out, const std::string& group, const AssembledMatrices& A) {
+  const std::string g = group + "/matrices";
+  const auto n = static_cast<hsize_t>(A.n);
+  out.write(g + "/M", A.M, {n, n});
+  out.write(g + "/C", A.C, {n, n});
+  out.write(g + "/K", A.K, {n, n});
+  out.write(g + "/G", A.G, {n, n});
+  out.attribute(g, "description",
+                "M x'' + (C + Omega G) x' + K x = f: x = stator modal coordinates, then rotor DOFs "
+                "(u_x, u_y, theta_x, theta_y per station); G per unit driving speed [rad/s]");
+  out.attribute_int(g, "n_stator_modes", A.n_stator);
+}
+
 }  // namespace morse::rampup

@@ -39,6 +39,11 @@
 #include "morse/fe/nonlinear.hpp"
 #include "morse/mesh/partition.hpp"
 
+namespace morse::io {
+class H5Output;
+class H5SliceWriter;
+}
+
 namespace morse::dyn {
 
 /// One nodal load: F(t) = amplitude * sin(omega t + phase) * dir on every node of `set`
@@ -175,6 +180,33 @@ class Loads {
   std::shared_ptr<const LoadHistory> history_;
 };
 
+// ------------------------------------------------------------------------------------------
+// The load description stored with a run (/fom/load of `morse fom`, /sim/load of `morse
+// simulate`; docs/hdf5-schema.md), so that `morse compare` reads the load of the runs it compares
+// instead of taking it on the command line again.
+
+struct LoadDescription {
+  std::vector<NodalLoad> loads;  ///< the harmonic (and constant) nodal loads, in option order
+  std::string history;           ///< the tabulated history's source (FILE or FILE:/GROUP, as -load_history takes it), "" if none
+  double history_scale = 1.0;    ///< -load_history_scale
+  Outside history_outside = Outside::Error;  ///< -load_history_outside
+};
+
+/// t_max of seed 003's criterion e1: the first maximum (t >= 0) of the first harmonic load
+/// (omega > 0), (pi/2 - phase mod 2 pi) / omega; -1 if no load is harmonic.
+double first_maximum(const std::vector<NodalLoad>& loads);
+
+/// Writes d into `group` (e.g. "/fom/load"): the attribute n_loads; if n_loads > 0 the datasets
+/// sets (the set names, one per line), direction [n][3] (as given; Loads normalizes it), amplitude,
+/// omega and phase [n]; with a history the attributes history, history_scale and history_outside.
+/// Rank 0 data (io::H5Output); not collective.
+void write_load_description(io::H5Output& out, const std::string& group, const LoadDescription& d);
+
+/// Reads what write_load_description wrote. Returns false (d untouched) if the file has no
+/// `group` (a file written before the load was stored); throws naming the file and the dataset if
+/// the group is inconsistent. Serial, any rank.
+bool read_load_description(const std::string& file, const std::string& group, LoadDescription* d);
+
 /// The displacements of the nodes of one node set, sampled from distributed vectors onto rank 0
 /// (one small reduction per sample; the set's nodes only). Collective.
 class SetProbe {
@@ -227,6 +259,13 @@ struct StaticResult {
 /// Nonlinear (or linear) static solution. Throws morse::Error (collectively) when an increment
 /// still fails after max_cutbacks halvings, naming the load factor reached. Collective.
 StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSettings& s);
+
+/// Writes /static (docs/hdf5-schema.md): the displacement at every node (/static/u, [1][node][3],
+/// nodes in global order), the displacements of the probes' sets (/static/sets/<SET>), the
+/// increments tried (/static/history) and the settings as attributes. /meta and /mesh are the
+/// command's. Collective (gathers u).
+void write_static(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const StaticResult& res,
+                  const std::vector<SetProbe>& probes, const StaticSettings& s);
 
 // ------------------------------------------------------------------------------------------
 // Dynamics
@@ -309,5 +348,67 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
 /// damping eigen solve under <prefix>damping_. integrate() calls it; a command calls it before its
 /// early unknown-option check. Not collective.
 void add_option_prefixes(const FomSettings& s);
+
+// ------------------------------------------------------------------------------------------
+// The file of a full-order run (/fom of `morse fom`, docs/hdf5-schema.md), written and read here.
+
+/// The histories of a run, one entry per step from the initial state.
+struct FomHistory {
+  std::vector<double> time, energy;  ///< energy: seed 003 eq. 46 (Energies::eq46)
+  std::vector<double> kinetic, strain_linear, strain_nonlinear, external_work, damping_loss, balance;
+  std::vector<std::int64_t> newton_iterations;
+  std::vector<double> residual;
+  /// Displacements of monitored node sets: u is [time][node][x,y,z] (SetProbe::sample per step).
+  struct Set {
+    std::string name;
+    std::vector<std::int64_t> node_ids;
+    std::vector<double> u;
+  };
+  std::vector<Set> sets;
+  /// Appends step i: its time, energies, Newton iterations and residual (not the sets). Not
+  /// collective.
+  void record(const StepInfo& i);
+};
+
+/// Full-field snapshots of a run, /fom/snapshots/{u,v} ([snapshot][free DOF], with the DOF map
+/// dof_node_ids, dof_components), written in parallel into the temporary file of `out` while the
+/// run goes on (no rank holds more than its own rows). Collective throughout.
+class FomSnapshotWriter {
+ public:
+  /// Suspends out (io::H5Output::suspend) and creates the datasets for `rows` snapshots.
+  FomSnapshotWriter(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, std::int64_t rows);
+  ~FomSnapshotWriter();
+  FomSnapshotWriter(const FomSnapshotWriter&) = delete;
+  FomSnapshotWriter& operator=(const FomSnapshotWriter&) = delete;
+  /// Writes u and v of step i as the next snapshot.
+  void write(const StepInfo& i);
+  /// Closes the parallel file and resumes out. Call once, before write_fom.
+  void close();
+  /// The times of the snapshots written (for write_fom).
+  const std::vector<double>& times() const { return times_; }
+
+ private:
+  io::H5Output* out_;
+  std::unique_ptr<io::H5SliceWriter> w_;
+  int u_ = -1, v_ = -1;
+  std::vector<double> times_;
+};
+
+/// Writes /fom: the histories h (time, energy, energies/*, newton_iterations, residual,
+/// sets/<SET>/{node_ids,u}), the snapshot times (snapshot_every > 0: /fom/snapshots/time and
+/// @every), the damped frequencies of stats, the load description (/fom/load and, with a history,
+/// /fom@load_history, @load_history_scale) and the settings and statistics of the run as
+/// attributes. /meta and /mesh are the command's. Rank 0 data; not collective.
+void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>& snapshot_times,
+               PetscInt snapshot_every, const FomSettings& s, const FomStats& stats, const LoadDescription& load);
+
+/// Reads the histories of a fom file (what write_fom writes of h) with the monitored sets `sets`
+/// (each must be in /fom/sets). Throws naming the file and the missing or inconsistent dataset.
+/// Serial, any rank.
+FomHistory read_fom(const std::string& file, const std::vector<std::string>& sets);
+
+/// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
+/// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
+UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file);
 
 }  // namespace morse::dyn

@@ -35,4 +35,11 @@ struct Indicator {
 std::vector<double> interpolate(const std::vector<double>& t, const std::vector<double>& y, std::size_t n,
                                 const std::vector<double>& at);
 
+/// Writes /compare into a `morse simulate` file (docs/hdf5-schema.md): e, weights, I, t_max and
+/// the time of the snapshot used, with the fom file and the tip set as attributes (an existing
+/// /compare is replaced). Atomic: a copy of `file` is modified, then renamed over it. Serial (one
+/// rank); throws naming the file if it cannot be written.
+void write_compare(const std::string& file, const Indicator& ind, double tmax, double tsnap, const std::string& fom,
+                   const std::string& tip);
+
 }  // namespace morse::eval

@@ -7,6 +7,7 @@
 
 #include <hdf5.h>
 #include <mpi.h>
+#include <petscmat.h>
 #include <petscvec.h>
 
 #include <cstdint>
@@ -150,6 +151,35 @@ void write_provenance(H5Output& out, const std::string& command, const std::stri
 /// Writes /mesh/coordinates, /mesh/node_ids, /mesh/topology (XDMF mixed), /mesh/element_ids
 /// from a mesh gathered on rank 0 (gather_to_rank0). Not collective.
 void write_mesh(H5Output& out, const mesh::Mesh& m);
+
+/// Every node set of the distributed mesh as a dataset <group>/<SET> of external node ids,
+/// ascending (e.g. /mesh/node_sets, read back by `morse rampup` for bearing and clamp nodes;
+/// /nlrom/node_sets, read by nlrom::read_stored_model). Collective (gathers on rank 0).
+void write_node_sets(H5Output& out, const mesh::LocalMesh& lm, const std::string& group);
+
+/// Columns first .. first + count - 1 of V (MPIDENSE, rows = the model's free DOFs) as dataset
+/// `name`: [count][node][x,y,z] for a mesh model (nodes in global order, 0 at eliminated DOFs),
+/// [count][row] for a matrix model (rows as /dofs), gathered and written one column at a time, so
+/// that rank 0 never holds more than one (mode shapes, constraint modes). Collective.
+void write_modes_dataset(H5Output& out, const std::string& name, const fe::Model& md, Mat V, PetscInt first,
+                         PetscInt count);
+
+/// The modes of the full model (`morse modes`): <group>/frequencies_hz, <group>/eigenvalues
+/// (omega2, ascending) and <group>/mode_shapes (the columns of V as in write_modes_dataset,
+/// mass-normalized, with its description). Collective.
+void write_modes(H5Output& out, const std::string& group, const fe::Model& md, const std::vector<double>& omega2,
+                 Mat V);
+
+/// The model description of an output file: /mesh and /mesh/node_sets (mesh model) or /dofs
+/// (matrix model: write_dof_labels of its rows and matrix files). Collective.
+void write_model(H5Output& out, const fe::Model& md);
+
+/// /dofs of a model given by its matrices (matrix input, docs/hdf5-schema.md): the node id and
+/// component (1..6) of every free row in row order (gathered on rank 0), the matrix files
+/// (source) and the number of rows of the files. Rank 0 data; not collective.
+void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node,
+                      const std::vector<std::int64_t>& component, const std::string& source,
+                      std::int64_t n_rows_file);
 
 /// Writes an XDMF file next to the HDF5 file that shows the mesh and, for each listed dataset
 /// (shape [count][n][components], n = nodes or, with cell, elements), one field per entry, named

@@ -1,10 +1,9 @@
 // morse/io/superelement.hpp: the superelement files of `morse reduce` / `morse select` (/rom,
-// docs/hdf5-schema.md) read back, and exported to the codes that use superelements: MBDyn's modal
-// joint (.fem), Nastran (OUTPUT4 and a DMIG bulk-data deck) and MatrixMarket (docs/export.md).
+// docs/hdf5-schema.md): written (write_superelement) and read back (read_superelement). Their
+// exports to MBDyn, Nastran and MatrixMarket are in io/export.hpp.
 //
-// Everything here is serial: call it on one rank (the command runs it on rank 0). Reading uses
-// serial HDF5 (io::read_doubles and friends); every writer writes "<path>.tmp" and renames it to
-// <path> when complete, so a failed write leaves no partial file.
+// Reading is serial: call it on one rank (the commands run it on rank 0); it uses serial HDF5
+// (io::read_doubles and friends). Writing goes through the run's io::H5Output (rank 0 data).
 //
 // The coordinates of a superelement are ordered as in /rom: the n_b boundary DOFs first (labelled
 // by node id and component 1..6: 1..3 the x, y, z translations in the basic system, 4..6
@@ -45,6 +44,13 @@ struct Superelement {
   /// Every node id the file names (/mesh/node_ids or /dofs/node), sorted and unique; empty if it
   /// has neither. Used to keep SPOINT ids clear of them.
   std::vector<std::int64_t> model_node_ids;
+  /// /rom/frequencies_hz: the n frequencies of the superelement (K_CB, M_CB) [Hz], ascending;
+  /// empty if the file has none.
+  std::vector<double> frequencies_hz;
+  double damping_ratio = 0;  ///< /rom@damping_ratio (0 if absent)
+  /// /rom/selected_modes (select files): the fixed-interface mode (0-based, of
+  /// /cb/fixed_interface) of each modal coordinate; empty otherwise.
+  std::vector<std::int64_t> selected_modes;
 
   int n_modes() const { return n - n_b; }
   /// Frequency [Hz] of modal coordinate k (0-based, k < n_modes()): sqrt(K_jj / M_jj) / 2 pi of
@@ -61,6 +67,21 @@ struct Superelement {
 /// pair given twice, boundary_nodes not the nodes of boundary_dofs, a boundary node missing from
 /// /mesh, a non-finite matrix entry). Serial.
 Superelement read_superelement(const std::string& file);
+
+class H5Output;
+/// Writes /rom (docs/hdf5-schema.md) from se: /rom/M, /rom/K, /rom/C (if se.C is not empty),
+/// /rom/boundary_nodes, /rom/boundary_dofs (se.dof_node, se.dof_component), /rom/frequencies_hz,
+/// the attributes n_boundary_dofs, n_modes, damping_ratio and dof_order, and for a select file
+/// (se.selection_method not empty) /rom/selected_modes and /rom@selection_method. se.source,
+/// units, command and the model and coordinate fields are not written (/meta, /mesh and /dofs
+/// are the command's). The data is significant on rank 0 (H5Output); not collective.
+/// read_superelement(out.path()) reads back what is written here.
+void write_superelement(H5Output& out, const Superelement& se);
+
+/// Writes the candidate fixed-interface modes of a Craig-Bampton superelement (reduce, select):
+/// /cb/fixed_interface/frequencies_hz and /cb/fixed_interface/eigenvalues (omega2, ascending).
+/// Rank 0 data; not collective.
+void write_fixed_interface(H5Output& out, const std::vector<double>& omega2);
 
 /// Reads boundary node coordinates from a text file (one `node x y z` per line, '#' starts a
 /// comment; other nodes are ignored) into se->boundary_xyz, replacing those of /mesh. Throws
@@ -102,90 +123,5 @@ struct RigidBodyInertia {
 /// rigidly (K_CB R != 0, e.g. clamped besides the interface) gives valid = false with the
 /// reason; it is not an error. Serial.
 RigidBodyInertia rigid_body_inertia(const Superelement& se);
-
-// ---------------------------------------------------------------------------------------------
-// Writers. Each writes "<path>.tmp" and renames it to <path>; throws morse::Error naming the file
-// on an I/O failure or on input it cannot represent.
-
-/// MBDyn modal joint FEM file (MBDyn input manual, "Modal Element", "FEM File Format"; the
-/// parser is ReadModal in mbdyn/struct/modal.cc). Record groups written:
-///   1 header: REV0, NNODES, NNORMAL = n_modes, NATTACHED = 0, NCONSTRAINT = n_b, NREJECTED = 0
-///   2 FEM node labels (node ids), 3 and 4 initial modal displacements and velocities (zeros),
-///   5, 6, 7 x, y, z of the nodes, 8 the n mode shapes (x y z rx ry rz per node, one "**" header
-///   line per mode), 9 generalized mass M_CB, 10 generalized stiffness K_CB (full, row by row),
-///   12 rigid-body inertia (mass, centre of mass, inertia tensor about it) if the superelement
-///   can move rigidly, 13 the damping matrix C if the file has one; then "** END OF FILE".
-/// Record 11 (lumped nodal masses) is not written (see docs/export.md). Nodes: the interface
-/// nodes, or with `shapes` every mesh node (the exact shapes of the basis). Values print with 17
-/// significant digits. Needs coordinates; throws naming the node if an interface node has only
-/// some of its components in the boundary while the others are interior DOFs (matrix input).
-struct MbdynInfo {
-  int n_nodes = 0;
-  bool inertia_written = false;
-  RigidBodyInertia inertia;
-};
-MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
-                          const NodalShapes* shapes = nullptr);
-
-/// Names of the Nastran matrices (OP4 and DMIG), 1-8 characters, a letter first.
-struct NastranNames {
-  std::string op4_K = "KAA", op4_M = "MAA", op4_C = "BAA";
-  std::string dmig_K = "KAAX", dmig_M = "MAAX", dmig_C = "BAAX";
-};
-
-/// OUTPUT4 ASCII file of K, M (and C as a third matrix) in /rom order, double precision
-/// ("1P,3E23.16": exact round trip), form 6 when exactly symmetric; written by io::write_op4.
-void write_op4_matrices(const std::string& path, const Superelement& se,
-                        const NastranNames& names = {});
-
-/// Default id offset of the SPOINTs that carry the modal coordinates in the DMIG deck: the
-/// smallest power of ten above every node id the file names (its mesh or DOF map, else the
-/// boundary), so modal coordinate k (1-based) is SPOINT offset + k.
-std::int64_t default_spoint_offset(const Superelement& se);
-
-/// Nastran bulk-data deck: comments naming the source, SPOINTs offset+1..offset+n_modes, and one
-/// DMIG per matrix (large field DMIG*, IFO 6 symmetric with the lower triangle when the matrix is
-/// exactly symmetric, else IFO 1 with every nonzero; TIN 2; boundary DOFs as GRID/component,
-/// modal coordinates as SPOINT/0). Each value takes the 16-character field with as many
-/// significant digits as fit (D exponent: 10 to 12 digits, 9 when |exponent| >= 100; the exact
-/// round trip is the OP4's job). If grids_path is not empty and coordinates are known, GRID*
-/// cards of the boundary nodes (basic system) go to that file. Throws if a SPOINT id would
-/// collide with a node id of the file or exceed 99999999.
-void write_dmig_deck(const std::string& path, const std::string& grids_path, const Superelement& se,
-                     std::int64_t spoint_offset, const NastranNames& names = {});
-
-/// A value in a Nastran 16-character large field: the most significant digits that fit, with a
-/// "D" exponent without leading zeros (e.g. "-1.2345678901D-5"); "0.0" for zero. Exposed for tests.
-std::string nastran_large_real(double v);
-
-/// MatrixMarket coordinate files of K, M (and C) at 17 significant digits (io::write_matrix:
-/// "symmetric" with the lower triangle when exactly symmetric, else "general").
-void write_matrix_market(const std::string& path_K, const std::string& path_M,
-                         const std::string& path_C, const Superelement& se);
-
-/// Text DOF map of the exported matrices: one line per row, `row node <id> <component>` for a
-/// boundary DOF and `row modal <k> <spoint id>` for modal coordinate k (1-based), with the
-/// frequency as a comment.
-void write_dof_map_text(const std::string& path, const Superelement& se,
-                        std::int64_t spoint_offset);
-
-// ---------------------------------------------------------------------------------------------
-// The whole export (what `morse export` does).
-
-struct ExportOptions {
-  std::string prefix;  ///< output prefix: <prefix>.fem, .op4, _dmig.bdf, _K.mtx, ...
-  bool mbdyn = true, op4 = true, dmig = true, mtx = true;
-  bool mbdyn_all_nodes = false;    ///< shapes at every mesh node (needs the basis)
-  std::int64_t spoint_offset = 0;  ///< 0: default_spoint_offset()
-  NastranNames names;
-};
-struct ExportResult {
-  std::vector<std::string> files;  ///< written, in order
-  MbdynInfo mbdyn;
-  std::int64_t spoint_offset = 0;
-};
-/// Checks everything each requested format needs first (coordinates, components, names, ids),
-/// then writes the files; if a write fails, the files of this call already written are removed.
-ExportResult export_superelement(const Superelement& se, const ExportOptions& o);
 
 }  // namespace morse::io

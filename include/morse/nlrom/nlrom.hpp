@@ -20,6 +20,7 @@
 #include "morse/core/handle.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
+#include "morse/io/h5.hpp"
 
 namespace morse::nlrom {
 
@@ -180,6 +181,28 @@ struct StoredModel {
 /// `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the
 /// missing or inconsistent dataset, or the missing set (listing the file's sets). Collective.
 StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets);
+
+/// How a `morse nlrom` file's model was built, recorded as attributes of /nlrom.
+struct StoredInfo {
+  std::string basis = "cb";           ///< -nlrom_basis: cb, cbmd or pod
+  std::string forces = "step";        ///< -nlrom_forces: step or exact
+  std::string boundary_set;           ///< the interface node set
+  std::string derivative_selection = "weight";  ///< cbmd: weight or random
+  double step_displacement = 0;       ///< -step_displacement (STEP)
+  PetscInt filter_pod = 0;            ///< -nlrom_filter_pod
+  double modal_damping_ratio = 0;     ///< -nlrom_damping_modal
+  double t2_forces_seconds = 0;       ///< offline time of the forces (t1 is basis.seconds)
+  double t3_projection_seconds = 0;   ///< offline time of the projection
+};
+
+/// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on
+/// rank 0), /nlrom/node_sets (every node set of lm), /nlrom/{M,K,C} (rm), /nlrom/{A,B} (rm.g),
+/// /nlrom/basis (the columns of basis.V at every node, [r][node][3]), /nlrom/labels,
+/// /nlrom/boundary_nodes, the modal-derivative pairs and weights (cbmd), the POD singular values
+/// (pod), the damped frequencies, and the attributes of info. /meta is the command's.
+/// Collective (gathers the mesh and the basis).
+void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const Basis& basis,
+                        const ReducedModel& rm, const StoredInfo& info);
 
 /// M~ = V^T M V, K~ = V^T K V (symmetrized), and modal damping xi on the first k modes of the
 /// reduced model itself: C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T. Collective.

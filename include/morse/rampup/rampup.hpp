@@ -397,6 +397,21 @@ struct HistoryErrors {
 };
 HistoryErrors compare(const History& h, const History& ref);
 
+/// Writes <group>/error (docs/hdf5-schema.md): the errors per bearing and direction
+/// (bearing_force, displacement, [n_bearings][2]) and their worst, best and mean as attributes,
+/// with the reference file's name. Rank 0 data; not collective.
+void write_errors(io::H5Output& out, const std::string& group, const HistoryErrors& he, const std::string& reference);
+
+/// Writes <group>/stators/<name> of a stator superelement: the frequencies [Hz] of its kept modes,
+/// its clamped nodes, and as attributes its file, mode counts, boundary DOFs (n_boundary_dofs),
+/// cut-off and the dropped off-diagonal damping. Rank 0 data; not collective.
+void write_stator(io::H5Output& out, const std::string& group, const StatorModes& sm, const std::string& file,
+                  std::int64_t n_boundary_dofs);
+
+/// Writes <group>/matrices: the dense M, C, K, G of the assembly (AssembledMatrices). Rank 0 data;
+/// not collective.
+void write_matrices(io::H5Output& out, const std::string& group, const AssembledMatrices& A);
+
 /// Seed 000 §3.3's score S = S1 + S2 out of 20: S1 = 10 - eps_mean [%] if eps_mean < 10 %, else
 /// 0 (error_mean is a fraction); S2 = 10 (1 - t / t_ref) if t < t_ref, else 0. (The seed's
 /// printed rule for S2 reads "10 t / t_ref"; every row of its Table 1 fits 10 (1 - t / t_ref).)

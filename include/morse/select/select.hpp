@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/io/h5.hpp"
 
 namespace morse::select {
 
@@ -133,5 +134,74 @@ std::vector<double> mac_matrix(const MacBasis& b, const std::vector<double>& Q, 
 /// the full Craig–Bampton operators), row-major. Not collective.
 std::vector<double> restrict_operator(const std::vector<double>& A, PetscInt n_b, PetscInt n,
                                       const std::vector<PetscInt>& selected);
+
+// ------------------------------------------------------------------------------------------
+// The whole selection and its check against the full model (what `morse select` does between
+// building the candidate superelement and writing): for each method its scores, ranking and
+// truncation, then the restricted superelement's modes in the analysis band compared with the
+// full model's by MAC (pairwise, and mass-weighted over the band's modal space for clusters of
+// near-repeated modes).
+
+struct VerifySettings {
+  std::vector<Method> methods;     ///< the ranking methods, in order (distinct)
+  std::vector<std::string> names;  ///< their names (stage names and results), same order
+  PetscInt num_modes = -1;         ///< keep this many modes (truncate count); -1: by fraction
+  double fraction = 0.95;          ///< keep up to this cumulative score fraction (num_modes < 0)
+  double fmax_analysis_hz = 0;     ///< the analysis cutoff [Hz] (superelement modes in band, MAC)
+  PetscInt fom_modes = -1;         ///< full-model modes for the MAC (> 0), else all below the cutoff
+  double mac_threshold = 0.98;     ///< MAC above which a full-model mode counts as matched
+  /// EBR excitation: a load table file (read_ebr_load), or harmonics on every boundary DOF
+  /// (ebr_given: ebr_freq, with ebr_amp (default 1) and ebr_phase [deg] (default 0)), or every
+  /// boundary DOF loaded alone at 8 frequencies across the analysis band.
+  std::string ebr_load;
+  bool ebr_given = false;  ///< use ebr_freq, ebr_amp, ebr_phase (any of them given)
+  std::vector<double> ebr_freq, ebr_amp, ebr_phase;
+  /// IMR (if methods has it): full-system modes with the interface free, on springs of
+  /// imr_stiffness on every boundary DOF ("spring"), or the fixed-interface modes ("clamped");
+  /// imr_modes the modes of interest (1-based; empty: all below the cutoff); imr_shift the relative
+  /// frequency shift of the fictitious force.
+  std::string imr_support = "free";
+  double imr_stiffness = -1;
+  std::vector<PetscInt> imr_modes;
+  double imr_shift = 0.01;
+};
+
+/// One method's selection and check.
+struct MethodCheck {
+  std::string name;
+  std::vector<double> score;  ///< per candidate mode
+  Selection sel;
+  std::vector<double> rom_f;  ///< frequencies [Hz] of the restricted superelement, ascending
+  PetscInt in_band = 0;       ///< of them below the cutoff
+  PetscInt matches = 0;       ///< full-model modes with best pairwise MAC above the threshold
+  PetscInt subspace_matches = 0;  ///< full-model modes with subspace MAC above the threshold
+  double worst_err = 0;       ///< largest relative frequency error of a matched pair
+  std::vector<double> mac;    ///< [full-model mode][in-band superelement mode] (n_fom x max(in_band, 1))
+  std::vector<double> best_mac, subspace_mac;  ///< per full-model mode
+  std::vector<double> M, K;   ///< the restricted superelement (restrict_operator), row-major
+};
+
+struct VerifyResult {
+  double fmax_analysis_hz = 0;
+  InterfaceCoupling ic;
+  Excitation excitation;
+  std::vector<double> fom_omega2;  ///< the full-model eigenvalues of the MAC reference, ascending
+  std::vector<MethodCheck> methods;  ///< same order as the settings' methods
+  PetscInt cb_in_band = 0;  ///< superelement modes in band with every candidate (plain Craig-Bampton)
+  std::vector<double> eim_fractions;  ///< EIM score of each candidate over their sum (effective mass)
+};
+
+/// Ranks and truncates the candidate modes of cb (built with keep_basis) by every method of s and
+/// checks each restricted superelement against the full model (K, M: the model's free-DOF
+/// operators; w: the sign reference of its modes, as cb::sign_reference, or null). Eigen solves
+/// read the options of prefixes select_fom_ (full model) and select_imr_ (spring-supported system).
+/// Throws (collectively) on an IMR mode out of range. Collective.
+VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& cb, Vec w, const VerifySettings& s);
+
+/// Writes /select (docs/hdf5-schema.md): the full-model frequencies, the analysis cutoff, the MAC
+/// threshold, the effective-mass fractions (directional, of a model of total mass total_mass, and
+/// the EIM trace fractions), and per method /select/<name> (scores, ranking, selection, the
+/// restricted superelement's frequencies and the MAC check). Rank 0 data; not collective.
+void write_selection(io::H5Output& out, const VerifyResult& v, double mac_threshold, double total_mass);
 
 }  // namespace morse::select

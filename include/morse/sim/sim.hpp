@@ -10,6 +10,7 @@
 // (q_i q_j, i <= j, then q_i q_j q_k, i <= j <= k): one contiguous pass, no allocation.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -314,6 +315,58 @@ void write_sweep(const std::string& path, SweepRecord rec);
 bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error);
 
 // ------------------------------------------------------------------------------------------
+// The file of a reduced run (/sim of `morse simulate`, docs/hdf5-schema.md). Its contact group
+// (/sim/contact) is read back as a load history by dyn::read_load_table (dyn is below sim: the
+// reader of that table format stays there).
+
+/// What a run records at its output steps (every -sim_output_every steps from the initial state).
+struct SimRecord {
+  std::vector<double> time, energy;  ///< energy: seed 003 eq. 46 (StepState::energy)
+  std::vector<double> q;             ///< [time][r] reduced coordinates
+  std::vector<double> final_q, final_v;  ///< the state at final_time (the last step)
+  double final_time = 0.0;
+  /// Displacements u = Phi q of monitored node sets: u is [time][node][x,y,z].
+  struct Set {
+    std::string name;
+    std::vector<std::int64_t> node_ids;
+    std::vector<double> u;
+  };
+  std::vector<Set> sets;
+  /// Full fields at the snapshot times of a fom file (snapshots_fom empty: none): u and v are
+  /// [snapshot][DOF] on the fom's DOF map (node id, component 0..2).
+  std::string snapshots_fom;
+  std::vector<double> snapshot_time, snapshot_u, snapshot_v;
+  std::vector<std::int64_t> snapshot_node_ids, snapshot_components;
+  /// Contact at the output steps (written when Settings::contact has nodes), per contact node.
+  struct Contact {
+    std::vector<std::int64_t> node_ids;
+    std::vector<double> normal;      ///< [time][node] lambda >= 0 [N]
+    std::vector<double> tangential;  ///< [time][node][3] friction force [N]
+    std::vector<double> normals;     ///< [node][3] contact_normals()
+    std::vector<double> mean_force;  ///< [time][node][3] mean force since the previous output row
+    std::vector<double> mean_force_time;  ///< centre of each row's output interval (0 for row 0)
+    std::vector<double> gap;              ///< [time][node]
+    std::vector<std::int64_t> active;     ///< [time] nodes in contact
+    std::vector<double> radial_displacement;  ///< [time][node] e_r . u
+    double max_normal_force = 0.0, time_of_max_normal_force = 0.0;
+  } contact;
+  std::string rom;        ///< the nlrom file of the model
+  std::string case_name;  ///< -sim_cases: the case, "" for a single run
+  dyn::LoadDescription load;  ///< the run's nodal loads (/sim/load)
+};
+
+/// Writes /sim: the histories of rec, its snapshots and contact, the load (/sim/load) and the
+/// settings and statistics of the run as attributes. /meta is the command's. Rank 0 data (or a
+/// serial H5Output, as `morse simulate` runs one case per rank); not collective.
+void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const Stats& stats);
+
+/// Reads a simulate file back: the histories, the final state, the monitored sets `sets` (each
+/// must be in /sim/sets), the snapshots and the contact histories if the file has them, the model
+/// (/sim@rom), the case and the stored load (empty for a file written before it was stored).
+/// Throws naming the file and the missing or inconsistent dataset. Serial, any rank.
+SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets);
+
+// ------------------------------------------------------------------------------------------
 // Stress recovery (seed 003 Figs. 11 and 25): the stress of a displacement field u = Phi q.
 
 /// Linear: the small-strain stress sigma = lambda tr(eps) I + 2 mu eps, eps = (H + H^T) / 2.
@@ -349,5 +402,23 @@ struct StressField {
 /// material. Collective.
 StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fallback,
                            const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, StressMeasure m);
+
+/// What `morse stress` writes besides the field (/stress, docs/hdf5-schema.md).
+struct StressRecord {
+  std::int64_t n_nodes = 0, n_elements = 0;  ///< of the global mesh
+  std::vector<double> displacement;  ///< [node][3] u = Phi q in global node order (rank 0)
+  double time = 0.0;                 ///< of the state
+  std::int64_t step = 0;             ///< its output row in the simulate file
+  StressMeasure measure = StressMeasure::Nonlinear;
+  double max_nodal_von_mises = 0.0;  ///< largest nodal von Mises and its node's id
+  std::int64_t max_node_id = -1;
+  std::string rom, sim;              ///< the nlrom and simulate files
+  std::string monitor;               ///< the set whose radial displacement chose the state ("" if a time did)
+  double monitor_radial_displacement = 0.0;
+};
+/// Writes /stress: the displacement, the nodal stress (in XDMF Tensor6 order xx, xy, xz, yy, yz,
+/// zz) and von Mises, the element von Mises (mean and max) of f, and the attributes of r. /meta
+/// and /mesh are the command's. Rank 0 data; not collective.
+void write_stress(io::H5Output& out, const StressField& f, const StressRecord& r);
 
 }  // namespace morse::sim

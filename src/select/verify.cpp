@@ -1,0 +1,224 @@
+// select/verify.cpp: the selection of every method and its check against the full model
+// (select::verify, morse/select/select.hpp): MAC of the restricted superelement's in-band modes
+// against the full model's, with the IMR system modes and the EBR excitation they need.
+#include <petscmat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "morse/eigen/eigen.hpp"
+#include "morse/core/error.hpp"
+#include "morse/core/handle.hpp"
+#include "morse/core/log.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/select/select.hpp"
+
+namespace morse::select {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+double hz(double omega2) { return std::sqrt(std::max(0.0, omega2)) / kTwoPi; }
+
+}  // namespace
+
+VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w, const VerifySettings& s) {
+  VerifyResult out;
+  const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
+  const double f_an = s.fmax_analysis_hz;
+  out.fmax_analysis_hz = f_an;
+  const double l_an = std::pow(kTwoPi * f_an, 2);
+  auto& ic = out.ic;
+  {
+    StageTimer t(comm, "InterfaceCoupling");
+    ic = interface_coupling(comm, K, M, res);
+  }
+  // Full-model modes with the real boundary conditions (clamp only): MAC reference and IMR.
+  eigen::Eigenpairs fom;
+  {
+    eigen::EigenSettings es;
+    es.prefix = "select_fom_";
+    es.stage = "Fom";
+    es.what = "full-model modes";
+    if (s.fom_modes > 0)
+      es.nev = s.fom_modes;
+    else
+      es.omega2_max = l_an;
+    fom = eigen::solve_eigen(K, M, es, w);
+  }
+  const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
+  out.fom_omega2 = fom.omega2;
+
+  auto& ex = out.excitation;
+  if (!s.ebr_load.empty()) {
+    ex = read_ebr_load(comm, s.ebr_load, res);
+  } else if (s.ebr_given) {
+    ex.freq_hz = s.ebr_freq;
+    ex.amplitude = s.ebr_amp.empty() ? std::vector<double>(ex.freq_hz.size(), 1.0) : s.ebr_amp;
+    ex.phase_deg = s.ebr_phase.empty() ? std::vector<double>(ex.freq_hz.size(), 0.0) : s.ebr_phase;
+    ex.all_components = false;
+  } else {
+    for (int k = 1; k <= 8; ++k) ex.freq_hz.push_back(f_an * (k - 0.5) / 8.0);
+    ex.amplitude.assign(8, 1.0);
+    ex.phase_deg.assign(8, 0.0);
+  }
+  std::unique_ptr<ImrData> imr;
+  if (std::find(s.methods.begin(), s.methods.end(), Method::IMR) != s.methods.end()) {
+    StageTimer t(comm, "ImrSystemModes");
+    std::vector<PetscInt> modes;
+    for (auto m1 : s.imr_modes) modes.push_back(m1 - 1);
+    if (s.imr_support == "clamped") {
+      imr = std::make_unique<ImrData>();
+      imr->clamped = true;
+      if (modes.empty())
+        for (PetscInt i = 0; i < nphi && res.fixed_omega2[i] <= l_an; ++i) modes.push_back(i);
+      for (auto m : modes)
+        MORSE_CHECK(m >= 0 && m < nphi, "-select_imr_modes ", m + 1, " is out of range (1..", nphi,
+                    " fixed-interface modes)");
+      imr->clamped_modes = modes;
+    } else {
+      eigen::Eigenpairs sys;
+      Mat Ks = K;
+      UMat Kspring;
+      eigen::Eigenpairs* use = &fom;
+      if (s.imr_support == "spring") {
+        MORSE_CALL(MatDuplicate(K, MAT_COPY_VALUES, Kspring.ptr()));
+        for (auto g : res.boundary_dofs) {
+          PetscInt rs, re;
+          MORSE_CALL(MatGetOwnershipRange(Kspring.get(), &rs, &re));
+          if (g >= rs && g < re) MORSE_CALL(MatSetValue(Kspring.get(), g, g, s.imr_stiffness, ADD_VALUES));
+        }
+        MORSE_CALL(MatAssemblyBegin(Kspring.get(), MAT_FINAL_ASSEMBLY));
+        MORSE_CALL(MatAssemblyEnd(Kspring.get(), MAT_FINAL_ASSEMBLY));
+        Ks = Kspring.get();
+        eigen::EigenSettings es;
+        es.prefix = "select_imr_";
+        es.stage = "Imr";
+        es.what = "IMR system modes";
+        es.omega2_max = l_an;
+        sys = eigen::solve_eigen(Ks, M, es, nullptr);
+        use = &sys;
+      }
+      const PetscInt n_sys = static_cast<PetscInt>(use->omega2.size());
+      if (modes.empty())
+        for (PetscInt i = 0; i < n_sys; ++i) modes.push_back(i);
+      for (auto m : modes)
+        MORSE_CHECK(m >= 0 && m < n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys,
+                    " system modes", s.fom_modes > 0 && s.imr_support == "free" ? "" : cat(" below ", f_an, " Hz"),
+                    ")");
+      imr = std::make_unique<ImrData>(imr_data(comm, M, res, use->V.get(), use->omega2, modes, s.imr_shift));
+    }
+  }
+
+  MacBasis mb;
+  {
+    StageTimer t(comm, "MacProjections");
+    UMat MV;
+    MORSE_CALL(MatMatMult(M, fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
+    mb = mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
+  }
+  auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
+  for (std::size_t mi = 0; mi < s.methods.size(); ++mi) {
+    MethodCheck mr;
+    mr.name = s.names[mi];
+    {
+      // The ranking proper: scores, ranking, truncation.
+      StageTimer ts(comm, cat("Select_", s.names[mi]));
+      mr.score = scores(comm, s.methods[mi], ic, res, ex, imr.get());
+      mr.sel = truncate(s.methods[mi], mr.score, s.num_modes, s.fraction);
+    }
+    // Its check: the restricted superelement's modes against the full model's.
+    StageTimer t(comm, cat("Check_", s.names[mi]));
+    mr.M = restrict_operator(res.M, nb, nr, mr.sel.selected);
+    mr.K = restrict_operator(res.K, nb, nr, mr.sel.selected);
+    const int n = static_cast<int>(nb + mr.sel.selected.size());
+    std::vector<double> vec;
+    auto lam = eigen::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
+    for (double l : lam) mr.rom_f.push_back(hz(l));
+    while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
+    // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
+    const PetscInt nq = std::max<PetscInt>(mr.in_band, 1);
+    std::vector<double> Q(static_cast<std::size_t>(nr) * nq, 0.0);
+    std::vector<PetscInt> idx(nb);
+    std::iota(idx.begin(), idx.end(), 0);
+    for (auto sidx : mr.sel.selected) idx.push_back(nb + sidx);
+    for (PetscInt k = 0; k < mr.in_band; ++k)
+      for (int row = 0; row < n; ++row) Q[idx[row] * nq + k] = vec[static_cast<std::size_t>(row) * n + k];
+    mr.mac = mac_matrix(mb, Q, nq);
+    auto wmac = mac_matrix(mb, Q, nq, &res.M);
+    mr.best_mac.assign(n_fom, 0.0);
+    mr.subspace_mac.assign(n_fom, 0.0);
+    for (PetscInt j = 0; j < n_fom; ++j) {
+      // Near-repeated modes (cyclic parts) mix freely inside their cluster, which pairwise MAC
+      // cannot follow: the mass-weighted MAC summed over the in-band superelement modes is the
+      // squared projection of the full-model mode on the superelement's in-band modal space.
+      for (PetscInt k = 0; k < mr.in_band; ++k) mr.subspace_mac[j] += wmac[j * nq + k];
+      if (mr.subspace_mac[j] > s.mac_threshold) ++mr.subspace_matches;
+      PetscInt best = -1;
+      for (PetscInt k = 0; k < mr.in_band; ++k)
+        if (mr.mac[j * nq + k] > mr.best_mac[j]) mr.best_mac[j] = mr.mac[j * nq + k], best = k;
+      if (best >= 0 && mr.best_mac[j] > s.mac_threshold) {
+        ++mr.matches;
+        mr.worst_err = std::max(mr.worst_err, std::abs(mr.rom_f[best] / f_fom(j) - 1.0));
+      }
+    }
+    if (mr.in_band == 0) mr.mac.assign(n_fom, 0.0);
+    out.methods.push_back(std::move(mr));
+  }
+
+  // Plain frequency-ordered Craig-Bampton for the same candidate set: reference row.
+  {
+    auto lam = eigen::dense_eigenvalues(static_cast<int>(nr), res.K, res.M);
+    while (out.cb_in_band < nr && lam[out.cb_in_band] <= l_an) ++out.cb_in_band;
+  }
+  auto eim = scores(comm, Method::EIM, ic, res, ex, nullptr);
+  double eim_total = 0;
+  for (double v : eim) eim_total += v;
+  for (double v : eim) out.eim_fractions.push_back(v / eim_total);
+  return out;
+}
+
+void write_selection(io::H5Output& out, const VerifyResult& v, double mac_threshold, double total_mass) {
+  std::vector<double> fom_hz;
+  for (double l : v.fom_omega2) fom_hz.push_back(hz(l));
+  const auto n_fom = static_cast<hsize_t>(fom_hz.size());
+  out.write("/select/fom/frequencies_hz", fom_hz);
+  out.attribute("/select", "fmax_analysis_hz", v.fmax_analysis_hz);
+  out.attribute("/select", "mac_threshold", mac_threshold);
+  out.attribute_int("/select", "cb_modes_in_band", static_cast<std::int64_t>(v.cb_in_band));
+  out.write("/select/effective_mass/directional_fractions", directional_mass_fractions(v.ic, total_mass),
+            {static_cast<hsize_t>(v.ic.n_phi), 3});
+  out.attribute("/select/effective_mass/directional_fractions", "description",
+                "(P_i r_d)^2 / total mass for a rigid translation r_d of the interface in x, y, z");
+  out.write("/select/effective_mass/trace_fractions", v.eim_fractions);
+  for (const auto& mr : v.methods) {
+    const std::string g = "/select/" + mr.name;
+    const double total = std::accumulate(mr.score.begin(), mr.score.end(), 0.0);
+    std::vector<double> frac;
+    for (double x : mr.score) frac.push_back(total > 0 ? x / total : 0.0);
+    std::vector<std::int64_t> rank(mr.sel.ranking.begin(), mr.sel.ranking.end()),
+        sel(mr.sel.selected.begin(), mr.sel.selected.end());
+    out.write(g + "/scores", mr.score);
+    out.write(g + "/score_fractions", frac);
+    out.write(g + "/ranking", rank);
+    out.write(g + "/cumulative", mr.sel.cumulative);
+    out.write(g + "/selected", sel);
+    out.write(g + "/rom_frequencies_hz", mr.rom_f);
+    out.write(g + "/mac", mr.mac, {n_fom, static_cast<hsize_t>(std::max<PetscInt>(mr.in_band, 1))});
+    out.write(g + "/best_mac", mr.best_mac);
+    out.write(g + "/subspace_mac", mr.subspace_mac);
+    out.attribute(g, "retained_fraction", mr.sel.retained);
+    out.attribute_int(g, "n_selected", static_cast<std::int64_t>(mr.sel.selected.size()));
+    out.attribute_int(g, "n_rom_modes_in_band", static_cast<std::int64_t>(mr.in_band));
+    out.attribute_int(g, "n_mac_matches", static_cast<std::int64_t>(mr.matches));
+    out.attribute_int(g, "n_subspace_mac_matches", static_cast<std::int64_t>(mr.subspace_matches));
+    out.attribute(g, "worst_frequency_error", mr.worst_err);
+  }
+}
+
+}  // namespace morse::select
