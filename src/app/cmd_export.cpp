@@ -29,13 +29,13 @@ struct ExportCommandOptions {
 
 PetscErrorCode get_export_options(MPI_Comm comm, ExportCommandOptions* o) {
   std::vector<std::string> formats;
-  PetscCall(get_set_list(comm, "-export_format",
+  PetscCall(options::get_string_list(comm, "-export_format",
                          "Formats to write, comma separated: mbdyn, op4, dmig, mtx (default: all)",
                          &formats));
   if (!formats.empty()) o->formats = formats;
-  PetscCall(get_set_list(comm, "-export_op4_names",
+  PetscCall(options::get_string_list(comm, "-export_op4_names",
                          "Names of K, M, C in the OP4 file (default KAA,MAA,BAA)", &o->op4_names));
-  PetscCall(get_set_list(
+  PetscCall(options::get_string_list(
       comm, "-export_dmig_names",
       "Names of the K, M, C DMIG matrices (case control K2GG, M2GG, B2GG; default KAAX,MAAX,BAAX)",
       &o->dmig_names));

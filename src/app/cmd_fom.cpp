@@ -35,7 +35,7 @@ struct FomOptions {
 };
 
 PetscErrorCode get_fom_options(MPI_Comm comm, FomOptions* o) {
-  PetscCall(get_set_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &o->monitor));
+  PetscCall(options::get_string_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &o->monitor));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscReal ray[2] = {0, 0};

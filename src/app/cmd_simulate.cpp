@@ -35,9 +35,9 @@ struct SimOptions {
 };
 
 PetscErrorCode get_sim_options(MPI_Comm comm, SimOptions* o) {
-  PetscCall(get_set_list(comm, "-sim_monitor", "Node sets whose reconstructed displacements u = Phi q are written",
+  PetscCall(options::get_string_list(comm, "-sim_monitor", "Node sets whose reconstructed displacements u = Phi q are written",
                          &o->monitor));
-  PetscCall(get_set_list(comm, "-sim_cases",
+  PetscCall(options::get_string_list(comm, "-sim_cases",
                          "Independent load cases run one per rank; case c takes its loads from -c_load_sets, "
                          "-c_load_<SET>_* and writes <out>_c.h5",
                          &o->cases));

@@ -25,7 +25,7 @@ struct StaticOptions {
 };
 
 PetscErrorCode get_static_options(MPI_Comm comm, StaticOptions* o) {
-  PetscCall(get_set_list(comm, "-static_monitor", "Node sets whose displacements are printed and written",
+  PetscCall(options::get_string_list(comm, "-static_monitor", "Node sets whose displacements are printed and written",
                          &o->monitor));
   PetscOptionsBegin(comm, nullptr, "morse static options", "");
   PetscCall(MorseOptionsBool("-static_linear", "Linear solution K u = f (for comparison)", "", o->linear, &o->linear,

@@ -238,25 +238,9 @@ io::Superelement rom_superelement(const cb::CBResult& cb, const std::vector<doub
   return se;
 }
 
-PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
-                            const char* prefix) {
-  char* v[64];
-  PetscInt n = 64;
-  PetscBool set = PETSC_FALSE;
-  PetscOptionsBegin(comm, prefix, "morse set list", "");
-  PetscCall(MorseOptionsStringArray(name, help, "", v, &n, &set));
-  PetscOptionsEnd();
-  if (set)
-    for (PetscInt i = 0; i < n; ++i) {
-      sets->emplace_back(v[i]);
-      PetscCall(PetscFree(v[i]));
-    }
-  return PETSC_SUCCESS;
-}
-
 PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error, const char* prefix) {
   std::vector<std::string> sets;
-  PetscCall(get_set_list(comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated",
+  PetscCall(options::get_string_list(comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated",
                          &sets, prefix));
   const std::string pre = prefix ? cat("-", prefix) : std::string("-");
   PetscOptionsBegin(comm, prefix, "morse loads (F(t) = A sin(omega t + phase) per node; omega = 0: constant A)", "");

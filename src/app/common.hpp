@@ -116,9 +116,6 @@ PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o);
 std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
                                                           const fe::DofLayout& dofs, const LoadHistoryOptions& o);
 
-/// A comma-separated list of node sets from option `name` (empty if not given).
-PetscErrorCode get_set_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* sets,
-                            const char* prefix = nullptr);
 
 /// Contact and rotation options shared by simulate and sweep (docs/user-guide.md):
 /// -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point x,y,z,

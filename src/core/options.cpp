@@ -201,4 +201,20 @@ void check_unknown(MPI_Comm comm, bool early) {
   collective_check(comm, err);
 }
 
+PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* list,
+                               const char* prefix) {
+  char* v[64];
+  PetscInt n = 64;
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, prefix, "morse set list", "");
+  PetscCall(MorseOptionsStringArray(name, help, "", v, &n, &set));
+  PetscOptionsEnd();
+  if (set)
+    for (PetscInt i = 0; i < n; ++i) {
+      list->emplace_back(v[i]);
+      PetscCall(PetscFree(v[i]));
+    }
+  return PETSC_SUCCESS;
+}
+
 }  // namespace morse::options

@@ -89,6 +89,12 @@ bool petsc_global(const std::string& name);
 /// Collective on comm (every rank throws morse::Error).
 void check_unknown(MPI_Comm comm, bool early);
 
+/// A comma-separated list option (e.g. -load_sets LE,tip; -sim_monitor LE) read under `prefix`
+/// (may be null) and registered with its help text; at most 64 items. `list` is left unchanged if
+/// the option is not given. Uses PetscOptionsBegin: returns a PETSc error code. Collective.
+PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* list,
+                               const char* prefix = nullptr);
+
 }  // namespace morse::options
 
 // Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same
