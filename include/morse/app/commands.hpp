@@ -1,12 +1,12 @@
 // morse/app/commands.hpp: the commands of the morse executable, callable from C++.
 //
-// Each command reads its options from the PETSc options database (-help lists them with their
-// defaults), runs its stages, prints a summary on rank 0 and writes one HDF5 file atomically.
-//   morse modes  -mesh FILE -clamp SET -modes_nev N [-out FILE.h5]
-//   morse reduce -mesh FILE -clamp SET -boundary SET (-cb_num_fixed_modes N | -cb_fmax HZ)
-//                [-cb_damping XI] [-cb_write_basis] [-out FILE.h5]
-//   morse mesh box [-box_type hex20 -box_lx .. -box_nx ..] -out FILE.msh
-// Unknown options are an error.
+// Each command (modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare,
+// export, mesh, rampup; `morse -help` lists them, `morse <command> -help` their options with
+// defaults) reads its options from the PETSc options database through the settings readers of the
+// library modules, refuses an unknown or misspelled option before any work (core/options.hpp),
+// calls the library, prints a summary on rank 0 and writes one HDF5 file atomically (a temporary
+// file renamed at the end). The commands are thin: what they compute and write is in the library
+// (docs/architecture.md).
 #pragma once
 
 #include <mpi.h>
