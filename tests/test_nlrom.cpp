@@ -491,3 +491,26 @@ TEST(Nlrom, StoredModelRoundTrips) {
     std::remove(file.c_str());
   }
 }
+
+// The offline settings read their options and validate them with the boundary set.
+TEST(Options, OfflineSettings) {
+  PetscOptionsSetValue(nullptr, "-nlrom_basis", "cbmd");
+  PetscOptionsSetValue(nullptr, "-nlrom_num_derivatives", "4");
+  PetscOptionsSetValue(nullptr, "-nlrom_derivative_selection", "random");
+  nlrom::OfflineSettings s;
+  s.basis.boundary_set = "root";
+  ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.basis.kind, nlrom::BasisKind::CBMD);
+  EXPECT_EQ(s.basis.n_derivatives, 4);
+  EXPECT_TRUE(s.basis.random_derivatives);
+  nlrom::OfflineSettings t;
+  ASSERT_EQ(t.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(t.error, "morse nlrom: no boundary set given: use -boundary SET");
+  PetscOptionsSetValue(nullptr, "-nlrom_basis", "svd");
+  nlrom::OfflineSettings u;
+  ASSERT_EQ(u.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(u.error, "-nlrom_basis svd: unknown (cb, cbmd or pod)");
+  for (const char* n : {"-nlrom_basis", "-nlrom_num_derivatives", "-nlrom_derivative_selection"})
+    PetscOptionsClearValue(nullptr, n);
+}
