@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "elastica.hpp"
-#include "morse/core/options.hpp"
+#include "given_options.hpp"
 #include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/io/h5.hpp"
@@ -462,24 +462,10 @@ TEST(RunFile, StaticFileRoundTrips) {
   if (world_rank() == 0) std::remove(file.c_str());
 }
 
-// Options given for one test, removed again (with the registrations) at its end.
-struct GivenOptions {
-  std::vector<std::string> names;
-  GivenOptions(std::initializer_list<std::pair<const char*, const char*>> given) {
-    for (const auto& [name, value] : given) {
-      PetscOptionsSetValue(nullptr, name, value);
-      names.emplace_back(name);
-    }
-  }
-  ~GivenOptions() {
-    for (const auto& n : names) PetscOptionsClearValue(nullptr, n.c_str());
-    options::clear();
-  }
-};
-
 // dyn::get_loads reads -load_* (under a case prefix too) and records the first bad value, naming
 // the option; the load-history and fom settings read and validate their options.
 TEST(Options, LoadsHistoryAndFomSettings) {
+  using test::GivenOptions;
   {
     GivenOptions g{{"-c1_load_sets", "tip,root"}, {"-c1_load_tip_dir", "y"}, {"-c1_load_tip_amplitude", "3"},
                    {"-c1_load_tip_omega", "100"}, {"-c1_load_root_amplitude", "1"}};

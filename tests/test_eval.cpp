@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "given_options.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
@@ -137,12 +138,9 @@ TEST(Compare, TmaxFromTheStoredLoadAndSettings) {
   std::remove(fom.c_str());
   std::remove(rom.c_str());
 
-  PetscOptionsSetValue(nullptr, "-compare_weights", "0.5,0.5");
-  PetscOptionsSetValue(nullptr, "-compare_tip", "edge");
+  test::GivenOptions g{{"-compare_weights", "0.5,0.5"}, {"-compare_tip", "edge"}};
   eval::CompareSettings s;
   ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
-  PetscOptionsClearValue(nullptr, "-compare_weights");
-  PetscOptionsClearValue(nullptr, "-compare_tip");
   EXPECT_EQ(s.tip, "edge");
   EXPECT_EQ(s.w, (std::vector<double>{0.25, 0.25, 0.25, 0.25}));
   EXPECT_EQ(s.error, "-compare_weights takes four values w1,w2,w3,w4");

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <random>
 
+#include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
@@ -494,9 +495,7 @@ TEST(Nlrom, StoredModelRoundTrips) {
 
 // The offline settings read their options and validate them with the boundary set.
 TEST(Options, OfflineSettings) {
-  PetscOptionsSetValue(nullptr, "-nlrom_basis", "cbmd");
-  PetscOptionsSetValue(nullptr, "-nlrom_num_derivatives", "4");
-  PetscOptionsSetValue(nullptr, "-nlrom_derivative_selection", "random");
+  test::GivenOptions g{{"-nlrom_basis", "cbmd"}, {"-nlrom_num_derivatives", "4"}, {"-nlrom_derivative_selection", "random"}};
   nlrom::OfflineSettings s;
   s.basis.boundary_set = "root";
   ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
@@ -507,10 +506,8 @@ TEST(Options, OfflineSettings) {
   nlrom::OfflineSettings t;
   ASSERT_EQ(t.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
   EXPECT_EQ(t.error, "morse nlrom: no boundary set given: use -boundary SET");
-  PetscOptionsSetValue(nullptr, "-nlrom_basis", "svd");
+  test::GivenOptions h{{"-nlrom_basis", "svd"}};
   nlrom::OfflineSettings u;
   ASSERT_EQ(u.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
   EXPECT_EQ(u.error, "-nlrom_basis svd: unknown (cb, cbmd or pod)");
-  for (const char* n : {"-nlrom_basis", "-nlrom_num_derivatives", "-nlrom_derivative_selection"})
-    PetscOptionsClearValue(nullptr, n);
 }
