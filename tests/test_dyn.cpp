@@ -7,8 +7,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "elastica.hpp"
+#include "given_options.hpp"
 #include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/io/h5.hpp"
@@ -456,4 +460,55 @@ TEST(RunFile, StaticFileRoundTrips) {
   }
   MPI_Barrier(PETSC_COMM_WORLD);
   if (world_rank() == 0) std::remove(file.c_str());
+}
+
+// dyn::get_loads reads -load_* (under a case prefix too) and records the first bad value, naming
+// the option; the load-history and fom settings read and validate their options.
+TEST(Options, LoadsHistoryAndFomSettings) {
+  using test::GivenOptions;
+  {
+    GivenOptions g{{"-c1_load_sets", "tip,root"}, {"-c1_load_tip_dir", "y"}, {"-c1_load_tip_amplitude", "3"},
+                   {"-c1_load_tip_omega", "100"}, {"-c1_load_root_amplitude", "1"}};
+    std::vector<dyn::NodalLoad> loads;
+    std::string error;
+    ASSERT_EQ(dyn::get_loads(PETSC_COMM_WORLD, &loads, &error, "c1_"), PETSC_SUCCESS);
+    ASSERT_EQ(loads.size(), 2u);
+    EXPECT_EQ(loads[0].set, "tip");
+    EXPECT_EQ(loads[0].dir[1], 1.0);
+    EXPECT_EQ(loads[0].amplitude, 3.0);
+    EXPECT_EQ(loads[0].omega, 100.0);
+    EXPECT_EQ(error, "load on set root: give its direction with -c1_load_root_dir x|y|z|vx,vy,vz");
+    EXPECT_TRUE(options::registered("-c1_load_tip_phase"));
+  }
+  {
+    GivenOptions g{{"-load_history_outside", "hold"}};
+    dyn::LoadHistoryOptions h;
+    ASSERT_EQ(h.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(h.outside, dyn::Outside::Hold);
+    EXPECT_EQ(h.error, "-load_history_outside needs -load_history FILE");
+  }
+  {
+    GivenOptions g{{"-fom_dt", "1e-3"}, {"-fom_tfinal", "0.01"}, {"-fom_scheme", "energy"}, {"-fom_monitor", "tip,root"},
+                   {"-fom_rayleigh", "1,2"}, {"-fom_snapshot_every", "5"}};
+    dyn::FomSettings s;
+    ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(s.error, "");
+    EXPECT_EQ(s.dt, 1e-3);
+    EXPECT_EQ(s.scheme, dyn::Scheme::Energy);
+    EXPECT_EQ(s.monitor, (std::vector<std::string>{"tip", "root"}));
+    EXPECT_EQ(s.rayleigh_beta, 2.0);
+    EXPECT_EQ(s.snapshot_every, 5);
+  }
+  {
+    GivenOptions g{{"-fom_dt", "1e-3"}, {"-fom_newton", "exact"}};
+    dyn::FomSettings s;
+    ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(s.error, "-fom_newton exact: unknown (krylov or modified)");
+  }
+  {
+    GivenOptions g{{"-fom_dt", "1e-3"}};
+    dyn::FomSettings s;
+    ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(s.error, "-fom_tfinal must be positive (got 0)");
+  }
 }

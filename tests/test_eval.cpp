@@ -8,8 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "given_options.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
+#include "morse/dyn/dyn.hpp"
+#include "morse/eval/compare.hpp"
 #include "morse/eval/indicator.hpp"
 #include "morse/io/h5.hpp"
 
@@ -101,4 +104,44 @@ TEST(Indicator, WriteCompareRoundTrips) {
   EXPECT_EQ(io::read_string_attribute(file, "/compare", "fom"), "fom.h5");
   EXPECT_EQ(io::read_string_attribute(file, "/compare", "tip_set"), "tip");
   std::remove(file.c_str());
+}
+
+// t_max of e1 from the runs' stored load: the fom file's, else the simulate file's; loads given
+// on the command line override it; -compare_weights needs four values. Each rank uses its own
+// files.
+TEST(Compare, TmaxFromTheStoredLoadAndSettings) {
+  int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
+  MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  const std::string fom = cat("/tmp/morse_test_eval_tmax_fom_", pid, "_r", world_rank(), ".h5");
+  const std::string rom = cat("/tmp/morse_test_eval_tmax_sim_", pid, "_r", world_rank(), ".h5");
+  dyn::LoadDescription ld;
+  ld.loads.resize(1);
+  ld.loads[0].set = "tip", ld.loads[0].dir[0] = 1, ld.loads[0].amplitude = 1, ld.loads[0].omega = 100;
+  {
+    io::H5Output out(PETSC_COMM_SELF, fom);
+    out.write("/fom/time", std::vector<double>{0.0, 1.0});
+    out.commit();
+  }
+  {
+    io::H5Output out(PETSC_COMM_SELF, rom);
+    out.write("/sim/time", std::vector<double>{0.0, 1.0});
+    dyn::write_load_description(out, "/sim/load", ld);
+    out.commit();
+  }
+  std::string stored;
+  EXPECT_NEAR(eval::load_tmax(fom, rom, {}, &stored), M_PI / 2 / 100, 1e-15);
+  EXPECT_EQ(stored, rom);
+  auto given = ld.loads;
+  given[0].omega = 200;
+  EXPECT_NEAR(eval::load_tmax(fom, rom, given, &stored), M_PI / 2 / 200, 1e-15);
+  EXPECT_EQ(stored, rom);
+  std::remove(fom.c_str());
+  std::remove(rom.c_str());
+
+  test::GivenOptions g{{"-compare_weights", "0.5,0.5"}, {"-compare_tip", "edge"}};
+  eval::CompareSettings s;
+  ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(s.tip, "edge");
+  EXPECT_EQ(s.w, (std::vector<double>{0.25, 0.25, 0.25, 0.25}));
+  EXPECT_EQ(s.error, "-compare_weights takes four values w1,w2,w3,w4");
 }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <random>
 
+#include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
@@ -490,4 +491,23 @@ TEST(Nlrom, StoredModelRoundTrips) {
     EXPECT_TRUE(io::read_doubles(file, "/nlrom/damping/omega", &w, &d, &err) && w == rm.damping_omega) << err;
     std::remove(file.c_str());
   }
+}
+
+// The offline settings read their options and validate them with the boundary set.
+TEST(Options, OfflineSettings) {
+  test::GivenOptions g{{"-nlrom_basis", "cbmd"}, {"-nlrom_num_derivatives", "4"}, {"-nlrom_derivative_selection", "random"}};
+  nlrom::OfflineSettings s;
+  s.basis.boundary_set = "root";
+  ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.basis.kind, nlrom::BasisKind::CBMD);
+  EXPECT_EQ(s.basis.n_derivatives, 4);
+  EXPECT_TRUE(s.basis.random_derivatives);
+  nlrom::OfflineSettings t;
+  ASSERT_EQ(t.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(t.error, "morse nlrom: no boundary set given: use -boundary SET");
+  test::GivenOptions h{{"-nlrom_basis", "svd"}};
+  nlrom::OfflineSettings u;
+  ASSERT_EQ(u.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(u.error, "-nlrom_basis svd: unknown (cb, cbmd or pod)");
 }

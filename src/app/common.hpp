@@ -94,28 +94,9 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
 /// The Craig-Bampton settings of the -boundary / -cb_* options (keep_basis as -cb_write_basis).
 cb::CBSettings cb_settings(const ReduceOptions& r);
 
-/// The shared nodal loads: -load_sets SET[,SET...] and, per set, -load_<SET>_dir x|y|z|vx,vy,vz,
-/// -load_<SET>_amplitude (newtons per node, required), -load_<SET>_omega (rad/s, 0 = constant)
-/// and -load_<SET>_phase (rad). A missing direction or amplitude, or a bad direction, is an
-/// error that names the option.
-PetscErrorCode get_loads(MPI_Comm comm, std::vector<dyn::NodalLoad>* loads, std::string* error,
-                         const char* prefix = nullptr);
-
-/// The tabulated load history of `morse fom` (docs/user-guide.md): -load_history FILE[:/GROUP],
-/// -load_history_outside error|zero|hold, -load_history_scale S.
-struct LoadHistoryOptions {
-  std::string spec;  ///< empty: none
-  dyn::Outside outside = dyn::Outside::Error;
-  double scale = 1.0;
-  std::string error;  ///< a bad value, naming the option
-};
-PetscErrorCode get_load_history(MPI_Comm comm, LoadHistoryOptions* o);
-/// Reads the table (rank 0, broadcast) and applies it to the model; null without -load_history.
-/// Prints a one-line summary. Throws collectively on bad input (the reader's message, prefixed by
-/// the option). Collective.
-std::shared_ptr<const dyn::LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
-                                                          const fe::DofLayout& dofs, const LoadHistoryOptions& o);
-
+/// The nodal loads (-load_*): read by dyn::get_loads; this forwarding name keeps the callers in
+/// cmd_static and cmd_simulate unchanged.
+using dyn::get_loads;
 
 /// Contact and rotation options shared by simulate and sweep (docs/user-guide.md):
 /// -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point x,y,z,

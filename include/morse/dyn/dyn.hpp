@@ -65,6 +65,16 @@ inline double harmonic_factor(double amplitude, double omega, double phase, doub
 /// Parses a direction: x, y, z or vx,vy,vz. Returns "" or an error message.
 std::string parse_direction(const std::string& text, double dir[3]);
 
+/// Reads the nodal loads of the options (docs/user-guide.md): -load_sets SET[,SET...] and, per
+/// set, -load_<SET>_dir x|y|z|vx,vy,vz, -load_<SET>_amplitude (newtons per node, required),
+/// -load_<SET>_omega (rad/s, 0 = constant) and -load_<SET>_phase (rad), under `prefix` if given
+/// (e.g. a case of `morse simulate -sim_cases`: -<prefix>load_sets ...). Appends one NodalLoad per
+/// set to *loads. A missing direction or amplitude, a bad direction or a negative omega is recorded
+/// in *error (if it is empty) as a message naming the option, for the caller to raise after -help.
+/// Uses PetscOptionsBegin: returns a PETSc error code. Collective.
+PetscErrorCode get_loads(MPI_Comm comm, std::vector<NodalLoad>* loads, std::string* error,
+                         const char* prefix = nullptr);
+
 // ------------------------------------------------------------------------------------------
 // Tabulated nodal load histories (Nastran TABLED1 / Code_Aster DEFI_FONCTION, per node and
 // component): a force vector per node at each time of a grid t_0 < t_1 < ... < t_{n-1},
@@ -151,6 +161,24 @@ class LoadHistory {
   Outside outside_;
   std::size_t n_nodes_ = 0;
 };
+
+/// The options of a tabulated load history (`morse fom`, docs/user-guide.md).
+struct LoadHistoryOptions {
+  std::string spec;  ///< -load_history FILE[:/GROUP]; empty: none
+  Outside outside = Outside::Error;  ///< -load_history_outside error|zero|hold
+  double scale = 1.0;                ///< -load_history_scale S (finite)
+  std::string error;  ///< a bad value, naming the option (raised by the caller, after -help)
+  /// Reads -load_history, -load_history_outside and -load_history_scale. A bad outside value, a
+  /// non-finite scale or -load_history_outside without -load_history is recorded in `error`.
+  /// Uses PetscOptionsBegin: returns a PETSc error code. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+};
+
+/// Reads the table of o (read_load_table, rank 0, broadcast) and applies it to the model; null
+/// without -load_history. Prints a one-line summary on rank 0. Throws collectively on bad input
+/// (the reader's message, prefixed by "-load_history "). Collective.
+std::shared_ptr<const LoadHistory> make_load_history(MPI_Comm comm, const mesh::LocalMesh& lm,
+                                                     const fe::DofLayout& dofs, const LoadHistoryOptions& o);
 
 /// The load vectors of a list of nodal loads on a distributed model. Collective.
 class Loads {
@@ -303,6 +331,23 @@ struct FomSettings {
   PetscInt krylov_max_it = 60;       ///< CG iterations before the factor is refreshed and CG rerun
   PetscInt krylov_refactor_its = 12; ///< refresh the factor for the next solve above this count
   std::string prefix = "fom_";   ///< options prefix of the KSP/PC and of the damping eigen solve
+  // What a `morse fom` run records and starts from (read by set_from_options; integrate() does
+  // not use them).
+  std::vector<std::string> monitor;             ///< -fom_monitor: node sets whose histories are written
+  PetscInt snapshot_every = 0;                  ///< -fom_snapshot_every K: full fields every K steps (0: none)
+  std::string initial;                          ///< -fom_initial FILE: initial displacement ("" = zero)
+  std::string initial_dataset = "/static/u";    ///< -fom_initial_dataset: the nodal dataset of -fom_initial
+  std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
+
+  /// Reads -fom_monitor, -fom_dt, -fom_tfinal, -fom_linear, -fom_scheme energy|trapezoidal,
+  /// -fom_snapshot_every, -fom_damping_modal, -fom_damping_modes, -fom_rayleigh alpha,beta,
+  /// -fom_newton_rtol, -fom_newton_atol, -fom_newton_max_it, -fom_refactor_every,
+  /// -fom_refactor_ratio, -fom_newton krylov|modified, -fom_krylov_rtol, -fom_krylov_max_it,
+  /// -fom_krylov_refactor_its, -fom_initial and -fom_initial_dataset (docs/user-guide.md), then
+  /// validates them: the first bad value (unknown scheme or Newton variant, dt or t_final not
+  /// positive, t_final < dt, damping ratio outside [0, 1), ...) is recorded in `error`. Uses
+  /// PetscOptionsBegin: returns a PETSc error code. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
 };
 
 /// Energies at one instant (seed 003 eq. 46 is kinetic + strain_linear).

@@ -9,7 +9,7 @@
 //   I  = sum w_i e_i  (eq. 43; w_i = 1/4 by default)
 //
 // Norms over time are discrete sums over the common time samples. Pure functions of arrays:
-// the command (`morse compare`) reads the files and aligns the time samples.
+// eval/compare.hpp (compare_runs) reads the files and aligns the time samples.
 #pragma once
 
 #include <array>

@@ -131,6 +131,34 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
 /// in the Euclidean inner product. sigma receives every singular value (descending). Collective.
 UMat pod(Mat X, PetscInt n, std::vector<double>* sigma);
 
+/// The POD filter of the reduced force (eq. 38): the nonlinear forces g_nl of the snapshots of the
+/// fom file `file` (dyn::read_fom_snapshots), compressed to their n leading POD vectors (Phi_f,
+/// MPIDENSE, K's row layout; StepSettings::filter). Throws (collectively) if n exceeds the number
+/// of snapshots, naming -nlrom_filter_pod and the file. Collective.
+UMat force_filter(const fe::Model& md, const fe::Svk& svk, const std::string& file, PetscInt n);
+
+/// The settings of the offline stage (`morse nlrom`): the basis, the identification of the reduced
+/// force and the reduced modal damping.
+struct OfflineSettings {
+  BasisSettings basis;              ///< boundary_set: -boundary, set by the caller (not read here)
+  std::string basis_name = "cb";    ///< -nlrom_basis cb|cbmd|pod (sets basis.kind)
+  std::string forces = "step";      ///< -nlrom_forces step|exact
+  PetscInt n_filter = 0;            ///< -nlrom_filter_pod: POD filter vectors of g_nl (0: none)
+  double step_displacement = 0.01;  ///< -step_displacement (StepSettings::displacement)
+  double damping_xi = 0.0;          ///< -nlrom_damping_modal (project_model's xi)
+  PetscInt damping_modes = 0;       ///< -nlrom_damping_modes (project_model's k)
+  std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
+  /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
+  /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
+  /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
+  /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal and -nlrom_damping_modes
+  /// (docs/user-guide.md), then validates them with basis.boundary_set (call it after setting
+  /// that): the first bad value (unknown basis or force method, no boundary set, damping ratio
+  /// outside [0, 1), a filter without snapshots, ...) is recorded in `error`. Uses
+  /// PetscOptionsBegin: returns a PETSc error code. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+};
+
 // ------------------------------------------------------------------------------------------
 // The reduced model.
 
