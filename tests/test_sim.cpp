@@ -19,6 +19,7 @@
 #include "morse/nlrom/nlrom.hpp"
 #include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/sim/run.hpp"
 #include "morse/sim/sim.hpp"
 #include "util.hpp"
 
@@ -921,4 +922,57 @@ TEST(SimFile, RoundTrips) {
   EXPECT_EQ(table.time, c.mean_force_time);
   EXPECT_EQ(table.forces, c.mean_force);
   std::remove(file.c_str());
+}
+
+TEST(SimRun, CasePathsAndSpeedGrid) {
+  EXPECT_EQ(sim::case_path("out/simulate.h5", "a"), "out/simulate_a.h5");
+  EXPECT_EQ(sim::case_path("run.d/simulate", "b"), "run.d/simulate_b.h5");
+  EXPECT_EQ(sim::case_path("x.y.h5", "c"), "x.y_c.h5");
+  sim::SweepOptions so;
+  so.omega_min = 100, so.omega_max = 130, so.omega_step = 10;
+  EXPECT_EQ(so.n_speeds(), 4);
+  const auto todo = so.todo({1, 3});
+  ASSERT_EQ(todo.size(), 2u);
+  EXPECT_EQ(todo[0].index, 0);
+  EXPECT_EQ(todo[1].index, 2);
+  EXPECT_EQ(todo[1].omega, 120.0);
+  so.omega_max = so.omega_min;
+  EXPECT_EQ(so.n_speeds(), 1);
+}
+
+TEST(SimRun, CasesRoundRobinReportEveryFailure) {
+  int size = 1, rank = 0;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  std::vector<std::size_t> ran;
+  sim::run_cases(PETSC_COMM_WORLD, {"a", "b", "c"}, [&](std::size_t i) { ran.push_back(i); });
+  for (std::size_t i : ran) EXPECT_EQ(static_cast<int>(i % size), rank);
+  try {
+    sim::run_cases(PETSC_COMM_WORLD, {"a", "b", ""}, [&](std::size_t i) {
+      if (i != 0) throw Error(cat("bad ", i));
+    });
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("case b: bad 1"), std::string::npos) << m;
+    EXPECT_NE(m.find("bad 2"), std::string::npos) << m;
+    EXPECT_EQ(m.find("case a"), std::string::npos) << m;
+  }
+}
+
+TEST(SimRun, ContactOptionsReadAndCheckTheirValues) {
+  MORSE_CALL(PetscOptionsSetValue(nullptr, "-contact_set", "tip"));
+  MORSE_CALL(PetscOptionsSetValue(nullptr, "-contact_plane_normal", "0,3,4"));
+  MORSE_CALL(PetscOptionsSetValue(nullptr, "-casing_clearance", "1e-3"));
+  MORSE_CALL(PetscOptionsSetValue(nullptr, "-casing_lobes", "0"));
+  sim::ContactOptions c;
+  MORSE_CALL(c.set_from_options(PETSC_COMM_WORLD));
+  EXPECT_EQ(c.set, "tip");
+  EXPECT_TRUE(c.plane_given);
+  EXPECT_DOUBLE_EQ(c.plane.normal[1], 0.6);
+  EXPECT_DOUBLE_EQ(c.plane.normal[2], 0.8);
+  EXPECT_DOUBLE_EQ(c.casing.bump_height, 2e-3);  // default 2 x clearance
+  EXPECT_EQ(c.error, "-casing_lobes must be >= 1 (got 0)");
+  for (const char* o : {"-contact_set", "-contact_plane_normal", "-casing_clearance", "-casing_lobes"})
+    MORSE_CALL(PetscOptionsClearValue(nullptr, o));
 }

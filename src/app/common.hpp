@@ -98,23 +98,6 @@ cb::CBSettings cb_settings(const ReduceOptions& r);
 /// cmd_static and cmd_simulate unchanged.
 using dyn::get_loads;
 
-/// Contact and rotation options shared by simulate and sweep (docs/user-guide.md):
-/// -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point x,y,z,
-/// -contact_plane_normal x,y,z (normalized here), -casing_clearance, -casing_bump_height (default
-/// 2 x clearance), -casing_lobes, -casing_width, -casing_alpha, -sim_omega, -sim_revolutions.
-struct ContactOptions {
-  std::string set;
-  sim::Obstacle obstacle = sim::Obstacle::Casing;
-  sim::Plane plane;
-  sim::Casing casing;
-  double mu = 0.15;
-  double revolutions = 0.0;  ///< 0: not given
-  bool plane_given = false;  ///< -contact_plane_point or -contact_plane_normal given
-  bool omega_given = false;  ///< -sim_omega given
-  std::string error;         ///< a bad value, naming the option
-};
-PetscErrorCode get_contact_options(MPI_Comm comm, ContactOptions* o);
-
 // The commands, one file each (cmd_<name>.cpp).
 void run_modes(MPI_Comm comm);
 void run_reduce(MPI_Comm comm);

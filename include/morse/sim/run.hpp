@@ -1,0 +1,171 @@
+// morse/sim/run.hpp: the options of the reduced runs (`morse simulate`, `morse sweep`) read by
+// their settings (PETSc's XSetFromOptions habit), and what a run of `morse simulate` does besides
+// integrating: the file name of each case, the snapshot plan of a fom file, the records of a run
+// (SimRecord) and the cases run round robin over the ranks (docs/user-guide.md).
+#pragma once
+
+#include <mpi.h>
+#include <petscsys.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "morse/dyn/dyn.hpp"
+#include "morse/nlrom/nlrom.hpp"
+#include "morse/sim/sim.hpp"
+
+namespace morse::sim {
+
+/// Contact and rotation options shared by simulate and sweep.
+struct ContactOptions {
+  std::string set;
+  Obstacle obstacle = Obstacle::Casing;
+  Plane plane;
+  Casing casing;
+  double mu = 0.15;
+  double revolutions = 0.0;  ///< 0: not given
+  bool plane_given = false;  ///< -contact_plane_point or -contact_plane_normal given
+  bool omega_given = false;  ///< -sim_omega given
+  std::string error;         ///< a bad value, naming the option (raised by the command after -help)
+
+  /// Reads -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point
+  /// x,y,z, -contact_plane_normal x,y,z (normalized here), -casing_clearance, -casing_bump_height
+  /// (default 2 x clearance), -casing_lobes, -casing_width, -casing_alpha, -sim_omega and
+  /// -sim_revolutions. A bad value is recorded in `error` (the first one). Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+  /// The contact settings of these options: the nodes of `set` in sm (contact_nodes, which throws
+  /// alike on every rank for a node that is not a physical boundary node), the obstacle, plane,
+  /// casing and friction. Not collective.
+  void apply(const nlrom::StoredModel& sm, ContactSettings* c) const;
+};
+
+/// The options of `morse simulate`.
+struct SimOptions {
+  std::string rom, out = "simulate.h5", snapshots;
+  Settings s;
+  PetscBool linear = PETSC_FALSE;
+  PetscInt every = 1;
+  std::vector<std::string> monitor, cases;
+  ContactOptions contact;
+  std::vector<double> v0_uniform;  ///< 3 values, or empty
+  bool tfinal_set = false;
+
+  /// Reads -sim_monitor, -sim_cases, -rom, -out, -sim_dt, -sim_tfinal, -sim_scheme,
+  /// -sim_newton_rtol, -sim_newton_max_it, -sim_kernel, -sim_linear, -sim_output_every,
+  /// -sim_snapshots, -sim_q0, -sim_v0, -sim_v0_uniform and the contact options
+  /// (ContactOptions::set_from_options). A bad value is recorded in contact.error. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+  /// Completes s for the stored model sm: the contact (-contact_set: central differences only),
+  /// t_final from -sim_revolutions at -sim_omega, v0 fitted on the basis from -sim_v0_uniform
+  /// (*v0_residual: the relative residual of the fit). Throws naming the option, alike on every
+  /// rank. Not collective.
+  void resolve(const nlrom::StoredModel& sm, double* v0_residual);
+};
+
+/// The options of `morse sweep`.
+struct SweepOptions {
+  std::string rom, out = "sweep.h5", monitor = "LE";
+  double omega_min = 0, omega_max = 0, omega_step = 0, dt = 0, fmax = 10000.0;
+  PetscInt bins = 500, batch = 8;
+  PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, batched = PETSC_FALSE;
+  ContactOptions contact;
+
+  /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
+  /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
+  /// -sweep_batched, -sweep_restart and the contact options (ContactOptions::set_from_options).
+  /// Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+  /// Throws (alike on every rank) on options a sweep refuses: no -rom or -contact_set, a plane
+  /// obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
+  void check() const;
+  /// The sweep settings for the stored model sm: dt, linear, the casing contact of -contact_set,
+  /// -sim_revolutions (default 200), the spectrum, batch and the radial row of -sweep_monitor.
+  SweepSettings settings(const nlrom::StoredModel& sm) const;
+  /// The size of the speed grid omega_min, omega_min + step, ..., omega_max.
+  long n_speeds() const;
+  /// The speeds of the grid not in done_idx (indices of finished speeds), in grid order.
+  std::vector<SpeedTask> todo(const std::vector<std::int64_t>& done_idx) const;
+};
+
+/// The "key=value" lines that define a sweep (SweepRecord::settings): a resumed sweep must match
+/// them exactly. Not collective.
+std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::size_t r);
+
+/// Resumes a sweep: rank 0 reads `out` (unless restart) and, if it holds a sweep with the settings
+/// of rec, takes its finished speeds into rec; then writes rec as the first checkpoint (which also
+/// proves that `out` is writable). Returns the indices of the finished speeds on every rank.
+/// Throws collectively if `out` holds another sweep or cannot be read or written. Collective.
+std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart,
+                                       SweepRecord* rec);
+
+/// The options of `morse stress`.
+struct StressOptions {
+  std::string rom, sim, monitor = "LE", measure;
+  double time = -1.0;
+  PetscBool time_set = PETSC_FALSE, xdmf = PETSC_TRUE;
+  std::string error;  ///< a bad value, naming the option (raised by the command after -help)
+
+  /// Reads -rom, -sim, -stress_time, -stress_monitor, -stress_measure linear|nonlinear (another
+  /// value is recorded in `error`) and -stress_xdmf. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+};
+
+/// The state of a simulate file whose stress `morse stress` recovers.
+struct StressState {
+  std::vector<double> q;               ///< r: the reduced coordinates of the state
+  double time = 0.0;                   ///< its time
+  std::int64_t step = 0, n_steps = 0;  ///< its output row, and the rows of the file
+  double radial = 0.0;  ///< the largest |radial displacement| at the monitor (no -stress_time)
+  StressMeasure measure =
+      StressMeasure::Nonlinear;  ///< -stress_measure, else the file's (/sim@linear)
+};
+/// Rank 0 reads /sim/time and /sim/q of so.sim (and /sim@linear without -stress_measure) and picks
+/// the stored time nearest so.time (so.time_set), else the time of the largest |radial
+/// displacement| at so.monitor (StoredModel::radial_row); every rank receives that state. Throws
+/// collectively naming the file or the option on bad input. Collective.
+StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::StoredModel& sm);
+
+/// The displacement u ([k][3] at the nodes node_ids) in the node order of the gathered mesh gm
+/// (rec->displacement), and the largest nodal von Mises of f with its node's id. Rank 0 (gm and f
+/// are rank 0 data); not collective.
+void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u,
+                  const mesh::Mesh& gm, const StressField& f, StressRecord* rec);
+
+/// The file of case `c` of a run writing `out`: <out stem>_<c><extension> (<out>_<c>.h5 if out
+/// has no extension).
+std::string case_path(const std::string& out, const std::string& c);
+
+/// The snapshot times and the DOF map of a fom file (-sim_snapshots), with the rows of those DOFs
+/// in a stored model.
+struct SnapshotPlan {
+  std::string fom;  ///< empty: no snapshots
+  std::vector<double> time;
+  std::vector<std::int64_t> ids, comps;
+  std::vector<std::size_t> rows;
+};
+/// Reads the snapshot plan of fom file `fom` for stored model sm; an error names -sim_snapshots.
+/// Collective on comm (every rank throws alike).
+SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
+                                const nlrom::StoredModel& sm);
+
+/// Integrates the reduced model of sm under `loads` (sim::integrate) and records the run in
+/// *rec: every `every`-th step the time, energy, q, the contact histories (the mean contact force
+/// of every output interval, so that the history can drive another model) and the displacements
+/// of the monitored sets; the full fields at the snapshot steps of plan (the step nearest each
+/// snapshot time within [0, t_final]); the final state; the node ids of the monitored sets and of
+/// the contact set `contact_set` (s.contact has its nodes) and the loads. Serial.
+Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& loads,
+               const Settings& s, long every, const std::vector<std::string>& monitor,
+               const std::string& contact_set, const SnapshotPlan& plan, SimRecord* rec);
+
+/// Runs task(i) for every case i, round robin over the ranks of comm (case i on rank i % size). A
+/// failed case does not stop the others: at the end every rank throws one morse::Error naming
+/// every failure in rank order ("case <name>: <message>", or the message alone for an unnamed
+/// case). Collective.
+void run_cases(MPI_Comm comm, const std::vector<std::string>& names,
+               const std::function<void(std::size_t)>& task);
+
+}  // namespace morse::sim

@@ -1,0 +1,632 @@
+// sim/run.cpp: the options of the reduced runs and what `morse simulate` does around
+// sim::integrate: case files, the snapshot plan, the records of a run, the cases round robin
+// (sim/run.hpp).
+#include "morse/sim/run.hpp"
+
+#include <petscsys.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
+#include "morse/io/h5.hpp"
+
+namespace morse::sim {
+
+PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
+  ContactOptions* o = this;
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE, bump_set = PETSC_FALSE;
+  auto bad = [&](const std::string& e) {
+    if (o->error.empty()) o->error = e;
+  };
+  auto& c = o->casing;
+  PetscOptionsBegin(comm, nullptr,
+                    "morse contact (seed 003 §3.4: blade tip against a rigid obstacle)", "");
+  PetscCall(MorseOptionsString(
+      "-contact_set",
+      "Node set in contact (physical boundary nodes of the reduced model: its -boundary set "
+      "or a subset); no contact if not given",
+      "", buf, buf, sizeof buf, &set));
+  if (set) o->set = buf;
+  const char* obstacles[] = {"plane", "casing", "Obstacle", "", nullptr};
+  PetscEnum ob = static_cast<PetscEnum>(o->obstacle);
+  PetscCall(MorseOptionsEnum(
+      "-contact_obstacle",
+      "casing (rigid, of revolution about z, two-lobe distortion growing in time: eq. 52-53) or "
+      "plane (-contact_plane_point, -contact_plane_normal)",
+      "", obstacles, ob, &ob, nullptr));
+  o->obstacle = static_cast<Obstacle>(ob);
+  PetscCall(
+      MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
+  if (!(o->mu >= 0)) bad(cat("-contact_mu must be >= 0 (got ", o->mu, ")"));
+  PetscInt n = 3;
+  PetscCall(MorseOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "",
+                                  o->plane.point, &n, &set));
+  if (set && n != 3) bad("-contact_plane_point needs 3 values x,y,z");
+  o->plane_given = set;
+  n = 3;
+  PetscCall(MorseOptionsRealArray("-contact_plane_normal",
+                                  "Normal of the plane x,y,z, pointing to the free side", "",
+                                  o->plane.normal, &n, &set));
+  if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
+  o->plane_given = o->plane_given || set;
+  const double nn =
+      std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
+                o->plane.normal[2] * o->plane.normal[2]);
+  if (!(nn > 0))
+    bad("-contact_plane_normal must not be zero");
+  else
+    for (double& x : o->plane.normal) x /= nn;
+  PetscCall(MorseOptionsReal("-casing_clearance",
+                             "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
+                             c.clearance, &c.clearance, nullptr));
+  c.bump_height = 2.0 * c.clearance;
+  PetscCall(MorseOptionsReal("-casing_bump_height",
+                             "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)", "",
+                             c.bump_height, &c.bump_height, &bump_set));
+  if (!bump_set) c.bump_height = 2.0 * c.clearance;
+  PetscInt lobes = c.lobes;
+  PetscCall(MorseOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)",
+                            "", lobes, &lobes, nullptr));
+  c.lobes = static_cast<int>(lobes);
+  PetscCall(MorseOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)",
+                             "", c.width, &c.width, nullptr));
+  PetscCall(MorseOptionsReal(
+      "-casing_alpha",
+      "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "", c.alpha,
+      &c.alpha, nullptr));
+  PetscBool omega_set = PETSC_FALSE;
+  PetscCall(MorseOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)",
+                             "", c.omega, &c.omega, &omega_set));
+  o->omega_given = omega_set;
+  PetscCall(MorseOptionsReal("-sim_revolutions",
+                             "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
+                             o->revolutions, &o->revolutions, &set));
+  if (set && !(o->revolutions > 0))
+    bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
+  PetscOptionsEnd();
+  if (!(c.clearance > 0)) bad(cat("-casing_clearance must be positive (got ", c.clearance, " m)"));
+  if (!(c.bump_height >= 0))
+    bad(cat("-casing_bump_height must be >= 0 (got ", c.bump_height, " m)"));
+  if (c.lobes < 1) bad(cat("-casing_lobes must be >= 1 (got ", c.lobes, ")"));
+  if (!(c.width > 0)) bad(cat("-casing_width must be positive (got ", c.width, " rad)"));
+  if (!(c.alpha >= 0)) bad(cat("-casing_alpha must be >= 0 (got ", c.alpha, " 1/s)"));
+  return PETSC_SUCCESS;
+}
+
+PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
+  SimOptions* o = this;
+  PetscCall(options::get_string_list(
+      comm, "-sim_monitor", "Node sets whose reconstructed displacements u = Phi q are written",
+      &o->monitor));
+  PetscCall(options::get_string_list(
+      comm, "-sim_cases",
+      "Independent load cases run one per rank; case c takes its loads from -c_load_sets, "
+      "-c_load_<SET>_* and writes <out>_c.h5",
+      &o->cases));
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse simulate options", "");
+  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf,
+                               sizeof buf, &set));
+  if (set) o->rom = buf;
+  buf[0] = 0;
+  PetscCall(
+      MorseOptionsString("-out", "Output HDF5 file", "", o->out.c_str(), buf, sizeof buf, &set));
+  if (set) o->out = buf;
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "",
+                             o->s.dt, &o->s.dt, nullptr));
+  PetscCall(
+      MorseOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
+  o->tfinal_set = set;
+  const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
+  PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
+  PetscCall(MorseOptionsEnum(
+      "-sim_scheme",
+      "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
+      "Newton on the reduced model: morse fom's scheme, any dt)",
+      "", schemes, scheme, &scheme, nullptr));
+  o->s.scheme = static_cast<Scheme>(scheme);
+  PetscCall(MorseOptionsReal("-sim_newton_rtol",
+                             "trapezoidal: Newton tolerance relative to the force scale", "",
+                             o->s.newton_rtol, &o->s.newton_rtol, nullptr));
+  PetscInt max_it = o->s.newton_max_it;
+  PetscCall(MorseOptionsInt("-sim_newton_max_it",
+                            "trapezoidal: Newton iterations per step before the run stops", "",
+                            max_it, &max_it, nullptr));
+  o->s.newton_max_it = static_cast<int>(max_it);
+  const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
+  PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
+  PetscCall(MorseOptionsEnum(
+      "-sim_kernel",
+      "Nonlinear force in the time loop: folded (P3 [A;B] times the monomials), potential "
+      "(symmetric energy coefficients, ~4 times fewer bytes; exact or STEP tensors), auto "
+      "(potential when A, B derive from a potential and the folded matrix exceeds 12 MB)",
+      "", layouts, layout, &layout, nullptr));
+  o->s.kernel = static_cast<KernelLayout>(layout);
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear,
+                             &o->linear, nullptr));
+  PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every,
+                            nullptr));
+  buf[0] = 0;
+  PetscCall(MorseOptionsString(
+      "-sim_snapshots",
+      "A morse fom file: write the full field u = Phi q (and v) at its snapshot times and "
+      "on its DOF map (/sim/snapshots)",
+      "", buf, buf, sizeof buf, &set));
+  if (set) o->snapshots = buf;
+  std::vector<PetscReal> v(4096);
+  const char* names[2] = {"-sim_q0", "-sim_v0"};
+  const char* helps[2] = {"Initial reduced coordinates q(0), r values (default 0)",
+                          "Initial reduced velocities dq/dt(0), r values (default 0)"};
+  std::vector<double>* dest[2] = {&o->s.q0, &o->s.v0};
+  for (int i = 0; i < 2; ++i) {
+    PetscInt n = static_cast<PetscInt>(v.size());
+    PetscCall(MorseOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
+    if (set) dest[i]->assign(v.begin(), v.begin() + n);
+  }
+  PetscInt n3 = 3;
+  PetscReal u3[3] = {0, 0, 0};
+  PetscCall(MorseOptionsRealArray(
+      "-sim_v0_uniform",
+      "Initial velocity vx,vy,vz of every node [m/s], fitted on the basis by least squares "
+      "(for impact tests; the fit residual is printed)",
+      "", u3, &n3, &set));
+  if (set) {
+    if (n3 != 3 && o->contact.error.empty())
+      o->contact.error = "-sim_v0_uniform needs 3 values vx,vy,vz";
+    o->v0_uniform.assign(u3, u3 + 3);
+  }
+  PetscOptionsEnd();
+  PetscCall(o->contact.set_from_options(comm));
+  o->s.linear = o->linear;
+  return PETSC_SUCCESS;
+}
+
+void ContactOptions::apply(const nlrom::StoredModel& sm, ContactSettings* c) const {
+  c->nodes = contact_nodes(sm, set);  // throws on every rank alike (same model)
+  c->obstacle = obstacle, c->plane = plane, c->casing = casing, c->mu = mu;
+}
+
+void SimOptions::resolve(const nlrom::StoredModel& sm, double* v0_residual) {
+  if (!contact.set.empty()) {
+    contact.apply(sm, &s.contact);
+    MORSE_CHECK(s.scheme == Scheme::Central,
+                "morse simulate: contact (-contact_set) needs -sim_scheme central "
+                "(forward-increment Lagrange "
+                "multipliers are explicit)");
+  }
+  if (contact.revolutions > 0) {
+    const double w = contact.casing.omega;
+    MORSE_CHECK(w != 0.0, "-sim_revolutions needs a rotation speed: give -sim_omega (rad/s)");
+    MORSE_CHECK(!tfinal_set, "give either -sim_tfinal or -sim_revolutions, not both");
+    s.t_final = contact.revolutions * 2.0 * M_PI / std::abs(w);
+  }
+  if (!v0_uniform.empty()) {
+    MORSE_CHECK(s.v0.empty(), "give either -sim_v0 or -sim_v0_uniform, not both");
+    std::vector<double> u(sm.node_ids.size() * 3);
+    for (std::size_t k = 0; k < u.size(); ++k) u[k] = v0_uniform[k % 3];
+    s.v0 = sm.fit(u, v0_residual);
+  }
+}
+
+std::string case_path(const std::string& out, const std::string& c) {
+  auto dot = out.rfind('.');
+  auto slash = out.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
+    return out + "_" + c + ".h5";
+  return out.substr(0, dot) + "_" + c + out.substr(dot);
+}
+
+PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
+  SweepOptions* o = this;
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse sweep options", "");
+  PetscCall(MorseOptionsString(
+      "-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "", buf,
+      buf, sizeof buf, &set));
+  if (set) o->rom = buf;
+  buf[0] = 0;
+  PetscCall(MorseOptionsString(
+      "-out", "Sweep file (HDF5), rewritten after every speed; resumed if it exists", "",
+      o->out.c_str(), buf, sizeof buf, &set));
+  if (set) o->out = buf;
+  PetscCall(MorseOptionsReal("-sweep_omega_min", "Lowest rotation speed [rad/s]", "", o->omega_min,
+                             &o->omega_min, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_max", "Highest rotation speed [rad/s]", "", o->omega_max,
+                             &o->omega_max, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step,
+                             &o->omega_step, nullptr));
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt,
+                             &o->dt, nullptr));
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear,
+                             &o->linear, nullptr));
+  buf[0] = 0;
+  PetscCall(MorseOptionsString("-sweep_monitor",
+                               "Node set of one node whose radial displacement is recorded", "",
+                               o->monitor.c_str(), buf, sizeof buf, &set));
+  if (set) o->monitor = buf;
+  PetscCall(MorseOptionsReal("-sweep_spectrum_fmax", "Highest frequency of the spectrum [Hz]", "",
+                             o->fmax, &o->fmax, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_spectrum_bins",
+                            "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "", o->bins,
+                            &o->bins, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_batch",
+                            "Speeds advanced together per rank (one pass of the cubic tensor)", "",
+                            o->batch, &o->batch, nullptr));
+  PetscCall(MorseOptionsBool(
+      "-sweep_batched",
+      "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
+      "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
+      "", o->batched, &o->batched, nullptr));
+  PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "",
+                             o->restart, &o->restart, nullptr));
+  PetscOptionsEnd();
+  return o->contact.set_from_options(comm);
+}
+
+std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::size_t r) {
+  char b[2048];
+  const auto& c = o.contact.casing;
+  std::snprintf(
+      b, sizeof b,
+      "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
+      "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
+      "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
+      "spectrum_decimation=block_mean\n",
+      o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
+      s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes,
+      c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
+  return b;
+}
+
+void SweepOptions::check() const {
+  MORSE_CHECK(!rom.empty(),
+              "morse sweep: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
+  MORSE_CHECK(!contact.set.empty(), "morse sweep: give the contact nodes with -contact_set SET");
+  MORSE_CHECK(contact.obstacle == sim::Obstacle::Casing && !contact.plane_given,
+              "morse sweep: the obstacle is the casing (-contact_obstacle casing; -contact_plane_* "
+              "do not apply)");
+  MORSE_CHECK(!contact.omega_given,
+              "morse sweep: the speeds are -sweep_omega_min/_max/_step; -sim_omega does not apply");
+  MORSE_CHECK(omega_min > 0 && omega_max >= omega_min,
+              "morse sweep: give 0 < -sweep_omega_min <= -sweep_omega_max (got ", omega_min, ", ",
+              omega_max, ")");
+  MORSE_CHECK(omega_step > 0 || omega_max == omega_min,
+              "morse sweep: -sweep_omega_step must be positive");
+  MORSE_CHECK(batch > 0, "-sweep_batch must be positive (got ", batch, ")");
+  MORSE_CHECK(fmax > 0 && bins > 0,
+              "-sweep_spectrum_fmax and -sweep_spectrum_bins must be positive");
+}
+
+SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
+  SweepSettings s;
+  s.base.dt = dt;
+  s.base.linear = linear;
+  contact.apply(sm, &s.base.contact);  // the casing (check())
+  s.revolutions = contact.revolutions > 0 ? contact.revolutions : 200.0;
+  s.spectrum_fmax = fmax;
+  s.spectrum_bins = static_cast<int>(bins);
+  s.batch = static_cast<int>(batch);
+  s.batched = batched;
+  s.monitor = sm.radial_row(monitor, "-sweep_monitor");
+  return s;
+}
+
+long SweepOptions::n_speeds() const {
+  return omega_max == omega_min
+             ? 1
+             : static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) + 1;
+}
+
+std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_idx) const {
+  const std::set<std::int64_t> done(done_idx.begin(), done_idx.end());
+  std::vector<SpeedTask> todo;
+  for (long i = 0; i < n_speeds(); ++i)
+    if (!done.count(i)) todo.push_back({i, omega_min + static_cast<double>(i) * omega_step});
+  return todo;
+}
+
+std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart,
+                                       SweepRecord* rec) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string err;
+  std::vector<std::int64_t> done_idx;
+  if (rank == 0 && !restart) {
+    SweepRecord old;
+    std::string why;
+    if (read_sweep(out, &old, &why)) {
+      if (old.settings != rec->settings)
+        err = cat(out,
+                  " holds a sweep with other settings; give another -out, or -sweep_restart to "
+                  "overwrite it");
+      else {
+        rec->results = old.results;
+        for (const auto& R : old.results) done_idx.push_back(R.index);
+      }
+    } else if (why.find("no such file") == std::string::npos) {
+      err = cat(why, "; give another -out, or -sweep_restart to overwrite it");
+    }
+  }
+  // The first checkpoint also proves that -out is writable before any speed runs.
+  if (rank == 0 && err.empty()) {
+    try {
+      write_sweep(out, *rec);
+    } catch (const std::exception& e) {
+      err = cat("morse sweep: cannot write -out ", out, ": ", e.what());
+    }
+  }
+  collective_check(comm, err);
+  long nd = static_cast<long>(done_idx.size());
+  MPI_Bcast(&nd, 1, MPI_LONG, 0, comm);
+  done_idx.resize(static_cast<std::size_t>(nd));
+  MPI_Bcast(done_idx.data(), static_cast<int>(nd), MPI_INT64_T, 0, comm);
+  return done_idx;
+}
+
+PetscErrorCode StressOptions::set_from_options(MPI_Comm comm) {
+  StressOptions* o = this;
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  PetscBool set = PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse stress options", "");
+  PetscCall(MorseOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "",
+                               buf, buf, sizeof buf, &set));
+  if (set) o->rom = buf;
+  buf[0] = 0;
+  PetscCall(MorseOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf,
+                               sizeof buf, &set));
+  if (set) o->sim = buf;
+  PetscCall(
+      MorseOptionsReal("-stress_time",
+                       "Time [s] of the stress (the nearest stored step); default: the time of "
+                       "the largest |radial displacement| at -stress_monitor",
+                       "", o->time, &o->time, &o->time_set));
+  buf[0] = 0;
+  PetscCall(MorseOptionsString(
+      "-stress_monitor", "Node set of one node whose largest radial displacement picks the time",
+      "", o->monitor.c_str(), buf, sizeof buf, &set));
+  if (set) o->monitor = buf;
+  buf[0] = 0;
+  PetscCall(MorseOptionsString(
+      "-stress_measure",
+      "linear (small strain) | nonlinear (Cauchy stress of St Venant-Kirchhoff); default: "
+      "as the simulation (its /sim attribute linear)",
+      "", "", buf, sizeof buf, &set));
+  if (set) o->measure = buf;
+  PetscCall(MorseOptionsBool("-stress_xdmf",
+                             "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+                             &o->xdmf, nullptr));
+  PetscOptionsEnd();
+  if (!(o->measure.empty() || o->measure == "linear" || o->measure == "nonlinear"))
+    o->error = cat("-stress_measure ", o->measure, ": unknown (linear or nonlinear)");
+  return PETSC_SUCCESS;
+}
+
+StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::StoredModel& sm) {
+  StressState st;
+  const std::size_t r = sm.r();
+  const std::vector<double> radial =
+      so.time_set ? std::vector<double>{} : sm.radial_row(so.monitor, "-stress_monitor");
+
+  // Rank 0 reads the simulation and picks the state: the stored time nearest -stress_time, or the
+  // largest |u_r| at the monitor node. The others receive that state only.
+  std::string err;
+  double linear = 0.0, ur = 0.0, t_step = 0.0;
+  std::int64_t step = 0, nt = 0;
+  std::vector<double> q_step(r);
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) {
+    std::vector<double> time, q;
+    std::vector<hsize_t> dt, dq;
+    if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) &&
+        io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) && so.measure.empty() &&
+        !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
+      err = cat(err, " (give -stress_measure)");
+    if (err.empty() && (dq.size() != 2 || dq[0] != time.size() || time.empty()))
+      err = cat(so.sim, ": /sim/q and /sim/time disagree (a morse simulate file is expected)");
+    else if (err.empty() && dq[1] != r)
+      err = cat(so.sim, " has ", dq[1], " reduced coordinates; ", so.rom, " has r = ", r,
+                " (not the model of this simulation)");
+    else if (err.empty() && so.time_set &&
+             !(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12))
+      err = cat("-stress_time ", so.time, " s lies outside the simulation [", time.front(), ", ",
+                time.back(), "] s");
+    if (err.empty()) {
+      nt = static_cast<std::int64_t>(time.size());
+      for (std::int64_t i = 0; i < nt; ++i) {
+        if (so.time_set) {
+          if (std::abs(time[i] - so.time) < std::abs(time[step] - so.time)) step = i;
+          continue;
+        }
+        double v = 0.0;
+        for (std::size_t j = 0; j < r; ++j) v += radial[j] * q[static_cast<std::size_t>(i) * r + j];
+        if (std::abs(v) > std::abs(ur)) ur = v, step = i;
+      }
+      t_step = time[step];
+      std::copy_n(&q[static_cast<std::size_t>(step) * r], r, q_step.begin());
+    }
+  }
+  collective_check(comm, err);
+  double scalars[3] = {linear, ur, t_step};
+  std::int64_t ints[2] = {step, nt};
+  MPI_Bcast(scalars, 3, MPI_DOUBLE, 0, comm);
+  MPI_Bcast(ints, 2, MPI_INT64_T, 0, comm);
+  MPI_Bcast(q_step.data(), static_cast<int>(r), MPI_DOUBLE, 0, comm);
+  st.radial = scalars[1], st.time = scalars[2], st.step = ints[0], st.n_steps = ints[1];
+  st.measure = so.measure.empty()
+                   ? (scalars[0] != 0.0 ? StressMeasure::Linear : StressMeasure::Nonlinear)
+               : so.measure == "linear" ? StressMeasure::Linear
+                                        : StressMeasure::Nonlinear;
+  st.q = std::move(q_step);
+  return st;
+}
+
+void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u,
+                  const mesh::Mesh& gm, const StressField& f, StressRecord* rec) {
+  std::map<std::int64_t, std::size_t> row;
+  for (std::size_t k = 0; k < node_ids.size(); ++k) row[node_ids[k]] = k;
+  const std::size_t nn = gm.node_ids.size();
+  rec->displacement.assign(3 * nn, 0.0);
+  rec->max_node_id = -1;
+  rec->max_nodal_von_mises = 0.0;
+  for (std::size_t g = 0; g < nn; ++g) {
+    const std::size_t k = row.at(gm.node_ids[g]);  // recover_stress checked every node
+    for (int c = 0; c < 3; ++c) rec->displacement[3 * g + c] = u[3 * k + c];
+    if (f.nodal_mises[g] > rec->max_nodal_von_mises)
+      rec->max_nodal_von_mises = f.nodal_mises[g], rec->max_node_id = gm.node_ids[g];
+  }
+}
+
+SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
+                                const nlrom::StoredModel& sm) {
+  SnapshotPlan plan;
+  plan.fom = fom;
+  std::string err;
+  try {
+    std::vector<hsize_t> d;
+    if (!io::read_doubles(fom, "/fom/snapshots/time", &plan.time, &d, &err) ||
+        !io::read_ints(fom, "/fom/snapshots/dof_node_ids", &plan.ids, &d, &err) ||
+        !io::read_ints(fom, "/fom/snapshots/dof_components", &plan.comps, &d, &err))
+      err = cat("-sim_snapshots: ", err,
+                " (a morse fom file run with -fom_snapshot_every K is expected)");
+    else
+      plan.rows = sm.dof_rows(plan.ids, plan.comps);
+  } catch (const std::exception& e) {
+    err = cat("-sim_snapshots ", fom, ": ", e.what());
+  }
+  collective_check(comm, err);
+  return plan;
+}
+
+Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& nodal,
+               const Settings& s, long every, const std::vector<std::string>& monitor,
+               const std::string& contact_set, const SnapshotPlan& plan, SimRecord* out) {
+  const std::size_t r = sm.r();
+  std::vector<ReducedLoad> loads;
+  for (const auto& l : nodal) {
+    ReducedLoad rl;
+    rl.amplitude = l.amplitude, rl.omega = l.omega, rl.phase = l.phase;
+    rl.p = sm.nodal_pattern(l.set, l.dir);
+    loads.push_back(std::move(rl));
+  }
+  std::vector<long> snap_step;
+  for (double t : plan.time)
+    if (t <= s.t_final * (1 + 1e-12)) snap_step.push_back(std::lround(t / s.dt));
+  SimRecord& rec = *out;
+  std::map<std::string, std::vector<double>> hist;
+  // Contact at the output steps: normal force, friction vector, gap, radial displacement e_r . u.
+  const auto& cn = s.contact.nodes;
+  const std::size_t nc = cn.size();
+  auto& cr = rec.contact;
+  std::vector<double> e_r(3 * nc, 0.0);
+  // The contact forces act for one step each: the mean force of every output interval (its
+  // impulse over its length) keeps what the output samples alone would miss, so that the
+  // history can drive another model (-load_history).
+  if (nc) cr.normals = contact_normals(s.contact);
+  const std::vector<double>& c_normal = cr.normals;
+  std::vector<double> c_sum(3 * nc, 0.0);
+  long c_count = 0;
+  double t_prev_out = 0.0;
+  for (std::size_t k = 0; k < nc; ++k) {
+    const double rho = std::hypot(cn[k].x[0], cn[k].x[1]);
+    if (rho > 0) e_r[3 * k] = cn[k].x[0] / rho, e_r[3 * k + 1] = cn[k].x[1] / rho;
+  }
+  std::size_t next_snap = 0;
+  auto stats = integrate(sm.model, loads, s, [&](const StepState& x) {
+    while (next_snap < snap_step.size() && snap_step[next_snap] == x.step) {
+      rec.snapshot_time.push_back(x.t);
+      sm.dof_values(plan.rows, x.q, &rec.snapshot_u);
+      sm.dof_values(plan.rows, x.v, &rec.snapshot_v);
+      ++next_snap;
+    }
+    rec.final_q.assign(x.q, x.q + r);
+    rec.final_v.assign(x.v, x.v + r);
+    rec.final_time = x.t;
+    for (std::size_t k = 0; k < nc; ++k)
+      if (x.contact_normal[k] > cr.max_normal_force)
+        cr.max_normal_force = x.contact_normal[k], cr.time_of_max_normal_force = x.t;
+    if (nc && x.step > 0) {
+      for (std::size_t k = 0; k < nc; ++k)
+        for (int d = 0; d < 3; ++d)
+          c_sum[3 * k + d] +=
+              x.contact_normal[k] * c_normal[3 * k + d] + x.contact_friction[3 * k + d];
+      ++c_count;
+    }
+    if (x.step % every != 0) return;
+    if (nc) {
+      // Row 0 (the initial state) has no force; row i the mean over the steps since row i - 1.
+      for (std::size_t j = 0; j < 3 * nc; ++j)
+        cr.mean_force.push_back(c_count ? c_sum[j] / c_count : 0.0);
+      cr.mean_force_time.push_back(x.step == 0 ? 0.0 : 0.5 * (t_prev_out + x.t));
+      std::fill(c_sum.begin(), c_sum.end(), 0.0);
+      c_count = 0;
+      t_prev_out = x.t;
+      cr.normal.insert(cr.normal.end(), x.contact_normal, x.contact_normal + nc);
+      cr.tangential.insert(cr.tangential.end(), x.contact_friction, x.contact_friction + 3 * nc);
+      cr.gap.insert(cr.gap.end(), x.gap, x.gap + nc);
+      cr.active.push_back(x.active);
+      for (std::size_t k = 0; k < nc; ++k) {
+        const double* u = x.q + cn[k].dof;
+        cr.radial_displacement.push_back(e_r[3 * k] * u[0] + e_r[3 * k + 1] * u[1]);
+      }
+    }
+    rec.time.push_back(x.t);
+    rec.energy.push_back(x.energy());
+    rec.q.insert(rec.q.end(), x.q, x.q + r);
+    for (const auto& m : monitor) sm.displacements(m, x.q, &hist[m]);
+  });
+  for (const auto& m : monitor) {
+    std::vector<std::int64_t> ids;
+    for (auto k : sm.sets.at(m)) ids.push_back(sm.node_ids[k]);
+    rec.sets.push_back({m, std::move(ids), hist[m]});
+  }
+  if (!plan.fom.empty()) {
+    rec.snapshots_fom = plan.fom;
+    rec.snapshot_node_ids = plan.ids;
+    rec.snapshot_components = plan.comps;
+  }
+  if (nc)
+    for (auto k : sm.sets.at(contact_set)) cr.node_ids.push_back(sm.node_ids[k]);
+  rec.load.loads = nodal;
+  return stats;
+}
+
+void run_cases(MPI_Comm comm, const std::vector<std::string>& names,
+               const std::function<void(std::size_t)>& task) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  std::string err;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (static_cast<int>(i % size) != rank) continue;
+    try {
+      task(i);
+    } catch (const std::exception& e) {
+      err += (err.empty() ? "" : "; ") +
+             (names[i].empty() ? std::string(e.what()) : cat("case ", names[i], ": ", e.what()));
+    }
+  }
+  // Every rank's failures, joined in rank order, on every rank.
+  int len = static_cast<int>(err.size());
+  std::vector<int> lens(size), offs(size, 0);
+  MPI_Allgather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, comm);
+  for (int i = 1; i < size; ++i) offs[i] = offs[i - 1] + lens[i - 1];
+  std::string all(static_cast<std::size_t>(offs[size - 1] + lens[size - 1]), ' ');
+  MPI_Allgatherv(err.data(), len, MPI_CHAR, all.data(), lens.data(), offs.data(), MPI_CHAR, comm);
+  std::string joined;
+  for (int i = 0; i < size; ++i)
+    if (lens[i] > 0) joined += (joined.empty() ? "" : "; ") + all.substr(offs[i], lens[i]);
+  collective_check(comm, joined);
+}
+
+}  // namespace morse::sim
