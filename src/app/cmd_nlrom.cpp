@@ -36,7 +36,7 @@ struct NlromOptions {
 PetscErrorCode get_nlrom_options(MPI_Comm comm, NlromOptions* o) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
-  PetscCall(get_boundary(comm, &o->b.boundary_set));
+  PetscCall(cb::read_boundary_option(comm, &o->b.boundary_set));
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
   PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
                                o->basis.c_str(), buf, sizeof buf, &set));
@@ -140,7 +140,7 @@ void run_nlrom(MPI_Comm comm) {
       no.b.training_dt = w > 0 ? 2 * M_PI / w / 200 : no.b.training_tfinal / 1000;
     }
   }
-  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
+  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   auto basis = nlrom::build_basis(md, svk, no.b);
   const PetscInt r = basis.r();
   print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",

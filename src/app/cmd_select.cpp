@@ -136,22 +136,24 @@ std::string hz_of(double lambda) { return cat(hz(lambda)); }
 }  // namespace
 
 void run_select(MPI_Comm comm) {
-  CommonOptions o;
-  MORSE_CALL(get_common(comm, "select.h5", &o));
+  io::ModelInput o;
+  MORSE_CALL(o.set_from_options(comm, "select.h5"));
+  cb::CBSettings cs;
+  MORSE_CALL(cs.set_from_options(comm));
   ReduceOptions r;
   MORSE_CALL(get_reduce_options(comm, &r));
   SelectOptions so;
   MORSE_CALL(get_select_options(comm, &so));
   if (help_requested()) return;
-  for (const std::string& p : {cb_settings(r).prefix, std::string(kFomPrefix), std::string(kImrPrefix)})
+  for (const std::string& p : {cs.prefix, std::string(kFomPrefix), std::string(kImrPrefix)})
     options::add_prefix(p, options::Solver::Eigen);
   check_options(comm, true);
-  MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
-  MORSE_CHECK(!so.from.empty() || r.n_fixed >= 0 || r.fmax > 0,
+  MORSE_CHECK(!cs.boundary_set.empty(), "no boundary set given: use -boundary SET");
+  MORSE_CHECK(!so.from.empty() || cs.n_fixed >= 0 || cs.fmax_hz > 0,
               "give the candidate modes: -cb_num_fixed_modes N or -cb_fmax HZ (or -select_from FILE.h5)");
-  MORSE_CHECK(so.from.empty() || (r.n_fixed < 0 && r.fmax < 0),
+  MORSE_CHECK(so.from.empty() || (cs.n_fixed < 0 && cs.fmax_hz < 0),
               "-select_from reads the candidate modes from its file: drop -cb_num_fixed_modes / -cb_fmax");
-  MORSE_CHECK(!(r.n_fixed >= 0 && r.fmax > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
+  MORSE_CHECK(!(cs.n_fixed >= 0 && cs.fmax_hz > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
   std::vector<select::Method> methods;
   for (const auto& name : so.methods) {
     select::Method m;
@@ -170,7 +172,7 @@ void run_select(MPI_Comm comm) {
   MORSE_CHECK(so.ebr_load.empty() || !so.ebr_given,
               "give the EBR excitation either as -select_ebr_load FILE or as -select_ebr_freq/-select_ebr_amp/"
               "-select_ebr_phase, not both");
-  MORSE_CHECK(!r.write_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
+  MORSE_CHECK(!cs.keep_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
   MORSE_CHECK(!r.xdmf_set, "-cb_xdmf is a reduce option (the mode shapes of -cb_write_basis): select writes no mode "
                            "shapes");
   MORSE_CHECK(so.imr_support == "free" || so.imr_support == "spring" || so.imr_support == "clamped",
@@ -184,16 +186,15 @@ void run_select(MPI_Comm comm) {
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && !so.from.empty()),
               "-select_from reads nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.C && r.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
+  MORSE_CHECK(!(md.C && cs.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
                                            "-cb_damping (modal damping of the fixed-interface modes), not both");
-  cb::CBSettings cs = cb_settings(r);
   cs.keep_basis = true;
-  auto res = so.from.empty() ? cb::craig_bampton(md, cs) : cb::load_basis(md, so.from, r.boundary, r.damping);
+  auto res = so.from.empty() ? cb::craig_bampton(md, cs) : cb::load_basis(md, so.from, cs.boundary_set, cs.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
   if (md.C) res.C = cb::project_symmetric(comm, md.C.get(), res.T.get());  // T^T C T, restricted below
   const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
   double f_an = so.fmax_analysis > 0 ? so.fmax_analysis
-                : r.fmax > 0       ? 0.5 * r.fmax
+                : cs.fmax_hz > 0       ? 0.5 * cs.fmax_hz
                                    : 0.5 * std::sqrt(res.fixed_omega2.back()) / kTwoPi;
 
   select::VerifySettings vs;
@@ -237,12 +238,12 @@ void run_select(MPI_Comm comm) {
   for (const auto& mr : results)
     if (mr.name == rom_name) {
       auto C = select::restrict_operator(res.C, nb, nr, mr.sel.selected);
-      auto se = rom_superelement(res, mr.M, mr.K, r.damping > 0 || md.C ? &C : nullptr, mr.rom_f, r.damping);
+      auto se = rom_superelement(res, mr.M, mr.K, cs.damping > 0 || md.C ? &C : nullptr, mr.rom_f, cs.damping);
       se.selected_modes.assign(mr.sel.selected.begin(), mr.sel.selected.end());
       se.selection_method = mr.name;
       io::write_superelement(out, se);
     }
-  out.attribute("/cb", "boundary_set", r.boundary);
+  out.attribute("/cb", "boundary_set", cs.boundary_set);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }

@@ -74,7 +74,7 @@ void run_static(MPI_Comm comm) {
   std::vector<dyn::SetProbe> probes;
   for (const auto& m : so.monitor) probes.emplace_back(*md.mesh, md.dofs, m);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the solve
-  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
+  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   auto res = dyn::solve_static(svk, loads, so.s);
   check_options(comm, false);
 
