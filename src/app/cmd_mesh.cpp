@@ -26,26 +26,6 @@ namespace morse::app::detail {
 
 namespace {
 
-PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len, std::string* type_out) {
-  char type[64] = "hex20";
-  PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
-  PetscCall(MorseOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
-                               sizeof type, nullptr));
-  PetscCall(MorseOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
-  PetscCall(MorseOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
-  PetscCall(MorseOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
-  PetscCall(MorseOptionsInt("-box_nx", "Cells in x", "", b->nx, &b->nx, nullptr));
-  PetscCall(MorseOptionsInt("-box_ny", "Cells in y", "", b->ny, &b->ny, nullptr));
-  PetscCall(MorseOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
-  PetscCall(MorseOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
-                             &b->distortion, nullptr));
-  PetscCall(MorseOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
-                               out, out, len, nullptr));
-  PetscOptionsEnd();
-  *type_out = type;
-  return PETSC_SUCCESS;
-}
-
 PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
   PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
   PetscCall(MorseOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
@@ -148,15 +128,13 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   mesh::BoxSpec box;
   mesh::BladeSpec blade;
   mesh::StatorSpec stator;
+  std::strcpy(out, (what + ".msh").c_str());
+  MORSE_CALL(get_mesh_out(comm, out, sizeof out));
   if (what == "box") {
-    std::strcpy(out, "box.msh");
-    std::string type;
-    MORSE_CALL(get_box_options(comm, &box, out, sizeof out, &type));
-    MORSE_CHECK(mesh::parse_element_name(type, &box.type), "-box_type ", type,
-                ": unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
+    std::string error;
+    MORSE_CALL(mesh::box_spec_from_options(comm, &box, &error));
+    MORSE_CHECK(error.empty(), error);
   } else {
-    std::strcpy(out, (what + ".msh").c_str());
-    MORSE_CALL(get_mesh_out(comm, out, sizeof out));
     if (what == "blade")
       MORSE_CALL(mesh::blade_spec_from_options(comm, &blade));
     else
@@ -185,9 +163,6 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
               : f == "small" ? mesh::NastranWriteOptions::Format::Small
                              : mesh::NastranWriteOptions::Format::Free;
   nw.aset = aset;
-  if (what == "box")
-    MORSE_CHECK(box.nx > 0 && box.ny > 0 && box.nz > 0 && box.lx > 0 && box.ly > 0 && box.lz > 0,
-                "-box_n* and -box_l* must be positive");
   std::string err;
   if (rank_of(comm) == 0) try {
       auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
