@@ -7,26 +7,13 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
+#include "util.hpp"
 
 namespace {
 
 namespace opt = morse::options;
 
-// Options given on the command line for one test, removed again at its end.
-struct GivenOptions {
-  std::vector<std::string> names;
-  GivenOptions() = default;
-  GivenOptions(std::initializer_list<std::pair<const char*, const char*>> given) {
-    for (const auto& [name, value] : given) {
-      PetscOptionsSetValue(nullptr, name, value);
-      names.emplace_back(name);
-    }
-  }
-  ~GivenOptions() {
-    for (const auto& n : names) PetscOptionsClearValue(nullptr, n.c_str());
-    opt::clear();
-  }
-};
+using morse::test::GivenOptions;
 
 // A command's option block: -casing_clearance, -contact_mu and, under prefix c1_, -load_sets.
 PetscErrorCode read_options(double* clearance, double* mu) {

@@ -15,23 +15,11 @@
 #include "morse/io/matrix_model.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/select/select.hpp"
+#include "util.hpp"
 
 namespace {
 
-// Options given on the command line for one test, removed again at its end.
-struct GivenOptions {
-  std::vector<std::string> names;
-  GivenOptions(std::initializer_list<std::pair<const char*, const char*>> given) {
-    for (const auto& [name, value] : given) {
-      PetscOptionsSetValue(nullptr, name, value);
-      names.emplace_back(name);
-    }
-  }
-  ~GivenOptions() {
-    for (const auto& n : names) PetscOptionsClearValue(nullptr, n.c_str());
-    morse::options::clear();
-  }
-};
+using morse::test::GivenOptions;
 
 std::string check_error(const morse::io::ModelInput& in, const char* needs_mesh = nullptr) {
   try {

@@ -3,6 +3,8 @@
 
 #include <mpi.h>
 
+#include <petscsys.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -10,6 +12,7 @@
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/mesh/generator.hpp"
@@ -163,5 +166,22 @@ inline std::string history_rank_difference(const std::vector<double>& serial, co
       msg += cat(q ? "energy" : "displacement", ": 1 rank vs all ranks differ by ", diff[q], " of ", scale[q], "; ");
   return msg;
 }
+
+/// Options given on the command line for one test, removed again at its end (with the
+/// registrations made meanwhile).
+struct GivenOptions {
+  std::vector<std::string> names;
+  GivenOptions() = default;
+  GivenOptions(std::initializer_list<std::pair<const char*, const char*>> given) {
+    for (const auto& [name, value] : given) {
+      PetscOptionsSetValue(nullptr, name, value);
+      names.emplace_back(name);
+    }
+  }
+  ~GivenOptions() {
+    for (const auto& n : names) PetscOptionsClearValue(nullptr, n.c_str());
+    options::clear();
+  }
+};
 
 }  // namespace morse::test
