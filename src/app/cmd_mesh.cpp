@@ -13,7 +13,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
-#include "morse/fe/element.hpp"
+#include "morse/fe/model.hpp"
 #include "morse/mesh/blade.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/gmsh.hpp"
@@ -60,44 +60,19 @@ void run_mesh_info(MPI_Comm comm) {
   }
   StageTimer t(comm, "Check");
   const auto& m = lm.mesh;
-  std::vector<std::int64_t> per_type(mesh::kNumElementTypes, 0);
-  double volume = 0, min_jac = 1e300, xyz[3 * fe::kMaxNodes];
-  std::int64_t worst = -1, n_bad = 0;
-  for (std::int64_t e = 0; e < m.num_elements(); ++e) {
-    const auto type = m.elem_types[e];
-    ++per_type[static_cast<int>(type)];
-    const auto off = m.elem_offsets[e];
-    for (int a = 0; a < mesh::nodes_per_element(type); ++a)
-      for (int d = 0; d < 3; ++d) xyz[3 * a + d] = m.coords[3 * m.elem_nodes[off + a] + d];
-    const double j = fe::min_jacobian(type, xyz);
-    if (j <= 0) ++n_bad;
-    if (j < min_jac) min_jac = j, worst = m.elem_ids[e];
-    volume += fe::element_volume(type, xyz);
-  }
-  MPI_Allreduce(MPI_IN_PLACE, per_type.data(), mesh::kNumElementTypes, MPI_INT64_T, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, &volume, 1, MPI_DOUBLE, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, &n_bad, 1, MPI_INT64_T, MPI_SUM, comm);
-  struct {
-    double v;
-    int r;
-  } in{min_jac, rank_of(comm)}, outv;
-  MPI_Allreduce(&in, &outv, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm);
-  MPI_Bcast(&worst, 1, MPI_INT64_T, outv.r, comm);
+  const fe::MeshQuality q = fe::mesh_quality(comm, lm);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements\n", path.c_str(), m.units.c_str(),
          (long long)lm.n_global_nodes, (long long)lm.n_global_elements);
   for (int k = 0; k < mesh::kNumElementTypes; ++k)
-    if (per_type[k]) print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)per_type[k]);
-  print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", volume,
-         outv.v, (long long)worst, (long long)n_bad);
+    if (q.per_type[k])
+      print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)q.per_type[k]);
+  print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", q.volume,
+         q.min_jacobian, (long long)q.worst_element, (long long)q.n_inverted);
   for (const auto& [name, n] : lm.node_set_sizes) print0(comm, "  node set    %-20s %lld nodes\n", name.c_str(), (long long)n);
   for (const auto& [name, n] : lm.elem_set_sizes) print0(comm, "  element set %-20s %lld elements\n", name.c_str(), (long long)n);
   for (const auto& mat : m.materials)
     print0(comm, "  material %-20s E %.6g nu %.6g rho %.6g\n", mat.name.c_str(), mat.E, mat.nu, mat.rho);
-  std::int64_t fixed = 0;
-  for (std::int64_t k = 0; k < m.num_nodes(); ++k)
-    if (lm.node_owner[k] == rank_of(comm) && !m.fixed_dofs.empty() && m.fixed_dofs[k]) ++fixed;
-  MPI_Allreduce(MPI_IN_PLACE, &fixed, 1, MPI_INT64_T, MPI_SUM, comm);
-  if (fixed) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)fixed);
+  if (q.n_fixed_nodes) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)q.n_fixed_nodes);
 }
 
 PetscErrorCode get_nastran_options(MPI_Comm comm, mesh::Material* mat, char* fmt, size_t lf, char* aset, size_t la,

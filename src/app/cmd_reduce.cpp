@@ -14,7 +14,7 @@
 #include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
-#include "morse/io/matrices.hpp"
+#include "morse/io/matrix_model.hpp"
 #include "morse/mesh/partition.hpp"
 
 namespace morse::app::detail {
@@ -45,17 +45,8 @@ void run_reduce(MPI_Comm comm) {
   MORSE_CHECK(r.write_matrices.empty() || md.mesh.has_value(), "-matrices_write writes the matrices of a mesh model");
   if (!r.write_matrices.empty()) {
     StageTimer t(comm, "WriteMatrices");
+    io::write_model_matrices(comm, md, r.write_matrices, r.write_format);
     const std::string ext = r.write_format == "mtx" ? ".mtx" : ".petsc";
-    io::write_matrix(md.K.get(), r.write_matrices + "_K" + ext, true);
-    io::write_matrix(md.M.get(), r.write_matrices + "_M" + ext, true);
-    auto map = io::mesh_dof_map(*md.mesh, md.dofs);
-    std::string err;
-    if (rank_of(comm) == 0) try {
-        io::write_dof_map(r.write_matrices + "_dofmap.txt", map);
-      } catch (const std::exception& e) {
-        err = e.what();
-      }
-    collective_check(comm, err);
     print0(comm, "morse: wrote %s_K%s, %s_M%s and %s_dofmap.txt\n", r.write_matrices.c_str(), ext.c_str(),
            r.write_matrices.c_str(), ext.c_str(), r.write_matrices.c_str());
   }

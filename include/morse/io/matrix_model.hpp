@@ -36,6 +36,11 @@ struct MatrixInput {
 /// a node set naming a node that has no row, a clamp that removes every row. Collective.
 fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in);
 
+/// Writes the free-DOF K and M of a mesh model and its DOF map (mesh_dof_map) as
+/// <prefix>_K.<ext>, <prefix>_M.<ext> (write_matrix, symmetric; ext: mtx or petsc, as `format`)
+/// and <prefix>_dofmap.txt (rank 0). Throws collectively on a write failure. Collective.
+void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format);
+
 /// The model input of a command: a mesh (fe::MeshInput, built by fe::mesh_model) or assembled
 /// operators (MatrixInput, built by matrix_model), and the output file (-out).
 struct ModelInput {
