@@ -75,22 +75,6 @@ void run_mesh_info(MPI_Comm comm) {
   if (q.n_fixed_nodes) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)q.n_fixed_nodes);
 }
 
-PetscErrorCode get_nastran_options(MPI_Comm comm, mesh::Material* mat, char* fmt, size_t lf, char* aset, size_t la,
-                                   char* spc, size_t ls) {
-  PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
-  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat->E, &mat->E, nullptr));
-  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat->nu, &mat->nu, nullptr));
-  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat->rho, &mat->rho, nullptr));
-  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
-                               lf, nullptr));
-  PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset, aset,
-                               la, nullptr));
-  PetscCall(MorseOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
-                               "", spc, spc, ls, nullptr));
-  PetscOptionsEnd();
-  return PETSC_SUCCESS;
-}
-
 }  // namespace
 
 void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
@@ -116,12 +100,9 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
       MORSE_CALL(mesh::stator_spec_from_options(comm, &stator));
   }
   // Nastran output: the material of the deck and its format.
-  mesh::Material mat;
-  mat.name = "options";
-  mat.E = mat.nu = mat.rho = -1;
   mesh::NastranWriteOptions nw;
-  char fmt[32] = "large", aset[256] = "", spc[256] = "";
-  MORSE_CALL(get_nastran_options(comm, &mat, fmt, sizeof fmt, aset, sizeof aset, spc, sizeof spc));
+  MORSE_CALL(nw.set_from_options(comm));
+  const mesh::Material& mat = nw.material;
   if (help_requested()) return;
   check_options(comm, false);
   const std::string out_s = out;
@@ -132,12 +113,7 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   MORSE_CHECK(nastran || ext == "msh", "-out ", out_s, ": expected .msh (Gmsh) or .bdf/.dat/.nas (Nastran)");
   MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0),
               "-out ", out_s, ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
-  const std::string f = fmt;
-  MORSE_CHECK(f == "large" || f == "small" || f == "free", "-nastran_format ", f, ": expected large, small or free");
-  nw.format = f == "large" ? mesh::NastranWriteOptions::Format::Large
-              : f == "small" ? mesh::NastranWriteOptions::Format::Small
-                             : mesh::NastranWriteOptions::Format::Free;
-  nw.aset = aset;
+  MORSE_CHECK(nw.error.empty(), nw.error);
   std::string err;
   if (rank_of(comm) == 0) try {
       auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
@@ -146,9 +122,9 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
         m.materials.push_back(mat);
         for (auto& em : m.elem_material)
           if (em < 0) em = static_cast<int>(m.materials.size()) - 1;
-        if (spc[0]) {
-          auto it = m.node_sets.find(spc);
-          MORSE_CHECK(it != m.node_sets.end(), "-nastran_spc ", spc, ": the mesh has no such node set");
+        if (!nw.spc.empty()) {
+          auto it = m.node_sets.find(nw.spc);
+          MORSE_CHECK(it != m.node_sets.end(), "-nastran_spc ", nw.spc, ": the mesh has no such node set");
           m.fixed_dofs.assign(m.num_nodes(), 0);
           for (auto k : it->second) m.fixed_dofs[k] = 7;
         }
