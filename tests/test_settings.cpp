@@ -14,6 +14,7 @@
 #include "morse/io/export.hpp"
 #include "morse/io/matrix_model.hpp"
 #include "morse/mesh/generator.hpp"
+#include "morse/mesh/nastran.hpp"
 #include "morse/select/select.hpp"
 #include "util.hpp"
 
@@ -150,4 +151,18 @@ TEST(Settings, BoxSpec) {
   PetscOptionsSetValue(nullptr, "-box_type", "hex27");
   ASSERT_EQ(morse::mesh::box_spec_from_options(PETSC_COMM_WORLD, &b, &error), 0);
   EXPECT_EQ(error, "-box_type hex27: unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
+}
+
+TEST(Settings, NastranWriteOptions) {
+  GivenOptions g{{"-nastran_format", "free"}, {"-nastran_spc", "x0"}, {"-material_rho", "7800"}};
+  morse::mesh::NastranWriteOptions o;
+  ASSERT_EQ(o.set_from_options(PETSC_COMM_WORLD), 0);
+  EXPECT_EQ(o.error, "");
+  EXPECT_EQ(o.format, morse::mesh::NastranWriteOptions::Format::Free);
+  EXPECT_EQ(o.spc, "x0");
+  EXPECT_EQ(o.material.rho, 7800);
+  EXPECT_EQ(o.material.E, -1);
+  PetscOptionsSetValue(nullptr, "-nastran_format", "wide");
+  ASSERT_EQ(o.set_from_options(PETSC_COMM_WORLD), 0);
+  EXPECT_EQ(o.error, "-nastran_format wide: expected large, small or free");
 }
