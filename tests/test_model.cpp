@@ -352,3 +352,14 @@ TEST(Model, MaterialPerElementSet) {
   const double V = b.lx * b.ly * b.lz;
   EXPECT_NEAR(ops.mass, 0.5 * V * 2700.0 + 0.5 * V * 7800.0, 1e-10 * ops.mass);
 }
+
+TEST(MeshQuality, BoxCountsVolumeAndNoInvertedElement) {
+  auto lm = morse::test::box_mesh(PETSC_COMM_WORLD, morse::test::box_spec(morse::mesh::ElementType::Tet4, 2.0, 0.5, 0.25, 4, 2, 1));
+  const auto q = morse::fe::mesh_quality(PETSC_COMM_WORLD, lm);
+  EXPECT_EQ(q.per_type[static_cast<int>(morse::mesh::ElementType::Tet4)], 6 * 4 * 2 * 1);
+  EXPECT_NEAR(q.volume, 2.0 * 0.5 * 0.25, 1e-12);
+  EXPECT_GT(q.min_jacobian, 0);
+  EXPECT_GE(q.worst_element, 0);
+  EXPECT_EQ(q.n_inverted, 0);
+  EXPECT_EQ(q.n_fixed_nodes, 0);
+}

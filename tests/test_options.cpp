@@ -8,6 +8,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
 #include "given_options.hpp"
+#include "util.hpp"
 
 namespace {
 

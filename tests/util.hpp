@@ -3,6 +3,8 @@
 
 #include <mpi.h>
 
+#include <petscsys.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -10,10 +12,12 @@
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/fe/model.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/partition.hpp"
+#include "given_options.hpp"
 
 namespace morse::test {
 

@@ -44,7 +44,7 @@ void run_fom(MPI_Comm comm) {
   }
   std::vector<dyn::SetProbe> probes;
   for (const auto& m : fs.monitor) probes.emplace_back(*md.mesh, md.dofs, m);
-  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
+  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   UVec u0;
   if (!fs.initial.empty()) {
     MORSE_CALL(MatCreateVecs(md.K.get(), u0.ptr(), nullptr));

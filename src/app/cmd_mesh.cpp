@@ -13,7 +13,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
-#include "morse/fe/element.hpp"
+#include "morse/fe/model.hpp"
 #include "morse/mesh/blade.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/gmsh.hpp"
@@ -25,26 +25,6 @@
 namespace morse::app::detail {
 
 namespace {
-
-PetscErrorCode get_box_options(MPI_Comm comm, mesh::BoxSpec* b, char* out, size_t len, std::string* type_out) {
-  char type[64] = "hex20";
-  PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
-  PetscCall(MorseOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
-                               sizeof type, nullptr));
-  PetscCall(MorseOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
-  PetscCall(MorseOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
-  PetscCall(MorseOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
-  PetscCall(MorseOptionsInt("-box_nx", "Cells in x", "", b->nx, &b->nx, nullptr));
-  PetscCall(MorseOptionsInt("-box_ny", "Cells in y", "", b->ny, &b->ny, nullptr));
-  PetscCall(MorseOptionsInt("-box_nz", "Cells in z", "", b->nz, &b->nz, nullptr));
-  PetscCall(MorseOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
-                             &b->distortion, nullptr));
-  PetscCall(MorseOptionsString("-out", "Output mesh file: .msh (Gmsh 4.1) or .bdf/.dat/.nas (Nastran bulk data)", "",
-                               out, out, len, nullptr));
-  PetscOptionsEnd();
-  *type_out = type;
-  return PETSC_SUCCESS;
-}
 
 PetscErrorCode get_mesh_out(MPI_Comm comm, char* out, size_t len) {
   PetscOptionsBegin(comm, nullptr, "morse mesh options", "");
@@ -80,60 +60,19 @@ void run_mesh_info(MPI_Comm comm) {
   }
   StageTimer t(comm, "Check");
   const auto& m = lm.mesh;
-  std::vector<std::int64_t> per_type(mesh::kNumElementTypes, 0);
-  double volume = 0, min_jac = 1e300, xyz[3 * fe::kMaxNodes];
-  std::int64_t worst = -1, n_bad = 0;
-  for (std::int64_t e = 0; e < m.num_elements(); ++e) {
-    const auto type = m.elem_types[e];
-    ++per_type[static_cast<int>(type)];
-    const auto off = m.elem_offsets[e];
-    for (int a = 0; a < mesh::nodes_per_element(type); ++a)
-      for (int d = 0; d < 3; ++d) xyz[3 * a + d] = m.coords[3 * m.elem_nodes[off + a] + d];
-    const double j = fe::min_jacobian(type, xyz);
-    if (j <= 0) ++n_bad;
-    if (j < min_jac) min_jac = j, worst = m.elem_ids[e];
-    volume += fe::element_volume(type, xyz);
-  }
-  MPI_Allreduce(MPI_IN_PLACE, per_type.data(), mesh::kNumElementTypes, MPI_INT64_T, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, &volume, 1, MPI_DOUBLE, MPI_SUM, comm);
-  MPI_Allreduce(MPI_IN_PLACE, &n_bad, 1, MPI_INT64_T, MPI_SUM, comm);
-  struct {
-    double v;
-    int r;
-  } in{min_jac, rank_of(comm)}, outv;
-  MPI_Allreduce(&in, &outv, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm);
-  MPI_Bcast(&worst, 1, MPI_INT64_T, outv.r, comm);
+  const fe::MeshQuality q = fe::mesh_quality(comm, lm);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements\n", path.c_str(), m.units.c_str(),
          (long long)lm.n_global_nodes, (long long)lm.n_global_elements);
   for (int k = 0; k < mesh::kNumElementTypes; ++k)
-    if (per_type[k]) print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)per_type[k]);
-  print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", volume,
-         outv.v, (long long)worst, (long long)n_bad);
+    if (q.per_type[k])
+      print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)q.per_type[k]);
+  print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", q.volume,
+         q.min_jacobian, (long long)q.worst_element, (long long)q.n_inverted);
   for (const auto& [name, n] : lm.node_set_sizes) print0(comm, "  node set    %-20s %lld nodes\n", name.c_str(), (long long)n);
   for (const auto& [name, n] : lm.elem_set_sizes) print0(comm, "  element set %-20s %lld elements\n", name.c_str(), (long long)n);
   for (const auto& mat : m.materials)
     print0(comm, "  material %-20s E %.6g nu %.6g rho %.6g\n", mat.name.c_str(), mat.E, mat.nu, mat.rho);
-  std::int64_t fixed = 0;
-  for (std::int64_t k = 0; k < m.num_nodes(); ++k)
-    if (lm.node_owner[k] == rank_of(comm) && !m.fixed_dofs.empty() && m.fixed_dofs[k]) ++fixed;
-  MPI_Allreduce(MPI_IN_PLACE, &fixed, 1, MPI_INT64_T, MPI_SUM, comm);
-  if (fixed) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)fixed);
-}
-
-PetscErrorCode get_nastran_options(MPI_Comm comm, mesh::Material* mat, char* fmt, size_t lf, char* aset, size_t la,
-                                   char* spc, size_t ls) {
-  PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
-  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat->E, &mat->E, nullptr));
-  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat->nu, &mat->nu, nullptr));
-  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat->rho, &mat->rho, nullptr));
-  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
-                               lf, nullptr));
-  PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset, aset,
-                               la, nullptr));
-  PetscCall(MorseOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
-                               "", spc, spc, ls, nullptr));
-  PetscOptionsEnd();
-  return PETSC_SUCCESS;
+  if (q.n_fixed_nodes) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)q.n_fixed_nodes);
 }
 
 }  // namespace
@@ -148,27 +87,22 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   mesh::BoxSpec box;
   mesh::BladeSpec blade;
   mesh::StatorSpec stator;
+  std::strcpy(out, (what + ".msh").c_str());
+  MORSE_CALL(get_mesh_out(comm, out, sizeof out));
   if (what == "box") {
-    std::strcpy(out, "box.msh");
-    std::string type;
-    MORSE_CALL(get_box_options(comm, &box, out, sizeof out, &type));
-    MORSE_CHECK(mesh::parse_element_name(type, &box.type), "-box_type ", type,
-                ": unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
+    std::string error;
+    MORSE_CALL(mesh::box_spec_from_options(comm, &box, &error));
+    MORSE_CHECK(error.empty(), error);
   } else {
-    std::strcpy(out, (what + ".msh").c_str());
-    MORSE_CALL(get_mesh_out(comm, out, sizeof out));
     if (what == "blade")
       MORSE_CALL(mesh::blade_spec_from_options(comm, &blade));
     else
       MORSE_CALL(mesh::stator_spec_from_options(comm, &stator));
   }
   // Nastran output: the material of the deck and its format.
-  mesh::Material mat;
-  mat.name = "options";
-  mat.E = mat.nu = mat.rho = -1;
   mesh::NastranWriteOptions nw;
-  char fmt[32] = "large", aset[256] = "", spc[256] = "";
-  MORSE_CALL(get_nastran_options(comm, &mat, fmt, sizeof fmt, aset, sizeof aset, spc, sizeof spc));
+  MORSE_CALL(nw.set_from_options(comm));
+  const mesh::Material& mat = nw.material;
   if (help_requested()) return;
   check_options(comm, false);
   const std::string out_s = out;
@@ -179,15 +113,7 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   MORSE_CHECK(nastran || ext == "msh", "-out ", out_s, ": expected .msh (Gmsh) or .bdf/.dat/.nas (Nastran)");
   MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0),
               "-out ", out_s, ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
-  const std::string f = fmt;
-  MORSE_CHECK(f == "large" || f == "small" || f == "free", "-nastran_format ", f, ": expected large, small or free");
-  nw.format = f == "large" ? mesh::NastranWriteOptions::Format::Large
-              : f == "small" ? mesh::NastranWriteOptions::Format::Small
-                             : mesh::NastranWriteOptions::Format::Free;
-  nw.aset = aset;
-  if (what == "box")
-    MORSE_CHECK(box.nx > 0 && box.ny > 0 && box.nz > 0 && box.lx > 0 && box.ly > 0 && box.lz > 0,
-                "-box_n* and -box_l* must be positive");
+  MORSE_CHECK(nw.error.empty(), nw.error);
   std::string err;
   if (rank_of(comm) == 0) try {
       auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
@@ -196,9 +122,9 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
         m.materials.push_back(mat);
         for (auto& em : m.elem_material)
           if (em < 0) em = static_cast<int>(m.materials.size()) - 1;
-        if (spc[0]) {
-          auto it = m.node_sets.find(spc);
-          MORSE_CHECK(it != m.node_sets.end(), "-nastran_spc ", spc, ": the mesh has no such node set");
+        if (!nw.spc.empty()) {
+          auto it = m.node_sets.find(nw.spc);
+          MORSE_CHECK(it != m.node_sets.end(), "-nastran_spc ", nw.spc, ": the mesh has no such node set");
           m.fixed_dofs.assign(m.num_nodes(), 0);
           for (auto k : it->second) m.fixed_dofs[k] = 7;
         }

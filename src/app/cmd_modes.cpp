@@ -77,7 +77,7 @@ void run_modes(MPI_Comm comm) {
   io::write_modes(out, "/fom", md, eig.omega2, eig.V.get());
   out.attribute("/fom", "clamp", [&] {
     std::string s;
-    for (auto& c : o.clamp) s += (s.empty() ? "" : ",") + c;
+    for (auto& c : o.mesh.clamp) s += (s.empty() ? "" : ",") + c;
     return s;
   }());
   out.commit();

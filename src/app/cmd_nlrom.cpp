@@ -26,7 +26,7 @@ void run_nlrom(MPI_Comm comm) {
   std::string load_error;
   MORSE_CALL(dyn::get_loads(comm, &load_list, &load_error));
   nlrom::OfflineSettings no;
-  MORSE_CALL(get_boundary(comm, &no.basis.boundary_set));
+  MORSE_CALL(cb::read_boundary_option(comm, &no.basis.boundary_set));
   MORSE_CALL(no.set_from_options(comm));
   if (help_requested()) return;
   options::add_prefix(no.basis.prefix, options::Solver::Eigen);
@@ -45,7 +45,7 @@ void run_nlrom(MPI_Comm comm) {
       no.basis.training_dt = w > 0 ? 2 * M_PI / w / 200 : no.basis.training_tfinal / 1000;
     }
   }
-  fe::Svk svk(*md.mesh, md.dofs, o.material, md.K.get());
+  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   auto basis = nlrom::build_basis(md, svk, no.basis);
   const PetscInt r = basis.r();
   print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",

@@ -14,50 +14,43 @@
 #include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
-#include "morse/io/matrices.hpp"
+#include "morse/io/matrix_model.hpp"
 #include "morse/mesh/partition.hpp"
 
 namespace morse::app::detail {
 
 void run_reduce(MPI_Comm comm) {
-  CommonOptions o;
-  MORSE_CALL(get_common(comm, "superelement.h5", &o));
+  io::ModelInput o;
+  MORSE_CALL(o.set_from_options(comm, "superelement.h5"));
+  cb::CBSettings cs;
+  MORSE_CALL(cs.set_from_options(comm));
   ReduceOptions r;
   MORSE_CALL(get_reduce_options(comm, &r));
   if (help_requested()) return;
-  options::add_prefix(cb_settings(r).prefix, options::Solver::Eigen);
+  options::add_prefix(cs.prefix, options::Solver::Eigen);
   check_options(comm, true);
-  MORSE_CHECK(!r.boundary.empty(), "no boundary set given: use -boundary SET");
-  MORSE_CHECK(r.n_fixed >= 0 || r.fmax > 0, "give -cb_num_fixed_modes N or -cb_fmax HZ");
-  MORSE_CHECK(!(r.n_fixed >= 0 && r.fmax > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
-  MORSE_CHECK(r.damping >= 0 && r.damping < 1, "-cb_damping must be in [0, 1) (got ", r.damping, ")");
-  MORSE_CHECK(!(r.xdmf_set && r.xdmf && !r.write_basis),
+  MORSE_CHECK(!cs.boundary_set.empty(), "no boundary set given: use -boundary SET");
+  MORSE_CHECK(cs.n_fixed >= 0 || cs.fmax_hz > 0, "give -cb_num_fixed_modes N or -cb_fmax HZ");
+  MORSE_CHECK(!(cs.n_fixed >= 0 && cs.fmax_hz > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
+  MORSE_CHECK(cs.damping >= 0 && cs.damping < 1, "-cb_damping must be in [0, 1) (got ", cs.damping, ")");
+  MORSE_CHECK(!(r.xdmf_set && r.xdmf && !cs.keep_basis),
               "-cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis");
   Model md = build_model(comm, o);
-  MORSE_CHECK(!(!md.mesh && r.write_basis),
+  MORSE_CHECK(!(!md.mesh && cs.keep_basis),
               "-cb_write_basis writes nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.C && r.damping > 0), "give either -matrices_C (projected on the superelement) or -cb_damping "
+  MORSE_CHECK(!(md.C && cs.damping > 0), "give either -matrices_C (projected on the superelement) or -cb_damping "
                                            "(modal damping of the fixed-interface modes), not both");
   MORSE_CHECK(r.write_format == "mtx" || r.write_format == "petsc", "-matrices_write_format ", r.write_format,
               ": expected mtx or petsc");
   MORSE_CHECK(r.write_matrices.empty() || md.mesh.has_value(), "-matrices_write writes the matrices of a mesh model");
   if (!r.write_matrices.empty()) {
     StageTimer t(comm, "WriteMatrices");
+    io::write_model_matrices(comm, md, r.write_matrices, r.write_format);
     const std::string ext = r.write_format == "mtx" ? ".mtx" : ".petsc";
-    io::write_matrix(md.K.get(), r.write_matrices + "_K" + ext, true);
-    io::write_matrix(md.M.get(), r.write_matrices + "_M" + ext, true);
-    auto map = io::mesh_dof_map(*md.mesh, md.dofs);
-    std::string err;
-    if (rank_of(comm) == 0) try {
-        io::write_dof_map(r.write_matrices + "_dofmap.txt", map);
-      } catch (const std::exception& e) {
-        err = e.what();
-      }
-    collective_check(comm, err);
     print0(comm, "morse: wrote %s_K%s, %s_M%s and %s_dofmap.txt\n", r.write_matrices.c_str(), ext.c_str(),
            r.write_matrices.c_str(), ext.c_str(), r.write_matrices.c_str());
   }
-  cb::CBSettings cs = cb_settings(r);
+  const bool write_basis = cs.keep_basis;
   cs.keep_basis = cs.keep_basis || md.C;
   auto res = cb::craig_bampton(md, cs);
   if (md.C) res.C = cb::project_symmetric(comm, md.C.get(), res.T.get());
@@ -85,10 +78,10 @@ void run_reduce(MPI_Comm comm) {
   io::write_provenance(out, "reduce", md.units);
   io::write_model(out, md);
   io::write_fixed_interface(out, res.fixed_omega2);
-  io::write_superelement(out, rom_superelement(res, res.M, res.K, r.damping > 0 || md.C ? &res.C : nullptr, rom_f, r.damping));
-  out.attribute("/cb", "boundary_set", r.boundary);
+  io::write_superelement(out, rom_superelement(res, res.M, res.K, cs.damping > 0 || md.C ? &res.C : nullptr, rom_f, cs.damping));
+  out.attribute("/cb", "boundary_set", cs.boundary_set);
   std::vector<io::XdmfField> fields;
-  if (r.write_basis) {
+  if (write_basis) {
     io::write_modes_dataset(out, "/cb/constraint_modes", md, res.T.get(), 0, res.n_b);
     io::write_modes_dataset(out, "/cb/fixed_interface/mode_shapes", md, res.T.get(), res.n_b, res.n_phi);
     out.attribute("/cb/constraint_modes", "description", "Psi: [boundary DOF][node][x,y,z]");
@@ -96,7 +89,7 @@ void run_reduce(MPI_Comm comm) {
     fields = {{"/cb/constraint_modes", "psi", (int)res.n_b}, {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};
   }
   out.commit();
-  if (r.xdmf && r.write_basis) write_xdmf_collective(comm, o.out, mesh::gather_to_rank0(*md.mesh), fields);
+  if (r.xdmf && write_basis) write_xdmf_collective(comm, o.out, mesh::gather_to_rank0(*md.mesh), fields);
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }
 

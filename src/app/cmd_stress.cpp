@@ -43,7 +43,7 @@ void run_stress(MPI_Comm comm) {
   sim::StressField f;
   {
     StageTimer t(comm, "Stress");
-    f = sim::recover_stress(*md.mesh, o.material, sm.node_ids, u, st.measure);
+    f = sim::recover_stress(*md.mesh, o.mesh.material, sm.node_ids, u, st.measure);
   }
   check_options(comm, false);
   const char* mname = st.measure == sim::StressMeasure::Linear ? "linear" : "nonlinear";

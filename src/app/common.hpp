@@ -28,24 +28,11 @@
 
 namespace morse::app::detail {
 
-struct CommonOptions {
-  std::string mesh;
-  std::string units;
-  std::vector<std::string> clamp;
-  mesh::Material material;
-  std::vector<mesh::Material> set_materials;  ///< name = element set
-  /// Node sets given on the command line (-mesh_node_sets): name, external node ids.
-  std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
-  PetscBool skip_unsupported = PETSC_FALSE;  ///< -mesh_skip_unsupported (Nastran)
-  std::string error;  ///< a bad option value, raised by build_model (after -help)
-  std::string out;
-  /// Assembled operators instead of a mesh (-matrices_K, -matrices_M, -matrices_C,
-  /// -matrices_dofmap, -matrices_symmetry_tol); the commands that need only K and M.
-  io::MatrixInput matrices;
-  bool matrices_given() const { return !matrices.K.empty() || !matrices.M.empty() || !matrices.C.empty() || !matrices.dofmap.empty(); }
-};
-
-PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o);
+/// The model options (-mesh, -clamp, -material_*, -matrices_*, ...) and -out: io::ModelInput.
+using CommonOptions = io::ModelInput;
+inline PetscErrorCode get_common(MPI_Comm comm, const char* default_out, CommonOptions* o) {
+  return o->set_from_options(comm, default_out);
+}
 
 // Unknown-option check (options::check_unknown, derived from the options registered so far).
 // early, once the command has read its own options and registered the prefixes of the solvers it
@@ -72,27 +59,15 @@ void write_xdmf_collective(MPI_Comm comm, const std::string& h5, const mesh::Mes
 io::Superelement rom_superelement(const cb::CBResult& cb, const std::vector<double>& M, const std::vector<double>& K,
                                   const std::vector<double>* C, const std::vector<double>& freq_hz, double damping);
 
+/// The output options of reduce and select beside cb::CBSettings: -cb_xdmf, -matrices_write,
+/// -matrices_write_format.
 struct ReduceOptions {
-  std::string boundary;
-  PetscInt n_fixed = -1;
-  PetscReal fmax = -1;
-  PetscReal damping = 0;
-  PetscBool write_basis = PETSC_FALSE;
   PetscBool xdmf = PETSC_TRUE;
   PetscBool xdmf_set = PETSC_FALSE;  ///< -cb_xdmf given explicitly
   std::string write_matrices;        ///< -matrices_write PREFIX: K, M and the DOF map of the model
   std::string write_format = "mtx";  ///< -matrices_write_format mtx|petsc
 };
-
-/// -boundary SET (unchanged if not given): the node set of the interface, read by reduce, select
-/// (get_reduce_options) and nlrom.
-PetscErrorCode get_boundary(MPI_Comm comm, std::string* boundary);
-
-/// -boundary and the -cb_* and -matrices_write* options of reduce and select.
 PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r);
-
-/// The Craig-Bampton settings of the -boundary / -cb_* options (keep_basis as -cb_write_basis).
-cb::CBSettings cb_settings(const ReduceOptions& r);
 
 /// The nodal loads (-load_*): read by dyn::get_loads; this forwarding name keeps the callers in
 /// cmd_static and cmd_simulate unchanged.

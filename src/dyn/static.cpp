@@ -75,6 +75,27 @@ using USNES = Unique<SNES, SNESDestroy>;
 
 }  // namespace
 
+PetscErrorCode StaticSettings::set_from_options(MPI_Comm comm) {
+  PetscBool lin = linear ? PETSC_TRUE : PETSC_FALSE;
+  PetscOptionsBegin(comm, nullptr, "morse static options", "");
+  PetscCall(MorseOptionsBool("-static_linear", "Linear solution K u = f (for comparison)", "", lin, &lin, nullptr));
+  PetscCall(MorseOptionsReal("-static_time", "Time at which the loads are evaluated [s]", "", time, &time, nullptr));
+  PetscCall(MorseOptionsReal("-static_load_factor", "Final load factor on the loads", "", load_factor, &load_factor,
+                             nullptr));
+  PetscCall(MorseOptionsInt("-static_steps", "Initial number of equal load increments", "", steps, &steps, nullptr));
+  PetscCall(MorseOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "",
+                            max_cutbacks, &max_cutbacks, nullptr));
+  PetscCall(MorseOptionsReal("-static_rtol", "Newton tolerance: ||R|| <= rtol max(||lambda f||, ||K u||)", "", rtol,
+                             &rtol, nullptr));
+  PetscCall(MorseOptionsInt("-static_max_it", "Newton iterations per increment", "", max_it, &max_it, nullptr));
+  PetscOptionsEnd();
+  linear = lin;
+  if (steps <= 0) error = cat("-static_steps must be positive (got ", steps, ")");
+  else if (max_cutbacks < 0) error = cat("-static_max_cutbacks must be >= 0 (got ", max_cutbacks, ")");
+  else if (!(rtol > 0 && max_it > 0)) error = "-static_rtol and -static_max_it must be positive";
+  return PETSC_SUCCESS;
+}
+
 StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSettings& s) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)svk.stiffness(), &comm));

@@ -372,4 +372,38 @@ Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh:
   return ops;
 }
 
+MeshQuality mesh_quality(MPI_Comm comm, const mesh::LocalMesh& lm) {
+  const auto& m = lm.mesh;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  MeshQuality q;
+  q.per_type.assign(mesh::kNumElementTypes, 0);
+  double xyz[3 * kMaxNodes];
+  for (std::int64_t e = 0; e < m.num_elements(); ++e) {
+    const auto type = m.elem_types[e];
+    ++q.per_type[static_cast<int>(type)];
+    const auto off = m.elem_offsets[e];
+    for (int a = 0; a < mesh::nodes_per_element(type); ++a)
+      for (int d = 0; d < 3; ++d) xyz[3 * a + d] = m.coords[3 * m.elem_nodes[off + a] + d];
+    const double j = min_jacobian(type, xyz);
+    if (j <= 0) ++q.n_inverted;
+    if (j < q.min_jacobian) q.min_jacobian = j, q.worst_element = m.elem_ids[e];
+    q.volume += element_volume(type, xyz);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, q.per_type.data(), mesh::kNumElementTypes, MPI_INT64_T, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &q.volume, 1, MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &q.n_inverted, 1, MPI_INT64_T, MPI_SUM, comm);
+  struct {
+    double v;
+    int r;
+  } in{q.min_jacobian, rank}, out;
+  MPI_Allreduce(&in, &out, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm);
+  q.min_jacobian = out.v;
+  MPI_Bcast(&q.worst_element, 1, MPI_INT64_T, out.r, comm);
+  for (std::int64_t k = 0; k < m.num_nodes(); ++k)
+    if (lm.node_owner[k] == rank && !m.fixed_dofs.empty() && m.fixed_dofs[k]) ++q.n_fixed_nodes;
+  MPI_Allreduce(MPI_IN_PLACE, &q.n_fixed_nodes, 1, MPI_INT64_T, MPI_SUM, comm);
+  return q;
+}
+
 }  // namespace morse::fe

@@ -248,4 +248,20 @@ fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in) {
   return md;
 }
 
+void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format) {
+  const std::string ext = format == "mtx" ? ".mtx" : ".petsc";
+  write_matrix(md.K.get(), prefix + "_K" + ext, true);
+  write_matrix(md.M.get(), prefix + "_M" + ext, true);
+  auto map = mesh_dof_map(*md.mesh, md.dofs);
+  std::string err;
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) try {
+      write_dof_map(prefix + "_dofmap.txt", map);
+    } catch (const std::exception& e) {
+      err = e.what();
+    }
+  collective_check(comm, err);
+}
+
 }  // namespace morse::io

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 
 namespace morse::mesh {
 
@@ -193,6 +194,34 @@ Mesh generate_box(const BoxSpec& spec) {
   for (std::int64_t e = 0; e < m.num_elements(); ++e) all_elems[e] = e;
   m.normalize_sets();
   return m;
+}
+
+}  // namespace morse::mesh
+
+namespace morse::mesh {
+
+PetscErrorCode box_spec_from_options(MPI_Comm comm, BoxSpec* b, std::string* error) {
+  char type[64] = "";
+  PetscCall(PetscStrncpy(type, element_name(b->type), sizeof type));
+  PetscInt nx = b->nx, ny = b->ny, nz = b->nz;
+  PetscOptionsBegin(comm, nullptr, "morse mesh box options", "");
+  PetscCall(MorseOptionsString("-box_type", "Element type: tet4 tet10 wedge6 wedge15 hex8 hex20", "", type, type,
+                               sizeof type, nullptr));
+  PetscCall(MorseOptionsReal("-box_lx", "Length in x", "", b->lx, &b->lx, nullptr));
+  PetscCall(MorseOptionsReal("-box_ly", "Length in y", "", b->ly, &b->ly, nullptr));
+  PetscCall(MorseOptionsReal("-box_lz", "Length in z", "", b->lz, &b->lz, nullptr));
+  PetscCall(MorseOptionsInt("-box_nx", "Cells in x", "", nx, &nx, nullptr));
+  PetscCall(MorseOptionsInt("-box_ny", "Cells in y", "", ny, &ny, nullptr));
+  PetscCall(MorseOptionsInt("-box_nz", "Cells in z", "", nz, &nz, nullptr));
+  PetscCall(MorseOptionsReal("-box_distortion", "Random vertex displacement / cell size", "", b->distortion,
+                             &b->distortion, nullptr));
+  PetscOptionsEnd();
+  b->nx = static_cast<int>(nx), b->ny = static_cast<int>(ny), b->nz = static_cast<int>(nz);
+  if (!parse_element_name(type, &b->type))
+    *error = cat("-box_type ", type, ": unknown element type (tet4 tet10 wedge6 wedge15 hex8 hex20)");
+  else if (!(b->nx > 0 && b->ny > 0 && b->nz > 0 && b->lx > 0 && b->ly > 0 && b->lz > 0))
+    *error = "-box_n* and -box_l* must be positive";
+  return PETSC_SUCCESS;
 }
 
 }  // namespace morse::mesh

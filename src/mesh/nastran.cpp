@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
 #include "morse/mesh/cells.hpp"
 
 namespace morse::mesh {
@@ -1897,6 +1898,37 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
   if (ec)
     throw Error(
         cat("write_nastran: cannot rename '", tmp, "' to '", path, "' (", ec.message(), ")"));
+}
+
+}  // namespace morse::mesh
+
+namespace morse::mesh {
+
+PetscErrorCode NastranWriteOptions::set_from_options(MPI_Comm comm) {
+  char fmt[32] = "", aset_buf[256] = "", spc_buf[256] = "";
+  PetscCall(PetscStrncpy(fmt, format == Format::Large ? "large" : format == Format::Small ? "small" : "free", sizeof fmt));
+  PetscCall(PetscStrncpy(aset_buf, aset.c_str(), sizeof aset_buf));
+  PetscCall(PetscStrncpy(spc_buf, spc.c_str(), sizeof spc_buf));
+  auto& mat = material;
+  PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat.E, &mat.E, nullptr));
+  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat.nu, &mat.nu, nullptr));
+  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat.rho, &mat.rho, nullptr));
+  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
+                               sizeof fmt, nullptr));
+  PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset_buf,
+                               aset_buf, sizeof aset_buf, nullptr));
+  PetscCall(MorseOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
+                               "", spc_buf, spc_buf, sizeof spc_buf, nullptr));
+  PetscOptionsEnd();
+  const std::string f = fmt;
+  if (f == "large" || f == "small" || f == "free")
+    format = f == "large" ? Format::Large : f == "small" ? Format::Small : Format::Free;
+  else if (error.empty())
+    error = cat("-nastran_format ", f, ": expected large, small or free");
+  aset = aset_buf;
+  spc = spc_buf;
+  return PETSC_SUCCESS;
 }
 
 }  // namespace morse::mesh

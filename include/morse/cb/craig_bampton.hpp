@@ -15,6 +15,9 @@
 // by the eigen solver (shift 0) is reused for the constraint modes, so K_ii is factored once.
 #pragma once
 
+#include <mpi.h>
+#include <petscsys.h>
+
 #include <string>
 #include <vector>
 
@@ -29,7 +32,17 @@ struct CBSettings {
   double damping = 0.0;       ///< modal damping ratio xi of the fixed-interface modes
   bool keep_basis = false;    ///< keep T (Psi and Phi) in the result
   std::string prefix = "cb_"; ///< options prefix of the eigen solver
+
+  /// Reads -boundary (read_boundary_option), -cb_num_fixed_modes, -cb_fmax, -cb_damping and
+  /// -cb_write_basis (keep_basis); the fields of the options not given are left unchanged.
+  /// Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
 };
+
+/// -boundary SET: the node set (or row set) of the interface, read by reduce and select
+/// (CBSettings::set_from_options) and by nlrom (the contact nodes). `boundary` is left unchanged
+/// if the option is not given. Collective.
+PetscErrorCode read_boundary_option(MPI_Comm comm, std::string* boundary);
 
 struct CBResult {
   PetscInt n_b = 0;    ///< boundary DOFs

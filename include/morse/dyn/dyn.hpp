@@ -267,6 +267,12 @@ struct StaticSettings {
   double rtol = 1e-9;        ///< converged when ||R|| <= rtol max(||lambda f||, ||K u||)
   PetscInt max_it = 25;      ///< Newton iterations per increment
   std::string prefix = "static_";  ///< options prefix of the SNES (and its KSP/PC)
+  std::string error;         ///< a bad option value, naming the option (set_from_options)
+
+  /// Reads -static_linear, -static_time, -static_load_factor, -static_steps,
+  /// -static_max_cutbacks, -static_rtol and -static_max_it; a bad value (steps <= 0,
+  /// max_cutbacks < 0, rtol or max_it <= 0) is recorded in `error`. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
 };
 
 /// One converged (or failed) load increment.

@@ -114,4 +114,18 @@ struct MeshInput {
 /// mesh::add_node_set, number_dofs and assemble do. Collective.
 Model mesh_model(MPI_Comm comm, const MeshInput& in);
 
+/// What `morse mesh info` reports of a distributed mesh beyond its sets: the global element count
+/// per type, the volume, the smallest Jacobian determinant (min_jacobian) and its element, the
+/// inverted elements and the nodes with DOFs fixed by *BOUNDARY. Identical on every rank.
+struct MeshQuality {
+  std::vector<std::int64_t> per_type;  ///< elements per mesh::ElementType
+  double volume = 0;
+  double min_jacobian = 1e300;
+  std::int64_t worst_element = -1;  ///< element id of min_jacobian
+  std::int64_t n_inverted = 0;      ///< elements with min_jacobian <= 0
+  std::int64_t n_fixed_nodes = 0;   ///< nodes with *BOUNDARY DOFs
+};
+/// Computes the MeshQuality of lm. Collective.
+MeshQuality mesh_quality(MPI_Comm comm, const mesh::LocalMesh& lm);
+
 }  // namespace morse::fe

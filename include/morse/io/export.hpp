@@ -7,6 +7,9 @@
 // file. The coordinates of the superelement are ordered as in /rom (io/superelement.hpp).
 #pragma once
 
+#include <mpi.h>
+#include <petscsys.h>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -90,6 +93,16 @@ struct ExportOptions {
   bool mbdyn_all_nodes = false;    ///< shapes at every mesh node (needs the basis)
   std::int64_t spoint_offset = 0;  ///< 0: default_spoint_offset()
   NastranNames names;
+  std::string from;         ///< the superelement file to export (-export_from; not used by export_superelement)
+  std::string coordinates;  ///< interface node coordinates file (-export_coordinates; set_boundary_coordinates)
+  std::string error;        ///< a bad option value, naming the option (set_from_options)
+
+  /// Reads -export_from, -out (prefix; default: -export_from without .h5), -export_format
+  /// (mbdyn,op4,dmig,mtx; default all), -export_op4_names and -export_dmig_names (K,M[,C]),
+  /// -export_coordinates, -export_mbdyn_nodes interface|all and -export_spoint_offset. An unknown
+  /// format, a bad node choice, a negative offset or a wrong number of names is recorded in
+  /// `error`. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
 };
 struct ExportResult {
   std::vector<std::string> files;  ///< written, in order

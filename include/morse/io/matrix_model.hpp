@@ -5,6 +5,7 @@
 #pragma once
 
 #include <mpi.h>
+#include <petscsys.h>
 
 #include <cstdint>
 #include <string>
@@ -34,5 +35,34 @@ struct MatrixInput {
 /// nonsymmetric K or M (naming the worst entry by row, node and component), an unknown clamp set,
 /// a node set naming a node that has no row, a clamp that removes every row. Collective.
 fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in);
+
+/// Writes the free-DOF K and M of a mesh model and its DOF map (mesh_dof_map) as
+/// <prefix>_K.<ext>, <prefix>_M.<ext> (write_matrix, symmetric; ext: mtx or petsc, as `format`)
+/// and <prefix>_dofmap.txt (rank 0). Throws collectively on a write failure. Collective.
+void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format);
+
+/// The model input of a command: a mesh (fe::MeshInput, built by fe::mesh_model) or assembled
+/// operators (MatrixInput, built by matrix_model), and the output file (-out).
+struct ModelInput {
+  fe::MeshInput mesh;    ///< path empty: no -mesh
+  MatrixInput matrices;  ///< K, M, C, dofmap empty: no -matrices_*
+  std::string out;       ///< -out
+  std::string error;     ///< a bad option value, raised by check() (after -help)
+
+  bool matrices_given() const {
+    return !matrices.K.empty() || !matrices.M.empty() || !matrices.C.empty() || !matrices.dofmap.empty();
+  }
+  /// Reads -mesh, -mesh_units, -mesh_skip_unsupported, -clamp, -material_E/_nu/_rho,
+  /// -material_sets with -material_<set>_E/_nu/_rho, -mesh_node_sets with -mesh_node_set_<name>
+  /// (id,id,a-b,...), -matrices_K/_M/_C/_dofmap, -matrices_symmetry_tol and -out (default
+  /// default_out). -mesh_units, -clamp and the node sets fill both inputs. A bad node list or a
+  /// missing -mesh_node_set_<name> is recorded in `error`. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm, const char* default_out);
+  /// Throws (morse::Error, on every rank alike) on a recorded `error`, on matrix input when
+  /// needs_mesh is not null (needs_mesh: why the command needs a mesh, named in the message), on
+  /// both a mesh and matrices, on -material_* with matrices, and on no model at all. Not collective
+  /// (every rank holds the same input).
+  void check(const char* needs_mesh = nullptr) const;
+};
 
 }  // namespace morse::io

@@ -1,7 +1,11 @@
 // morse/mesh/generator.hpp: built-in structured meshes of a box (beams, plates, blocks).
 #pragma once
 
+#include <mpi.h>
+#include <petscsys.h>
+
 #include <array>
+#include <string>
 
 #include "morse/mesh/mesh.hpp"
 
@@ -17,6 +21,12 @@ struct BoxSpec {
   unsigned seed = 1;
   std::array<double, 3> origin{0, 0, 0};
 };
+
+/// Reads the -box_* options into spec: -box_type tet4|tet10|wedge6|wedge15|hex8|hex20, -box_lx,
+/// -box_ly, -box_lz, -box_nx, -box_ny, -box_nz and -box_distortion. Values not given keep those
+/// of spec. An unknown type or a cell count or length that is not positive is recorded in *error
+/// (naming the option). PETSc error zone; collective on comm.
+PetscErrorCode box_spec_from_options(MPI_Comm comm, BoxSpec* spec, std::string* error);
 
 /// Generates the structured mesh of a box, returned by value (the caller owns it).
 ///

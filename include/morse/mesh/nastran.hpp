@@ -118,6 +118,9 @@
 // [0.1, 1e5), fewer outside (-1.23-12 has 3): use it only for models that tolerate that.
 #pragma once
 
+#include <mpi.h>
+#include <petscsys.h>
+
 #include <string>
 
 #include "morse/mesh/mesh.hpp"
@@ -138,6 +141,16 @@ struct NastranWriteOptions {
   Format format = Format::Large;
   /// Node set written as ASET1 123 (the Craig-Bampton boundary); empty: no ASET1.
   std::string aset;
+  /// For `morse mesh`, not read by write_nastran: the MAT1 of the elements without a material
+  /// (E, nu, rho -1: not given) and the node set whose translations SPC1 fixes (empty: none).
+  Material material{"options", -1, -1, -1};
+  std::string spc;
+  std::string error;  ///< a bad option value, naming the option (set_from_options)
+
+  /// Reads -material_E, -material_nu, -material_rho (the MAT1), -nastran_format
+  /// large|small|free, -nastran_aset and -nastran_spc; an unknown format is recorded in `error`.
+  /// Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
 };
 
 /// Writes m as Nastran bulk data to path (through path + ".tmp", renamed when complete). Serial.

@@ -166,6 +166,25 @@ struct VerifySettings {
   double imr_shift = 0.01;
 };
 
+/// The options of `morse select`: the verification settings and what the command does with them.
+struct Settings {
+  VerifySettings verify;   ///< methods, names, num_modes, fraction, fom_modes, mac_threshold, ebr_*, imr_*;
+                           ///< fmax_analysis_hz: -select_fmax_analysis as given (-1: not given)
+  std::string from;        ///< -select_from: a `morse reduce -cb_write_basis` file (empty: compute the modes)
+  std::string rom_method;  ///< the method whose superelement is written to /rom (default: the first)
+  std::string error;       ///< a bad option value, naming the option (raised after -help)
+
+  /// Reads -select_from, -select_method (default eim), -select_num_modes, -select_fraction
+  /// (default 0.95 without -select_num_modes), -select_fmax_analysis, -select_fom_modes,
+  /// -select_mac_threshold, -select_rom_method, -select_ebr_freq/_amp/_phase, -select_ebr_load,
+  /// -select_imr_support free|spring|clamped, -select_imr_support_stiffness, -select_imr_modes
+  /// and -select_imr_shift. Records in `error`: an unknown or repeated method, both
+  /// -select_num_modes and -select_fraction, a negative count, a fraction outside (0, 1], both
+  /// EBR forms, a bad IMR support or a spring without stiffness, a -select_rom_method not among
+  /// the methods. Collective.
+  PetscErrorCode set_from_options(MPI_Comm comm);
+};
+
 /// One method's selection and check.
 struct MethodCheck {
   std::string name;

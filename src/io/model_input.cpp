@@ -1,0 +1,153 @@
+// io/model_input.cpp: io::ModelInput, the model options of the commands (a mesh or assembled
+// operators) read into fe::MeshInput and io::MatrixInput.
+#include <petscsys.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "morse/core/error.hpp"
+#include "morse/core/options.hpp"
+#include "morse/io/matrix_model.hpp"
+
+namespace morse::io {
+
+namespace {
+
+// "1,2,10-12" -> {1, 2, 10, 11, 12}; "" on success, else the reason.
+std::string parse_id_list(const std::string& text, std::vector<std::int64_t>* ids) {
+  std::size_t p = 0;
+  while (p <= text.size()) {
+    std::size_t q = text.find(',', p);
+    if (q == std::string::npos) q = text.size();
+    const std::string item = text.substr(p, q - p);
+    char* end = nullptr;
+    const long long a = std::strtoll(item.c_str(), &end, 10);
+    long long b = a;
+    if (end != item.c_str() && *end == '-') b = std::strtoll(end + 1, &end, 10);
+    if (item.empty() || *end != '\0' || b < a || b - a > 10000000)
+      return cat("'", item, "' is not a node id or a range a-b");
+    for (long long v = a; v <= b; ++v) ids->push_back(v);
+    p = q + 1;
+  }
+  return {};
+}
+
+}  // namespace
+
+PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_out) {
+  char buf[PETSC_MAX_PATH_LEN] = "";
+  char* sets[16];
+  PetscInt n_sets = 16;
+  PetscBool set = PETSC_FALSE, skip = mesh.skip_unsupported ? PETSC_TRUE : PETSC_FALSE;
+  auto& material = mesh.material;
+  material.name = "options";
+  material.E = material.nu = material.rho = -1;
+  PetscOptionsBegin(comm, nullptr, "morse model options", "");
+  PetscCall(MorseOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
+                               buf, buf, sizeof buf, &set));
+  if (set) mesh.path = buf;
+  buf[0] = 0;
+  PetscCall(MorseOptionsString("-mesh_units",
+                               "Unit system of the mesh, recorded in the output (e.g. SI, mm-t-s); "
+                               "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) mesh.units = matrices.units = buf;
+  PetscCall(MorseOptionsBool("-mesh_skip_unsupported",
+                             "Nastran: skip element cards morse cannot represent (CQUAD4, CBAR, CELAS, ...) with a warning "
+                             "instead of an error (their stiffness and mass are then missing)",
+                             "", skip, &skip, nullptr));
+  mesh.skip_unsupported = skip;
+  PetscCall(MorseOptionsStringArray("-clamp",
+                                    "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
+                                    "the DOFs fixed by *BOUNDARY in the deck",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      mesh.clamp.emplace_back(sets[i]);
+      PetscCall(PetscFree(sets[i]));
+    }
+  matrices.clamp = mesh.clamp;
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "",
+                             material.E, &material.E, nullptr));
+  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh",
+                             "", material.nu, &material.nu, nullptr));
+  PetscCall(MorseOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
+                             material.rho, &material.rho, nullptr));
+  n_sets = 16;
+  PetscCall(MorseOptionsStringArray("-material_sets",
+                                    "Element sets given their own material by -material_<set>_E, _nu, _rho "
+                                    "(overrides the mesh's material for those elements)",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      morse::mesh::Material m;
+      m.name = sets[i];
+      m.E = m.nu = m.rho = -1;
+      PetscCall(PetscFree(sets[i]));
+      const std::string p = "-material_" + m.name + "_";
+      PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
+      PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
+      PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
+      mesh.set_materials.push_back(m);
+    }
+  n_sets = 16;
+  PetscCall(MorseOptionsStringArray("-mesh_node_sets",
+                                    "Node sets added to the mesh, comma separated; their nodes are given by "
+                                    "-mesh_node_set_<name> id,id,a-b,... (external node ids, a-b = a range)",
+                                    "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      std::string name = sets[i];
+      PetscCall(PetscFree(sets[i]));
+      const std::string opt = "-mesh_node_set_" + name;
+      char list[4096] = "";
+      PetscBool has = PETSC_FALSE;
+      PetscCall(MorseOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
+      std::vector<std::int64_t> ids;
+      std::string err = has ? parse_id_list(list, &ids) : cat("give the node ids of set ", name, " with ", opt);
+      if (!err.empty() && error.empty()) error = has ? cat(opt, ": ", err) : err;
+      mesh.node_sets.emplace_back(name, std::move(ids));
+    }
+  matrices.node_sets = mesh.node_sets;
+  struct {
+    const char* name;
+    const char* help;
+    std::string* dest;
+  } files[] = {
+      {"-matrices_K", "Stiffness matrix instead of a mesh (reduce, select): .mtx/.mm MatrixMarket, .petsc/.bin PETSc binary, "
+                      ".op4[:NAME] Nastran OUTPUT4", &matrices.K},
+      {"-matrices_M", "Mass matrix (same formats as -matrices_K)", &matrices.M},
+      {"-matrices_C", "Viscous damping matrix, projected on the superelement (optional)", &matrices.C},
+      {"-matrices_dofmap", "DOF map of the matrices: text 'node component [set ...]' per row, or .h5 /dofmap", &matrices.dofmap},
+  };
+  for (auto& f : files) {
+    buf[0] = 0;
+    PetscCall(MorseOptionsString(f.name, f.help, "", buf, buf, sizeof buf, &set));
+    if (set) *f.dest = buf;
+  }
+  PetscCall(MorseOptionsReal("-matrices_symmetry_tol", "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)",
+                             "", matrices.symmetry_tol, &matrices.symmetry_tol, nullptr));
+  PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
+  PetscCall(MorseOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
+  out = buf;
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+void ModelInput::check(const char* needs_mesh) const {
+  MORSE_CHECK(error.empty(), error);
+  MORSE_CHECK(!needs_mesh || !matrices_given(),
+              needs_mesh, "; -matrices_K/-matrices_M/-matrices_C/-matrices_dofmap give none (use -mesh)");
+  MORSE_CHECK(!(matrices_given() && !mesh.path.empty()), "give either -mesh or -matrices_K/-matrices_M, not both");
+  if (matrices_given()) {
+    MORSE_CHECK(mesh.set_materials.empty() && mesh.material.E < 0 && mesh.material.nu < 0 && mesh.material.rho < 0,
+                "-material_* options need a mesh: the matrices already hold the material");
+    return;
+  }
+  MORSE_CHECK(!mesh.path.empty(), !needs_mesh ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
+                                              : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
+}
+
+}  // namespace morse::io
