@@ -65,7 +65,10 @@ int main(int argc, char** argv) {
       if (words.empty()) {
         PetscBool help = PETSC_FALSE;
         PetscOptionsHasHelp(nullptr, &help);
-        if (!help) throw morse::Error("no command given (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, export, mesh, rampup); see -help");
+        if (!help)
+          throw morse::Error(
+              "no command given (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, "
+              "compare, export, mesh, rampup); see -help");
       } else {
         morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
       }

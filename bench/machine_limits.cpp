@@ -34,9 +34,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Tells the compiler that the memory behind p is read and written here: stores before it cannot be
 // dropped, loads after it cannot be hoisted across it.
@@ -55,8 +53,7 @@ double* alloc(std::size_t n) {
 // ---- read-only bandwidth -------------------------------------------------------------------
 
 __attribute__((target("avx2,fma"))) double read_sum_avx2(const double* a, std::size_t n) {
-  __m256d s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd(), s2 = _mm256_setzero_pd(),
-          s3 = _mm256_setzero_pd();
+  __m256d s0 = _mm256_setzero_pd(), s1 = _mm256_setzero_pd(), s2 = _mm256_setzero_pd(), s3 = _mm256_setzero_pd();
   std::size_t i = 0;
   for (; i + 16 <= n; i += 16) {
     s0 = _mm256_add_pd(s0, _mm256_load_pd(a + i));
@@ -106,10 +103,9 @@ __attribute__((target("avx2,fma"))) double fma_avx2(long iterations, double m, d
     x10 = _mm256_fmadd_pd(x10, vm, vc);
     x11 = _mm256_fmadd_pd(x11, vm, vc);
   }
-  const __m256d s = _mm256_add_pd(
-      _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(x0, x1), _mm256_add_pd(x2, x3)),
-                    _mm256_add_pd(_mm256_add_pd(x4, x5), _mm256_add_pd(x6, x7))),
-      _mm256_add_pd(_mm256_add_pd(x8, x9), _mm256_add_pd(x10, x11)));
+  const __m256d s = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_add_pd(x0, x1), _mm256_add_pd(x2, x3)),
+                                                _mm256_add_pd(_mm256_add_pd(x4, x5), _mm256_add_pd(x6, x7))),
+                                  _mm256_add_pd(_mm256_add_pd(x8, x9), _mm256_add_pd(x10, x11)));
   alignas(32) double t[4];
   _mm256_store_pd(t, s);
   return t[0] + t[1] + t[2] + t[3];
@@ -199,15 +195,16 @@ int main(int argc, char** argv) {
   const double fma_flops = static_cast<double>(iterations) * kChains * (avx2 ? 4 : 1) * 2.0;
 
   const double dn = static_cast<double>(n);
-  std::printf("{\"stream_copy_gbs\": %.3f, \"stream_scale_gbs\": %.3f, \"stream_add_gbs\": %.3f, "
-              "\"stream_triad_gbs\": %.3f, \"read_gbs\": %.3f, \"fma_peak_gflops\": %.3f, \"n\": %zu, "
-              "\"isa\": \"%s\", \"reps\": %d, \"fma_chains\": %d, "
-              "\"convention\": \"STREAM: 16 bytes/element for copy and scale, 24 for add and triad (write-allocate "
-              "traffic not counted); read: 8 bytes/element; GB = 1e9 bytes; best of reps; FMA: 2 flops per lane per "
-              "FMA (scalar fallback: mul + add = 2 flops)\", \"checksum\": %.17g}\n",
-              16.0 * dn / best[0] * 1e-9, 16.0 * dn / best[1] * 1e-9, 24.0 * dn / best[2] * 1e-9,
-              24.0 * dn / best[3] * 1e-9, 8.0 * dn / best[4] * 1e-9, fma_flops / best_fma * 1e-9, n,
-              avx2 ? "avx2+fma (4 x double)" : "x86-64 scalar (no fma)", reps, kChains, checksum);
+  std::printf(
+      "{\"stream_copy_gbs\": %.3f, \"stream_scale_gbs\": %.3f, \"stream_add_gbs\": %.3f, "
+      "\"stream_triad_gbs\": %.3f, \"read_gbs\": %.3f, \"fma_peak_gflops\": %.3f, \"n\": %zu, "
+      "\"isa\": \"%s\", \"reps\": %d, \"fma_chains\": %d, "
+      "\"convention\": \"STREAM: 16 bytes/element for copy and scale, 24 for add and triad (write-allocate "
+      "traffic not counted); read: 8 bytes/element; GB = 1e9 bytes; best of reps; FMA: 2 flops per lane per "
+      "FMA (scalar fallback: mul + add = 2 flops)\", \"checksum\": %.17g}\n",
+      16.0 * dn / best[0] * 1e-9, 16.0 * dn / best[1] * 1e-9, 24.0 * dn / best[2] * 1e-9, 24.0 * dn / best[3] * 1e-9,
+      8.0 * dn / best[4] * 1e-9, fma_flops / best_fma * 1e-9, n,
+      avx2 ? "avx2+fma (4 x double)" : "x86-64 scalar (no fma)", reps, kChains, checksum);
   std::free(a);
   std::free(b);
   std::free(c);

@@ -62,8 +62,10 @@ inline double carlson_rd(double x, double y, double z) {
   }
   const double c1 = 3.0 / 14.0, c2 = 1.0 / 6.0, c3 = 9.0 / 22.0, c4 = 3.0 / 26.0;
   const double ea = dx * dy, eb = dz * dz, ec = ea - eb, ed = ea - 6.0 * eb, ee = ed + 2.0 * ec;
-  return 3.0 * sum + fac * (1.0 + ed * (-c1 + 0.25 * c3 * ed - 1.5 * c4 * dz * ee) +
-                            dz * (c2 * ee + dz * (-c3 * ec + dz * c4 * ea))) / (ave * std::sqrt(ave));
+  return 3.0 * sum + fac *
+                         (1.0 + ed * (-c1 + 0.25 * c3 * ed - 1.5 * c4 * dz * ee) +
+                          dz * (c2 * ee + dz * (-c3 * ec + dz * c4 * ea))) /
+                         (ave * std::sqrt(ave));
 }
 
 /// F(phi,k) and E(phi,k) for 0 <= phi <= pi/2, given sin/cos of phi and k^2, with
@@ -83,7 +85,7 @@ inline ElasticaTip cantilever_tip_load_elastica(double alpha) {
   auto integrals = [&](double t, double& df, double& de) {
     const double st = std::sin(t), k2 = 0.5 * (1.0 + st), s = std::sin(0.25 * pi - 0.5 * t);
     double f0, e0, f1, e1;
-    legendre_fe(1.0, 0.0, k2, s * s, f0, e0);  // complete: K(k), E(k)
+    legendre_fe(1.0, 0.0, k2, s * s, f0, e0);                                             // complete: K(k), E(k)
     legendre_fe(1.0 / std::sqrt(1.0 + st), std::sqrt(st / (1.0 + st)), k2, 0.5, f1, e1);  // phi1
     df = f0 - f1, de = e0 - e1;
   };

@@ -2,9 +2,9 @@
 // and as fixtures, and the check that a call throws a morse::Error naming every expected part.
 #pragma once
 
+#include <petscsys.h>
 #include <gtest/gtest.h>
 #include <mpi.h>
-#include <petscsys.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -144,7 +144,8 @@ void expect_error_parts(F f, std::initializer_list<std::string> parts, const std
     ADD_FAILURE() << "no error: " << what;
   } catch (const Error& e) {
     const std::string msg = e.what();
-    for (const std::string& part : parts) EXPECT_NE(msg.find(part), std::string::npos) << "'" << part << "' not in: " << msg;
+    for (const std::string& part : parts)
+      EXPECT_NE(msg.find(part), std::string::npos) << "'" << part << "' not in: " << msg;
   }
 }
 

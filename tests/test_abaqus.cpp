@@ -18,9 +18,9 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
-#include "scratch.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/abaqus.hpp"
+#include "scratch.hpp"
 
 namespace {
 
@@ -77,8 +77,7 @@ struct TypeCase {
 
 std::vector<TypeCase> type_cases() {
   const std::vector<std::pair<int, int>> tet{{1, 2}, {2, 3}, {3, 1}, {1, 4}, {2, 4}, {3, 4}};
-  const std::vector<std::pair<int, int>> wedge{{1, 2}, {2, 3}, {3, 1}, {4, 5}, {5, 6},
-                                               {6, 4}, {1, 4}, {2, 5}, {3, 6}};
+  const std::vector<std::pair<int, int>> wedge{{1, 2}, {2, 3}, {3, 1}, {4, 5}, {5, 6}, {6, 4}, {1, 4}, {2, 5}, {3, 6}};
   const std::vector<std::pair<int, int>> hex{{1, 2}, {2, 3}, {3, 4}, {4, 1}, {5, 6}, {6, 7},
                                              {7, 8}, {8, 5}, {1, 5}, {2, 6}, {3, 7}, {4, 8}};
   return {{"C3D4", ElementType::Tet4, 1.0 / 6, {}}, {"C3D10", ElementType::Tet10, 1.0 / 6, tet},
@@ -127,8 +126,7 @@ TEST_F(AbaqusTest, EveryElementTypeInAbaqusOrder) {
     auto label = [&](int k) { return 1000 + 7 * (n - 1 - k); };
     std::string deck = "*NODE\n";
     for (int k = n - 1; k >= 0; --k)
-      deck +=
-          cat(label(k), ", ", full(abq[k][0]), ", ", full(abq[k][1]), ", ", full(abq[k][2]), "\n");
+      deck += cat(label(k), ", ", full(abq[k][0]), ", ", full(abq[k][1]), ", ", full(abq[k][2]), "\n");
     deck += cat("*ELEMENT, TYPE=", tc.abaqus_name, ", ELSET=E1\n42");
     for (int k = 0; k < n; ++k) deck += cat(",", (k % 8 == 7 && k + 1 < n) ? "\n" : " ", label(k));
     deck += "\n";
@@ -161,8 +159,7 @@ TEST_F(AbaqusTest, EveryElementTypeInAbaqusOrder) {
     for (int k = 0; k < n; ++k)
       for (int i = 0; i < 3; ++i)
         u[3 * k + i] = A[i][0] * xyz[3 * k] + A[i][1] * xyz[3 * k + 1] + A[i][2] * xyz[3 * k + 2];
-    const double expect[6] = {A[0][0],           A[1][1],           A[2][2],
-                              A[1][2] + A[2][1], A[0][2] + A[2][0], A[0][1] + A[1][0]};
+    const double expect[6] = {A[0][0], A[1][1], A[2][2], A[1][2] + A[2][1], A[0][2] + A[2][0], A[0][1] + A[1][0]};
     const bool tet = t == ElementType::Tet4 || t == ElementType::Tet10;
     const bool hex = t == ElementType::Hex8 || t == ElementType::Hex20;
     const double points[3][3] = {{0.25, 0.25, 0.25},
@@ -281,24 +278,20 @@ TEST_F(AbaqusTest, KeywordsSetsIncludesBoundaryMaterials) {
   EXPECT_EQ(m.elem_types[0], ElementType::Hex8);
   EXPECT_EQ(m.elem_types[1], ElementType::Tet4);
   EXPECT_EQ(m.elem_ids, (std::vector<std::int64_t>{1, 2}));
-  EXPECT_EQ(ids_of(m, {m.elem_nodes.begin() + 8, m.elem_nodes.end()}),
-            (std::vector<std::int64_t>{2, 20, 3, 6}));
+  EXPECT_EQ(ids_of(m, {m.elem_nodes.begin() + 8, m.elem_nodes.end()}), (std::vector<std::int64_t>{2, 20, 3, 6}));
   for (std::int64_t e = 0; e < m.num_elements(); ++e) {
     std::vector<double> xyz;
     for (auto k = m.elem_offsets[e]; k < m.elem_offsets[e + 1]; ++k)
       for (int d = 0; d < 3; ++d) xyz.push_back(m.coords[3 * m.elem_nodes[k] + d]);
-    EXPECT_NEAR(morse::fe::element_volume(m.elem_types[e], xyz.data()), e == 0 ? 1.0 : 1.0 / 6,
-                1e-14);
+    EXPECT_NEAR(morse::fe::element_volume(m.elem_types[e], xyz.data()), e == 0 ? 1.0 : 1.0 / 6, 1e-14);
   }
 
   // Sets: names as first written, indices sorted.
   ASSERT_EQ(m.node_sets.size(), 5u);
-  EXPECT_EQ(ids_of(m, m.node_sets.at("Nall")),
-            (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 20}));
+  EXPECT_EQ(ids_of(m, m.node_sets.at("Nall")), (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 20}));
   EXPECT_EQ(ids_of(m, m.node_sets.at("Bottom")), (std::vector<std::int64_t>{1, 2, 3, 4, 20}));
   EXPECT_EQ(ids_of(m, m.node_sets.at("TOP")), (std::vector<std::int64_t>{5, 6, 7, 8}));
-  EXPECT_EQ(ids_of(m, m.node_sets.at("both")),
-            (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 20}));
+  EXPECT_EQ(ids_of(m, m.node_sets.at("both")), (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 20}));
   EXPECT_EQ(ids_of(m, m.node_sets.at("Odd")), (std::vector<std::int64_t>{1, 3, 5, 7}));
   ASSERT_EQ(m.elem_sets.size(), 4u);
   EXPECT_EQ(m.elem_sets.at("Bricks"), (std::vector<std::int64_t>{0}));
@@ -308,8 +301,8 @@ TEST_F(AbaqusTest, KeywordsSetsIncludesBoundaryMaterials) {
 
   // *BOUNDARY: bottom xyz; 5: y + x (XSYMM on TOP); 6: x y; 7: z + x; 8: x; 99: free.
   ASSERT_EQ(m.fixed_dofs.size(), 10u);
-  const std::vector<std::pair<std::int64_t, int>> fixed = {
-      {1, 7}, {2, 7}, {3, 7}, {4, 7}, {5, 3}, {6, 3}, {7, 5}, {8, 1}, {20, 7}, {99, 0}};
+  const std::vector<std::pair<std::int64_t, int>> fixed = {{1, 7}, {2, 7}, {3, 7}, {4, 7},  {5, 3},
+                                                           {6, 3}, {7, 5}, {8, 1}, {20, 7}, {99, 0}};
   for (const auto& [id, mask] : fixed) EXPECT_EQ(m.fixed_dofs[index_of(m, id)], mask) << id;
 
   // Materials: in order of definition; first temperature line; sections resolved afterwards.
@@ -385,25 +378,20 @@ TEST_F(AbaqusTest, ErrorMissingFiles) {
   expect_error(path, {"main.inp:3:", "sub/nope.inp"});
   // A missing file included from an included file names the inner file.
   write("a/inner.inp", "*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=gone.inp\n");
-  expect_error(write("outer.inp", "*INCLUDE, INPUT=a/inner.inp\n"),
-               {"a/inner.inp:3:", "a/gone.inp"});
+  expect_error(write("outer.inp", "*INCLUDE, INPUT=a/inner.inp\n"), {"a/inner.inp:3:", "a/gone.inp"});
 }
 
 TEST_F(AbaqusTest, ErrorUnknownElementType) {
   expect_error(write("deck.inp", cat(kTet, "*ELEMENT, TYPE=C3D8R\n1, 1, 2, 3, 4, 1, 2, 3, 4\n")),
                {"deck.inp:6:", "C3D8R"});
-  expect_error(write("deck2.inp", cat(kTet, "*ELEMENT\n1, 1, 2, 3, 4\n")),
-               {"deck2.inp:6:", "TYPE"});
+  expect_error(write("deck2.inp", cat(kTet, "*ELEMENT\n1, 1, 2, 3, 4\n")), {"deck2.inp:6:", "TYPE"});
 }
 
 TEST_F(AbaqusTest, ErrorUndefinedNode) {
-  expect_error(
-      write("deck.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n7, 1, 2, 3,\n", "99\n")),
-      {"deck.inp:8:", "element 7", "undefined node 99"});
-  expect_error(write("deck2.inp", cat(kTet, "*NSET, NSET=S\n1, 2\n5\n")),
-               {"deck2.inp:8:", "'S'", "undefined node 5"});
-  expect_error(write("deck3.inp", cat(kTet, "*BOUNDARY\n1, 1\n6, 1\n")),
-               {"deck3.inp:8:", "undefined node 6"});
+  expect_error(write("deck.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n7, 1, 2, 3,\n", "99\n")),
+               {"deck.inp:8:", "element 7", "undefined node 99"});
+  expect_error(write("deck2.inp", cat(kTet, "*NSET, NSET=S\n1, 2\n5\n")), {"deck2.inp:8:", "'S'", "undefined node 5"});
+  expect_error(write("deck3.inp", cat(kTet, "*BOUNDARY\n1, 1\n6, 1\n")), {"deck3.inp:8:", "undefined node 6"});
 }
 
 TEST_F(AbaqusTest, ErrorTruncatedAndMalformedLines) {
@@ -413,16 +401,12 @@ TEST_F(AbaqusTest, ErrorTruncatedAndMalformedLines) {
   // Element continued into the next keyword.
   expect_error(write("kw.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3\n*NSET, NSET=A\n1\n")),
                {"kw.inp:7:", "element 1", "truncated"});
-  expect_error(write("many.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4, 1\n")),
-               {"many.inp:7:", "more than 4"});
-  expect_error(write("nan.inp", "*NODE\n1, 0.0, 0.0, 0.0\n2, 0.0, abc, 0\n"),
-               {"nan.inp:3:", "'abc'"});
+  expect_error(write("many.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4, 1\n")), {"many.inp:7:", "more than 4"});
+  expect_error(write("nan.inp", "*NODE\n1, 0.0, 0.0, 0.0\n2, 0.0, abc, 0\n"), {"nan.inp:3:", "'abc'"});
   expect_error(write("short.inp", "*NODE\n1, 0.0, 0.0\n"), {"short.inp:2:", "label, x, y, z"});
-  expect_error(write("label.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3x, 4\n")),
-               {"label.inp:7:", "'3x'"});
+  expect_error(write("label.inp", cat(kTet, "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3x, 4\n")), {"label.inp:7:", "'3x'"});
   expect_error(write("dup.inp", cat(kTet, "2, 5, 5, 5\n")), {"dup.inp:6:", "node 2"});
-  expect_error(write("gen.inp", cat(kTet, "*NSET, NSET=A, GENERATE\n4, 1\n")),
-               {"gen.inp:7:", "GENERATE"});
+  expect_error(write("gen.inp", cat(kTet, "*NSET, NSET=A, GENERATE\n4, 1\n")), {"gen.inp:7:", "GENERATE"});
   expect_error(write("data.inp", "1, 2, 3\n"), {"data.inp:1:", "before the first keyword"});
 }
 
@@ -430,8 +414,7 @@ TEST_F(AbaqusTest, ErrorUndefinedSetsAndMaterials) {
   const std::string base = cat(kTet, "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n");  // 1-7
   expect_error(write("bc.inp", cat(base, "*BOUNDARY\n1, 1, 3\nFixed, 1, 3\n")),
                {"bc.inp:10:", "undefined node set 'Fixed'"});
-  expect_error(write("nested.inp", cat(base, "*NSET, NSET=A\n1, B\n")),
-               {"nested.inp:9:", "undefined node set 'B'"});
+  expect_error(write("nested.inp", cat(base, "*NSET, NSET=A\n1, B\n")), {"nested.inp:9:", "undefined node set 'B'"});
   expect_error(write("sec.inp", cat(base, "*SOLID SECTION, ELSET=Other, MATERIAL=M\n")),
                {"sec.inp:8:", "undefined element set 'Other'"});
   expect_error(write("mat.inp", cat(base, "*SOLID SECTION, ELSET=e, MATERIAL=Steel\n",
@@ -439,8 +422,7 @@ TEST_F(AbaqusTest, ErrorUndefinedSetsAndMaterials) {
                {"mat.inp:8:", "undefined material 'Steel'"});
   expect_error(write("bcval.inp", cat(base, "*BOUNDARY\n1, 1, 3, 0.5\n")),
                {"bcval.inp:9:", "nonzero prescribed displacement"});
-  expect_error(write("ela.inp", cat(base, "*ELASTIC\n7e4, 0.3\n")),
-               {"ela.inp:8:", "outside a *MATERIAL"});
+  expect_error(write("ela.inp", cat(base, "*ELASTIC\n7e4, 0.3\n")), {"ela.inp:8:", "outside a *MATERIAL"});
   expect_error(write("aniso.inp", cat(base, "*MATERIAL, NAME=A\n*ELASTIC, TYPE=ORTHO\n1,2,3\n")),
                {"aniso.inp:9:", "ORTHO"});
   // An error inside an included file names that file.
@@ -459,10 +441,8 @@ TEST_F(AbaqusTest, Rotor37BladeDeck) {
 
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh m = read_abaqus(deck.string(), morse::world_rank() == 0);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (morse::world_rank() == 0)
-    std::printf("[ info     ] read %s in %.3f s\n", deck.c_str(), seconds);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (morse::world_rank() == 0) std::printf("[ info     ] read %s in %.3f s\n", deck.c_str(), seconds);
 
   EXPECT_EQ(m.num_nodes(), 20831);
   ASSERT_EQ(m.num_elements(), 6732);

@@ -1,15 +1,15 @@
 // Craig–Bampton superelement (seed 000 eq. 3–6): Guyan exactness in statics, convergence of the
 // reduced frequencies from above, exactness with every interior mode, independence of the rank
 // count, and cutoff selection.
+#include <petscsys.h>
 #include <gtest/gtest.h>
+#include <petscblaslapack.h>
 
 #include <cmath>
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/units.hpp"
 #include "util.hpp"
-
-#include <petscblaslapack.h>
 
 using namespace morse;
 using mesh::ElementType;

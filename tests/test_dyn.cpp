@@ -110,7 +110,7 @@ TEST(Fom, LinearTwinMatchesModalSuperposition) {
   UVec F, ustat, tmp;
   MORSE_CALL(MatCreateVecs(b.ops.K.get(), F.ptr(), ustat.ptr()));
   MORSE_CALL(VecDuplicate(F.get(), tmp.ptr()));
-  loads.evaluate(M_PI / (2 * W), F.get());  // amplitude pattern
+  loads.evaluate(M_PI / (2 * W), F.get());                  // amplitude pattern
   test::direct_solve(b.ops.K.get(), F.get(), ustat.get());  // K^-1 F (all modes, static)
   // Tip response of each mode and of the static remainder.
   const int m = 20;
@@ -347,8 +347,10 @@ TEST(RunFile, FomFileRoundTrips) {
   const std::string file = cat("/tmp/morse_test_dyn_fom_", pid, ".h5");
   std::vector<UVec> us, vs;
   for (int k = 0; k < 3; ++k) {
-    us.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double y, double z, int d) { return (k + 1) * x + y * d - z; }));
-    vs.push_back(test::nodal_vector(m.lm, m.dofs, [=](double x, double, double z, int d) { return std::sin(k + x + d * z); }));
+    us.push_back(
+        test::nodal_vector(m.lm, m.dofs, [=](double x, double y, double z, int d) { return (k + 1) * x + y * d - z; }));
+    vs.push_back(
+        test::nodal_vector(m.lm, m.dofs, [=](double x, double, double z, int d) { return std::sin(k + x + d * z); }));
   }
   dyn::FomHistory h;
   dyn::SetProbe probe(m.lm, m.dofs, "x1");
@@ -404,7 +406,8 @@ TEST(RunFile, FomFileRoundTrips) {
     ASSERT_TRUE(dyn::read_load_description(file, "/fom/load", &lb));
     ASSERT_EQ(lb.loads.size(), 1u);
     EXPECT_EQ(lb.loads[0].omega, 7.0);
-    test::expect_error_parts([&] { dyn::read_fom(file, {"tip"}); }, {file, "/fom/sets/tip"}, "read_fom of a missing set");
+    test::expect_error_parts([&] { dyn::read_fom(file, {"tip"}); }, {file, "/fom/sets/tip"},
+                             "read_fom of a missing set");
   }
   auto X = dyn::read_fom_snapshots(m.lm, m.dofs, file);
   PetscInt n_snap = 0;
@@ -467,8 +470,11 @@ TEST(RunFile, StaticFileRoundTrips) {
 TEST(Options, LoadsHistoryAndFomSettings) {
   using test::GivenOptions;
   {
-    GivenOptions g{{"-c1_load_sets", "tip,root"}, {"-c1_load_tip_dir", "y"}, {"-c1_load_tip_amplitude", "3"},
-                   {"-c1_load_tip_omega", "100"}, {"-c1_load_root_amplitude", "1"}};
+    GivenOptions g{{"-c1_load_sets", "tip,root"},
+                   {"-c1_load_tip_dir", "y"},
+                   {"-c1_load_tip_amplitude", "3"},
+                   {"-c1_load_tip_omega", "100"},
+                   {"-c1_load_root_amplitude", "1"}};
     std::vector<dyn::NodalLoad> loads;
     std::string error;
     ASSERT_EQ(dyn::get_loads(PETSC_COMM_WORLD, &loads, &error, "c1_"), PETSC_SUCCESS);
@@ -488,8 +494,8 @@ TEST(Options, LoadsHistoryAndFomSettings) {
     EXPECT_EQ(h.error, "-load_history_outside needs -load_history FILE");
   }
   {
-    GivenOptions g{{"-fom_dt", "1e-3"}, {"-fom_tfinal", "0.01"}, {"-fom_scheme", "energy"}, {"-fom_monitor", "tip,root"},
-                   {"-fom_rayleigh", "1,2"}, {"-fom_snapshot_every", "5"}};
+    GivenOptions g{{"-fom_dt", "1e-3"},          {"-fom_tfinal", "0.01"},  {"-fom_scheme", "energy"},
+                   {"-fom_monitor", "tip,root"}, {"-fom_rayleigh", "1,2"}, {"-fom_snapshot_every", "5"}};
     dyn::FomSettings s;
     ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
     EXPECT_EQ(s.error, "");

@@ -8,11 +8,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "eigen/detail/testing.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/session.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/fe/model.hpp"
-#include "eigen/detail/testing.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -165,98 +165,99 @@ void clustered(PetscInt m, UMat* K, UMat* M) {
 // a solve made to lose its highest pair (fault injection) is refused, by cutoff and by count.
 TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
   for (const std::string solver : {"krylovschur", "block"}) {
-  SCOPED_TRACE(solver);
-  const PetscInt m = 40, n = 3 * m;
-  UMat K, M;
-  clustered(m, &K, &M);
-  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
-  // Cutoff between clusters 10 and 11 (eigenvalues 30..32 and 33..35).
-  const double cutoff = 0.5 * (lam[29] + lam[30]);
-  eigen::EigenSettings s;
-  s.omega2_max = cutoff;
-  s.solver = solver;
-  s.prefix = "test_cluster_" + solver + "_";
-  auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
-  ASSERT_EQ(e.omega2.size(), 30u);
-  EXPECT_EQ(e.inertia_count, 30);
-  for (int k = 0; k < 30; ++k) EXPECT_NEAR(e.omega2[k], lam[k], 1e-9 * lam[k]) << "eigenvalue " << k;
-  EXPECT_LE(e.max_residual, 1e-10);
-  auto r = eigen::relative_residuals(K.get(), M.get(), e.V.get(), e.omega2);
-  for (int k = 0; k < 30; ++k) EXPECT_LE(r[k], 1e-10) << "pair " << k;
-  EXPECT_LT(identity_deviation(M.get(), e.V.get(), e.V.get()), 1e-10);
-  // A wrong pair is caught by the residual check: perturb one eigenvalue.
-  auto wrong = e.omega2;
-  wrong[7] *= 1.0 + 1e-6;
-  EXPECT_GT(eigen::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
+    SCOPED_TRACE(solver);
+    const PetscInt m = 40, n = 3 * m;
+    UMat K, M;
+    clustered(m, &K, &M);
+    auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+    // Cutoff between clusters 10 and 11 (eigenvalues 30..32 and 33..35).
+    const double cutoff = 0.5 * (lam[29] + lam[30]);
+    eigen::EigenSettings s;
+    s.omega2_max = cutoff;
+    s.solver = solver;
+    s.prefix = "test_cluster_" + solver + "_";
+    auto e = eigen::solve_eigen(K.get(), M.get(), s, nullptr);
+    ASSERT_EQ(e.omega2.size(), 30u);
+    EXPECT_EQ(e.inertia_count, 30);
+    for (int k = 0; k < 30; ++k) EXPECT_NEAR(e.omega2[k], lam[k], 1e-9 * lam[k]) << "eigenvalue " << k;
+    EXPECT_LE(e.max_residual, 1e-10);
+    auto r = eigen::relative_residuals(K.get(), M.get(), e.V.get(), e.omega2);
+    for (int k = 0; k < 30; ++k) EXPECT_LE(r[k], 1e-10) << "pair " << k;
+    EXPECT_LT(identity_deviation(M.get(), e.V.get(), e.V.get()), 1e-10);
+    // A wrong pair is caught by the residual check: perturb one eigenvalue.
+    auto wrong = e.omega2;
+    wrong[7] *= 1.0 + 1e-6;
+    EXPECT_GT(eigen::relative_residuals(K.get(), M.get(), e.V.get(), wrong)[7], 1e-10);
 
-  // Count mode with one shift: the 29 lowest (the cut falls inside the 10th cluster, so the
-  // other converged copies of eigenvalue 29 tie at the window's edge) and the 12 nearest to a
-  // shift between clusters 5 and 6 are checked by inertia and pass.
-  for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
-    eigen::EigenSettings t;
-    t.nev = nev;
-    t.shift = shift;
-    t.solver = solver;
-    t.count_slicing = 0;
-    t.prefix = cat("test_check_", solver, "_", nev, "_");
-    auto c = eigen::solve_eigen(K.get(), M.get(), t, nullptr);
-    EXPECT_GE(c.inertia_count, nev) << "count mode was not checked by inertia";
-    EXPECT_LE(c.inertia_count, nev + 2);
-    if (shift > 0) {
-      EXPECT_GT(c.check_lo, 0.0);
-    }
-  }
-
-  // The check itself, on hand-made results with the eigenvalues of LAPACK: the 29 lowest cut the
-  // 10th cluster, whose third copy is not among the pairs (an unconverged tie): accepted, with
-  // 30 counted; the 29 lowest but the first (a missed mode) and a cluster copy dropped from
-  // inside the window are refused.
-  {
-    eigen::EigenSettings t;
-    t.nev = 29;
-    t.prefix = cat("test_check_hand_", solver, "_");
-    eigen::Eigenpairs tie;
-    tie.omega2.assign(lam.begin(), lam.begin() + 29);
-    eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &tie);
-    EXPECT_EQ(tie.inertia_count, 30);
-    for (int variant = 0; variant < 2; ++variant) {
-      eigen::Eigenpairs miss;
-      if (variant == 0) miss.omega2.assign(lam.begin() + 1, lam.begin() + 30);  // the lowest lost
-      else {
-        miss.omega2.assign(lam.begin(), lam.begin() + 30);
-        miss.omega2.erase(miss.omega2.begin() + 13);  // one copy of the 5th cluster lost
+    // Count mode with one shift: the 29 lowest (the cut falls inside the 10th cluster, so the
+    // other converged copies of eigenvalue 29 tie at the window's edge) and the 12 nearest to a
+    // shift between clusters 5 and 6 are checked by inertia and pass.
+    for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
+      eigen::EigenSettings t;
+      t.nev = nev;
+      t.shift = shift;
+      t.solver = solver;
+      t.count_slicing = 0;
+      t.prefix = cat("test_check_", solver, "_", nev, "_");
+      auto c = eigen::solve_eigen(K.get(), M.get(), t, nullptr);
+      EXPECT_GE(c.inertia_count, nev) << "count mode was not checked by inertia";
+      EXPECT_LE(c.inertia_count, nev + 2);
+      if (shift > 0) {
+        EXPECT_GT(c.check_lo, 0.0);
       }
-      std::string msg;
+    }
+
+    // The check itself, on hand-made results with the eigenvalues of LAPACK: the 29 lowest cut the
+    // 10th cluster, whose third copy is not among the pairs (an unconverged tie): accepted, with
+    // 30 counted; the 29 lowest but the first (a missed mode) and a cluster copy dropped from
+    // inside the window are refused.
+    {
+      eigen::EigenSettings t;
+      t.nev = 29;
+      t.prefix = cat("test_check_hand_", solver, "_");
+      eigen::Eigenpairs tie;
+      tie.omega2.assign(lam.begin(), lam.begin() + 29);
+      eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &tie);
+      EXPECT_EQ(tie.inertia_count, 30);
+      for (int variant = 0; variant < 2; ++variant) {
+        eigen::Eigenpairs miss;
+        if (variant == 0)
+          miss.omega2.assign(lam.begin() + 1, lam.begin() + 30);  // the lowest lost
+        else {
+          miss.omega2.assign(lam.begin(), lam.begin() + 30);
+          miss.omega2.erase(miss.omega2.begin() + 13);  // one copy of the 5th cluster lost
+        }
+        std::string msg;
+        try {
+          eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &miss);
+        } catch (const Error& err) {
+          msg = err.what();
+        }
+        EXPECT_NE(msg.find("missed modes"), std::string::npos) << "variant " << variant << ": " << msg;
+      }
+    }
+
+    // Fault injection: the solve loses a pair (by cutoff and count by slicing the highest, by
+    // count with one shift the lowest); the Sylvester check refuses it.
+    for (const std::string mode : {"cutoff", "count_slicing", "count"}) {
+      if (mode == "count_slicing" && solver == "block") continue;  // the block solver does not slice
+      eigen::EigenSettings t = s;
+      t.prefix = cat("test_drop_", mode, "_", solver, "_");
+      if (mode != "cutoff") {
+        t.omega2_max = -1;
+        t.nev = 30;
+        t.count_slicing = mode == "count" ? 0 : 10;
+      }
+      eigen::detail::DropForTest drop(1);
       try {
-        eigen::check_count_by_inertia(K.get(), M.get(), t, {}, &miss);
+        eigen::solve_eigen(K.get(), M.get(), t, nullptr);
+        ADD_FAILURE() << "a truncated solve passed the Sylvester check (" << mode << ")";
       } catch (const Error& err) {
-        msg = err.what();
+        const std::string msg = err.what();
+        EXPECT_NE(msg.find("Sylvester"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("missed modes"), std::string::npos) << msg;
       }
-      EXPECT_NE(msg.find("missed modes"), std::string::npos) << "variant " << variant << ": " << msg;
     }
-  }
-
-  // Fault injection: the solve loses a pair (by cutoff and count by slicing the highest, by
-  // count with one shift the lowest); the Sylvester check refuses it.
-  for (const std::string mode : {"cutoff", "count_slicing", "count"}) {
-    if (mode == "count_slicing" && solver == "block") continue;  // the block solver does not slice
-    eigen::EigenSettings t = s;
-    t.prefix = cat("test_drop_", mode, "_", solver, "_");
-    if (mode != "cutoff") {
-      t.omega2_max = -1;
-      t.nev = 30;
-      t.count_slicing = mode == "count" ? 0 : 10;
-    }
-    eigen::detail::DropForTest drop(1);
-    try {
-      eigen::solve_eigen(K.get(), M.get(), t, nullptr);
-      ADD_FAILURE() << "a truncated solve passed the Sylvester check (" << mode << ")";
-    } catch (const Error& err) {
-      const std::string msg = err.what();
-      EXPECT_NE(msg.find("Sylvester"), std::string::npos) << msg;
-      EXPECT_NE(msg.find("missed modes"), std::string::npos) << msg;
-    }
-  }
   }
 }
 

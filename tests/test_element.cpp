@@ -207,16 +207,14 @@ int num_nodes(ElementType t) { return mesh::nodes_per_element(t); }
 int num_dofs(ElementType t) { return 3 * num_nodes(t); }
 
 double det3(const Mat3& A) {
-  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-         A[2] * (A[3] * A[7] - A[4] * A[6]);
+  return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) + A[2] * (A[3] * A[7] - A[4] * A[6]);
 }
 
 // Reference nodes mapped by x = A xi + c.
 Vec affine_nodes(ElementType t, const Mat3& A, const std::array<double, 3>& c) {
   Vec x;
   for (const auto& p : fe::reference_nodes(t))
-    for (int i = 0; i < 3; ++i)
-      x.push_back(A[3 * i] * p[0] + A[3 * i + 1] * p[1] + A[3 * i + 2] * p[2] + c[i]);
+    for (int i = 0; i < 3; ++i) x.push_back(A[3 * i] * p[0] + A[3 * i + 1] * p[1] + A[3 * i + 2] * p[2] + c[i]);
   return x;
 }
 
@@ -234,8 +232,7 @@ Vec distorted_nodes(ElementType t, unsigned seed) {
   const auto& edges = mesh::mid_edges(t);
   for (size_t e = 0; e < edges.size(); ++e)
     for (int i = 0; i < 3; ++i)
-      x[3 * (nv + e) + i] =
-          0.5 * (x[3 * edges[e].first + i] + x[3 * edges[e].second + i]) + 0.04 * size * u(rng);
+      x[3 * (nv + e) + i] = 0.5 * (x[3 * edges[e].first + i] + x[3 * edges[e].second + i]) + 0.04 * size * u(rng);
   return x;
 }
 
@@ -279,8 +276,7 @@ Vec symmetric_eigenvalues(Vec A, int n) {
         const double apq = at(p, q);
         if (apq == 0.0) continue;
         const double theta = (at(q, q) - at(p, p)) / (2.0 * apq);
-        const double tn =
-            (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double tn = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
         const double c = 1.0 / std::sqrt(tn * tn + 1.0), s = tn * c;
         for (int k = 0; k < n; ++k) {  // columns p, q
           const double akp = at(k, p), akq = at(k, q);
@@ -335,8 +331,7 @@ Vec mass(ElementType t, const Vec& xyz, double rho, double* min_det = nullptr) {
 }
 
 // int B^T D B dV with an arbitrary rule, through strain_displacement() and isotropic_elasticity().
-Vec integrate_btdb(ElementType t, const Vec& xyz, double E, double nu,
-                   const fe::QuadratureRule& rule) {
+Vec integrate_btdb(ElementType t, const Vec& xyz, double E, double nu, const fe::QuadratureRule& rule) {
   const int nd = num_dofs(t);
   const auto D = fe::isotropic_elasticity(E, nu);
   Vec K(nd * nd, 0.0), B(6 * nd), DB(6 * nd);
@@ -362,8 +357,7 @@ Vec integrate_ntn(ElementType t, const Vec& xyz, double rho, const fe::Quadratur
   Vec M(nd * nd, 0.0), N(n);
   for (size_t q = 0; q < rule.weights.size(); ++q) {
     fe::shape_functions(t, rule.points[q].data(), N.data(), nullptr);
-    const double f =
-        rho * rule.weights[q] * fe::jacobian_determinant(t, xyz.data(), rule.points[q].data());
+    const double f = rho * rule.weights[q] * fe::jacobian_determinant(t, xyz.data(), rule.points[q].data());
     for (int a = 0; a < n; ++a)
       for (int b = 0; b < n; ++b)
         for (int i = 0; i < 3; ++i) M[(3 * a + i) * nd + 3 * b + i] += f * N[a] * N[b];
@@ -376,14 +370,11 @@ Vec linear_field(const Vec& xyz, const Mat3& A, const std::array<double, 3>& c) 
   Vec u(xyz.size());
   for (size_t a = 0; a < xyz.size() / 3; ++a)
     for (int i = 0; i < 3; ++i)
-      u[3 * a + i] = A[3 * i] * xyz[3 * a] + A[3 * i + 1] * xyz[3 * a + 1] +
-                     A[3 * i + 2] * xyz[3 * a + 2] + c[i];
+      u[3 * a + i] = A[3 * i] * xyz[3 * a] + A[3 * i + 1] * xyz[3 * a + 1] + A[3 * i + 2] * xyz[3 * a + 2] + c[i];
   return u;
 }
 
-std::array<double, 6> voigt_strain(const Mat3& A) {
-  return {A[0], A[4], A[8], A[5] + A[7], A[2] + A[6], A[1] + A[3]};
-}
+std::array<double, 6> voigt_strain(const Mat3& A) { return {A[0], A[4], A[8], A[5] + A[7], A[2] + A[6], A[1] + A[3]}; }
 
 // Six rigid body modes: translations and infinitesimal rotations.
 std::vector<Vec> rigid_modes(const Vec& xyz) {
@@ -394,8 +385,7 @@ std::vector<Vec> rigid_modes(const Vec& xyz) {
     c[d] = 1.0;
     modes.push_back(linear_field(xyz, zero, c));
   }
-  const Mat3 rot[3] = {
-      {0, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 0, 0, 0, -1, 0, 0}, {0, -1, 0, 1, 0, 0, 0, 0, 0}};
+  const Mat3 rot[3] = {{0, 0, 0, 0, 0, -1, 0, 1, 0}, {0, 0, 1, 0, 0, 0, -1, 0, 0}, {0, -1, 0, 1, 0, 0, 0, 0, 0}};
   for (const Mat3& R : rot) modes.push_back(linear_field(xyz, R, {0, 0, 0}));
   return modes;
 }
@@ -404,9 +394,7 @@ constexpr double kE = 210e9, kNu = 0.3, kRho = 7850.0;
 
 class ElementTest : public ::testing::TestWithParam<ElementType> {};
 
-std::string type_name(const ::testing::TestParamInfo<ElementType>& info) {
-  return mesh::element_name(info.param);
-}
+std::string type_name(const ::testing::TestParamInfo<ElementType>& info) { return mesh::element_name(info.param); }
 
 // --- shape functions ---------------------------------------------------------------------------
 
@@ -420,8 +408,7 @@ TEST_P(ElementTest, NodeTables) {
   for (size_t k = 0; k < edges.size(); ++k) {
     const auto [p, q] = edges[k];
     ASSERT_TRUE(p >= 0 && p < nv && q >= 0 && q < nv && p != q);
-    for (int d = 0; d < 3; ++d)
-      EXPECT_DOUBLE_EQ(ref[nv + k][d], 0.5 * (ref[p][d] + ref[q][d])) << "node " << nv + k;
+    for (int d = 0; d < 3; ++d) EXPECT_DOUBLE_EQ(ref[nv + k][d], 0.5 * (ref[p][d] + ref[q][d])) << "node " << nv + k;
   }
   for (int a = 0; a < n; ++a) EXPECT_TRUE(inside_reference(t, ref[a].data(), 0.0));
 }
@@ -433,25 +420,13 @@ TEST(Element, MidEdgeTablesAreGmsh) {
   EXPECT_TRUE(mesh::mid_edges(ElementType::Tet4).empty());
   EXPECT_TRUE(mesh::mid_edges(ElementType::Wedge6).empty());
   EXPECT_TRUE(mesh::mid_edges(ElementType::Hex8).empty());
-  EXPECT_EQ(mesh::mid_edges(ElementType::Tet10),
-            (Edges{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}}));
+  EXPECT_EQ(mesh::mid_edges(ElementType::Tet10), (Edges{{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}}));
   EXPECT_EQ(mesh::mid_edges(ElementType::Wedge15),
             (Edges{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}}));
-  EXPECT_EQ(mesh::mid_edges(ElementType::Hex20), (Edges{{0, 1},
-                                                      {0, 3},
-                                                      {0, 4},
-                                                      {1, 2},
-                                                      {1, 5},
-                                                      {2, 3},
-                                                      {2, 6},
-                                                      {3, 7},
-                                                      {4, 5},
-                                                      {4, 7},
-                                                      {5, 6},
-                                                      {6, 7}}));
-  const std::vector<std::array<double, 3>> hex = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1},
-                                                  {-1, 1, -1},  {-1, -1, 1}, {1, -1, 1},
-                                                  {1, 1, 1},    {-1, 1, 1}};
+  EXPECT_EQ(mesh::mid_edges(ElementType::Hex20),
+            (Edges{{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3}, {2, 6}, {3, 7}, {4, 5}, {4, 7}, {5, 6}, {6, 7}}));
+  const std::vector<std::array<double, 3>> hex = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
   const std::vector<std::array<double, 3>> wedge = {{0, 0, -1}, {1, 0, -1}, {0, 1, -1},
                                                     {0, 0, 1},  {1, 0, 1},  {0, 1, 1}};
   const std::vector<std::array<double, 3>> tet = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -619,14 +594,11 @@ TEST(Element, Tet10SlidMidNodesVolume) {
   const auto& edges = mesh::mid_edges(t);
   for (int e = 0; e < 6; ++e)
     for (int i = 0; i < 3; ++i)
-      xyz[3 * (4 + e) + i] =
-          (1 - alpha[e]) * xyz[3 * edges[e].first + i] + alpha[e] * xyz[3 * edges[e].second + i];
+      xyz[3 * (4 + e) + i] = (1 - alpha[e]) * xyz[3 * edges[e].first + i] + alpha[e] * xyz[3 * edges[e].second + i];
   const double v = det3(kShear) / 6.0;
   ASSERT_GT(fe::min_jacobian(t, xyz.data()), 0.0);
   // Really non-affine: det J varies.
-  EXPECT_GT(std::abs(fe::jacobian_determinant(t, xyz.data(), fe::reference_nodes(t)[0].data()) -
-                     det3(kShear)),
-            1e-3);
+  EXPECT_GT(std::abs(fe::jacobian_determinant(t, xyz.data(), fe::reference_nodes(t)[0].data()) - det3(kShear)), 1e-3);
   EXPECT_NEAR(fe::element_volume(t, xyz.data()), v, 1e-14 * v);
 }
 
@@ -791,8 +763,8 @@ TEST_P(ElementTest, PatchTest) {
   // Strain at random points.
   Vec B(6 * nd);
   std::mt19937_64 rng(99);
-  const double eps_norm = *std::max_element(
-      eps.begin(), eps.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
+  const double eps_norm =
+      *std::max_element(eps.begin(), eps.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
   for (int s = 0; s < 10; ++s) {
     const auto x = random_reference_point(t, rng);
     ASSERT_GT(fe::strain_displacement(t, xyz.data(), x.data(), B.data()), 0.0);
@@ -862,8 +834,7 @@ TEST(Element, Tet4ConsistentMassClosedForm) {
   const double v = det3(kShear) / 6.0;
   const Vec M = mass(ElementType::Tet4, xyz, kRho);
   for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b)
-      EXPECT_NEAR(M[3 * a * 12 + 3 * b], kRho * v / 20 * (a == b ? 2 : 1), 1e-13 * kRho * v);
+    for (int b = 0; b < 4; ++b) EXPECT_NEAR(M[3 * a * 12 + 3 * b], kRho * v / 20 * (a == b ? 2 : 1), 1e-13 * kRho * v);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, ElementTest, ::testing::ValuesIn(kAllTypes), type_name);

@@ -27,9 +27,9 @@
 
 #include "morse/app/commands.hpp"
 #include "morse/core/session.hpp"
+#include "morse/io/export.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/op4.hpp"
-#include "morse/io/export.hpp"
 #include "morse/mesh/gmsh.hpp"
 #include "scratch.hpp"
 #include "util.hpp"
@@ -121,8 +121,7 @@ Fem read_fem(const std::string& path) {
         r.shapes.resize(nm * r.n_nodes * 6);
         for (std::size_t j = 0; j < nm; ++j) {
           std::getline(f, line);
-          EXPECT_TRUE(line.empty() || line.rfind("**", 0) == 0)
-              << "mode " << j + 1 << ": header '" << line << "'";
+          EXPECT_TRUE(line.empty() || line.rfind("**", 0) == 0) << "mode " << j + 1 << ": header '" << line << "'";
           for (int k = 0; k < r.n_nodes * 6; ++k) f >> r.shapes[j * r.n_nodes * 6 + k];
           std::getline(f, line);  // rest of the last line of the mode
         }
@@ -169,15 +168,13 @@ double nastran_real(std::string s) {
   char* end = nullptr;
   const double v = std::strtod(s.c_str(), &end);  // not stod: subnormals set ERANGE
   EXPECT_EQ(*end, '\0') << "real field '" << s << "'";
-  EXPECT_NE(s.find('.'), std::string::npos)
-      << "a Nastran real needs a decimal point: '" << s << "'";
+  EXPECT_NE(s.find('.'), std::string::npos) << "a Nastran real needs a decimal point: '" << s << "'";
   return v;
 }
 
 struct Dmig {
   int ifo = 0, tin = 0;
-  std::map<std::pair<long long, int>, std::map<std::pair<long long, int>, double>>
-      columns;  // [col][row]
+  std::map<std::pair<long long, int>, std::map<std::pair<long long, int>, double>> columns;  // [col][row]
 };
 struct Deck {
   std::map<std::string, Dmig> dmig;
@@ -192,9 +189,7 @@ void read_deck(const std::string& path, Deck* d) {
   std::pair<long long, int> col{-1, -1};
   std::string name;
   long long grid = -1;
-  auto field = [&](int k) {
-    return line.size() > 8u + 16u * (k - 1) ? line.substr(8 + 16 * (k - 1), 16) : "";
-  };
+  auto field = [&](int k) { return line.size() > 8u + 16u * (k - 1) ? line.substr(8 + 16 * (k - 1), 16) : ""; };
   while (std::getline(f, line)) {
     EXPECT_LE(line.size(), 80u) << line;
     if (line.empty() || line[0] == '$') continue;
@@ -227,8 +222,7 @@ void read_deck(const std::string& path, Deck* d) {
     } else if (head == "*") {
       if (card == "DMIG" && col.first > 0) {
         const std::pair<long long, int> row{std::stoll(trim(field(1))), std::stoi(trim(field(2)))};
-        EXPECT_TRUE(d->dmig[name].columns[col].emplace(row, nastran_real(field(3))).second)
-            << "entry twice";
+        EXPECT_TRUE(d->dmig[name].columns[col].emplace(row, nastran_real(field(3))).second) << "entry twice";
       } else if (card == "GRID") {
         d->grids[grid][2] = nastran_real(field(1));
         EXPECT_EQ(trim(field(2)), "") << "CD";
@@ -308,8 +302,7 @@ std::vector<std::string> files_in(const fs::path& dir) {
 }
 
 void run(const std::string& command, const std::vector<std::pair<std::string, std::string>>& opts) {
-  for (const auto& [k, v] : opts)
-    MORSE_CALL(PetscOptionsSetValue(nullptr, k.c_str(), v.empty() ? nullptr : v.c_str()));
+  for (const auto& [k, v] : opts) MORSE_CALL(PetscOptionsSetValue(nullptr, k.c_str(), v.empty() ? nullptr : v.c_str()));
   try {
     app::run_command(PETSC_COMM_WORLD, command, {});
   } catch (...) {
@@ -417,8 +410,10 @@ TEST_F(ExportTest, WriteSuperelementRoundTrips) {
   EXPECT_EQ(back.damping_ratio, se.damping_ratio);
   EXPECT_EQ(back.selection_method, "EIM");
   EXPECT_EQ(back.selected_modes, written.selected_modes);
-  for (const char* name : {"/rom/K", "/rom/M", "/rom/C", "/rom/frequencies_hz"}) EXPECT_EQ(h5(file, name), h5(free_, name)) << name;
-  for (const char* name : {"/rom/boundary_dofs", "/rom/boundary_nodes"}) EXPECT_EQ(h5i(file, name), h5i(free_, name)) << name;
+  for (const char* name : {"/rom/K", "/rom/M", "/rom/C", "/rom/frequencies_hz"})
+    EXPECT_EQ(h5(file, name), h5(free_, name)) << name;
+  for (const char* name : {"/rom/boundary_dofs", "/rom/boundary_nodes"})
+    EXPECT_EQ(h5i(file, name), h5i(free_, name)) << name;
   for (const char* a : {"n_boundary_dofs", "n_modes", "damping_ratio"}) {
     double x = -1, y = -2;
     std::string err;
@@ -426,7 +421,8 @@ TEST_F(ExportTest, WriteSuperelementRoundTrips) {
     EXPECT_TRUE(io::read_attribute(free_, "/rom", a, &y, &err)) << err;
     EXPECT_EQ(x, y) << a;
   }
-  EXPECT_EQ(io::read_string_attribute(file, "/rom", "dof_order"), io::read_string_attribute(free_, "/rom", "dof_order"));
+  EXPECT_EQ(io::read_string_attribute(file, "/rom", "dof_order"),
+            io::read_string_attribute(free_, "/rom", "dof_order"));
   // Without C (no damping), no /rom/C.
   written.C.clear();
   const std::string undamped = path("undamped.h5");
@@ -444,9 +440,8 @@ TEST_F(ExportTest, EveryFormatRoundTrips) {
   io::ExportOptions o;
   o.prefix = path("se");
   const auto res = io::export_superelement(se, o);
-  EXPECT_EQ(files_in(dir_),
-            (std::vector<std::string>{"se.fem", "se.op4", "se_C.mtx", "se_K.mtx", "se_M.mtx",
-                                      "se_dmig.bdf", "se_dofs.txt", "se_grids.bdf"}));
+  EXPECT_EQ(files_in(dir_), (std::vector<std::string>{"se.fem", "se.op4", "se_C.mtx", "se_K.mtx", "se_M.mtx",
+                                                      "se_dmig.bdf", "se_dofs.txt", "se_grids.bdf"}));
   EXPECT_EQ(res.files.size(), 8u);
   const int n = se.n, nb = se.n_b;
   const auto K = h5(free_, "/rom/K"), M = h5(free_, "/rom/M"), C = h5(free_, "/rom/C");
@@ -468,10 +463,8 @@ TEST_F(ExportTest, EveryFormatRoundTrips) {
   for (int j = 0; j < n; ++j)
     for (int k = 0; k < fem.n_nodes; ++k)
       for (int c = 0; c < 6; ++c) {
-        const bool one =
-            j < nb && se.dof_node[j] == se.boundary_nodes[k] && se.dof_component[j] == c + 1;
-        EXPECT_EQ(fem.shapes[(j * fem.n_nodes + k) * 6 + c], one ? 1.0 : 0.0)
-            << "mode " << j << " node " << k;
+        const bool one = j < nb && se.dof_node[j] == se.boundary_nodes[k] && se.dof_component[j] == c + 1;
+        EXPECT_EQ(fem.shapes[(j * fem.n_nodes + k) * 6 + c], one ? 1.0 : 0.0) << "mode " << j << " node " << k;
       }
   EXPECT_LE(rel_diff(M, fem.M), 1e-15);
   EXPECT_LE(rel_diff(K, fem.K), 1e-15);
@@ -480,8 +473,7 @@ TEST_F(ExportTest, EveryFormatRoundTrips) {
   EXPECT_TRUE(fem.has12);
 
   // OP4 (io::Op4Reader): KAA, MAA, BAA.
-  EXPECT_EQ(io::Op4Reader::names_in_file(path("se.op4")),
-            (std::vector<std::string>{"KAA", "MAA", "BAA"}));
+  EXPECT_EQ(io::Op4Reader::names_in_file(path("se.op4")), (std::vector<std::string>{"KAA", "MAA", "BAA"}));
   EXPECT_LE(rel_diff(K, read_op4(path("se.op4"), "KAA", n)), 1e-15);
   EXPECT_LE(rel_diff(M, read_op4(path("se.op4"), "MAA", n)), 1e-15);
   EXPECT_LE(rel_diff(C, read_op4(path("se.op4"), "BAA", n)), 1e-15);
@@ -530,8 +522,7 @@ TEST_F(ExportTest, EveryFormatRoundTrips) {
   std::map<std::pair<long long, int>, int> index;
   for (int j = 0; j < nb; ++j) index[{se.dof_node[j], se.dof_component[j]}] = j;
   for (int k = 0; k < se.n_modes(); ++k) index[{res.spoint_offset + k + 1, 0}] = nb + k;
-  for (const auto& [name, ref] :
-       std::map<std::string, const Dense*>{{"KAAX", &K}, {"MAAX", &M}, {"BAAX", &C}}) {
+  for (const auto& [name, ref] : std::map<std::string, const Dense*>{{"KAAX", &K}, {"MAAX", &M}, {"BAAX", &C}}) {
     ASSERT_TRUE(deck.dmig.count(name)) << name;
     const Dmig& d = deck.dmig[name];
     EXPECT_EQ(d.ifo, 6);
@@ -555,8 +546,7 @@ TEST_F(ExportTest, EveryFormatRoundTrips) {
   }
   ASSERT_EQ(deck.grids.size(), se.boundary_nodes.size());
   for (std::size_t k = 0; k < se.boundary_nodes.size(); ++k)
-    for (int d = 0; d < 3; ++d)
-      EXPECT_NEAR(deck.grids[se.boundary_nodes[k]][d], se.boundary_xyz[3 * k + d], 1e-11);
+    for (int d = 0; d < 3; ++d) EXPECT_NEAR(deck.grids[se.boundary_nodes[k]][d], se.boundary_xyz[3 * k + d], 1e-11);
 }
 
 TEST_F(ExportTest, RigidBodyInertiaIsTheBoxs) {
@@ -582,8 +572,7 @@ TEST_F(ExportTest, RigidBodyInertiaIsTheBoxs) {
   EXPECT_NEAR(fem.cm[1], kLy / 2, 1e-12);
   EXPECT_NEAR(fem.cm[2], kLz / 2, 1e-12);
   for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      EXPECT_NEAR(fem.J[3 * a + b], a == b ? Jref[a] : 0.0, jtol) << a << b;
+    for (int b = 0; b < 3; ++b) EXPECT_NEAR(fem.J[3 * a + b], a == b ? Jref[a] : 0.0, jtol) << a << b;
 
   // ... and against R^T M R of the full model, the rigid motions on every DOF (no superelement).
   MPI_Comm comm = PETSC_COMM_SELF;  // each rank its own serial model: the check is per rank
@@ -597,8 +586,7 @@ TEST_F(ExportTest, RigidBodyInertiaIsTheBoxs) {
       const double p[3] = {x, y, z};
       const int a = k - 3;  // (e_a x p)_d
       const double e[3] = {a == 0 ? 1.0 : 0.0, a == 1 ? 1.0 : 0.0, a == 2 ? 1.0 : 0.0};
-      const double c[3] = {e[1] * p[2] - e[2] * p[1], e[2] * p[0] - e[0] * p[2],
-                           e[0] * p[1] - e[1] * p[0]};
+      const double c[3] = {e[1] * p[2] - e[2] * p[1], e[2] * p[0] - e[0] * p[2], e[0] * p[1] - e[1] * p[0]};
       return c[d];
     }));
   double Mr[6][6];
@@ -617,8 +605,7 @@ TEST_F(ExportTest, RigidBodyInertiaIsTheBoxs) {
   const double c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b)
-      EXPECT_NEAR(fem.J[3 * a + b] + fem.mass * ((a == b ? c2 : 0.0) - c[a] * c[b]),
-                  Mr[3 + a][3 + b], jtol);
+      EXPECT_NEAR(fem.J[3 * a + b] + fem.mass * ((a == b ? c2 : 0.0) - c[a] * c[b]), Mr[3 + a][3 + b], jtol);
 }
 
 TEST_F(ExportTest, GroundedSuperelementHasNoRigidBodyRecord) {
@@ -652,8 +639,7 @@ TEST_F(ExportTest, ShapesAtEveryNodeAreTheBasis) {
   const Fem fem = read_fem(path("all.fem"));
   const auto ids = h5i(free_, "/mesh/node_ids");
   const auto xyz = h5(free_, "/mesh/coordinates");
-  const auto psi = h5(free_, "/cb/constraint_modes"),
-             phi = h5(free_, "/cb/fixed_interface/mode_shapes");
+  const auto psi = h5(free_, "/cb/constraint_modes"), phi = h5(free_, "/cb/fixed_interface/mode_shapes");
   const int nn = static_cast<int>(ids.size());
   ASSERT_EQ(fem.n_nodes, nn);
   for (int k = 0; k < nn; ++k) {
@@ -667,8 +653,7 @@ TEST_F(ExportTest, ShapesAtEveryNodeAreTheBasis) {
   for (int j = 0; j < se.n; ++j)
     for (int k = 0; k < nn; ++k) {
       for (int d = 0; d < 3; ++d) {
-        const double ref =
-            j < se.n_b ? psi[(j * nn + k) * 3 + d] : phi[((j - se.n_b) * nn + k) * 3 + d];
+        const double ref = j < se.n_b ? psi[(j * nn + k) * 3 + d] : phi[((j - se.n_b) * nn + k) * 3 + d];
         EXPECT_EQ(fem.shapes[(j * nn + k) * 6 + d], ref);
       }
       for (int d = 3; d < 6; ++d) EXPECT_EQ(fem.shapes[(j * nn + k) * 6 + d], 0.0);
@@ -679,14 +664,12 @@ TEST_F(ExportTest, ShapesAtEveryNodeAreTheBasis) {
       for (int d = 0; d < 3; ++d) {
         const bool one = j < se.n_b && se.dof_node[j] == node && se.dof_component[j] == d + 1;
         worst_interface =
-            std::max(worst_interface,
-                     std::abs(fem.shapes[(j * nn + row[node]) * 6 + d] - (one ? 1.0 : 0.0)));
+            std::max(worst_interface, std::abs(fem.shapes[(j * nn + row[node]) * 6 + d] - (one ? 1.0 : 0.0)));
       }
   EXPECT_LT(worst_interface, 1e-12);
   // The grounded file has no basis: refused, naming the dataset and the option that writes it.
   test::expect_error_parts([&] { io::read_nodal_shapes(io::read_superelement(grounded_)); },
-                           {grounded_, "/cb/constraint_modes", "-cb_write_basis"},
-                           "shapes without a basis");
+                           {grounded_, "/cb/constraint_modes", "-cb_write_basis"}, "shapes without a basis");
 }
 
 // A matrix-input file (/dofs instead of /mesh) as `reduce -matrices_K` writes it, made from the
@@ -731,21 +714,20 @@ TEST_F(ExportMatrixInputTest, NeedsCoordinatesForMbdyn) {
   EXPECT_EQ(se.units, "mm-t-s");
   io::ExportOptions o;
   o.prefix = path("mm");
-  test::expect_error_parts([&] { io::export_superelement(se, o); }, {file, "-export_coordinates"},
-                           "no coordinates");
+  test::expect_error_parts([&] { io::export_superelement(se, o); }, {file, "-export_coordinates"}, "no coordinates");
   EXPECT_EQ(files_in(dir_), std::vector<std::string>{"mm.h5"});  // nothing written
   // Without MBDyn: every other format, no GRID file; the SPOINTs clear node 5000 of /dofs.
   o.mbdyn = false;
   auto res = io::export_superelement(se, o);
   EXPECT_EQ(res.spoint_offset, 10000);
-  EXPECT_EQ(files_in(dir_), (std::vector<std::string>{"mm.h5", "mm.op4", "mm_K.mtx", "mm_M.mtx",
-                                                      "mm_dmig.bdf", "mm_dofs.txt"}));
+  EXPECT_EQ(files_in(dir_),
+            (std::vector<std::string>{"mm.h5", "mm.op4", "mm_K.mtx", "mm_M.mtx", "mm_dmig.bdf", "mm_dofs.txt"}));
   // With a coordinates file: the FEM file, and the same inertia as the mesh file's.
   std::string text = "# node x y z\n";
   const auto ref = io::read_superelement(free_);
   for (std::size_t k = 0; k < ref.boundary_nodes.size(); ++k)
-    text += cat(ref.boundary_nodes[k], " ", ref.boundary_xyz[3 * k], " ",
-                ref.boundary_xyz[3 * k + 1], " ", ref.boundary_xyz[3 * k + 2], "\n");
+    text += cat(ref.boundary_nodes[k], " ", ref.boundary_xyz[3 * k], " ", ref.boundary_xyz[3 * k + 1], " ",
+                ref.boundary_xyz[3 * k + 2], "\n");
   text += "777 1 2 3\n";  // not an interface node: ignored
   io::set_boundary_coordinates(&se, write("xyz.txt", text));
   o.mbdyn = true;
@@ -755,19 +737,16 @@ TEST_F(ExportMatrixInputTest, NeedsCoordinatesForMbdyn) {
   ASSERT_TRUE(res.mbdyn.inertia_written) << res.mbdyn.inertia.reason;
   const auto in = io::rigid_body_inertia(ref);
   EXPECT_NEAR(res.mbdyn.inertia.mass, in.mass, 1e-12 * in.mass);
-  EXPECT_LE(
-      rel_diff(Dense(in.inertia_cm.begin(), in.inertia_cm.end()),
-               Dense(res.mbdyn.inertia.inertia_cm.begin(), res.mbdyn.inertia.inertia_cm.end())),
-      1e-12);
+  EXPECT_LE(rel_diff(Dense(in.inertia_cm.begin(), in.inertia_cm.end()),
+                     Dense(res.mbdyn.inertia.inertia_cm.begin(), res.mbdyn.inertia.inertia_cm.end())),
+            1e-12);
   // Bad coordinate files.
   test::expect_error_parts([&] { io::set_boundary_coordinates(&se, write("bad.txt", "1 0 0\n")); },
                            {"bad.txt:1", "node x y z"}, "short line");
-  test::expect_error_parts(
-      [&] { io::set_boundary_coordinates(&se, write("few.txt", "1 0 0 0\n")); },
-      {"few.txt", "no coordinates for interface node"}, "missing node");
-  test::expect_error_parts(
-      [&] { io::set_boundary_coordinates(&se, write("twice.txt", "1 0 0 0\n1 0 0 0\n")); },
-      {"twice.txt:2", "given twice"}, "node twice");
+  test::expect_error_parts([&] { io::set_boundary_coordinates(&se, write("few.txt", "1 0 0 0\n")); },
+                           {"few.txt", "no coordinates for interface node"}, "missing node");
+  test::expect_error_parts([&] { io::set_boundary_coordinates(&se, write("twice.txt", "1 0 0 0\n1 0 0 0\n")); },
+                           {"twice.txt:2", "given twice"}, "node twice");
 }
 
 TEST_F(ExportMatrixInputTest, InteriorComponentAtAnInterfaceNodeIsRefused) {
@@ -777,43 +756,35 @@ TEST_F(ExportMatrixInputTest, InteriorComponentAtAnInterfaceNodeIsRefused) {
   se.boundary_xyz = ref.boundary_xyz;
   io::ExportOptions o;
   o.prefix = path("rot");
-  test::expect_error_parts(
-      [&] { io::export_superelement(se, o); },
-      {file, cat("interface node ", se.boundary_nodes[2]), "component 5", "interior"},
-      "interior rotation");
+  test::expect_error_parts([&] { io::export_superelement(se, o); },
+                           {file, cat("interface node ", se.boundary_nodes[2]), "component 5", "interior"},
+                           "interior rotation");
   EXPECT_EQ(files_in(dir_), std::vector<std::string>{"rot.h5"});
 }
 
 TEST_F(ExportTest, BadFilesAreRefusedNamingFileAndDataset) {
-  test::expect_error_parts([&] { io::read_superelement(path("none.h5")); },
-                           {"none.h5", "no such file"}, "missing");
-  test::expect_error_parts([&] { io::read_superelement(write("text.h5", "not hdf5")); },
-                           {"text.h5", "HDF5"}, "not HDF5");
+  test::expect_error_parts([&] { io::read_superelement(path("none.h5")); }, {"none.h5", "no such file"}, "missing");
+  test::expect_error_parts([&] { io::read_superelement(write("text.h5", "not hdf5")); }, {"text.h5", "HDF5"},
+                           "not HDF5");
   auto make = [&](const std::string& name, auto body) {
     io::H5Output out(MPI_COMM_SELF, path(name));
     body(out);
     out.commit();
     return path(name);
   };
-  const auto norom =
-      make("norom.h5", [](io::H5Output& out) { io::write_provenance(out, "modes", "SI"); });
-  test::expect_error_parts([&] { io::read_superelement(norom); },
-                           {norom, "no /rom/K", "not a superelement"}, "no /rom");
+  const auto norom = make("norom.h5", [](io::H5Output& out) { io::write_provenance(out, "modes", "SI"); });
+  test::expect_error_parts([&] { io::read_superelement(norom); }, {norom, "no /rom/K", "not a superelement"},
+                           "no /rom");
   const Dense eye4 = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   const std::vector<std::int64_t> dofs2 = {7, 1, 7, 2};
-  const auto rect = make("rect.h5", [&](io::H5Output& out) {
-    out.write("/rom/K", Dense(6, 1.0), {2, 3});
-  });
-  test::expect_error_parts([&] { io::read_superelement(rect); },
-                           {rect, "/rom/K must be square", "[2][3]"}, "K");
+  const auto rect = make("rect.h5", [&](io::H5Output& out) { out.write("/rom/K", Dense(6, 1.0), {2, 3}); });
+  test::expect_error_parts([&] { io::read_superelement(rect); }, {rect, "/rom/K must be square", "[2][3]"}, "K");
   const auto msize = make("msize.h5", [&](io::H5Output& out) {
     out.write("/rom/K", eye4, {4, 4});
     out.write("/rom/M", Dense(9, 1.0), {3, 3});
   });
-  test::expect_error_parts([&] { io::read_superelement(msize); },
-                           {msize, "/rom/M is [3][3]", "/rom/K is [4][4]"}, "M");
-  auto with_dofs = [&](const std::string& name, std::vector<std::int64_t> labels,
-                       std::vector<hsize_t> shape) {
+  test::expect_error_parts([&] { io::read_superelement(msize); }, {msize, "/rom/M is [3][3]", "/rom/K is [4][4]"}, "M");
+  auto with_dofs = [&](const std::string& name, std::vector<std::int64_t> labels, std::vector<hsize_t> shape) {
     return make(name, [&](io::H5Output& out) {
       out.write("/rom/K", eye4, {4, 4});
       out.write("/rom/M", eye4, {4, 4});
@@ -821,22 +792,20 @@ TEST_F(ExportTest, BadFilesAreRefusedNamingFileAndDataset) {
     });
   };
   const auto big = with_dofs("big.h5", std::vector<std::int64_t>(10, 1), {5, 2});
-  test::expect_error_parts([&] { io::read_superelement(big); },
-                           {big, "/rom/boundary_dofs", "n_b <= 4", "[5][2]"}, "n_b");
+  test::expect_error_parts([&] { io::read_superelement(big); }, {big, "/rom/boundary_dofs", "n_b <= 4", "[5][2]"},
+                           "n_b");
   const auto comp = with_dofs("comp.h5", {7, 1, 7, 9}, {2, 2});
-  test::expect_error_parts([&] { io::read_superelement(comp); }, {comp, "component 9", "1..6"},
-                           "component");
+  test::expect_error_parts([&] { io::read_superelement(comp); }, {comp, "component 9", "1..6"}, "component");
   const auto twice = with_dofs("twice.h5", {7, 1, 7, 1}, {2, 2});
-  test::expect_error_parts([&] { io::read_superelement(twice); },
-                           {twice, "node 7 component 1", "twice"}, "twice");
+  test::expect_error_parts([&] { io::read_superelement(twice); }, {twice, "node 7 component 1", "twice"}, "twice");
   const auto nodes = make("nodes.h5", [&](io::H5Output& out) {
     out.write("/rom/K", eye4, {4, 4});
     out.write("/rom/M", eye4, {4, 4});
     out.write("/rom/boundary_dofs", dofs2, {2, 2});
     out.write("/rom/boundary_nodes", std::vector<std::int64_t>{7, 8});
   });
-  test::expect_error_parts([&] { io::read_superelement(nodes); },
-                           {nodes, "/rom/boundary_nodes", "/rom/boundary_dofs"}, "nodes");
+  test::expect_error_parts([&] { io::read_superelement(nodes); }, {nodes, "/rom/boundary_nodes", "/rom/boundary_dofs"},
+                           "nodes");
   const auto nan = make("nan.h5", [&](io::H5Output& out) {
     Dense k = eye4;
     k[5] = std::nan("");
@@ -844,8 +813,7 @@ TEST_F(ExportTest, BadFilesAreRefusedNamingFileAndDataset) {
     out.write("/rom/M", eye4, {4, 4});
     out.write("/rom/boundary_dofs", dofs2, {2, 2});
   });
-  test::expect_error_parts([&] { io::read_superelement(nan); }, {nan, "/rom/K[1][1]", "not finite"},
-                           "nan");
+  test::expect_error_parts([&] { io::read_superelement(nan); }, {nan, "/rom/K[1][1]", "not finite"}, "nan");
   const auto nomesh = make("nomesh.h5", [&](io::H5Output& out) {
     out.write("/rom/K", eye4, {4, 4});
     out.write("/rom/M", eye4, {4, 4});
@@ -853,8 +821,8 @@ TEST_F(ExportTest, BadFilesAreRefusedNamingFileAndDataset) {
     out.write("/mesh/node_ids", std::vector<std::int64_t>{1, 2});
     out.write("/mesh/coordinates", Dense(6, 0.0), {2, 3});
   });
-  test::expect_error_parts([&] { io::read_superelement(nomesh); },
-                           {nomesh, "boundary node 7", "/mesh/node_ids"}, "node not in mesh");
+  test::expect_error_parts([&] { io::read_superelement(nomesh); }, {nomesh, "boundary node 7", "/mesh/node_ids"},
+                           "node not in mesh");
 }
 
 TEST_F(ExportTest, OptionsAreChecked) {
@@ -862,18 +830,16 @@ TEST_F(ExportTest, OptionsAreChecked) {
   io::ExportOptions o;
   o.prefix = path("x");
   o.spoint_offset = 40;  // 41..46 hit mesh nodes
-  test::expect_error_parts([&] { io::export_superelement(se, o); },
-                           {"SPOINT ids 41..46", "collide with node 41"}, "spoint collision");
+  test::expect_error_parts([&] { io::export_superelement(se, o); }, {"SPOINT ids 41..46", "collide with node 41"},
+                           "spoint collision");
   o.spoint_offset = 99999998;
   test::expect_error_parts([&] { io::export_superelement(se, o); }, {"99999999"}, "spoint range");
   o.spoint_offset = 0;
   o.names.dmig_K = "9BAD";
-  test::expect_error_parts([&] { io::export_superelement(se, o); }, {"DMIG name '9BAD'"},
-                           "dmig name");
+  test::expect_error_parts([&] { io::export_superelement(se, o); }, {"DMIG name '9BAD'"}, "dmig name");
   o.names.dmig_K = "KAAX";
   o.names.op4_M = "TOOLONGNAME";
-  test::expect_error_parts([&] { io::export_superelement(se, o); }, {"OP4 name 'TOOLONGNAME'"},
-                           "op4 name");
+  test::expect_error_parts([&] { io::export_superelement(se, o); }, {"OP4 name 'TOOLONGNAME'"}, "op4 name");
   EXPECT_TRUE(files_in(dir_).empty());
   // Other names and offset are used as given.
   o.names = {};
@@ -890,10 +856,9 @@ TEST_F(ExportTest, OptionsAreChecked) {
 }
 
 TEST(ExportNastranReal, FitsSixteenColumnsAndKeepsTenDigits) {
-  for (double v :
-       {1.0, -1.0, 0.5, 6247390596.8456869, -1.9357422200969121e9, 8.8343018652852495e-07, 1e-100,
-        -1.234567890123456e-123, 9.999999999999999e99, 1.7976931348623157e308,
-        2.2250738585072014e-308, -4.9406564584124654e-324, 3.0, 1.0 / 3.0, -2.0 / 3.0 * 1e-15}) {
+  for (double v : {1.0, -1.0, 0.5, 6247390596.8456869, -1.9357422200969121e9, 8.8343018652852495e-07, 1e-100,
+                   -1.234567890123456e-123, 9.999999999999999e99, 1.7976931348623157e308, 2.2250738585072014e-308,
+                   -4.9406564584124654e-324, 3.0, 1.0 / 3.0, -2.0 / 3.0 * 1e-15}) {
     const std::string s = io::nastran_large_real(v);
     EXPECT_LE(s.size(), 16u) << s;
     EXPECT_NE(s.find('.'), std::string::npos) << s;
@@ -901,8 +866,7 @@ TEST(ExportNastranReal, FitsSixteenColumnsAndKeepsTenDigits) {
     const double back = nastran_real(s);
     // Subnormals carry fewer digits; every normal value keeps at least 9 significant digits
     // (10 below |exponent| 100).
-    const double tol =
-        std::abs(v) < 1e-300 ? 1e-5 : (std::abs(std::log10(std::abs(v))) >= 99.5 ? 5e-9 : 5e-10);
+    const double tol = std::abs(v) < 1e-300 ? 1e-5 : (std::abs(std::log10(std::abs(v))) >= 99.5 ? 5e-9 : 5e-10);
     EXPECT_LE(std::abs(back - v), tol * std::abs(v)) << v << " -> " << s;
   }
   EXPECT_EQ(io::nastran_large_real(0.0), "0.0");
@@ -959,25 +923,19 @@ TEST(ExportRigidBody, RotationalDofsCarryTheirInertia) {
 TEST_F(ExportTest, CommandWritesTheChosenFormatsAndFailsCollectively) {
   const std::string prefix = base_->path("cli");
   run("export", {{"-export_from", free_}, {"-export_format", "mbdyn,op4"}, {"-out", prefix}});
-  for (const char* ext : {".fem", ".op4", "_dofs.txt"})
-    EXPECT_TRUE(fs::exists(prefix + ext)) << ext;
+  for (const char* ext : {".fem", ".op4", "_dofs.txt"}) EXPECT_TRUE(fs::exists(prefix + ext)) << ext;
   for (const char* ext : {"_dmig.bdf", "_K.mtx"}) EXPECT_FALSE(fs::exists(prefix + ext)) << ext;
   auto collective_error = [&](const std::vector<std::pair<std::string, std::string>>& opts,
                               std::initializer_list<std::string> parts, const std::string& what) {
     test::expect_error_parts([&] { run("export", opts); }, parts, what);
   };
-  collective_error({{"-out", prefix + "_none"}}, {"no superelement given", "-export_from"},
-                   "no -export_from");
-  collective_error(
-      {{"-export_from", free_}, {"-export_format", "mbdyn,foo"}, {"-out", prefix + "_foo"}},
-      {"-export_format foo", "unknown format"}, "unknown format");
-  collective_error({{"-export_from", mesh_}, {"-out", prefix + "_msh"}}, {mesh_, "HDF5"},
-                   "not HDF5 (rank 0 only)");
-  collective_error(
-      {{"-export_from", free_}, {"-export_mbdyn_nodes", "some"}, {"-out", prefix + "_n"}},
-      {"-export_mbdyn_nodes some"}, "nodes");
+  collective_error({{"-out", prefix + "_none"}}, {"no superelement given", "-export_from"}, "no -export_from");
+  collective_error({{"-export_from", free_}, {"-export_format", "mbdyn,foo"}, {"-out", prefix + "_foo"}},
+                   {"-export_format foo", "unknown format"}, "unknown format");
+  collective_error({{"-export_from", mesh_}, {"-out", prefix + "_msh"}}, {mesh_, "HDF5"}, "not HDF5 (rank 0 only)");
+  collective_error({{"-export_from", free_}, {"-export_mbdyn_nodes", "some"}, {"-out", prefix + "_n"}},
+                   {"-export_mbdyn_nodes some"}, "nodes");
   MPI_Barrier(PETSC_COMM_WORLD);
   for (const char* p : {"_none", "_foo", "_msh", "_n"})
-    for (const char* ext : {".fem", ".op4", "_dofs.txt", ".part.fem"})
-      EXPECT_FALSE(fs::exists(prefix + p + ext));
+    for (const char* ext : {".fem", ".op4", "_dofs.txt", ".part.fem"}) EXPECT_FALSE(fs::exists(prefix + p + ext));
 }

@@ -108,9 +108,9 @@ dyn::LoadTable reader_table() {
   dyn::LoadTable t;
   t.time = {0.0, 0.5, 2.0};
   t.node_ids = {7, 3};
-  t.forces = {1, 2, 3, -1, -2, -3,  //
-              4, 5, 6, 0.25, 0, 1e3,  //
-              -7, 8, 9.5, 1e-7, 2, 3};
+  t.forces = {1,  2, 3,   -1,   -2, -3,   //
+              4,  5, 6,   0.25, 0,  1e3,  //
+              -7, 8, 9.5, 1e-7, 2,  3};
   return t;
 }
 
@@ -128,8 +128,8 @@ TEST(LoadHistory, InterpolatesHandValuesAndDropsClampedDofs) {
   t.source = "hand table";
   t.time = {1.0, 2.0, 4.0};
   t.node_ids = {c, a};
-  t.forces = {100, 100, 100, 1, 2, 3,  //
-              100, 100, 100, 3, 2, 1,  //
+  t.forces = {100, 100, 100, 1,  2, 3,  //
+              100, 100, 100, 3,  2, 1,  //
               100, 100, 100, -1, 0, 5};
   UVec F;
   MORSE_CALL(MatCreateVecs(m.ops.K.get(), F.ptr(), nullptr));
@@ -145,8 +145,9 @@ TEST(LoadHistory, InterpolatesHandValuesAndDropsClampedDofs) {
   };
   dyn::LoadHistory h(m.lm, m.dofs, t, dyn::Outside::Error, 2.0);
   // (t, expected force of a / 2): between rows by hand.
-  const std::vector<std::pair<double, std::vector<double>>> cases = {
-      {1.0, {1, 2, 3}}, {1.25, {1.5, 2, 2.5}}, {2.0, {3, 2, 1}}, {3.0, {1, 1, 3}}, {3.5, {0, 0.5, 4}}, {4.0, {-1, 0, 5}}};
+  const std::vector<std::pair<double, std::vector<double>>> cases = {{1.0, {1, 2, 3}},   {1.25, {1.5, 2, 2.5}},
+                                                                     {2.0, {3, 2, 1}},   {3.0, {1, 1, 3}},
+                                                                     {3.5, {0, 0.5, 4}}, {4.0, {-1, 0, 5}}};
   for (const auto& [time, want] : cases) {
     const auto v = value(h, time);
     for (int d = 0; d < 3; ++d) EXPECT_NEAR(v[d], 2.0 * want[d], 1e-12) << "t " << time << " component " << d;
@@ -404,7 +405,8 @@ TEST(LoadHistory, SampledHarmonicConvergesToHarmonicLoad) {
   both.set_history(std::make_shared<dyn::LoadHistory>(m.lm, m.dofs, sampled(24), dyn::Outside::Error, -1.0));
   const auto diff = run(both);
   double worst = 0;
-  for (std::size_t i = 0; i < diff.size(); ++i) worst = std::max(worst, std::abs(diff[i] - (harmonic[i] - tables[1][i])));
+  for (std::size_t i = 0; i < diff.size(); ++i)
+    worst = std::max(worst, std::abs(diff[i] - (harmonic[i] - tables[1][i])));
   EXPECT_LT(worst, 1e-9 * peak);
 }
 

@@ -184,7 +184,8 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
   // 1e-10 / (relative gap), and the Ritz values of the superelement by up to ~1e-9.
   auto wr = eigen::dense_eigenvalues(static_cast<int>(n), res.K, res.M);
   auto wf = eigen::dense_eigenvalues(static_cast<int>(n), ref.K, ref.M);
-  for (PetscInt j = 0; j < n; ++j) EXPECT_NEAR(wr[j], wf[j], 1e-8 * std::abs(wf[j]) + 1e-6) << "superelement mode " << j;
+  for (PetscInt j = 0; j < n; ++j)
+    EXPECT_NEAR(wr[j], wf[j], 1e-8 * std::abs(wf[j]) + 1e-6) << "superelement mode " << j;
 }
 
 // A node set given by node ids (as -mesh_node_set_NAME does) selects every row of its nodes,
@@ -192,9 +193,10 @@ TEST_F(MatricesTest, MatrixModelGivesTheMeshSuperelement) {
 TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
   // A chain of 3 nodes with 2 DOFs each (component 1 and 5), springs and masses: k = 1, m = 1.
   auto K = write("k.mtx",
-                "%%MatrixMarket matrix coordinate real symmetric\n6 6 10\n"
-                "1 1 2\n2 2 2\n3 1 -1\n3 3 2\n4 2 -1\n4 4 2\n5 3 -1\n5 5 1\n6 4 -1\n6 6 1\n");
-  auto M = write("m.mtx", "%%MatrixMarket matrix coordinate real general\n6 6 6\n1 1 1\n2 2 1\n3 3 1\n4 4 1\n5 5 1\n6 6 1\n");
+                 "%%MatrixMarket matrix coordinate real symmetric\n6 6 10\n"
+                 "1 1 2\n2 2 2\n3 1 -1\n3 3 2\n4 2 -1\n4 4 2\n5 3 -1\n5 5 1\n6 4 -1\n6 6 1\n");
+  auto M = write("m.mtx",
+                 "%%MatrixMarket matrix coordinate real general\n6 6 6\n1 1 1\n2 2 1\n3 3 1\n4 4 1\n5 5 1\n6 6 1\n");
   auto map = write("map.txt", "# node component\n10 1\n10 5\n20 1\n20 5 # rotation\n30 1 tip\n30 5 tip\n");
   io::MatrixInput in;
   in.K = K;
@@ -229,13 +231,15 @@ TEST_F(MatricesTest, NodeSetsAndRotationalComponents) {
 TEST_F(MatricesTest, BadInputIsRefusedClearly) {
   auto good = write("good.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n3 3 2\n");
   auto nonsym = write("nonsym.mtx",
-                     "%%MatrixMarket matrix coordinate real general\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 -1\n2 1 -1.5\n");
+                      "%%MatrixMarket matrix coordinate real general\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 -1\n2 1 -1.5\n");
   auto big = write("big.mtx", "%%MatrixMarket matrix coordinate real symmetric\n4 4 4\n1 1 2\n2 2 2\n3 3 2\n4 4 2\n");
-  auto badline = write("badline.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 3\n1 1 2\n2 x 2\n3 3 2\n");
+  auto badline =
+      write("badline.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 3\n1 1 2\n2 x 2\n3 3 2\n");
   auto outside = write("outside.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 3\n1 1 2\n2 2 2\n4 3 2\n");
-  auto twice = write("twice.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n");
+  auto twice =
+      write("twice.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n");
   auto twice2 = write("twice2.mtx",
-                     "%%MatrixMarket matrix coordinate real symmetric\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n2 1 1\n");
+                      "%%MatrixMarket matrix coordinate real symmetric\n3 3 5\n1 1 2\n2 2 2\n3 3 2\n1 2 1\n2 1 1\n");
   auto complex = write("complex.mtx", "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n");
   auto count = write("count.mtx", "%%MatrixMarket matrix coordinate real symmetric\n3 3 4\n1 1 2\n2 2 2\n3 3 2\n");
   auto map_long = write("long.txt", "1 1\n1 2\n1 3\n2 1\n");
@@ -250,7 +254,8 @@ TEST_F(MatricesTest, BadInputIsRefusedClearly) {
     in.dofmap = map;
     io::matrix_model(w, in);
   };
-  expect_error([&] { model(nonsym, good, ""); }, {"-matrices_K", "nonsym.mtx", "not symmetric", "column 2 (node 1 component 2)"});
+  expect_error([&] { model(nonsym, good, ""); },
+               {"-matrices_K", "nonsym.mtx", "not symmetric", "column 2 (node 1 component 2)"});
   expect_error([&] { model(good, big, ""); }, {"size mismatch", "good.mtx", "big.mtx", "3 x 3", "4 x 4"});
   expect_error([&] { model(good, good, map_long); }, {"long.txt:4", "row 4", "only 3 rows"});
   expect_error([&] { model(good, good, map_short); }, {"short.txt", "2 rows listed", "3"});

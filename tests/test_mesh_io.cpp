@@ -155,8 +155,7 @@ void check_box(const BoxSpec& s) {
     total += morse::fe::element_volume(s.type, xyz.data());
     for (std::size_t k = 0; k < mids.size(); ++k)
       for (int d = 0; d < 3; ++d)
-        EXPECT_NEAR(xyz[3 * (nvert + k) + d],
-                    0.5 * (xyz[3 * mids[k].first + d] + xyz[3 * mids[k].second + d]), 1e-15);
+        EXPECT_NEAR(xyz[3 * (nvert + k) + d], 0.5 * (xyz[3 * mids[k].first + d] + xyz[3 * mids[k].second + d]), 1e-15);
   }
   EXPECT_NEAR(total, volume, 1e-12);
 
@@ -205,8 +204,7 @@ TEST_P(GeneratorTest, DefaultBeam) {
   s.type = GetParam();
   check_box(s);
   const Mesh m = morse::mesh::generate_box(s);
-  EXPECT_EQ(m.source,
-            morse::cat("box ", morse::mesh::element_name(s.type), " 10x1x1 size 1x0.1x0.1"));
+  EXPECT_EQ(m.source, morse::cat("box ", morse::mesh::element_name(s.type), " 10x1x1 size 1x0.1x0.1"));
 }
 
 TEST_P(GeneratorTest, DistortedBoxWithOrigin) {
@@ -391,8 +389,7 @@ void check_two_hex_mesh(const Mesh& m, const std::string& path) {
   EXPECT_EQ(m.elem_types, (std::vector<ElementType>{ElementType::Hex8, ElementType::Hex8}));
   EXPECT_EQ(m.elem_material, (std::vector<int>{-1, -1}));
   std::vector<std::int64_t> conn;
-  for (std::int64_t t : {10, 20, 50, 40, 70, 80, 110, 100, 20, 30, 60, 50, 80, 90, 120, 110})
-    conn.push_back(index(t));
+  for (std::int64_t t : {10, 20, 50, 40, 70, 80, 110, 100, 20, 30, 60, 50, 80, 90, 120, 110}) conn.push_back(index(t));
   EXPECT_EQ(m.elem_nodes, conn);
 
   auto sorted = [&](std::vector<std::int64_t> tags) {
@@ -409,8 +406,7 @@ void check_two_hex_mesh(const Mesh& m, const std::string& path) {
       {"body", all},
       {"physical_3_7", sorted({20, 30, 60, 50, 80, 90, 120, 110})}};
   EXPECT_EQ(m.node_sets, nsets);
-  std::map<std::string, std::vector<std::int64_t>> esets = {{"body", {0, 1}},
-                                                            {"physical_3_7", {1}}};
+  std::map<std::string, std::vector<std::int64_t>> esets = {{"body", {0, 1}}, {"physical_3_7", {1}}};
   EXPECT_EQ(m.elem_sets, esets);
 }
 
@@ -444,8 +440,7 @@ TEST(GmshRead, QuadraticTypes22AndUnnamedGroups) {
   text += "\n4 9 2 2 1 1 2 3 4 5 6\n$EndElements\n";
   TempFile f("quadratic22.msh", text);
   const Mesh m = morse::mesh::read_gmsh(f.path);
-  EXPECT_EQ(m.elem_types, (std::vector<ElementType>{ElementType::Tet10, ElementType::Wedge15,
-                                                    ElementType::Hex20}));
+  EXPECT_EQ(m.elem_types, (std::vector<ElementType>{ElementType::Tet10, ElementType::Wedge15, ElementType::Hex20}));
   EXPECT_EQ(m.elem_offsets, (std::vector<std::int64_t>{0, 10, 25, 45}));
   EXPECT_EQ(m.elem_sets.at("physical_3_4"), (std::vector<std::int64_t>{0, 1}));
   EXPECT_EQ(m.node_sets.at("physical_3_4").size(), 25u);
@@ -488,8 +483,7 @@ TEST_P(GeneratorTest, GmshRoundTrip) {
   TempFile g(morse::cat("roundtrip2_", morse::mesh::element_name(s.type), ".msh"));
   morse::mesh::write_gmsh(r, g.path);
   std::ifstream a(f.path), b(g.path);
-  std::string ta((std::istreambuf_iterator<char>(a)), {}),
-      tb((std::istreambuf_iterator<char>(b)), {});
+  std::string ta((std::istreambuf_iterator<char>(a)), {}), tb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_EQ(ta, tb);
 }
 
@@ -522,8 +516,8 @@ TEST(GmshRead, LargeMeshIsFast) {
   auto t2 = clock::now();
   const double tw = std::chrono::duration<double>(t1 - t0).count();
   const double tr = std::chrono::duration<double>(t2 - t1).count();
-  std::cout << "[ timing ] " << m.num_nodes() << " nodes, " << m.num_elements() << " tet10: write "
-            << tw << " s, read " << tr << " s\n";
+  std::cout << "[ timing ] " << m.num_nodes() << " nodes, " << m.num_elements() << " tet10: write " << tw << " s, read "
+            << tr << " s\n";
   expect_same_mesh(m, r);
   EXPECT_LT(tr, 10.0);  // loose bound: shared CI machines; typically well under 1 s
 }
@@ -531,11 +525,9 @@ TEST(GmshRead, LargeMeshIsFast) {
 // ---------------------------------------------------------------------------------------------
 // Errors: each message names the file and the line
 
-void expect_error(const std::string& msg, const std::string& path, int line,
-                  const std::string& what) {
+void expect_error(const std::string& msg, const std::string& path, int line, const std::string& what) {
   SCOPED_TRACE(msg);
-  EXPECT_NE(msg.find(morse::cat(path, ":", line, ":")), std::string::npos)
-      << "expected line " << line;
+  EXPECT_NE(msg.find(morse::cat(path, ":", line, ":")), std::string::npos) << "expected line " << line;
   EXPECT_NE(msg.find(what), std::string::npos) << "expected '" << what << "'";
 }
 
@@ -605,51 +597,43 @@ TEST(GmshErrors, UnsupportedElementType) {
 TEST(GmshErrors, UndefinedNode) {
   std::string text = kMsh41;
   text.replace(text.find("9 20 30 60"), 10, "9 20 31 60");
-  expect_error(read_error("undef41.msh", text), temp_path("undef41.msh"),
-               line_of(text, "9 20 31 60"), "node 31");
+  expect_error(read_error("undef41.msh", text), temp_path("undef41.msh"), line_of(text, "9 20 31 60"), "node 31");
 
   std::string text22 = kMsh22;
   text22.replace(text22.find("4 3 2 3 1 10 40"), 15, "4 3 2 3 1 10 45");
-  expect_error(read_error("undef22.msh", text22), temp_path("undef22.msh"),
-               line_of(text22, "4 3 2 3 1 10 45"), "node 45");
+  expect_error(read_error("undef22.msh", text22), temp_path("undef22.msh"), line_of(text22, "4 3 2 3 1 10 45"),
+               "node 45");
 }
 
 TEST(GmshErrors, BinaryAndVersion) {
-  const std::string bin =
-      std::string("$MeshFormat\n4.1 1 8\n") + '\x01' + '\0' + '\0' + '\0' + "\n$EndMeshFormat\n";
+  const std::string bin = std::string("$MeshFormat\n4.1 1 8\n") + '\x01' + '\0' + '\0' + '\0' + "\n$EndMeshFormat\n";
   expect_error(read_error("binary.msh", bin), temp_path("binary.msh"), 2,
                "binary .msh not supported, re-save as ASCII");
-  expect_error(read_error("v40.msh", "$MeshFormat\n4 0 8\n$EndMeshFormat\n"), temp_path("v40.msh"),
-               2, "version 4");
+  expect_error(read_error("v40.msh", "$MeshFormat\n4 0 8\n$EndMeshFormat\n"), temp_path("v40.msh"), 2, "version 4");
   expect_error(read_error("notmsh.msh", "hello\n"), temp_path("notmsh.msh"), 1, "hello");
 }
 
 TEST(GmshErrors, MalformedNumbers) {
   std::string text = kMsh41;
   text.replace(text.find("2 1 1\n"), 6, "2 1 x1\n");
-  expect_error(read_error("badnum.msh", text), temp_path("badnum.msh"), line_of(text, "2 1 x1"),
-               "x1");
+  expect_error(read_error("badnum.msh", text), temp_path("badnum.msh"), line_of(text, "2 1 x1"), "x1");
   std::string text2 = kMsh22;
   text2.replace(text2.find("50 1 1 0"), 8, "50 1 1.0.0 0");
-  expect_error(read_error("badnum22.msh", text2), temp_path("badnum22.msh"),
-               line_of(text2, "1.0.0"), "1.0.0");
+  expect_error(read_error("badnum22.msh", text2), temp_path("badnum22.msh"), line_of(text2, "1.0.0"), "1.0.0");
   std::string text3 = kMsh22;
   text3.replace(text3.find("5 5 2 1 1 10"), 12, "5 5 2 1 1 1e1");
-  expect_error(read_error("badint22.msh", text3), temp_path("badint22.msh"), line_of(text3, "1e1"),
-               "1e1");
+  expect_error(read_error("badint22.msh", text3), temp_path("badint22.msh"), line_of(text3, "1e1"), "1e1");
 }
 
 TEST(GmshErrors, DuplicatesAndNoSolids) {
   std::string text = kMsh22;
   text.replace(text.find("40 0 1 0"), 8, "10 0 1 0");
-  expect_error(read_error("dupnode.msh", text), temp_path("dupnode.msh"), line_of(text, "10 0 1 0"),
-               "node tag 10");
+  expect_error(read_error("dupnode.msh", text), temp_path("dupnode.msh"), line_of(text, "10 0 1 0"), "node tag 10");
 
   std::string dup_elem = kMsh22;
   dup_elem.replace(dup_elem.find("12 5 2 7 2 20 30"), 16, "9 5 2 7 2 20 60");
   const std::string msg = read_error("dupelem.msh", dup_elem);
-  expect_error(msg, temp_path("dupelem.msh"), line_of(dup_elem, "9 5 2 7 2 20 60"),
-               "element tag 9");
+  expect_error(msg, temp_path("dupelem.msh"), line_of(dup_elem, "9 5 2 7 2 20 60"), "element tag 9");
 
   const std::string flat =
       "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n3\n1 0 0 0\n2 1 0 0\n3 0 1 0\n$EndNodes\n"

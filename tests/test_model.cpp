@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "morse/cb/craig_bampton.hpp"
-#include "morse/fe/element.hpp"
 #include "morse/core/session.hpp"
+#include "morse/fe/element.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -15,8 +15,8 @@ using mesh::ElementType;
 
 namespace {
 
-constexpr ElementType kAllTypes[] = {ElementType::Tet4, ElementType::Tet10, ElementType::Wedge6,
-                                     ElementType::Wedge15, ElementType::Hex8, ElementType::Hex20};
+constexpr ElementType kAllTypes[] = {ElementType::Tet4,    ElementType::Tet10, ElementType::Wedge6,
+                                     ElementType::Wedge15, ElementType::Hex8,  ElementType::Hex20};
 
 std::string name(ElementType t) { return mesh::element_name(t); }
 
@@ -182,7 +182,8 @@ TEST_P(ModelByType, FreeFreeHasSixRigidBodyModes) {
   auto eig = eigen::solve_eigen(ops.K.get(), ops.M.get(), es, nullptr);
   const double first_elastic = eig.omega2[6];
   EXPECT_GT(first_elastic, 1e3) << name(GetParam());
-  for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(eig.omega2[i]), 1e-8 * first_elastic) << name(GetParam()) << " mode " << i;
+  for (int i = 0; i < 6; ++i)
+    EXPECT_LT(std::abs(eig.omega2[i]), 1e-8 * first_elastic) << name(GetParam()) << " mode " << i;
 }
 
 // Constant-strain patch test on a distorted mesh: prescribe u = A x + c on the box faces; the
@@ -202,9 +203,8 @@ TEST_P(ModelByType, PatchTestDistorted) {
   auto ops = fe::assemble(lm, dofs, test::steel());
   const double A[3][3] = {{1e-3, 2e-4, -3e-4}, {5e-4, -7e-4, 1e-4}, {-2e-4, 3e-4, 4e-4}};
   const double c[3] = {1e-3, -2e-3, 5e-4};
-  auto exact = test::nodal_vector(lm, dofs, [&](double x, double y, double z, int d) {
-    return A[d][0] * x + A[d][1] * y + A[d][2] * z + c[d];
-  });
+  auto exact = test::nodal_vector(
+      lm, dofs, [&](double x, double y, double z, int d) { return A[d][0] * x + A[d][1] * y + A[d][2] * z + c[d]; });
   // Boundary = nodes on any face.
   std::vector<PetscInt> bnd, inn;
   int rank = 0;
@@ -321,8 +321,8 @@ TEST_P(Cantilever, FrequenciesMatchClosedForms) {
     ASSERT_GE(best_i, 0);
     const double omega = std::sqrt(eig.omega2[best_i]);
     EXPECT_GT(best, 0.9) << name(GetParam()) << " " << c.what;
-    EXPECT_NEAR(omega / c.omega, 1.0, 0.01) << name(GetParam()) << " " << c.what << ": " << omega << " vs "
-                                            << c.omega << " rad/s (mode " << best_i + 1 << ", MAC " << best << ")";
+    EXPECT_NEAR(omega / c.omega, 1.0, 0.01) << name(GetParam()) << " " << c.what << ": " << omega << " vs " << c.omega
+                                            << " rad/s (mode " << best_i + 1 << ", MAC " << best << ")";
   }
 }
 
@@ -354,7 +354,8 @@ TEST(Model, MaterialPerElementSet) {
 }
 
 TEST(MeshQuality, BoxCountsVolumeAndNoInvertedElement) {
-  auto lm = morse::test::box_mesh(PETSC_COMM_WORLD, morse::test::box_spec(morse::mesh::ElementType::Tet4, 2.0, 0.5, 0.25, 4, 2, 1));
+  auto lm = morse::test::box_mesh(PETSC_COMM_WORLD,
+                                  morse::test::box_spec(morse::mesh::ElementType::Tet4, 2.0, 0.5, 0.25, 4, 2, 1));
   const auto q = morse::fe::mesh_quality(PETSC_COMM_WORLD, lm);
   EXPECT_EQ(q.per_type[static_cast<int>(morse::mesh::ElementType::Tet4)], 6 * 4 * 2 * 1);
   EXPECT_NEAR(q.volume, 2.0 * 0.5 * 0.25, 1e-12);

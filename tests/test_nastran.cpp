@@ -17,11 +17,11 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
-#include "scratch.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/nastran.hpp"
 #include "morse/mesh/partition.hpp"
+#include "scratch.hpp"
 
 namespace {
 
@@ -53,8 +53,7 @@ std::vector<std::int64_t> ids_of(const Mesh& m, const std::vector<std::int64_t>&
 
 /// Node ids of element e, in morse order.
 std::vector<std::int64_t> element_ids(const Mesh& m, std::int64_t e) {
-  return ids_of(
-      m, {m.elem_nodes.begin() + m.elem_offsets[e], m.elem_nodes.begin() + m.elem_offsets[e + 1]});
+  return ids_of(m, {m.elem_nodes.begin() + m.elem_offsets[e], m.elem_nodes.begin() + m.elem_offsets[e + 1]});
 }
 
 std::vector<double> element_xyz(const Mesh& m, std::int64_t e) {
@@ -85,8 +84,7 @@ void expect_midpoints(const Mesh& m) {
     const auto& edges = morse::mesh::mid_edges(t);
     for (std::size_t j = 0; j < edges.size(); ++j)
       for (int d = 0; d < 3; ++d)
-        EXPECT_NEAR(xyz[3 * (nv + j) + d],
-                    0.5 * (xyz[3 * edges[j].first + d] + xyz[3 * edges[j].second + d]), 1e-14)
+        EXPECT_NEAR(xyz[3 * (nv + j) + d], 0.5 * (xyz[3 * edges[j].first + d] + xyz[3 * edges[j].second + d]), 1e-14)
             << "element " << m.elem_ids[e] << " mid-edge node " << nv + j;
   }
 }
@@ -167,8 +165,7 @@ TEST_F(NastranTest, FormatsDeck) {
   ASSERT_EQ(static_cast<std::size_t>(m.num_nodes()), expect.size());
   for (std::int64_t k = 0; k < m.num_nodes(); ++k)
     for (int d = 0; d < 3; ++d)
-      EXPECT_NEAR(m.coords[3 * k + d], expect[k][d], 1e-14)
-          << "grid " << m.node_ids[k] << " x" << d;
+      EXPECT_NEAR(m.coords[3 * k + d], expect[k][d], 1e-14) << "grid " << m.node_ids[k] << " x" << d;
 
   // Elements in file order, in morse order (fe/element.hpp's mid-edge table):
   //   hex20:   G1..G8, then G9 (0,1), G12 (0,3), G13 (0,4), G10 (1,2), G14 (1,5), G11 (2,3),
@@ -181,12 +178,11 @@ TEST_F(NastranTest, FormatsDeck) {
   EXPECT_EQ(m.elem_types[0], ElementType::Hex20);
   EXPECT_EQ(m.elem_types[1], ElementType::Wedge15);
   EXPECT_EQ(m.elem_types[2], ElementType::Tet10);
-  EXPECT_EQ(element_ids(m, 0), (std::vector<std::int64_t>{1,  2,  3,  4,  5,  6,  7,  8,  9,  12,
-                                                          13, 10, 14, 11, 15, 16, 17, 20, 18, 19}));
-  EXPECT_EQ(element_ids(m, 1), (std::vector<std::int64_t>{201, 202, 203, 204, 205, 206, 207, 209,
-                                                          210, 208, 211, 212, 213, 215, 214}));
-  EXPECT_EQ(element_ids(m, 2),
-            (std::vector<std::int64_t>{301, 302, 303, 304, 305, 306, 307, 308, 310, 309}));
+  EXPECT_EQ(element_ids(m, 0),
+            (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 12, 13, 10, 14, 11, 15, 16, 17, 20, 18, 19}));
+  EXPECT_EQ(element_ids(m, 1),
+            (std::vector<std::int64_t>{201, 202, 203, 204, 205, 206, 207, 209, 210, 208, 211, 212, 213, 215, 214}));
+  EXPECT_EQ(element_ids(m, 2), (std::vector<std::int64_t>{301, 302, 303, 304, 305, 306, 307, 308, 310, 309}));
   const double volumes[3] = {8.0, 4.0, 1.0 / 6};
   for (std::int64_t e = 0; e < 3; ++e) {
     const auto xyz = element_xyz(m, e);
@@ -224,9 +220,8 @@ TEST_F(NastranTest, FormatsDeck) {
   // Fixed DOFs: SPC1 123 on 1-4, SPC1 3 on 9-12, SPC 12 on 201 and 3 on 202 (SID 2), PS 1 on
   // 203, SPC1 123456 on 301 (CD = 2, all translations: allowed); 456 and GRDSET PS 456 ignored.
   ASSERT_EQ(m.fixed_dofs.size(), static_cast<std::size_t>(m.num_nodes()));
-  const std::vector<std::pair<std::int64_t, int>> fixed = {{1, 7},   {2, 7},   {3, 7},   {4, 7},
-                                                           {9, 4},   {10, 4},  {11, 4},  {12, 4},
-                                                           {201, 3}, {202, 4}, {203, 1}, {301, 7}};
+  const std::vector<std::pair<std::int64_t, int>> fixed = {{1, 7},  {2, 7},  {3, 7},   {4, 7},   {9, 4},   {10, 4},
+                                                           {11, 4}, {12, 4}, {201, 3}, {202, 4}, {203, 1}, {301, 7}};
   for (std::int64_t k = 0; k < m.num_nodes(); ++k) {
     int mask = 0;
     for (const auto& [id, f] : fixed)
@@ -291,15 +286,13 @@ TEST_F(NastranTest, RealForms) {
                                                              {"12.345+12", 12.345e12},
                                                              {"1.25E-300", 1.25e-300}};
   std::string deck;
-  for (std::size_t i = 0; i < forms.size(); ++i)
-    deck += cat("GRID,", i + 1, ",,", forms[i].first, ",0.,0.\n");
+  for (std::size_t i = 0; i < forms.size(); ++i) deck += cat("GRID,", i + 1, ",,", forms[i].first, ",0.,0.\n");
   const Mesh m = read_nastran(write("reals.bdf", deck), false);
   ASSERT_EQ(static_cast<std::size_t>(m.num_nodes()), forms.size());
-  for (std::size_t i = 0; i < forms.size(); ++i)
-    EXPECT_EQ(m.coords[3 * i], forms[i].second) << forms[i].first;
+  for (std::size_t i = 0; i < forms.size(); ++i) EXPECT_EQ(m.coords[3 * i], forms[i].second) << forms[i].first;
 
-  for (const char* bad : {"1..0", "1.0E", "1.0-", "e5", "1.0x", "inf", "nan", "0x1p3", "1 .0",
-                          "1.0E+5.", "--1.", "."}) {
+  for (const char* bad :
+       {"1..0", "1.0E", "1.0-", "e5", "1.0x", "inf", "nan", "0x1p3", "1 .0", "1.0E+5.", "--1.", "."}) {
     SCOPED_TRACE(bad);
     expect_error(write("bad.bdf", cat("GRID,1,,0.,", bad, ",0.\n")),
                  {"bad.bdf:1:", "card GRID", cat("field 5 ('", bad, "') is not a real number")});
@@ -397,10 +390,9 @@ TEST_F(NastranTest, MaterialRulesAndWtmass) {
   }
   // Case-control WTMASS overrides the bulk data one.
   {
-    const Mesh m = read_nastran(
-        write("c.bdf", "SOL 103\nCEND\nPARAM,WTMASS,0.5\nBEGIN BULK\nPARAM,WTMASS,4.\n" + tet +
-                           "MAT1,7,200.,,.25,2.\nCONM2,9,1,,3.\n"),
-        false);
+    const Mesh m = read_nastran(write("c.bdf", "SOL 103\nCEND\nPARAM,WTMASS,0.5\nBEGIN BULK\nPARAM,WTMASS,4.\n" + tet +
+                                                   "MAT1,7,200.,,.25,2.\nCONM2,9,1,,3.\n"),
+                                false);
     EXPECT_EQ(m.materials[0].rho, 1.0);
     EXPECT_EQ(m.point_mass, (std::vector<double>{1.5, 0, 0, 0}));
   }
@@ -413,8 +405,7 @@ TEST_F(NastranTest, MaterialRulesAndWtmass) {
                      "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\n"
                      "GRID,4,,0.,0.,1.\nCTETRA,1,2,1,2,3,4\nPLSOLID,2,7\n"),
                {"pid.bdf:5:", "card CTETRA", "PSOLID 2", "is a PLSOLID"});
-  expect_error(write("fluid.bdf", tet + "PSOLID,8,7,,,,,PFLUID\n"),
-               {"fluid.bdf:7:", "card PSOLID", "FCTN"});
+  expect_error(write("fluid.bdf", tet + "PSOLID,8,7,,,,,PFLUID\n"), {"fluid.bdf:7:", "card PSOLID", "FCTN"});
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -442,20 +433,18 @@ TEST_F(NastranTest, UpsideDownHexIsMirrored) {
   EXPECT_GT(morse::fe::min_jacobian(ElementType::Hex20, xyz.data()), 0.0);
   EXPECT_NEAR(morse::fe::element_volume(ElementType::Hex20, xyz.data()), 1.0, 1e-14);
   expect_midpoints(m);
-  EXPECT_EQ(element_ids(m, 0), (std::vector<std::int64_t>{1,  2,  3,  4,  5,  6,  7,  8,  11, 14,
-                                                          15, 12, 16, 13, 17, 18, 19, 22, 20, 21}));
-  EXPECT_EQ(count(log, "1 element(s) were given with their corners in the other orientation"), 1)
-      << log;
+  EXPECT_EQ(element_ids(m, 0),
+            (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8, 11, 14, 15, 12, 16, 13, 17, 18, 19, 22, 20, 21}));
+  EXPECT_EQ(count(log, "1 element(s) were given with their corners in the other orientation"), 1) << log;
 
   // The linear hexahedron and the pentahedron, upside down too.
   const Mesh h8 = read_nastran(write("hex8.bdf", grids + "CHEXA,1,1,5,6,7,8,1,2\n,3,4\n"), false);
   const auto x8 = element_xyz(h8, 0);
   EXPECT_GT(morse::fe::min_jacobian(ElementType::Hex8, x8.data()), 0.0);
   EXPECT_EQ(element_ids(h8, 0), (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6, 7, 8}));
-  const Mesh p15 = read_nastran(
-      write("penta.bdf", grids + "GRID,23,,.5,.5,0.\nGRID,24,,.5,.5,1.\n"
-                                 "CPENTA,1,1,5,6,8,1,2,4\n,19,24,22,15,16,18,11,23\n,14\n"),
-      false);
+  const Mesh p15 = read_nastran(write("penta.bdf", grids + "GRID,23,,.5,.5,0.\nGRID,24,,.5,.5,1.\n"
+                                                           "CPENTA,1,1,5,6,8,1,2,4\n,19,24,22,15,16,18,11,23\n,14\n"),
+                                false);
   const auto x15 = element_xyz(p15, 0);
   EXPECT_GT(morse::fe::min_jacobian(ElementType::Wedge15, x15.data()), 0.0);
   EXPECT_NEAR(morse::fe::element_volume(ElementType::Wedge15, x15.data()), 0.5, 1e-14);
@@ -467,8 +456,8 @@ TEST_F(NastranTest, UpsideDownHexIsMirrored) {
 
 TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
   using Format = NastranWriteOptions::Format;
-  for (ElementType t : {ElementType::Hex20, ElementType::Tet10, ElementType::Wedge15,
-                        ElementType::Hex8, ElementType::Tet4, ElementType::Wedge6}) {
+  for (ElementType t : {ElementType::Hex20, ElementType::Tet10, ElementType::Wedge15, ElementType::Hex8,
+                        ElementType::Tet4, ElementType::Wedge6}) {
     morse::mesh::BoxSpec b;
     b.type = t;
     b.lx = 0.3;
@@ -482,8 +471,7 @@ TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
     b.origin = {0.5, 1.25, 2.0};
     Mesh m = morse::mesh::generate_box(b);
     m.materials = {{"steel", 2.1e11, 0.3, 7800.0}, {"alu", 7e10, 0.33, 2700.0}};
-    for (std::int64_t e = 0; e < m.num_elements(); ++e)
-      m.elem_material[e] = static_cast<int>(e % 2);
+    for (std::int64_t e = 0; e < m.num_elements(); ++e) m.elem_material[e] = static_cast<int>(e % 2);
     m.fixed_dofs.assign(static_cast<std::size_t>(m.num_nodes()), 0);
     for (auto k : m.node_sets.at("x0")) m.fixed_dofs[k] = 7;
     for (auto k : m.node_sets.at("y0")) m.fixed_dofs[k] |= 2;
@@ -497,8 +485,7 @@ TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
       NastranWriteOptions o;
       o.format = f;
       o.aset = "x1";
-      const std::string path =
-          (dir_ / cat(morse::mesh::element_name(t), "_", fname, ".bdf")).string();
+      const std::string path = (dir_ / cat(morse::mesh::element_name(t), "_", fname, ".bdf")).string();
       write_nastran(m, path, o);
       EXPECT_FALSE(fs::exists(path + ".tmp"));
       ::testing::internal::CaptureStderr();
@@ -515,10 +502,9 @@ TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
       int n_bad = 0;
       for (std::size_t i = 0; i < m.coords.size(); ++i) {
         const double x = m.coords[i], y = r.coords[i];
-        const bool ok = f == Format::Free ? x == y
-                        : f == Format::Large
-                            ? std::fabs(x - y) <= 1e-14 * std::max(1.0, std::fabs(x))
-                            : std::fabs(x - y) <= 1e-6 * std::fabs(x);
+        const bool ok = f == Format::Free    ? x == y
+                        : f == Format::Large ? std::fabs(x - y) <= 1e-14 * std::max(1.0, std::fabs(x))
+                                             : std::fabs(x - y) <= 1e-6 * std::fabs(x);
         if (!ok && n_bad++ < 5) ADD_FAILURE() << "coordinate " << i << ": " << x << " read " << y;
       }
 
@@ -538,8 +524,7 @@ TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
       // Node sets: SET1 1, 2, ... in name order, plus the ASET.
       ASSERT_EQ(r.node_sets.size(), m.node_sets.size() + 1);
       int sid = 0;
-      for (const auto& [name, members] : m.node_sets)
-        EXPECT_EQ(r.node_sets.at(cat("SET1_", ++sid)), members) << name;
+      for (const auto& [name, members] : m.node_sets) EXPECT_EQ(r.node_sets.at(cat("SET1_", ++sid)), members) << name;
       EXPECT_EQ(r.node_sets.at("ASET"), m.node_sets.at("x1"));
 
       EXPECT_EQ(r.fixed_dofs, m.fixed_dofs);
@@ -567,8 +552,7 @@ TEST_F(NastranTest, WriterFormatsAndErrors) {
     write_nastran(m, (dir_ / "x.bdf").string());
     ADD_FAILURE() << "no error";
   } catch (const morse::Error& e) {
-    EXPECT_NE(std::string(e.what()).find("element 1 has no material"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("element 1 has no material"), std::string::npos) << e.what();
   }
   m.materials = {{"steel", 2.1e11, 0.3, 7800.0}};
   m.elem_material.assign(1, 0);
@@ -592,10 +576,8 @@ TEST_F(NastranTest, WriterFormatsAndErrors) {
   };
   const std::string small = text(NastranWriteOptions::Format::Small);
   EXPECT_NE(small.find("\nBEGIN BULK\n"), std::string::npos);
-  EXPECT_NE(small.find("\nGRID    2               1.      0.      0.\n"), std::string::npos)
-      << small;
-  EXPECT_NE(small.find("\nMAT1    1       2.1E+11         0.3     7800.\n"), std::string::npos)
-      << small;
+  EXPECT_NE(small.find("\nGRID    2               1.      0.      0.\n"), std::string::npos) << small;
+  EXPECT_NE(small.find("\nMAT1    1       2.1E+11         0.3     7800.\n"), std::string::npos) << small;
   EXPECT_NE(small.find("\nENDDATA\n"), std::string::npos);
   const std::string large = text(NastranWriteOptions::Format::Large);
   EXPECT_NE(large.find("\nCHEXA*  1               1               1               2\n"
@@ -635,16 +617,13 @@ TEST_F(NastranTest, ErrorsGridsElementsAndFields) {
                {"twice.bdf:8:", "card CTETRA", "grid 3 appears twice"});
   expect_error(write("many.bdf", cat(kTet, "GRID,5,,0.,0.,0.,,,,,1\n")),
                {"many.bdf:8:", "card GRID", "11 fields; at most 10"});
-  expect_error(write("manyl.bdf", cat(kTet, "GRID*,5,,0.,0.,0.,1\n")),
-               {"manyl.bdf:8:", "card GRID", "at most 6"});
+  expect_error(write("manyl.bdf", cat(kTet, "GRID*,5,,0.,0.,0.,1\n")), {"manyl.bdf:8:", "card GRID", "at most 6"});
   expect_error(write("extra.bdf", cat(kTet, "GRID,5,,0.,0.,0.\n,7\n")),
                {"extra.bdf:9:", "card GRID", "field 2 ('7'): unexpected data"});
   expect_error(write("orphan.bdf", cat("+A      1\n", kTet)),
                {"orphan.bdf:1:", "continuation line", "without a parent card"});
-  expect_error(write("name.bdf", cat(kTet, "GRID 5 0 1. 2. 3.\n")),
-               {"name.bdf:8:", "not a card name"});
-  expect_error(write("repl.bdf", cat(kTet, "GRID,5,,=,0.,0.\n")),
-               {"repl.bdf:8:", "card GRID", "replication"});
+  expect_error(write("name.bdf", cat(kTet, "GRID 5 0 1. 2. 3.\n")), {"name.bdf:8:", "not a card name"});
+  expect_error(write("repl.bdf", cat(kTet, "GRID,5,,=,0.,0.\n")), {"repl.bdf:8:", "card GRID", "replication"});
   expect_error(write("pid.bdf", cat(kTet, "CTETRA,2,5,1,2,3,4\n")),
                {"pid.bdf:8:", "card CTETRA", "PSOLID 5", "not defined"});
   expect_error(write("mat.bdf", cat(kTet, "CTETRA,2,5,1,2,3,4\nPSOLID,5,9\n")),
@@ -662,15 +641,11 @@ TEST_F(NastranTest, ErrorsUnsupportedCards) {
   EXPECT_EQ(m.num_elements(), 1);
   EXPECT_EQ(count(log, "MISSING"), 1) << log;
   EXPECT_EQ(count(log, "1 CBAR, 1 CQUAD4"), 1) << log;
-  expect_error(
-      write("rbe2.bdf", cat(kTet, "RBE2,10,1,123,2\n")),
-      {"rbe2.bdf:8:", "card RBE2", "rigid elements and MPCs are not supported", "-matrices_K"});
-  expect_error(write("mpc.bdf", cat(kTet, "MPC,1,1,1,1.,2,1,-1.\n")),
-               {"mpc.bdf:8:", "card MPC", "rigid elements"});
-  expect_error(write("cord1.bdf", cat(kTet, "CORD1R,5,1,2,3\n")),
-               {"cord1.bdf:8:", "card CORD1R", "CORD2R"});
-  expect_error(write("super.bdf", cat(kTet, "BEGIN SUPER=1\n")),
-               {"super.bdf:8:", "card BEGIN", "not supported"});
+  expect_error(write("rbe2.bdf", cat(kTet, "RBE2,10,1,123,2\n")),
+               {"rbe2.bdf:8:", "card RBE2", "rigid elements and MPCs are not supported", "-matrices_K"});
+  expect_error(write("mpc.bdf", cat(kTet, "MPC,1,1,1,1.,2,1,-1.\n")), {"mpc.bdf:8:", "card MPC", "rigid elements"});
+  expect_error(write("cord1.bdf", cat(kTet, "CORD1R,5,1,2,3\n")), {"cord1.bdf:8:", "card CORD1R", "CORD2R"});
+  expect_error(write("super.bdf", cat(kTet, "BEGIN SUPER=1\n")), {"super.bdf:8:", "card BEGIN", "not supported"});
   expect_error(write("qset.bdf", cat(kTet, "QSET1,123,1\n")),
                {"qset.bdf:8:", "card QSET1", "on grids (1) is not supported"});
   expect_error(write("conm2.bdf", cat(kTet, "GRID,9,,5.,5.,5.\nCONM2,5,9,,1.\n")),
@@ -680,8 +655,7 @@ TEST_F(NastranTest, ErrorsUnsupportedCards) {
 TEST_F(NastranTest, ErrorsConstraintsAndSets) {
   expect_error(write("aset.bdf", cat(kTet, "ASET1,12,1,2\n")),
                {"aset.bdf:8:", "card ASET1", "field 2 ('12')", "1, 2, 3"});
-  expect_error(write("asetp.bdf", cat(kTet, "ASET,1,123456,2,13\n")),
-               {"asetp.bdf:8:", "card ASET", "field 5 ('13')"});
+  expect_error(write("asetp.bdf", cat(kTet, "ASET,1,123456,2,13\n")), {"asetp.bdf:8:", "card ASET", "field 5 ('13')"});
   expect_error(write("spcd.bdf", cat(kTet, "SPC,1,1,123,0.5\n")),
                {"spcd.bdf:8:", "card SPC", "field 5 ('0.5')", "enforced displacements"});
   // A grid in a rotated displacement system: SPC 1 alone would act along a skewed axis.
@@ -691,16 +665,14 @@ TEST_F(NastranTest, ErrorsConstraintsAndSets) {
   expect_error(write("cdps.bdf", cat(kTet, cord, "GRID,5,,0.,0.,2.,5,13\n")),
                {"cdps.bdf:10:", "card GRID", "grid 5", "CD = 5"});
   // All three translations (or rotations only) are fine in any system.
-  const Mesh ok = read_nastran(
-      write("cdok.bdf", cat(kTet, cord, "GRID,5,,0.,0.,2.,5\nSPC1,1,123,5\nSPC,1,5,456\n")), false);
+  const Mesh ok =
+      read_nastran(write("cdok.bdf", cat(kTet, cord, "GRID,5,,0.,0.,2.,5\nSPC1,1,123,5\nSPC,1,5,456\n")), false);
   EXPECT_EQ(ok.fixed_dofs[4], 7);
 
-  expect_error(write("set.bdf", cat(kTet, "SET1,3,1,2,77\n")),
-               {"set.bdf:8:", "card SET1", "undefined grid 77"});
+  expect_error(write("set.bdf", cat(kTet, "SET1,3,1,2,77\n")), {"set.bdf:8:", "card SET1", "undefined grid 77"});
   expect_error(write("thru.bdf", cat(kTet, "SPC1,1,123,50,THRU,60\n")),
                {"thru.bdf:8:", "card SPC1", "50 THRU 60 contains no grid"});
-  expect_error(write("thru2.bdf", cat(kTet, "SET1,1,4,THRU,2\n")),
-               {"thru2.bdf:8:", "card SET1", "empty"});
+  expect_error(write("thru2.bdf", cat(kTet, "SET1,1,4,THRU,2\n")), {"thru2.bdf:8:", "card SET1", "empty"});
   expect_error(write("comp.bdf", cat(kTet, "SPC1,1,1223,1\n")),
                {"comp.bdf:8:", "card SPC1", "field 3 ('1223') is not a component set"});
   expect_error(write("setsp.bdf", cat(kTet, "SPOINT,100\nSET1,1,100\n")),
@@ -708,12 +680,10 @@ TEST_F(NastranTest, ErrorsConstraintsAndSets) {
 }
 
 TEST_F(NastranTest, ErrorsIncludeCoordinatesAndContinuations) {
-  expect_error(write("inc.bdf", cat(kTet, "INCLUDE 'sub/nope.bdf'\n")),
-               {"inc.bdf:8:", "card INCLUDE", "sub/nope.bdf"});
+  expect_error(write("inc.bdf", cat(kTet, "INCLUDE 'sub/nope.bdf'\n")), {"inc.bdf:8:", "card INCLUDE", "sub/nope.bdf"});
   // An error inside an included file names that file and line.
   write("sub/bad.bdf", "$ comment\nGRID,8,,1.,2.,x\n");
-  expect_error(write("inc2.bdf", cat(kTet, "INCLUDE sub/bad.bdf\n")),
-               {"sub/bad.bdf:2:", "card GRID", "field 6 ('x')"});
+  expect_error(write("inc2.bdf", cat(kTet, "INCLUDE sub/bad.bdf\n")), {"sub/bad.bdf:2:", "card GRID", "field 6 ('x')"});
   expect_error(write("cycle.bdf", cat(kTet, "CORD2R,7,8,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n",
                                       "CORD2C,8,7,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n")),
                {"cycle.bdf:8:", "card CORD2R", "cycle", "7 -> 8 -> 7"});
@@ -723,15 +693,14 @@ TEST_F(NastranTest, ErrorsIncludeCoordinatesAndContinuations) {
                {"trunc.bdf:8:", "card CORD2R", "truncated"});
   expect_error(write("line.bdf", cat(kTet, "CORD2R,7,,0.,0.,0.,0.,0.,1.\n,0.,0.,2.\n")),
                {"line.bdf:8:", "card CORD2R", "on one line"});
-  expect_error(write("dupcord.bdf", cat(kTet, "CORD2R,7,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n",
-                                        "CORD2R,7,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n")),
+  expect_error(write("dupcord.bdf",
+                     cat(kTet, "CORD2R,7,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n", "CORD2R,7,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.\n")),
                {"dupcord.bdf:10:", "card CORD2R", "defined twice"});
   // Fields 2-7, two blank fields, then the marker in columns 73-80.
   const std::string parent =
       cat("CTETRA  2       1       1       2       3       4       ", std::string(16, ' '), "+A");
   ASSERT_EQ(parent.size(), 74u);
-  expect_error(write("marker.bdf", cat(kTet, parent, "\n+B\n")),
-               {"marker.bdf:9:", "card CTETRA", "'+B'", "'+A'"});
+  expect_error(write("marker.bdf", cat(kTet, parent, "\n+B\n")), {"marker.bdf:9:", "card CTETRA", "'+B'", "'+A'"});
 }
 
 }  // namespace

@@ -44,12 +44,18 @@ std::vector<std::pair<int, int>> abaqus_mid_edges(ElementType t) {
 
 const char* abaqus_type(ElementType t) {
   switch (t) {
-    case ElementType::Tet4: return "C3D4";
-    case ElementType::Tet10: return "C3D10";
-    case ElementType::Wedge6: return "C3D6";
-    case ElementType::Wedge15: return "C3D15";
-    case ElementType::Hex8: return "C3D8";
-    default: return "C3D20";
+    case ElementType::Tet4:
+      return "C3D4";
+    case ElementType::Tet10:
+      return "C3D10";
+    case ElementType::Wedge6:
+      return "C3D6";
+    case ElementType::Wedge15:
+      return "C3D15";
+    case ElementType::Hex8:
+      return "C3D8";
+    default:
+      return "C3D20";
   }
 }
 
@@ -213,6 +219,7 @@ TEST(NastranModel, PointMassesAddTheirMass) {
   const double x_heavy = root(0.5, 1.8751040687), x_plain = 1.8751040687119611;
   const double ratio_eb = std::pow(x_heavy / x_plain, 4);  // omega^2 ratio
   EXPECT_NEAR(w_heavy / w_plain, ratio_eb, 0.01 * ratio_eb) << "mu " << mu;
-  if (world_rank() == 0) std::printf("tip-mass ratio: FE %.6f, Euler-Bernoulli %.6f (mu %.4f)\n", w_heavy / w_plain, ratio_eb, mu);
+  if (world_rank() == 0)
+    std::printf("tip-mass ratio: FE %.6f, Euler-Bernoulli %.6f (mu %.4f)\n", w_heavy / w_plain, ratio_eb, mu);
   EXPECT_LT(w_heavy, w_plain);
 }

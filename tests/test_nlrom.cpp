@@ -37,7 +37,8 @@ UMat smooth_basis(const Model& m, int r, double scale) {
   MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, m.dofs.n_owned, PETSC_DECIDE, m.dofs.n_global, r, nullptr, P.ptr()));
   for (int j = 0; j < r; ++j) {
     auto v = test::nodal_vector(m.lm, m.dofs, [=](double x, double y, double z, int d) {
-      return scale * x * (std::sin(1.1 * (j + 1) * x + 0.7 * d + 0.3 * j) + 0.4 * y * (d + j) - 0.3 * z * std::cos(j * x));
+      return scale * x *
+             (std::sin(1.1 * (j + 1) * x + 0.7 * d + 0.3 * j) + 0.4 * y * (d + j) - 0.3 * z * std::cos(j * x));
     });
     Vec c;
     MORSE_CALL(MatDenseGetColumnVecWrite(P.get(), j, &c));
@@ -124,8 +125,9 @@ TEST_P(NlromByType, StepEqualsExactOnCraigBampton) {
   EXPECT_LT(db, 1e-8 * sb) << mesh::element_name(GetParam());
 }
 
-INSTANTIATE_TEST_SUITE_P(AllTypes, NlromByType, ::testing::ValuesIn({ElementType::Tet10, ElementType::Wedge15,
-                                                                     ElementType::Hex8, ElementType::Hex20}),
+INSTANTIATE_TEST_SUITE_P(AllTypes, NlromByType,
+                         ::testing::ValuesIn({ElementType::Tet10, ElementType::Wedge15, ElementType::Hex8,
+                                              ElementType::Hex20}),
                          [](const auto& i) { return mesh::element_name(i.param); });
 
 // POD-filtered STEP (eq. 38–39) equals the exact tensors of Phi^T Phi_f Phi_f^T g_nl, checked on
@@ -495,7 +497,8 @@ TEST(Nlrom, StoredModelRoundTrips) {
 
 // The offline settings read their options and validate them with the boundary set.
 TEST(Options, OfflineSettings) {
-  test::GivenOptions g{{"-nlrom_basis", "cbmd"}, {"-nlrom_num_derivatives", "4"}, {"-nlrom_derivative_selection", "random"}};
+  test::GivenOptions g{
+      {"-nlrom_basis", "cbmd"}, {"-nlrom_num_derivatives", "4"}, {"-nlrom_derivative_selection", "random"}};
   nlrom::OfflineSettings s;
   s.basis.boundary_set = "root";
   ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);

@@ -1,7 +1,8 @@
 // St Venant–Kirchhoff forces, tangent and energy (fe/nonlinear.hpp) against exact identities and
 // closed forms: Taylor test of the tangent (error ~ eps^2), symmetry, frame indifference under a
 // large rigid rotation, the uniform-stretch closed form, K_T(0) = K and g_nl(0) = 0 exactly,
-// g_nl exactly quadratic + cubic, the matrix-free tangent product, the block evaluation, and the midpoint energy identity.
+// g_nl exactly quadratic + cubic, the matrix-free tangent product, the block evaluation, and the midpoint energy
+// identity.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,8 +15,8 @@ using mesh::ElementType;
 
 namespace {
 
-constexpr ElementType kAllTypes[] = {ElementType::Tet4, ElementType::Tet10, ElementType::Wedge6,
-                                     ElementType::Wedge15, ElementType::Hex8, ElementType::Hex20};
+constexpr ElementType kAllTypes[] = {ElementType::Tet4,    ElementType::Tet10, ElementType::Wedge6,
+                                     ElementType::Wedge15, ElementType::Hex8,  ElementType::Hex20};
 
 using Fixture = test::Model;
 
@@ -109,7 +110,7 @@ TEST_P(SvkByType, ExactAtZeroAndExactlyCubic) {
   };
   eval(1.0, gp.get());
   eval(-1.0, gm.get());
-  MORSE_CALL(VecWAXPY(a.get(), 1.0, gp.get(), gm.get()));  // 2a
+  MORSE_CALL(VecWAXPY(a.get(), 1.0, gp.get(), gm.get()));   // 2a
   MORSE_CALL(VecWAXPY(b.get(), -1.0, gm.get(), gp.get()));  // 2b
   for (double s : {2.0, -3.0}) {
     eval(s, g.get());
@@ -172,9 +173,8 @@ TEST_P(SvkByType, UniformStretchClosedForm) {
   const double P11 = (1 + st[0]) * (lam * trE + 2 * mu * E[0]);
   auto fu = dup(u.get());
   svk.internal_force(u.get(), fu.get());
-  auto sel = test::nodal_vector(f.lm, f.dofs, [&](double x, double, double, int d) {
-    return (d == 0 && std::abs(x - 1.0) < 1e-9) ? 1.0 : 0.0;
-  });
+  auto sel = test::nodal_vector(
+      f.lm, f.dofs, [&](double x, double, double, int d) { return (d == 0 && std::abs(x - 1.0) < 1e-9) ? 1.0 : 0.0; });
   double R;
   MORSE_CALL(VecDot(fu.get(), sel.get(), &R));
   EXPECT_NEAR(R, P11 * A0, 1e-10 * P11 * A0);

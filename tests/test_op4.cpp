@@ -21,8 +21,8 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
-#include "scratch.hpp"
 #include "morse/io/op4.hpp"
+#include "scratch.hpp"
 
 namespace {
 
@@ -57,7 +57,7 @@ Csc to_csc(std::int64_t nrows, std::int64_t ncols, const Entries& e) {
 }
 
 void write_csc(const std::string& path, const std::string& name, const Csc& a, const Op4WriteOptions& o,
-           bool append = false) {
+               bool append = false) {
   write_op4(path, name, a.nrows, a.ncols, a.ptr, a.idx, a.val, o, append);
 }
 
@@ -123,12 +123,11 @@ void expect_same(const Entries& expected, const Entries& got) {
       ADD_FAILURE() << "entry (" << k.second << ", " << k.first << ") = " << full(v) << " not read";
       continue;
     }
-    EXPECT_EQ(bits(v), bits(it->second)) << "entry (" << k.second << ", " << k.first
-                                         << "): " << full(v) << " read as " << full(it->second);
+    EXPECT_EQ(bits(v), bits(it->second)) << "entry (" << k.second << ", " << k.first << "): " << full(v) << " read as "
+                                         << full(it->second);
   }
   for (const auto& [k, v] : got)
-    if (expected.count(k) == 0)
-      ADD_FAILURE() << "extra entry (" << k.second << ", " << k.first << ") = " << full(v);
+    if (expected.count(k) == 0) ADD_FAILURE() << "extra entry (" << k.second << ", " << k.first << ") = " << full(v);
 }
 
 double random_value(std::mt19937_64& rng) {
@@ -183,9 +182,8 @@ Entries dense_rect(std::mt19937_64& rng) {
 
 // The 4 x 4 symmetric matrix of the hand-written files.
 Entries small_symmetric(double last) {
-  return {{{0, 0}, 4.0},    {{0, 1}, -1.0}, {{0, 2}, 0.5},    {{1, 0}, -1.0},
-          {{1, 1}, 3.0},    {{1, 3}, 0.25}, {{2, 0}, 0.5},    {{2, 2}, 2.0},
-          {{2, 3}, -0.125}, {{3, 1}, 0.25}, {{3, 2}, -0.125}, {{3, 3}, last}};
+  return {{{0, 0}, 4.0}, {{0, 1}, -1.0}, {{0, 2}, 0.5},    {{1, 0}, -1.0}, {{1, 1}, 3.0},    {{1, 3}, 0.25},
+          {{2, 0}, 0.5}, {{2, 2}, 2.0},  {{2, 3}, -0.125}, {{3, 1}, 0.25}, {{3, 2}, -0.125}, {{3, 3}, last}};
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -307,8 +305,7 @@ std::string transcode(const std::string& path, bool swap, int marker, int word) 
           strings.emplace_back(row, v);
         }
         std::int64_t nw = 0;
-        for (const auto& s : strings)
-          nw += (bigmat ? 2 : 1) + static_cast<std::int64_t>(s.second.size()) * wpv;
+        for (const auto& s : strings) nw += (bigmat ? 2 : 1) + static_cast<std::int64_t>(s.second.size()) * wpv;
         c.integer(nw);
         for (const auto& s : strings) {
           const std::int64_t len = static_cast<std::int64_t>(s.second.size()) * wpv;
@@ -338,8 +335,7 @@ class Op4Test : public morse::test::ScratchDirTest {
 
   /// Expects reading matrix `name` of path to the end to throw a morse::Error whose message
   /// contains every part.
-  static void expect_error(const std::string& path, const std::string& name,
-                           std::initializer_list<std::string> parts) {
+  static void expect_error(const std::string& path, const std::string& name, std::initializer_list<std::string> parts) {
     morse::test::expect_error_parts(
         [&] {
           Op4Reader r(path, name);
@@ -366,8 +362,7 @@ TEST_F(Op4Test, RoundTripEveryLayout) {
   for (bool binary : {false, true}) {
     for (const Mode& m : modes) {
       for (bool single : {false, true}) {
-        const std::string label =
-            cat(binary ? "binary_" : "ascii_", m.label, single ? "_single" : "_double");
+        const std::string label = cat(binary ? "binary_" : "ascii_", m.label, single ? "_single" : "_double");
         SCOPED_TRACE(label);
         const Entries sym = random_symmetric(37, rng, !single);
         const Entries rect = dense_rect(rng);
@@ -389,8 +384,7 @@ TEST_F(Op4Test, RoundTripEveryLayout) {
           int form;
           const Entries* entries;
         };
-        const Case cases[] = {
-            {"KAA", 37, 37, 6, &sym}, {"RECT", 5, 7, 2, &rect}, {"ONE", 1, 1, 6, &one}};
+        const Case cases[] = {{"KAA", 37, 37, 6, &sym}, {"RECT", 5, 7, 2, &rect}, {"ONE", 1, 1, 6, &one}};
         for (const Case& c : cases) {
           SCOPED_TRACE(c.name);
           Op4Header h;
@@ -670,8 +664,7 @@ TEST_F(Op4Test, OtherBinaryLayouts) {
     bool swap;
     int marker, word;
   };
-  const Layout layouts[] = {{true, 4, 4},  {false, 8, 4}, {true, 8, 4},
-                            {false, 4, 8}, {true, 4, 8},  {true, 8, 8}};
+  const Layout layouts[] = {{true, 4, 4}, {false, 8, 4}, {true, 8, 4}, {false, 4, 8}, {true, 4, 8}, {true, 8, 8}};
   for (const Mode& m : modes) {
     SCOPED_TRACE(m.label);
     Op4WriteOptions o;
@@ -687,8 +680,8 @@ TEST_F(Op4Test, OtherBinaryLayouts) {
     EXPECT_EQ(transcode(p, false, 4, 4), slurp(p));  // the transcoder itself
     for (const Layout& l : layouts) {
       SCOPED_TRACE(cat("swap ", l.swap, " marker ", l.marker, " word ", l.word));
-      const std::string q = put(cat(m.label, "_", l.swap, l.marker, l.word, ".op4"),
-                                transcode(p, l.swap, l.marker, l.word));
+      const std::string q =
+          put(cat(m.label, "_", l.swap, l.marker, l.word, ".op4"), transcode(p, l.swap, l.marker, l.word));
       EXPECT_EQ(Op4Reader::names_in_file(q), (std::vector<std::string>{"KAA", "RECT"}));
       Op4Header h;
       expect_same(sym, read_all(q, "KAA", &h));
@@ -718,9 +711,7 @@ TEST_F(Op4Test, AsciiErrors) {
   const Case cases[] = {
       {"complex.op4",
        "       2       2       1       4CMAT    1P,3E23.16\n       1       1       2\n" +
-           std::string(
-               " 1.0000000000000000E+00 0.0000000000000000E+00\n       3       1       1\n") +
-           one,
+           std::string(" 1.0000000000000000E+00 0.0000000000000000E+00\n       3       1       1\n") + one,
        {":1: ", "complex matrices are not supported"}},
       {"form.op4",
        "       2       2       3       2KAA     1P,3E23.16\n       3       1       1\n" + one,
@@ -731,9 +722,7 @@ TEST_F(Op4Test, AsciiErrors) {
       {"col_high.op4",
        head + "       1       1       1\n" + one + "       5       1       1\n" + one + end,
        {":4: ", "column number 5 out of range 1..3"}},
-      {"col_zero.op4",
-       head + "       0       1       1\n" + one + end,
-       {":2: ", "column number 0 out of range"}},
+      {"col_zero.op4", head + "       0       1       1\n" + one + end, {":2: ", "column number 0 out of range"}},
       {"col_down.op4",
        head + "       2       1       1\n" + one + "       1       1       1\n" + one + end,
        {":4: ", "column 1 after column 2"}},
@@ -823,8 +812,7 @@ TEST_F(Op4Test, BinaryErrors) {
   const std::string p_mark = put("marker.op4", patch_int(bytes, 32, 1000));
   expect_error(p_mark, "KAA", {p_mark + ": byte 32: ", "truncated file"});
   const std::int32_t len1 = get<std::int32_t>(bytes, 32);
-  const std::string p_tail =
-      put("tail.op4", patch_int(bytes, 36 + static_cast<std::size_t>(len1), len1 + 1));
+  const std::string p_tail = put("tail.op4", patch_int(bytes, 36 + static_cast<std::size_t>(len1), len1 + 1));
   expect_error(p_tail, "KAA", {p_tail + ": byte ", "record-length markers differ"});
   const std::string p_nw = put("nw.op4", patch_int(bytes, 44, get<std::int32_t>(bytes, 44) + 2));
   expect_error(p_nw, "KAA", {p_nw + ": byte 44: ", "does not match the record length"});

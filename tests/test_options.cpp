@@ -1,13 +1,13 @@
 // The option registry and the unknown-option check derived from it (morse/core/options.hpp).
-#include <gtest/gtest.h>
 #include <petscsys.h>
+#include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
+#include "given_options.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
-#include "given_options.hpp"
 #include "util.hpp"
 
 namespace {
@@ -19,15 +19,14 @@ using morse::test::GivenOptions;
 // A command's option block: -casing_clearance, -contact_mu and, under prefix c1_, -load_sets.
 PetscErrorCode read_options(double* clearance, double* mu) {
   PetscOptionsBegin(PETSC_COMM_WORLD, nullptr, "test options", "");
-  PetscCall(MorseOptionsReal("-casing_clearance", "Casing: nominal radial clearance [m]", "",
-                             *clearance, clearance, nullptr));
+  PetscCall(MorseOptionsReal("-casing_clearance", "Casing: nominal radial clearance [m]", "", *clearance, clearance,
+                             nullptr));
   PetscCall(MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", *mu, mu, nullptr));
   PetscOptionsEnd();
   char* sets[4];
   PetscInt n = 4;
   PetscOptionsBegin(PETSC_COMM_WORLD, "c1_", "test options with a prefix", "");
-  PetscCall(
-      MorseOptionsStringArray("-load_sets", "Node sets carrying a load", "", sets, &n, nullptr));
+  PetscCall(MorseOptionsStringArray("-load_sets", "Node sets carrying a load", "", sets, &n, nullptr));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }
@@ -61,8 +60,7 @@ TEST(Options, RegistrationUnderTheBlockPrefix) {
   EXPECT_TRUE(opt::registered("-c1_load_sets"));
   EXPECT_FALSE(opt::registered("-load_sets"));
   EXPECT_EQ(opt::help("-contact_mu"), "Coulomb friction coefficient");
-  EXPECT_EQ(opt::names(),
-            (std::vector<std::string>{"-c1_load_sets", "-casing_clearance", "-contact_mu"}));
+  EXPECT_EQ(opt::names(), (std::vector<std::string>{"-c1_load_sets", "-casing_clearance", "-contact_mu"}));
   // Reading the same options again (a second command, a loop) is one registration.
   ASSERT_EQ(read_options(&c, &mu), 0);
   EXPECT_TRUE(opt::conflicts().empty());
@@ -78,11 +76,9 @@ TEST(Options, OneHelpTextPerName) {
   EXPECT_TRUE(opt::conflicts().empty());
   opt::add(nullptr, "-boundary", "Node set kept as physical DOFs");
   ASSERT_EQ(opt::conflicts().size(), 1u);
-  EXPECT_NE(opt::conflicts()[0].find("-boundary registered with two help texts"),
-            std::string::npos);
+  EXPECT_NE(opt::conflicts()[0].find("-boundary registered with two help texts"), std::string::npos);
   // The early check refuses to run with a conflict.
-  EXPECT_NE(early_error().find("internal error: -boundary registered with two help texts"),
-            std::string::npos);
+  EXPECT_NE(early_error().find("internal error: -boundary registered with two help texts"), std::string::npos);
 }
 
 TEST(Options, ClosestSuggestsOnlyNearNames) {
@@ -129,13 +125,11 @@ TEST(Options, SuspiciousByFirstWordOrDistanceNotInnerNorGlobal) {
 }
 
 TEST(Options, EarlyCheckRefusesMisspellingsNamingTheClosest) {
-  GivenOptions given(
-      {{"-casing_clearence", "1e-3"}, {"-contact_mu", "0.2"}, {"-ksp_monitor", nullptr}});
+  GivenOptions given({{"-casing_clearence", "1e-3"}, {"-contact_mu", "0.2"}, {"-ksp_monitor", nullptr}});
   double c = 1e-3, mu = 0.1;
   ASSERT_EQ(read_options(&c, &mu), 0);
   EXPECT_DOUBLE_EQ(mu, 0.2);
-  EXPECT_EQ(early_error(),
-            "unknown option(s): -casing_clearence (did you mean -casing_clearance?) (see -help)");
+  EXPECT_EQ(early_error(), "unknown option(s): -casing_clearence (did you mean -casing_clearance?) (see -help)");
   // The final check refuses every option nobody used, the unrelated one too.
   std::string final_error;
   try {
@@ -154,9 +148,7 @@ TEST(Options, DynamicNamesAndTheirListOption) {
   GivenOptions given({{"-c1_load_set", "x1"}, {"-c1_load_x1_dir", "z"}});
   double c = 1e-3, mu = 0.1;
   ASSERT_EQ(read_options(&c, &mu), 0);
-  EXPECT_EQ(
-      early_error(),
-      "unknown option(s): -c1_load_set (did you mean -c1_load_sets?) -c1_load_x1_dir (see -help)");
+  EXPECT_EQ(early_error(), "unknown option(s): -c1_load_set (did you mean -c1_load_sets?) -c1_load_x1_dir (see -help)");
 }
 
 TEST(Options, EarlyCheckPassesInnerAndUnrelatedOptions) {

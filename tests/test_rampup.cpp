@@ -130,8 +130,7 @@ Superelement chain_superelement(bool with_C) {
   for (int i = 0; i < nb; ++i) T[i * n + i] = 1.0;
   for (int i = 0; i < ni; ++i) {
     for (int j = 0; j < nb; ++j) T[(nb + i) * n + j] = 0.1 * std::sin(1.0 + i + 2.0 * j);
-    for (int j = 0; j < ni; ++j)
-      T[(nb + i) * n + nb + j] = (i == j ? 1.0 : 0.0) + 0.05 * std::cos(3.0 * i + j);
+    for (int j = 0; j < ni; ++j) T[(nb + i) * n + nb + j] = (i == j ? 1.0 : 0.0) + 0.05 * std::cos(3.0 * i + j);
   }
   auto project = [&](const std::vector<double>& A) {
     std::vector<double> Ap(n * n), AT(n * n, 0.0), R(n * n, 0.0);
@@ -155,8 +154,7 @@ Superelement chain_superelement(bool with_C) {
   se.M = project(M);
   if (with_C) {
     std::vector<double> C(K);
-    for (double& v : C)
-      v *= 1e-5;  // Rayleigh: modal damping 1e-5 omega^2, diagonal in any modal basis
+    for (double& v : C) v *= 1e-5;  // Rayleigh: modal damping 1e-5 omega^2, diagonal in any modal basis
     se.C = project(C);
   }
   for (int p : bnodes)
@@ -172,8 +170,7 @@ Superelement chain_superelement(bool with_C) {
 std::vector<double> chain_frequencies() {
   std::vector<double> w;
   for (double k : kChain)
-    for (int j = 1; j <= 5; ++j)
-      w.push_back(2.0 * std::sqrt(k) * std::sin((2 * j - 1) * M_PI / 22.0));
+    for (int j = 1; j <= 5; ++j) w.push_back(2.0 * std::sqrt(k) * std::sin((2 * j - 1) * M_PI / 22.0));
   std::sort(w.begin(), w.end());
   return w;
 }
@@ -225,9 +222,8 @@ TEST(RampupElement, StiffnessIsTheExactTimoshenkoMatrix) {
   const double L = 0.1, d = 0.06, di = 0.02;
   const ShaftElement e = shaft_element(L, d, di, m);
   const double A = M_PI * (d * d - di * di) / 4, I = M_PI * (std::pow(d, 4) - std::pow(di, 4)) / 64;
-  const double mr = di / d,
-               kappa = 6 * (1 + m.nu) * std::pow(1 + mr * mr, 2) /
-                       ((7 + 6 * m.nu) * std::pow(1 + mr * mr, 2) + (20 + 12 * m.nu) * mr * mr);
+  const double mr = di / d, kappa = 6 * (1 + m.nu) * std::pow(1 + mr * mr, 2) /
+                                    ((7 + 6 * m.nu) * std::pow(1 + mr * mr, 2) + (20 + 12 * m.nu) * mr * mr);
   EXPECT_NEAR(e.kappa, kappa, 1e-15);
   const double phi = 12 * m.E * I / (kappa * m.E / (2 * (1 + m.nu)) * A * L * L);
   EXPECT_NEAR(e.phi / phi, 1.0, 1e-14);
@@ -250,15 +246,12 @@ TEST(RampupElement, StiffnessIsTheExactTimoshenkoMatrix) {
   // consistent mass for phi = 0), x-z plane, in closed form.
   const double f2 = (1 + phi) * (1 + phi), rAL = m.rho * A * L, rIL = m.rho * I / L;
   EXPECT_NEAR(e.Mt[0] / (rAL * (13.0 / 35 + 7 * phi / 10 + phi * phi / 3) / f2), 1.0, 1e-12);
-  EXPECT_NEAR(e.Mt[3] / (rAL * L * (11.0 / 210 + 11 * phi / 120 + phi * phi / 24) / f2), 1.0,
-              1e-12);
+  EXPECT_NEAR(e.Mt[3] / (rAL * L * (11.0 / 210 + 11 * phi / 120 + phi * phi / 24) / f2), 1.0, 1e-12);
   EXPECT_NEAR(e.Mt[4] / (rAL * (9.0 / 70 + 3 * phi / 10 + phi * phi / 6) / f2), 1.0, 1e-12);
-  EXPECT_NEAR(e.Mt[8 * 3 + 3] / (rAL * L * L * (1.0 / 105 + phi / 60 + phi * phi / 120) / f2), 1.0,
-              1e-12);
+  EXPECT_NEAR(e.Mt[8 * 3 + 3] / (rAL * L * L * (1.0 / 105 + phi / 60 + phi * phi / 120) / f2), 1.0, 1e-12);
   EXPECT_NEAR(e.Mr[0] / (rIL * 6.0 / 5 / f2), 1.0, 1e-12);
   EXPECT_NEAR(e.Mr[3] / (rIL * L * (1.0 / 10 - phi / 2) / f2), 1.0, 1e-12);
-  EXPECT_NEAR(e.Mr[8 * 3 + 3] / (rIL * L * L * (2.0 / 15 + phi / 6 + phi * phi / 3) / f2), 1.0,
-              1e-12);
+  EXPECT_NEAR(e.Mr[8 * 3 + 3] / (rIL * L * L * (2.0 / 15 + phi / 6 + phi * phi / 3) / f2), 1.0, 1e-12);
   // Rigid translation carries the element's mass; a rigid rotation of the element (u_x = z,
   // theta_y = 1, a static solution the shape functions reproduce exactly) carries the rotary
   // inertia rho I L; G is skew-symmetric exactly.
@@ -266,8 +259,7 @@ TEST(RampupElement, StiffnessIsTheExactTimoshenkoMatrix) {
   for (int i : {0, 4})
     for (int j : {0, 4}) mt += e.Mt[8 * i + j];
   EXPECT_NEAR(mt / (m.rho * A * L), 1.0, 1e-13);
-  double qy[8] = {0, 0, 0, 1, L, 0, 0, 1},
-         qx[8] = {0, 0, 1, 0, 0, -L, 1, 0};  // theta_y = 1; theta_x = 1
+  double qy[8] = {0, 0, 0, 1, L, 0, 0, 1}, qx[8] = {0, 0, 1, 0, 0, -L, 1, 0};  // theta_y = 1; theta_x = 1
   double mrot = 0, g = 0;
   for (int i = 0; i < 8; ++i)
     for (int j = 0; j < 8; ++j) {
@@ -316,8 +308,7 @@ TEST(RampupElement, PinnedPinnedFrequenciesConvergeToTimoshenko) {
   const Section ss = section(ds, m);
   const auto ws = pinned_frequencies(Ls, ds, m, 24);
   for (int n = 1; n <= 2; ++n) {
-    EXPECT_NEAR(ws[n - 1] / (std::pow(n * M_PI / Ls, 2) * std::sqrt(ss.EI / ss.rhoA)), 1.0,
-                5e-4 * n * n);
+    EXPECT_NEAR(ws[n - 1] / (std::pow(n * M_PI / Ls, 2) * std::sqrt(ss.EI / ss.rhoA)), 1.0, 5e-4 * n * n);
     EXPECT_NEAR(ws[n - 1] / timoshenko_pinned(ss, Ls, n), 1.0, 1e-5);
   }
   if (world_rank() == 0)
@@ -375,10 +366,9 @@ TEST(RampupGyroscopic, CampbellDiagramOfADiskOnAMasslessShaft) {
     for (int j = 0; j < D.n; ++j) ASSERT_EQ(D.G[i * D.n + j], -D.G[j * D.n + i]);
   double worst = 0;
   for (double omega : {0.0, 300.0, 1000.0, 3000.0, 10000.0}) {
-    std::vector<double> ref = {
-        std::sqrt(kt / mass), std::sqrt(kt / mass),
-        (-Ip * omega + std::sqrt(Ip * Ip * omega * omega + 4 * Id * kth)) / (2 * Id),
-        (Ip * omega + std::sqrt(Ip * Ip * omega * omega + 4 * Id * kth)) / (2 * Id)};
+    std::vector<double> ref = {std::sqrt(kt / mass), std::sqrt(kt / mass),
+                               (-Ip * omega + std::sqrt(Ip * Ip * omega * omega + 4 * Id * kth)) / (2 * Id),
+                               (Ip * omega + std::sqrt(Ip * Ip * omega * omega + 4 * Id * kth)) / (2 * Id)};
     std::sort(ref.begin(), ref.end());
     const auto lam = whirl_eigenvalues(a, omega);
     ASSERT_EQ(lam.size(), 4u) << "at " << omega;
@@ -424,8 +414,7 @@ TEST(RampupLoad, UnbalanceForceIsMinusTheMassTimesItsAcceleration) {
       const double acc = (pos(t0 + h, c) - 2 * pos(t0, c) + pos(t0 - h, c)) / (h * h);
       std::vector<double> g(a.n(), 0.0);
       a.add_unbalance(lc.speed(t0), lc.acceleration(t0), lc.angle(t0), g.data());
-      EXPECT_NEAR(g[c], -2e-3 * acc, 1e-4 * 2e-3 * std::pow(1.3 * 400, 2))
-          << "t = " << t0 << " c = " << c;
+      EXPECT_NEAR(g[c], -2e-3 * acc, 1e-4 * 2e-3 * std::pow(1.3 * 400, 2)) << "t = " << t0 << " c = " << c;
     }
   }
 }
@@ -459,16 +448,14 @@ TEST(RampupIntegrate, JeffcottSteadyUnbalanceResponse) {
   const auto Xf = unbalance_response(a, W, 0);
   EXPECT_NEAR(std::abs(Xf[0]) / X, 1.0, 1e-12);
   if (world_rank() == 0)
-    std::printf("[ rampup ] Jeffcott |X| closed form %.6e, integrated %.6e, orbit %.6e\n", X, xmax,
-                rmax);
+    std::printf("[ rampup ] Jeffcott |X| closed form %.6e, integrated %.6e, orbit %.6e\n", X, xmax, rmax);
   expect_same_on_ranks(xmax, "Jeffcott amplitude");
 }
 
 TEST(RampupIntegrate, NewmarkAndHHTAreSecondOrder) {
   // Undamped Jeffcott from rest at constant speed: x = A (cos W t - cos w t),
   // y = A (sin W t - (W / w) sin w t), A = me W^2 / (k - m W^2).
-  const double m = 10, k = 1e6, me = 1e-4, W = 200, w = std::sqrt(k / m),
-               A = me * W * W / (k - m * W * W);
+  const double m = 10, k = 1e6, me = 1e-4, W = 200, w = std::sqrt(k / m), A = me * W * W / (k - m * W * W);
   const Assembly a = jeffcott(m, k, 0.0, me);
   LoadCase lc;
   lc.kind = LoadCase::Kind::Constant;
@@ -520,17 +507,14 @@ TEST(RampupIntegrate, EnergyIsConservedWithGyroscopicTermsWhenUndampedAndUnforce
   for (int i = 0; i < a.n(); ++i) s.x0[i] = 1e-5 * std::sin(1.0 + 3.0 * i);
   const double e0 = a.energy(s.x0.data(), std::vector<double>(a.n(), 0.0).data());
   double worst = 0;
-  integrate(a, lc, s, [&](const StepOutput& o) {
-    worst = std::max(worst, std::fabs(a.energy(o.x, o.v) / e0 - 1));
-  });
+  integrate(a, lc, s, [&](const StepOutput& o) { worst = std::max(worst, std::fabs(a.energy(o.x, o.v) / e0 - 1)); });
   EXPECT_LT(worst, 1e-10);
   // HHT with alpha < 0 dissipates.
   s.alpha = -0.2;
   double last = 0;
   integrate(a, lc, s, [&](const StepOutput& o) { last = a.energy(o.x, o.v); });
   EXPECT_LT(last, 0.999 * e0);
-  if (world_rank() == 0)
-    std::printf("[ rampup ] Newmark energy drift over 2000 steps: %.2e\n", worst);
+  if (world_rank() == 0) std::printf("[ rampup ] Newmark energy drift over 2000 steps: %.2e\n", worst);
   expect_same_on_ranks(worst, "energy drift");
 }
 
@@ -563,8 +547,7 @@ TEST_F(Rampup, StatorModalBasisOfTheClampedSuperelement) {
     EXPECT_NEAR(cut.damping[i], 0.02 * ref[i], 1e-9 * ref[i]);
   }
   for (std::size_t r = 0; r < cut.dof_node.size(); ++r)
-    for (int m = 0; m < 7; ++m)
-      EXPECT_NEAR(std::fabs(cut.phi[r * 7 + m]), std::fabs(all.phi[r * 15 + m]), 1e-9);
+    for (int m = 0; m < 7; ++m) EXPECT_NEAR(std::fabs(cut.phi[r * 7 + m]), std::fabs(all.phi[r * 15 + m]), 1e-9);
   expect_same_on_ranks(cut.omega[6], "stator frequency");
   // The seed's default: 2.5x the top spin speed (the faster of two spools).
   RotorSpec lp, hp;
@@ -671,16 +654,13 @@ TEST_F(Rampup, BadInputGivesClearErrors) {
   r.disks = {{"turbine", 1, 10, 0.1, 0.05}};
   StatorModes sm = stator_modes(chain_superelement(false), {101}, 1e4);
   Bearing b{"front", 0, 0, 0, 102, 1e6, 1e6, 0, 0, {}};  // 102 is an interior node
-  expect_error_parts([&] { Assembly({r}, {sm}, {b}); },
-                     {"bearing 'front'", "node 102", "not in the interface"},
+  expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"bearing 'front'", "node 102", "not in the interface"},
                      "bearing on an interior node");
   b.node = 101;
-  expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"node 101", "clamped"},
-                     "bearing on a clamped node");
+  expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"node 101", "clamped"}, "bearing on a clamped node");
   b.node = 103;
   b.kyy = -1;
-  expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"bearing 'front'", ">= 0", "kyy -1"},
-                     "negative stiffness");
+  expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"bearing 'front'", ">= 0", "kyy -1"}, "negative stiffness");
   b.kyy = 1e6;
   b.station = 7;
   expect_error_parts([&] { Assembly({r}, {sm}, {b}); }, {"station 7"}, "station out of range");
@@ -690,23 +670,20 @@ TEST_F(Rampup, BadInputGivesClearErrors) {
                      "unbalance on a missing disk");
   bad = r;
   bad.z = {0.0, 0.0};
-  expect_error_parts([&] { rotor_matrices(bad); }, {"rotor 'lp'", "strictly increasing"},
-                     "zero-length element");
+  expect_error_parts([&] { rotor_matrices(bad); }, {"rotor 'lp'", "strictly increasing"}, "zero-length element");
   bad = r;
   bad.sections[0].d_inner = 0.06;
-  expect_error_parts([&] { rotor_matrices(bad); }, {"rotor 'lp'", "element 0", "d_inner < d_outer"},
-                     "bad section");
+  expect_error_parts([&] { rotor_matrices(bad); }, {"rotor 'lp'", "element 0", "d_inner < d_outer"}, "bad section");
   expect_error_parts([&] { stator_modes(chain_superelement(false), {999}, 1e3); },
                      {"clamped node 999", "not a boundary"}, "unknown clamped node");
-  expect_error_parts([&] { stator_modes(chain_superelement(false), {101}, 0.0); },
-                     {"truncation frequency", "positive"}, "zero cut");
+  expect_error_parts([&] { stator_modes(chain_superelement(false), {101}, 0.0); }, {"truncation frequency", "positive"},
+                     "zero cut");
   {
     io::H5Output out(MPI_COMM_SELF, path("norom.h5"));
     out.write("/meta/x", std::vector<double>{1.0});
     out.commit();
   }
-  expect_error_parts([&] { read_superelement(path("norom.h5")); }, {"norom.h5", "no /rom/K"},
-                     "file without /rom");
+  expect_error_parts([&] { read_superelement(path("norom.h5")); }, {"norom.h5", "no /rom/K"}, "file without /rom");
   const Assembly a = jeffcott(10, 1e6, 0, 1e-4);
   LoadCase lc;
   lc.omega_max = 1000;
@@ -726,8 +703,7 @@ TEST_F(Rampup, BadInputGivesClearErrors) {
   ml.sections[0].material.rho = 0;
   ml.unbalances = {{"turbine", 1e-4, 0}};
   const Assembly am({ml}, {}, {});
-  expect_error_parts([&] { integrate(am, lc, s, nullptr); }, {"mass matrix is singular"},
-                     "massless DOF");
+  expect_error_parts([&] { integrate(am, lc, s, nullptr); }, {"mass matrix is singular"}, "massless DOF");
 }
 
 TEST(RampupPerformance, StepCostIsLinearInTheStatorModes) {
@@ -745,8 +721,7 @@ TEST(RampupPerformance, StepCostIsLinearInTheStatorModes) {
       for (int c = 1; c <= 3; ++c) {
         sm.dof_node.push_back(node);
         sm.dof_component.push_back(c);
-        for (int i = 0; i < N; ++i)
-          sm.phi.push_back(0.01 * std::sin(0.3 * node + 1.7 * c + 0.11 * i));
+        for (int i = 0; i < N; ++i) sm.phi.push_back(0.01 * std::sin(0.3 * node + 1.7 * c + 0.11 * i));
       }
     std::vector<RotorSpec> rotors(2);
     for (int k = 0; k < 2; ++k) {
@@ -782,8 +757,7 @@ TEST(RampupPerformance, StepCostIsLinearInTheStatorModes) {
   if (world_rank() == 0) {
     std::printf("[ rampup ] condensed step (R = 160 rotor DOFs, 10 bearing directions):");
     for (std::size_t i = 0; i < Ns.size(); ++i) std::printf(" N=%d %.1f us;", Ns[i], 1e6 * tc[i]);
-    std::printf("\n[ rampup ] dense step: N=100 %.2f ms; N=400 %.2f ms\n", 1e3 * td100,
-                1e3 * td400);
+    std::printf("\n[ rampup ] dense step: N=100 %.2f ms; N=400 %.2f ms\n", 1e3 * td100, 1e3 * td400);
   }
   // Linear: 8x the modes from 250 to 2000 costs at most ~8x (allow timing noise on a shared
   // machine); the dense step is cubic.
@@ -825,8 +799,7 @@ TEST(RampupAssembly, BearingOnSeveralNodesSitsOnTheirMean) {
     worst = std::max(worst, std::fabs(F[d] - k * (ur[d] - 0.5 * (u3 + u6))) / std::fabs(F[d]));
     // The coupling block of K: K[rotor][m] = -k (p3 + p6)_m / 2.
     const int rd = a.rotor_dof(0, 1, d);
-    for (int m = 0; m < N; ++m)
-      worst = std::max(worst, std::fabs(A.K[rd * n + m] + 0.5 * k * (p3[m] + p6[m])) / k);
+    for (int m = 0; m < N; ++m) worst = std::max(worst, std::fabs(A.K[rd * n + m] + 0.5 * k * (p3[m] + p6[m])) / k);
   }
   EXPECT_LT(worst, 1e-12);
   Bearing twice = b;

@@ -114,25 +114,21 @@ std::vector<double> uniform_stations(double length, int n_el) {
 Assembly two_disk_rotor(int n_el, double kxx, double kyy, double c) {
   EXPECT_EQ(n_el % 3, 0);
   RotorSpec r = shaft(uniform_stations(1.5, n_el));
-  r.disks = {plate_disk("left", n_el / 3, 0.28, 0.05, 0.07),
-             plate_disk("right", 2 * n_el / 3, 0.35, 0.05, 0.07)};
-  return Assembly({r}, {},
-                  {ground_bearing("b0", 0, kxx, kyy, c), ground_bearing("b1", n_el, kxx, kyy, c)});
+  r.disks = {plate_disk("left", n_el / 3, 0.28, 0.05, 0.07), plate_disk("right", 2 * n_el / 3, 0.35, 0.05, 0.07)};
+  return Assembly({r}, {}, {ground_bearing("b0", 0, kxx, kyy, c), ground_bearing("b1", n_el, kxx, kyy, c)});
 }
 
 // Example 5.9.9: bearings of 10 MN/m at 0 and 1.0 m, the 350 mm disk at the free end (1.5 m).
 Assembly overhung_rotor(const std::vector<double>& z) {
   const auto at = [&](double zz) {
-    const auto it =
-        std::find_if(z.begin(), z.end(), [&](double s) { return std::fabs(s - zz) < 1e-12; });
+    const auto it = std::find_if(z.begin(), z.end(), [&](double s) { return std::fabs(s - zz) < 1e-12; });
     EXPECT_NE(it, z.end()) << "no station at z = " << zz;
     return static_cast<int>(it - z.begin());
   };
   RotorSpec r = shaft(z);
   r.disks = {plate_disk("disk", at(1.5), 0.35, 0.05, 0.07)};
   return Assembly({r}, {},
-                  {ground_bearing("b0", at(0.0), 10e6, 10e6, 0.0),
-                   ground_bearing("b1", at(1.0), 10e6, 10e6, 0.0)});
+                  {ground_bearing("b0", at(0.0), 10e6, 10e6, 0.0), ground_bearing("b1", at(1.0), 10e6, 10e6, 0.0)});
 }
 
 // The n lowest whirl eigenvalues (Im > 0, ascending Im) at driving speed omega.
@@ -167,15 +163,15 @@ double expect_quoted(const char* what, const std::vector<double>& morse_values,
     EXPECT_NEAR(morse_values[k], q, unit) << what << ", value " << k << ": quoted " << quoted[k];
     worst = std::max(worst, std::fabs(morse_values[k] / q - 1.0));
     if (world_rank() == 0)
-      std::printf("[ literature ]   quoted %-8s morse %12.6f  rel. diff %+.2e\n", quoted[k],
-                  morse_values[k], morse_values[k] / q - 1.0);
+      std::printf("[ literature ]   quoted %-8s morse %12.6f  rel. diff %+.2e\n", quoted[k], morse_values[k],
+                  morse_values[k] / q - 1.0);
   }
   return worst;
 }
 
 // Relative comparison with numbers printed by another code (ROSS) to 8-11 significant digits.
-double expect_close(const char* what, const std::vector<double>& morse_values,
-                    const std::vector<double>& other, double rel) {
+double expect_close(const char* what, const std::vector<double>& morse_values, const std::vector<double>& other,
+                    double rel) {
   EXPECT_EQ(morse_values.size(), other.size()) << what;
   double worst = 0.0;
   for (std::size_t k = 0; k < std::min(morse_values.size(), other.size()); ++k) {
@@ -196,9 +192,8 @@ TEST(RampupLiterature, Friswell591IsotropicBearingsForwardAndBackwardWhirl) {
   const auto w = imag_parts(spin);
   double worst = expect_quoted("Example 5.9.1, 0 rev/min [rad/s]", rest,
                                {"86.66", "86.66", "274.31", "274.31", "716.78", "716.78"});
-  worst =
-      std::max(worst, expect_quoted("Example 5.9.1, 4000 rev/min [rad/s]", w,
-                                    {"85.39", "87.80", "251.78", "294.71", "600.18", "827.08"}));
+  worst = std::max(worst, expect_quoted("Example 5.9.1, 4000 rev/min [rad/s]", w,
+                                        {"85.39", "87.80", "251.78", "294.71", "600.18", "827.08"}));
   // Undamped: purely imaginary. Isotropic: each pair is degenerate at rest, and the gyroscopic
   // term splits it into a backward whirl below and a forward whirl above the rest frequency;
   // the backward one falls with speed and the forward one rises.
@@ -211,22 +206,18 @@ TEST(RampupLiterature, Friswell591IsotropicBearingsForwardAndBackwardWhirl) {
     EXPECT_GT(spin2[2 * p + 1], w[2 * p + 1]) << "forward whirl rises with speed, pair " << p;
   }
   for (const auto& l : spin) EXPECT_LT(std::fabs(l.real()), 1e-9 * std::abs(l));
-  if (world_rank() == 0)
-    std::printf("[ literature ] 5.9.1 worst relative difference %.2e\n", worst);
+  if (world_rank() == 0) std::printf("[ literature ] 5.9.1 worst relative difference %.2e\n", worst);
   expect_same_on_ranks(w[5], "5.9.1 forward whirl");
 }
 
 TEST(RampupLiterature, Friswell592AnisotropicBearings) {
   const Assembly a = two_disk_rotor(6, 1e6, 0.8e6, 0.0);
-  double worst =
-      expect_quoted("Example 5.9.2, 0 rev/min [rad/s]", imag_parts(lowest_whirl(a, 0.0, 6)),
-                    {"82.65", "86.66", "254.52", "274.31", "679.49", "716.79"});
+  double worst = expect_quoted("Example 5.9.2, 0 rev/min [rad/s]", imag_parts(lowest_whirl(a, 0.0, 6)),
+                               {"82.65", "86.66", "254.52", "274.31", "679.49", "716.79"});
   const auto w = imag_parts(lowest_whirl(a, kRpm4000, 6));
-  worst =
-      std::max(worst, expect_quoted("Example 5.9.2, 4000 rev/min [rad/s]", w,
-                                    {"82.33", "86.86", "239.64", "287.25", "583.49", "806.89"}));
-  if (world_rank() == 0)
-    std::printf("[ literature ] 5.9.2 worst relative difference %.2e\n", worst);
+  worst = std::max(worst, expect_quoted("Example 5.9.2, 4000 rev/min [rad/s]", w,
+                                        {"82.33", "86.86", "239.64", "287.25", "583.49", "806.89"}));
+  if (world_rank() == 0) std::printf("[ literature ] 5.9.2 worst relative difference %.2e\n", worst);
   expect_same_on_ranks(w[5], "5.9.2 frequency");
 }
 
@@ -236,10 +227,9 @@ TEST(RampupLiterature, Friswell593MixedModes) {
   // them in Hz.
   const Assembly a = two_disk_rotor(6, 1e6, 0.2e6, 0.0);
   const auto f = imag_parts(lowest_whirl(a, kRpm4000, 6), 1.0 / (2.0 * M_PI));
-  const double worst = expect_quoted("Example 5.9.3, 4000 rev/min [Hz]", f,
-                                     {"8.545", "13.77", "22.35", "44.06", "78.76", "120.4"});
-  if (world_rank() == 0)
-    std::printf("[ literature ] 5.9.3 worst relative difference %.2e\n", worst);
+  const double worst =
+      expect_quoted("Example 5.9.3, 4000 rev/min [Hz]", f, {"8.545", "13.77", "22.35", "44.06", "78.76", "120.4"});
+  if (world_rank() == 0) std::printf("[ literature ] 5.9.3 worst relative difference %.2e\n", worst);
   expect_same_on_ranks(f[4], "5.9.3 frequency");
 }
 
@@ -257,39 +247,31 @@ TEST(RampupLiterature, Friswell595DampedBearings) {
       EXPECT_LT(x.real(), 0.0);  // every mode damped
     }
     if (!spin) {
-      worst =
-          std::max(worst, expect_quoted("Example 5.9.5, 0 rev/min, |lambda|/2pi [Hz]", fn,
-                                        {"13.91", "13.91", "48.18", "48.18", "137.06", "137.06"}));
-      worst =
-          std::max(worst, expect_quoted("Example 5.9.5, 0 rev/min, Im(lambda)/2pi [Hz]", fd,
-                                        {"13.89", "13.89", "46.54", "46.54", "103.22", "103.22"}));
+      worst = std::max(worst, expect_quoted("Example 5.9.5, 0 rev/min, |lambda|/2pi [Hz]", fn,
+                                            {"13.91", "13.91", "48.18", "48.18", "137.06", "137.06"}));
+      worst = std::max(worst, expect_quoted("Example 5.9.5, 0 rev/min, Im(lambda)/2pi [Hz]", fd,
+                                            {"13.89", "13.89", "46.54", "46.54", "103.22", "103.22"}));
     } else {
-      worst =
-          std::max(worst, expect_quoted("Example 5.9.5, 4000 rev/min, |lambda|/2pi [Hz]", fn,
-                                        {"13.70", "14.09", "43.61", "52.18", "122.37", "149.81"}));
-      worst =
-          std::max(worst, expect_quoted("Example 5.9.5, 4000 rev/min, Im(lambda)/2pi [Hz]", fd,
-                                        {"13.68", "14.07", "41.98", "50.65", "104.25", "105.66"}));
+      worst = std::max(worst, expect_quoted("Example 5.9.5, 4000 rev/min, |lambda|/2pi [Hz]", fn,
+                                            {"13.70", "14.09", "43.61", "52.18", "122.37", "149.81"}));
+      worst = std::max(worst, expect_quoted("Example 5.9.5, 4000 rev/min, Im(lambda)/2pi [Hz]", fd,
+                                            {"13.68", "14.07", "41.98", "50.65", "104.25", "105.66"}));
       expect_same_on_ranks(fn[5], "5.9.5 frequency");
     }
   }
-  if (world_rank() == 0)
-    std::printf("[ literature ] 5.9.5 worst relative difference %.2e\n", worst);
+  if (world_rank() == 0) std::printf("[ literature ] 5.9.5 worst relative difference %.2e\n", worst);
 }
 
 TEST(RampupLiterature, Friswell599OverhungRotor) {
   const Assembly a = overhung_rotor(uniform_stations(1.5, 6));
-  double worst =
-      expect_quoted("Example 5.9.9, 0 rev/min [rad/s]", imag_parts(lowest_whirl(a, 0.0, 6)),
-                    {"90.14", "90.14", "630.73", "630.73", "830.43", "830.43"});
+  double worst = expect_quoted("Example 5.9.9, 0 rev/min [rad/s]", imag_parts(lowest_whirl(a, 0.0, 6)),
+                               {"90.14", "90.14", "630.73", "630.73", "830.43", "830.43"});
   const auto w = imag_parts(lowest_whirl(a, kRpm4000, 6));
-  worst =
-      std::max(worst, expect_quoted("Example 5.9.9, 4000 rev/min [rad/s]", w,
-                                    {"76.19", "103.91", "565.99", "634.23", "647.75", "1174.2"}));
+  worst = std::max(worst, expect_quoted("Example 5.9.9, 4000 rev/min [rad/s]", w,
+                                        {"76.19", "103.91", "565.99", "634.23", "647.75", "1174.2"}));
   // The disk at the free end tilts: the first pair splits by 36 % at 4000 rev/min (5.9.1: 3 %).
   EXPECT_GT(w[1] / w[0], 1.3);
-  if (world_rank() == 0)
-    std::printf("[ literature ] 5.9.9 worst relative difference %.2e\n", worst);
+  if (world_rank() == 0) std::printf("[ literature ] 5.9.9 worst relative difference %.2e\n", worst);
   expect_same_on_ranks(w[5], "5.9.9 frequency");
 }
 
@@ -303,54 +285,41 @@ TEST(RampupLiterature, FriswellCrossCode) {
   double worst = 0.0;
   {
     const Assembly a = two_disk_rotor(6, 1e6, 1e6, 0.0);
-    worst = std::max(worst, expect_close("5.9.1 at rest", imag_parts(lowest_whirl(a, 0.0, 6)),
-                                         {86.65811435, 86.65811435, 274.31285391, 274.31285391,
-                                          716.78631221, 716.78631221},
-                                         tol));
     worst = std::max(
-        worst,
-        expect_close(
-            "5.9.1 at 4000 rev/min", imag_parts(lowest_whirl(a, kRpm4000, 6)),
-            {85.389467, 87.7958637, 251.78460413, 294.71333087, 600.17936195, 827.07536193}, tol));
+        worst, expect_close("5.9.1 at rest", imag_parts(lowest_whirl(a, 0.0, 6)),
+                            {86.65811435, 86.65811435, 274.31285391, 274.31285391, 716.78631221, 716.78631221}, tol));
+    worst = std::max(
+        worst, expect_close("5.9.1 at 4000 rev/min", imag_parts(lowest_whirl(a, kRpm4000, 6)),
+                            {85.389467, 87.7958637, 251.78460413, 294.71333087, 600.17936195, 827.07536193}, tol));
   }
   {
     const Assembly a = two_disk_rotor(6, 1e6, 0.8e6, 0.0);
-    worst = std::max(worst, expect_close("5.9.2 at rest", imag_parts(lowest_whirl(a, 0.0, 6)),
-                                         {82.65303734, 86.65811435, 254.52047828, 274.31285391,
-                                          679.48903239, 716.78631221},
-                                         tol));
+    worst = std::max(
+        worst, expect_close("5.9.2 at rest", imag_parts(lowest_whirl(a, 0.0, 6)),
+                            {82.65303734, 86.65811435, 254.52047828, 274.31285391, 679.48903239, 716.78631221}, tol));
     worst = std::max(
         worst, expect_close("5.9.2 at 4000 rev/min", imag_parts(lowest_whirl(a, kRpm4000, 6)),
-                            {82.32547398, 86.86369902, 239.64228361, 287.24958074, 583.48782916,
-                             806.8872843},
-                            tol));
+                            {82.32547398, 86.86369902, 239.64228361, 287.24958074, 583.48782916, 806.8872843}, tol));
   }
   {
     const Assembly a = two_disk_rotor(6, 1e6, 1e6, 3e3);
     for (const bool spin : {false, true}) {
       std::vector<double> fn;
-      for (const auto& x : lowest_whirl(a, spin ? kRpm4000 : 0.0, 6))
-        fn.push_back(std::abs(x) / (2.0 * M_PI));
+      for (const auto& x : lowest_whirl(a, spin ? kRpm4000 : 0.0, 6)) fn.push_back(std::abs(x) / (2.0 * M_PI));
       const std::vector<double> ross =
-          spin ? std::vector<double>{13.69730748, 14.09185971,  43.60796387,
-                                     52.17870498, 122.36522778, 149.80603898}
-               : std::vector<double>{13.90536812, 13.90536812,  48.17762373,
-                                     48.17762373, 137.06057752, 137.06057752};
-      worst = std::max(
-          worst, expect_close(spin ? "5.9.5 at 4000 rev/min" : "5.9.5 at rest", fn, ross, tol));
+          spin ? std::vector<double>{13.69730748, 14.09185971, 43.60796387, 52.17870498, 122.36522778, 149.80603898}
+               : std::vector<double>{13.90536812, 13.90536812, 48.17762373, 48.17762373, 137.06057752, 137.06057752};
+      worst = std::max(worst, expect_close(spin ? "5.9.5 at 4000 rev/min" : "5.9.5 at rest", fn, ross, tol));
     }
   }
   {
     const Assembly a = overhung_rotor({0.0, 1.0, 1.5});
-    worst = std::max(worst, expect_close("5.9.9, two elements, at rest",
-                                         imag_parts(lowest_whirl(a, 0.0, 6), 1.0 / (2.0 * M_PI)),
-                                         {14.34690401, 14.34690401, 109.31683436, 109.31683436,
-                                          134.05186826, 134.05186826},
-                                         tol));
+    worst = std::max(
+        worst, expect_close("5.9.9, two elements, at rest", imag_parts(lowest_whirl(a, 0.0, 6), 1.0 / (2.0 * M_PI)),
+                            {14.34690401, 14.34690401, 109.31683436, 109.31683436, 134.05186826, 134.05186826}, tol));
   }
   if (world_rank() == 0)
-    std::printf("[ literature ] against ROSS's printed digits: worst relative difference %.2e\n",
-                worst);
+    std::printf("[ literature ] against ROSS's printed digits: worst relative difference %.2e\n", worst);
   expect_same_on_ranks(worst, "cross-code difference");
 }
 
@@ -364,16 +333,14 @@ TEST(RampupLiterature, MeshConvergence) {
   const std::vector<int> meshes = {6, 12, 24, 48, 96};
   for (const double omega : {0.0, kRpm4000}) {
     std::vector<std::vector<double>> w;
-    for (int n : meshes)
-      w.push_back(imag_parts(lowest_whirl(two_disk_rotor(n, 1e6, 1e6, 0.0), omega, 6)));
+    for (int n : meshes) w.push_back(imag_parts(lowest_whirl(two_disk_rotor(n, 1e6, 1e6, 0.0), omega, 6)));
     EXPECT_GT(std::fabs(w[1][4] - 716.78), 10 * 0.01);
     if (omega > 0.0) {
       EXPECT_GT(std::fabs(w[1][5] - 827.08), 10 * 0.01);
     }
     for (int k = 0; k < 6; ++k) {
       for (std::size_t m = 1; m < meshes.size(); ++m)
-        EXPECT_LE(w[m][k], w[m - 1][k] * (1.0 + 1e-10))
-            << "mode " << k << ", " << meshes[m] << " elements";
+        EXPECT_LE(w[m][k], w[m - 1][k] * (1.0 + 1e-10)) << "mode " << k << ", " << meshes[m] << " elements";
       const double limit = w[4][k] + (w[4][k] - w[3][k]) / 3.0;  // order 2
       const double err6 = w[0][k] / limit - 1.0;
       EXPECT_GT(err6, 0.0) << "mode " << k;

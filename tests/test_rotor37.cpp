@@ -79,7 +79,8 @@ TEST(Rotor37, LoadsAndGivesClampedFrequencies) {
     if (rank == 0) {
       auto s = solve(PETSC_COMM_SELF, nev);
       for (int k = 0; k < nev; ++k)
-        if (std::abs(s.omega2[k] / r.omega2[k] - 1.0) > 1e-9) msg = cat("mode ", k + 1, ": relative difference ", s.omega2[k] / r.omega2[k] - 1.0);
+        if (std::abs(s.omega2[k] / r.omega2[k] - 1.0) > 1e-9)
+          msg = cat("mode ", k + 1, ": relative difference ", s.omega2[k] / r.omega2[k] - 1.0);
     }
     EXPECT_FALSE(any_rank(PETSC_COMM_WORLD, !msg.empty())) << msg;
   }
@@ -103,11 +104,18 @@ TEST(Rotor37, PatchTestOnTheRealDeck) {
       [](double, double, double, int d) { return d == 0 ? 1.0 : 0.0; },
       [](double, double, double, int d) { return d == 1 ? 1.0 : 0.0; },
       [](double, double, double, int d) { return d == 2 ? 1.0 : 0.0; },
-      [&](double, double y, double z, int d) { return d == 1 ? -(z - c[2]) : d == 2 ? (y - c[1]) : 0.0; },
-      [&](double x, double, double z, int d) { return d == 0 ? (z - c[2]) : d == 2 ? -(x - c[0]) : 0.0; },
-      [&](double x, double y, double, int d) { return d == 0 ? -(y - c[1]) : d == 1 ? (x - c[0]) : 0.0; }};
+      [&](double, double y, double z, int d) { return d == 1   ? -(z - c[2])
+                                                      : d == 2 ? (y - c[1])
+                                                               : 0.0; },
+      [&](double x, double, double z, int d) { return d == 0   ? (z - c[2])
+                                                      : d == 2 ? -(x - c[0])
+                                                               : 0.0; },
+      [&](double x, double y, double, int d) { return d == 0   ? -(y - c[1])
+                                                      : d == 1 ? (x - c[0])
+                                                               : 0.0; }};
   // Scale of K: its action on the linear field.
-  auto lin = test::nodal_vector(lm, dofs, [&](double x, double y, double z, int d) { return A[d][0] * x + A[d][1] * y + A[d][2] * z; });
+  auto lin = test::nodal_vector(
+      lm, dofs, [&](double x, double y, double z, int d) { return A[d][0] * x + A[d][1] * y + A[d][2] * z; });
   UVec Ku;
   MORSE_CALL(VecDuplicate(lin.get(), Ku.ptr()));
   MORSE_CALL(MatMult(ops.K.get(), lin.get(), Ku.get()));

@@ -2,7 +2,6 @@
 // Euler–Bernoulli, the completeness identity of Kammer's P, the relations of eq. 17, exact
 // reproduction of plain Craig–Bampton, truncation rules and bad input.
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,8 +10,8 @@
 #include <cstdio>
 #include <fstream>
 
-#include "morse/eigen/eigen.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/mesh/partition.hpp"
 #include "morse/select/select.hpp"
 #include "scratch.hpp"
@@ -32,7 +31,7 @@ struct Problem {
 };
 
 Problem make(MPI_Comm comm, const mesh::BoxSpec& b, const std::vector<std::string>& clamp, const std::string& boundary,
-           PetscInt n_fixed) {
+             PetscInt n_fixed) {
   Problem s;
   s.lm = test::box_mesh(comm, b);
   s.dofs = fe::number_dofs(s.lm, clamp);
@@ -277,8 +276,8 @@ TEST(Select, EbrLoadTable) {
       {cat("100 ", ids[0], " w 1\n"), ":1: component 'w'"},
       {cat("-5 ", ids[0], " x 1\n"), ":1: frequency -5 Hz must be > 0"},
       {cat("100 ", ids[0], " x one\n"), ":1: amplitude 'one' is not a number"},
-      {cat("100 ", ids[0], " x 1\n100 ", ids[0], " 1 2\n"), ":2: node " + std::to_string(ids[0]) +
-                                                               " component 1 at 100 Hz is already loaded on line 1"},
+      {cat("100 ", ids[0], " x 1\n100 ", ids[0], " 1 2\n"),
+       ":2: node " + std::to_string(ids[0]) + " component 1 at 100 Hz is already loaded on line 1"},
       {"# nothing\n", "no load line"},
   };
   for (const auto& [text, expect] : bad) {

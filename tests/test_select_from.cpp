@@ -36,7 +36,7 @@ TEST(SelectFrom, BasisFileRoundTrip) {
   }
   MPI_Barrier(comm);
   const std::vector<std::pair<std::string, std::string>> opts = {
-      {"-mesh", base + ".msh"}, {"-clamp", "x0"}, {"-boundary", "x1"}, {"-cb_num_fixed_modes", "6"},
+      {"-mesh", base + ".msh"},    {"-clamp", "x0"},      {"-boundary", "x1"},   {"-cb_num_fixed_modes", "6"},
       {"-cb_write_basis", "true"}, {"-cb_xdmf", "false"}, {"-out", base + ".h5"}};
   for (const auto& [k, v] : opts) MORSE_CALL(PetscOptionsSetValue(nullptr, k.c_str(), v.c_str()));
   app::run_command(comm, "reduce", {});

@@ -1,8 +1,8 @@
 // Settings that read their own options (set_from_options): the model input (io::ModelInput), the
 // Craig-Bampton settings, the static settings, the export options, select's settings and the box
 // generator; each records a bad value in its error (or throws from check()) naming the option.
-#include <gtest/gtest.h>
 #include <petscsys.h>
+#include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
@@ -34,8 +34,8 @@ std::string check_error(const morse::io::ModelInput& in, const char* needs_mesh 
 }  // namespace
 
 TEST(Settings, ModelInputFillsMeshAndMatrixInput) {
-  GivenOptions g{{"-mesh", "a.msh"}, {"-mesh_units", "mm-t-s"}, {"-clamp", "root,hub"}, {"-material_E", "2e11"},
-                 {"-mesh_node_sets", "tip"}, {"-mesh_node_set_tip", "1,3,7-9"}};
+  GivenOptions g{{"-mesh", "a.msh"},      {"-mesh_units", "mm-t-s"},  {"-clamp", "root,hub"},
+                 {"-material_E", "2e11"}, {"-mesh_node_sets", "tip"}, {"-mesh_node_set_tip", "1,3,7-9"}};
   morse::io::ModelInput in;
   ASSERT_EQ(in.set_from_options(PETSC_COMM_WORLD, "x.h5"), 0);
   EXPECT_EQ(in.mesh.path, "a.msh");

@@ -2,11 +2,10 @@
 // response to a harmonic load from rest (modal solution of the reduced model), second-order
 // convergence in dt, the critical step refusal, and bounded energy of the undamped, unforced
 // nonlinear reduced model over 10^6 steps.
-#include <gtest/gtest.h>
-#include <unistd.h>
-
 #include <petscsys.h>
+#include <gtest/gtest.h>
 #include <petscblaslapack.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -14,11 +13,11 @@
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
-#include "morse/nlrom/nlrom.hpp"
-#include "morse/core/session.hpp"
 #include "morse/io/h5.hpp"
+#include "morse/nlrom/nlrom.hpp"
 #include "morse/sim/run.hpp"
 #include "morse/sim/sim.hpp"
 #include "util.hpp"
@@ -370,8 +369,8 @@ TEST(Sim, ContactWithRigidPlane) {
   auto m = box(ElementType::Hex8, 4);
   auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
-  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
-                                 static_cast<PetscInt>(r));
+  auto rm =
+      nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5, static_cast<PetscInt>(r));
   dyn::NodalLoad lx;
   lx.set = "x1";
   lx.dir[0] = 1.0;
@@ -438,8 +437,9 @@ TEST(Sim, ContactWithRigidPlane) {
   for (std::size_t i = 0; i < r; ++i) dq = std::max(dq, std::abs(qT[i] - z[i])), sq = std::max(sq, std::abs(z[i]));
   for (std::size_t k = 0; k < nb; ++k)
     dl = std::max(dl, std::abs(lamT[k] - z[r + k])), sl = std::max(sl, std::abs(z[r + k]));
-  print0(PETSC_COMM_WORLD, "  contact: r = %zu, %zu nodes, delta %.3e m, min gap %.2e, final state vs statics %.2e, forces %.2e\n",
-         r, nb, delta, min_gap, dq / sq, dl / sl);
+  print0(PETSC_COMM_WORLD,
+         "  contact: r = %zu, %zu nodes, delta %.3e m, min gap %.2e, final state vs statics %.2e, forces %.2e\n", r, nb,
+         delta, min_gap, dq / sq, dl / sl);
   EXPECT_LT(dq, 1e-6 * sq) << "final state vs constrained statics";
   EXPECT_LT(dl, 1e-5 * sl) << "contact forces vs constrained statics";
   // Friction: a transverse load at the face; friction opposes sliding (negative work) and holds
@@ -491,8 +491,8 @@ TEST(Sim, ContactWithGrowingCasing) {
   auto m = box(ElementType::Hex8, 4);
   auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
-  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5,
-                                 static_cast<PetscInt>(r));
+  auto rm =
+      nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.5, static_cast<PetscInt>(r));
   // Reference positions of the boundary nodes (in the order of the boundary DOFs), from every rank.
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
@@ -515,7 +515,8 @@ TEST(Sim, ContactWithGrowingCasing) {
   int active = 0;
   std::vector<double> qT(r), gT(nb), lT(nb);
   sim::integrate(rm, {}, s, [&](const sim::StepState& x) {
-    for (std::size_t k = 0; k < nb; ++k) min_gap = std::min(min_gap, x.gap[k]), gT[k] = x.gap[k], lT[k] = x.contact_normal[k];
+    for (std::size_t k = 0; k < nb; ++k)
+      min_gap = std::min(min_gap, x.gap[k]), gT[k] = x.gap[k], lT[k] = x.contact_normal[k];
     active = x.active;
     std::copy(x.q, x.q + r, qT.begin());
   });
@@ -529,8 +530,10 @@ TEST(Sim, ContactWithGrowingCasing) {
     if (th < 0) th += M_PI;
     const double f = 2e-3 * std::exp(-std::pow((th - M_PI / 2) / 10.0, 2));
     const double ur = (qT[3 * k] * X[3 * k] + qT[3 * k + 1] * X[3 * k + 1]) / rho;
-    if (lT[k] > 0.0) worst = std::max(worst, std::abs(ur - (1e-3 - grow * f)));
-    else EXPECT_GE(gT[k], 0.0);
+    if (lT[k] > 0.0)
+      worst = std::max(worst, std::abs(ur - (1e-3 - grow * f)));
+    else
+      EXPECT_GE(gT[k], 0.0);
   }
   EXPECT_LT(worst, 1e-12) << "nodes in contact are not on the casing";
   print0(PETSC_COMM_WORLD, "  casing: %d of %zu nodes in contact, |u_r - (c0 - f)| <= %.2e m, min gap %.2e\n", active,
@@ -583,8 +586,8 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
   auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
-  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.01,
-                                 static_cast<PetscInt>(r));
+  auto rm =
+      nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.01, static_cast<PetscInt>(r));
   rm.g = nlrom::exact_forces(svk, c.T.get());
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
@@ -671,8 +674,9 @@ TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) {
     EXPECT_NEAR(R.max_force, fmax, 1e-7 * fmax + 1e-12);
     EXPECT_EQ(R.max_active, act);
     touched += R.max_active > 0;
-    print0(PETSC_COMM_WORLD, "  sweep: omega %.0f rad/s, %ld steps, rms %.3e m, max |u_r| %.3e m, max force %.3e N, %d nodes\n",
-           R.omega, R.steps, R.rms, R.max_displacement, R.max_force, R.max_active);
+    print0(PETSC_COMM_WORLD,
+           "  sweep: omega %.0f rad/s, %ld steps, rms %.3e m, max |u_r| %.3e m, max force %.3e N, %d nodes\n", R.omega,
+           R.steps, R.rms, R.max_displacement, R.max_force, R.max_active);
   }
   EXPECT_GE(touched, 3) << "the casing should be touched at most speeds";
 }
@@ -751,9 +755,10 @@ TEST(Sim, BarImpactOnRigidWallMatchesWaveSolution) {
   impact(20, &d[0], &v[0], &e[0], &p[0]);
   impact(40, &d[1], &v[1], &e[1], &p[1]);
   for (int i = 0; i < 2; ++i)
-    print0(PETSC_COMM_WORLD, "  bar impact, %d elements: contact %.4e s (2L/c %.4e, error %.2f%%), rebound %.4f m/s, "
-           "energy after / before %.4f, deepest penetration %.1e m\n", 20 << i, d[i], T, 100 * (d[i] / T - 1), v[i],
-           e[i], p[i]);
+    print0(PETSC_COMM_WORLD,
+           "  bar impact, %d elements: contact %.4e s (2L/c %.4e, error %.2f%%), rebound %.4f m/s, "
+           "energy after / before %.4f, deepest penetration %.1e m\n",
+           20 << i, d[i], T, 100 * (d[i] / T - 1), v[i], e[i], p[i]);
   for (int i = 0; i < 2; ++i) {
     EXPECT_NEAR(d[i], T, 0.03 * T) << "contact duration";
     EXPECT_NEAR(v[i], v0, 0.05 * v0) << "rebound velocity";
@@ -829,7 +834,8 @@ TEST(Sim, StressRecoveryMatchesClosedForms) {
       er = std::max(er, fr.nodal_mises[n]);
     }
     for (double v : fs.element_mises) emean = std::max(emean, std::abs(v - (s11 - s22)));
-    print0(PETSC_COMM_SELF, "  stress %s: bending %.1e, stretch %.1e, element mean %.1e, rotation %.1e (of E k z %.2e, %.2e)\n",
+    print0(PETSC_COMM_SELF,
+           "  stress %s: bending %.1e, stretch %.1e, element mean %.1e, rotation %.1e (of E k z %.2e, %.2e)\n",
            mesh::element_name(t), eb / (E * k * 0.1), es / s11, emean / s11, er / E, E * k * 0.1, s11);
     EXPECT_LT(eb, 1e-9 * E * k * 0.1) << mesh::element_name(t) << ": pure bending";
     EXPECT_LT(es, 1e-12 * s11) << mesh::element_name(t) << ": uniaxial stretch";
@@ -868,7 +874,8 @@ TEST(SimFile, RoundTrips) {
   c.max_normal_force = 12.5, c.time_of_max_normal_force = 0.2;
   rec.rom = "rom.h5", rec.case_name = "b";
   rec.load.loads.resize(1);
-  rec.load.loads[0].set = "tip", rec.load.loads[0].dir[2] = 1, rec.load.loads[0].amplitude = 3, rec.load.loads[0].omega = 9;
+  rec.load.loads[0].set = "tip", rec.load.loads[0].dir[2] = 1, rec.load.loads[0].amplitude = 3,
+  rec.load.loads[0].omega = 9;
   sim::Settings s;
   s.dt = 1e-3, s.t_final = 0.3;
   s.contact.nodes.resize(nn);

@@ -11,8 +11,8 @@
 // solution is periodic of period 3 L/c: the end x = 0 flies to the wall (tau in [0, 1]), stays on
 // it (tau in [1, 2]) with the constant contact force E A delta / L, and flies back (tau in [2, 3]);
 // the energy E A delta^2 / 2L is conserved.
-#include <gtest/gtest.h>
 #include <petscsys.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -44,10 +44,9 @@ double exact_u(double xi, double tau) {
   const double p = std::fmod(tau, 3.0);
   const int phase = std::min(2, static_cast<int>(std::floor(p)));
   const double s = p - phase;
-  if (phase == 0) return 1.0 - std::max(xi, s);  // release wave from x = 0
-  if (phase == 1)
-    return -std::min(xi, s) + std::max(0.0, xi + s - 1.0);  // stopping waves from both ends
-  return std::min(s, 1.0 - xi);                             // leaving, reloaded from x = L
+  if (phase == 0) return 1.0 - std::max(xi, s);                           // release wave from x = 0
+  if (phase == 1) return -std::min(xi, s) + std::max(0.0, xi + s - 1.0);  // stopping waves from both ends
+  return std::min(s, 1.0 - xi);                                           // leaving, reloaded from x = L
 }
 // Exact velocity of the end x = 0, in units of delta c / L.
 double exact_v0(double tau) {
@@ -79,9 +78,8 @@ Bar make_bar(int nx, Basis basis) {
   bar.basis = basis;
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
-  auto b =
-      test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, kL, kA, kA, nx, 1, 1),
-                          {"x1"}, bar_material());
+  auto b = test::assembled_box(PETSC_COMM_WORLD, test::box_spec(ElementType::Hex8, kL, kA, kA, nx, 1, 1), {"x1"},
+                               bar_material());
   const PetscInt n = b.dofs.n_global;
   const double h = kL / nx;
   const PetscInt r = basis == Basis::Sections ? nx + 2 : n;
@@ -89,8 +87,8 @@ Bar make_bar(int nx, Basis basis) {
   MORSE_CALL(MatGetOwnershipRange(b.ops.K.get(), &first, &last));
   UMat V;
   MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, last - first, PETSC_DECIDE, n, r, nullptr, V.ptr()));
-  std::vector<double> xpos(static_cast<std::size_t>(r), 0.0),
-      is_x(static_cast<std::size_t>(r), 0.0), face(static_cast<std::size_t>(r), 0.0);
+  std::vector<double> xpos(static_cast<std::size_t>(r), 0.0), is_x(static_cast<std::size_t>(r), 0.0),
+      face(static_cast<std::size_t>(r), 0.0);
   for (std::size_t k = 0; k < b.lm.node_owner.size(); ++k) {
     if (b.lm.node_owner[k] != rank) continue;
     const PetscInt dx = b.dofs.node_dof[3 * k];
@@ -107,8 +105,7 @@ Bar make_bar(int nx, Basis basis) {
       xpos[static_cast<std::size_t>(sec == 0 ? 0 : sec + 2)] = x;
       is_x[static_cast<std::size_t>(sec == 0 ? 0 : sec + 2)] = 1.0;
     } else {
-      for (int d = 0; d < 3; ++d)
-        MORSE_CALL(MatSetValue(V.get(), dx + d, dx + d, 1.0, INSERT_VALUES));
+      for (int d = 0; d < 3; ++d) MORSE_CALL(MatSetValue(V.get(), dx + d, dx + d, 1.0, INSERT_VALUES));
       xpos[static_cast<std::size_t>(dx)] = x;
       is_x[static_cast<std::size_t>(dx)] = 1.0;
       if (sec == 0) face[static_cast<std::size_t>(dx)] = 1.0;
@@ -118,8 +115,7 @@ Bar make_bar(int nx, Basis basis) {
   MORSE_CALL(MatAssemblyEnd(V.get(), MAT_FINAL_ASSEMBLY));
   // Every rank needs the column data; the owners set them, the others hold 0 (x >= 0: max).
   for (auto* v : {&xpos, &is_x, &face})
-    MPI_Allreduce(MPI_IN_PLACE, v->data(), static_cast<int>(r), MPI_DOUBLE, MPI_MAX,
-                  PETSC_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, v->data(), static_cast<int>(r), MPI_DOUBLE, MPI_MAX, PETSC_COMM_WORLD);
   bar.rm = nlrom::project_model(PETSC_COMM_WORLD, V.get(), b.ops.K.get(), b.ops.M.get(), 0.0, 0);
   bar.r = static_cast<std::size_t>(r);
   bar.xpos.assign(bar.r, std::nan(""));
@@ -204,8 +200,7 @@ Result run(const Bar& bar, const Options& o) {
     if (bar.basis == Basis::Sections)
       for (std::size_t i = 0; i < r; ++i)
         if (!std::isnan(bar.xpos[i]))
-          R.err_field =
-              std::max(R.err_field, std::abs(x.q[i] / kDelta - exact_u(bar.xpos[i] / kL, tau)));
+          R.err_field = std::max(R.err_field, std::abs(x.q[i] / kDelta - exact_u(bar.xpos[i] / kL, tau)));
     if (x.step > 0) l1v += std::abs(x.v[i0] / v_scale - exact_v0(tau)) * h;
     t_last = x.t;
     double lam = 0, gap = x.q[i0] - s.contact.plane.point[0];
@@ -237,8 +232,7 @@ Result run(const Bar& bar, const Options& o) {
       if (x.step > 1) {
         R.max_rise = std::max(R.max_rise, e - e_prev);
         const double g2 = g_hist[g_hist.size() - 2];
-        R.max_balance =
-            std::max(R.max_balance, std::abs((e - e_prev) - lam * (gap - g2) / 2.0 / E_exact));
+        R.max_balance = std::max(R.max_balance, std::abs((e - e_prev) - lam * (gap - g2) / 2.0 / E_exact));
       }
       e_prev = e;
     }
@@ -256,12 +250,10 @@ Result run(const Bar& bar, const Options& o) {
       p.start = t - 0.5 * h;
       p.f_min = p.f_max = f;
       const long n = std::lround(t / h);  // state index; energy_at[n - 1] is E_{n-1/2}
-      if (o.energy)
-        p.e_before = n >= 2 ? energy_at[static_cast<std::size_t>(n - 2)] : energy_at.front();
+      if (o.energy) p.e_before = n >= 2 ? energy_at[static_cast<std::size_t>(n - 2)] : energy_at.front();
       R.phases.push_back(p);
     } else {
-      R.phases.back().releases +=
-          static_cast<int>(std::lround((t - R.phases.back().end + 0.5 * h) / h)) - 1;
+      R.phases.back().releases += static_cast<int>(std::lround((t - R.phases.back().end + 0.5 * h) / h)) - 1;
     }
     auto& p = R.phases.back();
     p.end = t + 0.5 * h;
@@ -294,10 +286,8 @@ int failed_criteria(const Result& R, double impulse_exact, double tL, std::strin
   for (std::size_t k = 0; k < R.phases.size(); ++k) {
     const auto& p = R.phases[k];
     const double t0 = 1.0 + 3.0 * static_cast<double>(k), t1 = t0 + 1.0;
-    if (std::abs(p.start / tL - t0) > kTolTimes)
-      fail(cat("contact ", k, " starts at ", p.start / tL, " L/c"));
-    if (std::abs(p.end / tL - t1) > kTolTimes)
-      fail(cat("contact ", k, " ends at ", p.end / tL, " L/c"));
+    if (std::abs(p.start / tL - t0) > kTolTimes) fail(cat("contact ", k, " starts at ", p.start / tL, " L/c"));
+    if (std::abs(p.end / tL - t1) > kTolTimes) fail(cat("contact ", k, " ends at ", p.end / tL, " L/c"));
     if (std::abs(p.impulse / impulse_exact - 1.0) > kTolImpulse)
       fail(cat("impulse ", k, " / exact ", p.impulse / impulse_exact));
   }
@@ -313,14 +303,11 @@ double max_time_error(const Result& R, double tL) {
   double e = 0;
   for (std::size_t k = 0; k < R.phases.size(); ++k) {
     const double t0 = 1.0 + 3.0 * static_cast<double>(k);
-    e = std::max(
-        {e, std::abs(R.phases[k].start / tL - t0), std::abs(R.phases[k].end / tL - t0 - 1.0)});
+    e = std::max({e, std::abs(R.phases[k].start / tL - t0), std::abs(R.phases[k].end / tL - t0 - 1.0)});
   }
   return e;
 }
-double rate(double e_coarse, double e_fine, double refine) {
-  return std::log(e_coarse / e_fine) / std::log(refine);
-}
+double rate(double e_coarse, double e_fine, double refine) { return std::log(e_coarse / e_fine) / std::log(refine); }
 
 struct Scales {
   double c, tL, impulse, force;
@@ -358,17 +345,16 @@ TEST(SimDep, PeriodicBarOnObstacleMatchesClosedForm) {
            "%.6f, "
            "max step rise %.1e, balance %.1e\n",
            nx, bar.r, R.dt, R.dt * S.c * nx / kL, R.steps, R.err_u0, R.err_field, R.err_v0,
-           mean_impulse_error(R, S.impulse), max_time_error(R, S.tL), R.min_gap, R.e0, R.max_rise,
-           R.max_balance);
+           mean_impulse_error(R, S.impulse), max_time_error(R, S.tL), R.min_gap, R.e0, R.max_rise, R.max_balance);
     for (std::size_t k = 0; k < R.phases.size(); ++k) {
       const Phase& p = R.phases[k];
       print0(PETSC_COMM_WORLD,
              "    contact %zu: [%.4f, %.4f] L/c (exact [%d, %d]), impulse / exact %.4f, force "
              "%.2f..%.2f x EA delta/L, "
              "%d chatter states, energy %.5f -> %.5f (loss %.2f h/L)\n",
-             k, p.start / S.tL, p.end / S.tL, 1 + 3 * static_cast<int>(k),
-             2 + 3 * static_cast<int>(k), p.impulse / S.impulse, p.f_min / S.force,
-             p.f_max / S.force, p.releases, p.e_before, p.e_after, (p.e_before - p.e_after) / hL);
+             k, p.start / S.tL, p.end / S.tL, 1 + 3 * static_cast<int>(k), 2 + 3 * static_cast<int>(k),
+             p.impulse / S.impulse, p.f_min / S.force, p.f_max / S.force, p.releases, p.e_before, p.e_after,
+             (p.e_before - p.e_after) / hL);
     }
     // At every h: no penetration beyond round-off, no energy created, every loss accounted for
     // by the multipliers, and the loss of each impact O(h): at most h/L of the energy (observed
@@ -376,8 +362,7 @@ TEST(SimDep, PeriodicBarOnObstacleMatchesClosedForm) {
     // stopped in each of the first two contact steps).
     EXPECT_GE(R.min_gap, -1e-12) << "penetration at nx = " << nx;
     EXPECT_LT(R.max_rise, 1e-10) << "energy created at nx = " << nx;
-    EXPECT_LT(R.max_balance, 1e-10)
-        << "energy change not the work of the multipliers at nx = " << nx;
+    EXPECT_LT(R.max_balance, 1e-10) << "energy change not the work of the multipliers at nx = " << nx;
     for (const auto& p : R.phases) {
       EXPECT_GE(p.e_before - p.e_after, -1e-10);
       EXPECT_LT(p.e_before - p.e_after, hL) << "energy loss per impact at nx = " << nx;
@@ -389,8 +374,7 @@ TEST(SimDep, PeriodicBarOnObstacleMatchesClosedForm) {
   // Convergence: each error falls at every refinement, at the observed rates over 16x in h.
   for (std::size_t i = 1; i < res.size(); ++i) {
     EXPECT_LT(res[i].err_u0, res[i - 1].err_u0) << "u(0) error does not fall at nx = " << meshes[i];
-    EXPECT_LT(res[i].err_field, res[i - 1].err_field)
-        << "field error does not fall at nx = " << meshes[i];
+    EXPECT_LT(res[i].err_field, res[i - 1].err_field) << "field error does not fall at nx = " << meshes[i];
     EXPECT_LT(res[i].err_v0, res[i - 1].err_v0) << "v(0) error does not fall at nx = " << meshes[i];
     EXPECT_LT(mean_impulse_error(res[i], S.impulse), mean_impulse_error(res[i - 1], S.impulse))
         << "impulse error does not fall at nx = " << meshes[i];
@@ -400,8 +384,7 @@ TEST(SimDep, PeriodicBarOnObstacleMatchesClosedForm) {
   const double loss_c = C.phases.front().e_before - C.phases.back().e_after;
   const double loss_f = F.phases.front().e_before - F.phases.back().e_after;
   const double r_u = rate(C.err_u0, F.err_u0, refine), r_v = rate(C.err_v0, F.err_v0, refine);
-  const double r_j =
-      rate(mean_impulse_error(C, S.impulse), mean_impulse_error(F, S.impulse), refine);
+  const double r_j = rate(mean_impulse_error(C, S.impulse), mean_impulse_error(F, S.impulse), refine);
   const double r_t = rate(max_time_error(C, S.tL), max_time_error(F, S.tL), refine);
   const double r_e = rate(loss_c, loss_f, refine);
   print0(PETSC_COMM_WORLD,

@@ -40,7 +40,6 @@ StatorSpec coarse_spec() {
   return s;
 }
 
-
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   EXPECT_TRUE(in.good()) << "cannot open " << path;
@@ -61,9 +60,7 @@ double mesh_volume(const Mesh& m) {
   return v;
 }
 
-double radius(const Mesh& m, std::int64_t n) {
-  return std::hypot(m.coords[3 * n], m.coords[3 * n + 1]);
-}
+double radius(const Mesh& m, std::int64_t n) { return std::hypot(m.coords[3 * n], m.coords[3 * n + 1]); }
 
 /// Relative volume error of the mesh of spec against the closed form.
 double volume_error(const StatorSpec& s) {
@@ -98,8 +95,8 @@ TEST(Stator, RegeneratesCommittedCoarseFile) {
   mesh::write_gmsh(m, fresh);
   const std::string want = file_bytes(committed), got = file_bytes(fresh);
   EXPECT_FALSE(want.empty());
-  EXPECT_TRUE(got == want) << "regenerate " << committed
-                           << " with: morse mesh stator -stator_size coarse -out " << committed;
+  EXPECT_TRUE(got == want) << "regenerate " << committed << " with: morse mesh stator -stator_size coarse -out "
+                           << committed;
   const Mesh r = mesh::read_gmsh(committed);
   EXPECT_EQ(r.coords, m.coords);
   EXPECT_EQ(r.elem_nodes, m.elem_nodes);
@@ -136,21 +133,16 @@ TEST(Stator, Sets) {
       const double* x = &m.coords[3 * n];
       const bool bearing = i < 10;
       EXPECT_NEAR(radius(m, n), bearing ? s.hub_bore_radius : s.flange_outer_radius, tol);
-      const double z = !bearing ? 0.5 * s.flange_thickness
-                       : i < 5  ? s.flange_thickness
-                                : s.length - s.flange_thickness;
+      const double z = !bearing ? 0.5 * s.flange_thickness : i < 5 ? s.flange_thickness : s.length - s.flange_thickness;
       EXPECT_NEAR(x[2], z, tol) << names[i];
       const double target = bearing ? 2 * kPi * (i % 5) / 5 : kPi / 180 * (90 + 120 * (i - 10));
-      EXPECT_LT(std::abs(std::remainder(std::atan2(x[1], x[0]) - target, 2 * kPi)),
-                h / radius(m, n))
-          << names[i];
+      EXPECT_LT(std::abs(std::remainder(std::atan2(x[1], x[0]) - target, 2 * kPi)), h / radius(m, n)) << names[i];
     }
     // Mount: exactly the nodes of the rear face z = L of casing and flange; no interface node.
     const auto& mount = m.node_sets.at("mount");
     std::vector<std::int64_t> face;
     for (std::int64_t n = 0; n < m.num_nodes(); ++n)
-      if (m.coords[3 * n + 2] == s.length && radius(m, n) > s.casing_inner_radius - tol)
-        face.push_back(n);
+      if (m.coords[3 * n + 2] == s.length && radius(m, n) > s.casing_inner_radius - tol) face.push_back(n);
     EXPECT_EQ(mount, face);
     for (auto n : mount) {
       EXPECT_LE(radius(m, n), s.flange_outer_radius + tol);
@@ -167,8 +159,7 @@ TEST(Stator, Sets) {
     for (std::int64_t e = 0; e < m.num_elements(); ++e) EXPECT_EQ(all[e], e);
     ASSERT_EQ(m.materials.size(), 1u);
     EXPECT_EQ(m.materials[0].name, "steel");
-    EXPECT_TRUE(
-        std::all_of(m.elem_material.begin(), m.elem_material.end(), [](int k) { return k == 0; }));
+    EXPECT_TRUE(std::all_of(m.elem_material.begin(), m.elem_material.end(), [](int k) { return k == 0; }));
     EXPECT_EQ(m.units, "SI");
     for (std::int64_t n = 0; n < m.num_nodes(); ++n) ASSERT_EQ(m.node_ids[n], n + 1);
     for (std::int64_t e = 0; e < m.num_elements(); ++e) ASSERT_EQ(m.elem_ids[e], e + 1);
@@ -207,12 +198,10 @@ TEST(Stator, Conforming) {
   double dmin = 1e300;  // smallest distance between nodes adjacent in x order within 1e-6 in x
   for (std::size_t a = 0; a < p.size(); ++a)
     for (std::size_t b = a + 1; b < p.size() && std::get<0>(p[b]) - std::get<0>(p[a]) < 1e-6; ++b)
-      dmin = std::min(dmin, std::hypot(std::get<1>(p[b]) - std::get<1>(p[a]),
-                                       std::get<2>(p[b]) - std::get<2>(p[a])));
+      dmin = std::min(dmin, std::hypot(std::get<1>(p[b]) - std::get<1>(p[a]), std::get<2>(p[b]) - std::get<2>(p[a])));
   EXPECT_GT(dmin, 1e-6);
   // Faces by their sorted corner nodes (hex faces in the hex8 corner numbering).
-  static const int kFaces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                   {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+  static const int kFaces[6][4] = {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
   std::map<std::vector<std::int64_t>, int> count;
   for (std::int64_t e = 0; e < m.num_elements(); ++e)
     for (const auto& f : kFaces) {
@@ -225,12 +214,10 @@ TEST(Stator, Conforming) {
   const double tol = 1e-9;
   auto on_surface = [&](std::int64_t n) {
     const double r = radius(m, n), z = m.coords[3 * n + 2];
-    const bool ring_face =
-        std::abs(r - s.hub_bore_radius) < tol || std::abs(r - s.hub_outer_radius) < tol ||
-        std::abs(r - s.casing_inner_radius) < tol || std::abs(r - s.casing_outer_radius) < tol ||
-        std::abs(r - s.flange_outer_radius) < tol;
-    const bool end_face = std::abs(z) < tol || std::abs(z - s.length) < tol ||
-                          std::abs(z - s.flange_thickness) < tol ||
+    const bool ring_face = std::abs(r - s.hub_bore_radius) < tol || std::abs(r - s.hub_outer_radius) < tol ||
+                           std::abs(r - s.casing_inner_radius) < tol || std::abs(r - s.casing_outer_radius) < tol ||
+                           std::abs(r - s.flange_outer_radius) < tol;
+    const bool end_face = std::abs(z) < tol || std::abs(z - s.length) < tol || std::abs(z - s.flange_thickness) < tol ||
                           std::abs(z - s.length + s.flange_thickness) < tol;
     return ring_face || end_face;
   };
@@ -268,8 +255,8 @@ TEST(Stator, VolumeMatchesClosedForm) {
   }
   EXPECT_LT(err[0], 2e-6);
   for (int level = 1; level < 3; ++level) {
-    const double order = std::log(err[level - 1] / err[level]) /
-                         std::log(static_cast<double>(cells[level]) / cells[level - 1]);
+    const double order =
+        std::log(err[level - 1] / err[level]) / std::log(static_cast<double>(cells[level]) / cells[level - 1]);
     EXPECT_GT(order, 3.5) << "level " << level;
     EXPECT_LT(order, 4.5) << "level " << level;
   }
@@ -346,11 +333,8 @@ TEST(Stator, Options) {
   EXPECT_EQ(s.n_thick, 2);
   EXPECT_EQ(s.vane_thickness, 0.004);
   MORSE_CALL(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr));
-  for (auto [name, value] :
-       std::vector<std::pair<const char*, const char*>>{{"-stator_size", "huge"},
-                                                        {"-stator_n_vanes", "-1"},
-                                                        {"-stator_n_thick", "12"},
-                                                        {"-stator_h", "2"}}) {
+  for (auto [name, value] : std::vector<std::pair<const char*, const char*>>{
+           {"-stator_size", "huge"}, {"-stator_n_vanes", "-1"}, {"-stator_n_thick", "12"}, {"-stator_h", "2"}}) {
     MORSE_CALL(PetscOptionsSetValue(nullptr, "-stator_size", "coarse"));
     MORSE_CALL(PetscOptionsSetValue(nullptr, "-stator_n_vanes", "9"));
     MORSE_CALL(PetscOptionsSetValue(nullptr, "-stator_n_thick", "2"));
@@ -361,8 +345,7 @@ TEST(Stator, Options) {
     EXPECT_EQ(t.size, "default");  // untouched on error
   }
   MORSE_CALL(PetscPopErrorHandler());
-  for (const char* name : {"-stator_size", "-stator_n_vanes", "-stator_h", "-stator_n_thick",
-                           "-stator_vane_thickness"})
+  for (const char* name : {"-stator_size", "-stator_n_vanes", "-stator_h", "-stator_n_thick", "-stator_vane_thickness"})
     MORSE_CALL(PetscOptionsClearValue(nullptr, name));
 }
 
@@ -374,8 +357,7 @@ struct Energy {
 
 /// Squared-displacement "energy" of column j of V by region (vane nodes: strictly between the
 /// hub and casing cylinders; hub nodes: on or inside the hub's outer cylinder). Collective.
-Energy region_energy(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat V, PetscInt j,
-                     const StatorSpec& s) {
+Energy region_energy(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, Mat V, PetscInt j, const StatorSpec& s) {
   Vec x;
   MORSE_CALL(MatDenseGetColumnVecRead(V, j, &x));
   const PetscScalar* a;

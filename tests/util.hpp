@@ -1,15 +1,15 @@
 // Shared helpers of the morse unit tests.
 #pragma once
 
-#include <mpi.h>
-
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
@@ -17,7 +17,6 @@
 #include "morse/fe/model.hpp"
 #include "morse/mesh/generator.hpp"
 #include "morse/mesh/partition.hpp"
-#include "given_options.hpp"
 
 namespace morse::test {
 

@@ -23,9 +23,8 @@ void run_export(MPI_Comm comm) {
   if (help_requested()) return;
   check_options(comm, true);
   MORSE_CHECK(eo.error.empty(), eo.error);
-  MORSE_CHECK(
-      !eo.from.empty(),
-      "no superelement given: use -export_from FILE (a file of morse reduce or morse select)");
+  MORSE_CHECK(!eo.from.empty(),
+              "no superelement given: use -export_from FILE (a file of morse reduce or morse select)");
   check_options(comm, false);
 
   std::string err;
@@ -45,8 +44,8 @@ void run_export(MPI_Comm comm) {
   print0(comm,
          "morse export: %s: %d DOFs = %d boundary DOFs (%zu nodes) + %d fixed-interface modes%s, "
          "units %s\n",
-         eo.from.c_str(), se.n, se.n_b, se.boundary_nodes.size(), se.n_modes(),
-         se.C.empty() ? "" : ", with C", se.units.c_str());
+         eo.from.c_str(), se.n, se.n_b, se.boundary_nodes.size(), se.n_modes(), se.C.empty() ? "" : ", with C",
+         se.units.c_str());
   if (eo.mbdyn) {
     const auto& in = res.mbdyn.inertia;
     print0(comm, "  MBDyn: %d FEM nodes (%s)\n", res.mbdyn.n_nodes,
@@ -59,16 +58,13 @@ void run_export(MPI_Comm comm) {
       print0(comm,
              "    inertia about the centre of mass: [%.10g %.10g %.10g; %.10g %.10g %.10g; %.10g "
              "%.10g %.10g]\n",
-             in.inertia_cm[0], in.inertia_cm[1], in.inertia_cm[2], in.inertia_cm[3],
-             in.inertia_cm[4], in.inertia_cm[5], in.inertia_cm[6], in.inertia_cm[7],
-             in.inertia_cm[8]);
+             in.inertia_cm[0], in.inertia_cm[1], in.inertia_cm[2], in.inertia_cm[3], in.inertia_cm[4], in.inertia_cm[5],
+             in.inertia_cm[6], in.inertia_cm[7], in.inertia_cm[8]);
     } else {
       print0(comm, "  no rigid-body inertia in the FEM file: %s\n", in.reason.c_str());
     }
   }
-  if (eo.dmig)
-    print0(comm, "  DMIG: modal coordinate k is SPOINT %lld+k\n",
-           static_cast<long long>(res.spoint_offset));
+  if (eo.dmig) print0(comm, "  DMIG: modal coordinate k is SPOINT %lld+k\n", static_cast<long long>(res.spoint_offset));
   for (const auto& f : res.files) print0(comm, "morse: wrote %s\n", f.c_str());
 }
 

@@ -1,6 +1,6 @@
 // app/cmd_fom.cpp: `morse fom`, the full-order nonlinear implicit dynamics under the nodal loads
-// (harmonic -load_* and tabulated -load_history; dyn::integrate), the reference of every reduced model. Writes /fom: time, monitored set
-// histories, energies, Newton statistics and full-field snapshots (written in parallel).
+// (harmonic -load_* and tabulated -load_history; dyn::integrate), the reference of every reduced model. Writes /fom:
+// time, monitored set histories, energies, Newton statistics and full-field snapshots (written in parallel).
 #include <petscsys.h>
 
 #include <cmath>
@@ -34,8 +34,7 @@ void run_fom(MPI_Comm comm) {
   collective_check(comm, ho.error);
   MORSE_CHECK(fs.error.empty(), fs.error);
 
-  Model md = build_model(
-      comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  Model md = build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   dyn::Loads loads(*md.mesh, md.dofs, load_list);
   const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fs.t_final / fs.dt - 1e-9));
   if (auto h = dyn::make_load_history(comm, *md.mesh, md.dofs, ho)) {

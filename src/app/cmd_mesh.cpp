@@ -38,8 +38,9 @@ PetscErrorCode get_mesh_in(MPI_Comm comm, std::string* path) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse mesh info options", "");
-  PetscCall(MorseOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "", buf,
-                               buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString(
+      "-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
+      buf, buf, sizeof buf, &set));
   PetscOptionsEnd();
   if (set) *path = buf;
   return PETSC_SUCCESS;
@@ -68,8 +69,10 @@ void run_mesh_info(MPI_Comm comm) {
       print0(comm, "  %-8s %lld\n", mesh::element_name(static_cast<mesh::ElementType>(k)), (long long)q.per_type[k]);
   print0(comm, "  volume %.10g; smallest Jacobian determinant %.6g (element %lld); %lld inverted elements\n", q.volume,
          q.min_jacobian, (long long)q.worst_element, (long long)q.n_inverted);
-  for (const auto& [name, n] : lm.node_set_sizes) print0(comm, "  node set    %-20s %lld nodes\n", name.c_str(), (long long)n);
-  for (const auto& [name, n] : lm.elem_set_sizes) print0(comm, "  element set %-20s %lld elements\n", name.c_str(), (long long)n);
+  for (const auto& [name, n] : lm.node_set_sizes)
+    print0(comm, "  node set    %-20s %lld nodes\n", name.c_str(), (long long)n);
+  for (const auto& [name, n] : lm.elem_set_sizes)
+    print0(comm, "  element set %-20s %lld elements\n", name.c_str(), (long long)n);
   for (const auto& mat : m.materials)
     print0(comm, "  material %-20s E %.6g nu %.6g rho %.6g\n", mat.name.c_str(), mat.E, mat.nu, mat.rho);
   if (q.n_fixed_nodes) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)q.n_fixed_nodes);
@@ -111,13 +114,14 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   const bool nastran = ext == "bdf" || ext == "dat" || ext == "nas";
   MORSE_CHECK(nastran || ext == "msh", "-out ", out_s, ": expected .msh (Gmsh) or .bdf/.dat/.nas (Nastran)");
-  MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0),
-              "-out ", out_s, ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
+  MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0), "-out ", out_s,
+              ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
   MORSE_CHECK(nw.error.empty(), nw.error);
   std::string err;
   if (rank_of(comm) == 0) try {
-      auto m = what == "box" ? mesh::generate_box(box) : what == "blade" ? mesh::generate_blade(blade)
-                                                                          : mesh::generate_stator(stator);
+      auto m = what == "box"     ? mesh::generate_box(box)
+               : what == "blade" ? mesh::generate_blade(blade)
+                                 : mesh::generate_stator(stator);
       if (nastran) {
         m.materials.push_back(mat);
         for (auto& em : m.elem_material)

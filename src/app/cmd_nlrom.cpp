@@ -33,8 +33,8 @@ void run_nlrom(MPI_Comm comm) {
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(no.error.empty(), no.error);
-  Model md = build_model(
-      comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  Model md =
+      build_model(comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   std::unique_ptr<dyn::Loads> training;
   if (!load_list.empty()) {

@@ -24,8 +24,7 @@ void run_rampup(MPI_Comm comm) {
   const rampup::LoadCase lc = o.load_case();
   const rampup::IntegratorSettings is = o.integrator();
   const double t_end = rampup::end_time(lc, is);
-  MORSE_CHECK(t_end / o.dt < 5e8, "-rampup_dt ", o.dt, " s gives ", t_end / o.dt,
-              " steps: too many");
+  MORSE_CHECK(t_end / o.dt < 5e8, "-rampup_dt ", o.dt, " s gives ", t_end / o.dt, " steps: too many");
 
   // Every rank builds the (small) model from the same options and files, so a bad input throws
   // the same error on every rank.
@@ -43,15 +42,11 @@ void run_rampup(MPI_Comm comm) {
     print0(comm,
            "  stator %s: %d modes below %.1f Hz kept of %d (clamped %zu nodes, %zu free boundary "
            "DOFs)%s\n",
-           sm.name.c_str(), sm.n_modes, sm.f_cut_hz, sm.n_total, sm.clamped_nodes.size(),
-           sm.dof_node.size(),
-           sm.n_modes
-               ? cat(", ", sm.omega.front() / kTwoPi, "..", sm.omega.back() / kTwoPi, " Hz").c_str()
-               : "");
+           sm.name.c_str(), sm.n_modes, sm.f_cut_hz, sm.n_total, sm.clamped_nodes.size(), sm.dof_node.size(),
+           sm.n_modes ? cat(", ", sm.omega.front() / kTwoPi, "..", sm.omega.back() / kTwoPi, " Hz").c_str() : "");
   }
-  print0(comm, "  %s to %.1f rpm in %g s, dt = %g s (%s%s)\n",
-         o.constant ? "constant speed" : "ramp", o.rpm_max, o.constant ? o.t_final : o.ramp_time,
-         o.dt, o.alpha == 0 ? "Newmark average acceleration" : "HHT-alpha",
+  print0(comm, "  %s to %.1f rpm in %g s, dt = %g s (%s%s)\n", o.constant ? "constant speed" : "ramp", o.rpm_max,
+         o.constant ? o.t_final : o.ramp_time, o.dt, o.alpha == 0 ? "Newmark average acceleration" : "HHT-alpha",
          o.dense ? ", dense reference step" : "");
 
   int rank = 0;
@@ -81,12 +76,11 @@ void run_rampup(MPI_Comm comm) {
         err = cat("-rampup_reference ", o.reference, ": ", ex.what());
       }
     collective_check(comm, err);
-    print0(
-        comm,
-        "  against %s (seed 000 eq. 24): bearing loads worst %.3g %%, best %.3g %%, mean %.3g %%; "
-        "displacements worst %.3g %%, best %.3g %%, mean %.3g %%\n",
-        o.reference.c_str(), 100 * he.force_worst, 100 * he.force_best, 100 * he.force_mean,
-        100 * he.displacement_worst, 100 * he.displacement_best, 100 * he.displacement_mean);
+    print0(comm,
+           "  against %s (seed 000 eq. 24): bearing loads worst %.3g %%, best %.3g %%, mean %.3g %%; "
+           "displacements worst %.3g %%, best %.3g %%, mean %.3g %%\n",
+           o.reference.c_str(), 100 * he.force_worst, 100 * he.force_best, 100 * he.force_mean,
+           100 * he.displacement_worst, 100 * he.displacement_best, 100 * he.displacement_mean);
   }
 
   StageTimer tw(comm, "Write");

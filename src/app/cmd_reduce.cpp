@@ -38,8 +38,9 @@ void run_reduce(MPI_Comm comm) {
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && cs.keep_basis),
               "-cb_write_basis writes nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.C && cs.damping > 0), "give either -matrices_C (projected on the superelement) or -cb_damping "
-                                           "(modal damping of the fixed-interface modes), not both");
+  MORSE_CHECK(!(md.C && cs.damping > 0),
+              "give either -matrices_C (projected on the superelement) or -cb_damping "
+              "(modal damping of the fixed-interface modes), not both");
   MORSE_CHECK(r.write_format == "mtx" || r.write_format == "petsc", "-matrices_write_format ", r.write_format,
               ": expected mtx or petsc");
   MORSE_CHECK(r.write_matrices.empty() || md.mesh.has_value(), "-matrices_write writes the matrices of a mesh model");
@@ -65,8 +66,8 @@ void run_reduce(MPI_Comm comm) {
   const std::vector<double> fi_hz = hz(res.fixed_omega2);
   print0(comm, "morse: Craig-Bampton superelement: %d boundary DOFs (%zu nodes) + %d fixed-interface modes = %d\n",
          (int)res.n_b, res.boundary_node_ids.size(), (int)res.n_phi, n);
-  print0(comm, "morse: K_ii factored once%s (%.3f s)\n", res.factor_reused ? ", shared by the eigen solver and the constraint modes" : "",
-         res.factor_seconds);
+  print0(comm, "morse: K_ii factored once%s (%.3f s)\n",
+         res.factor_reused ? ", shared by the eigen solver and the constraint modes" : "", res.factor_seconds);
   print0(comm, "\n  %-6s %20s %20s\n", "mode", "fixed-interface [Hz]", "superelement [Hz]");
   const std::size_t rows = std::min<std::size_t>(std::max(fi_hz.size(), rom_f.size()), 20);
   for (std::size_t i = 0; i < rows; ++i)
@@ -78,7 +79,8 @@ void run_reduce(MPI_Comm comm) {
   io::write_provenance(out, "reduce", md.units);
   io::write_model(out, md);
   io::write_fixed_interface(out, res.fixed_omega2);
-  io::write_superelement(out, rom_superelement(res, res.M, res.K, cs.damping > 0 || md.C ? &res.C : nullptr, rom_f, cs.damping));
+  io::write_superelement(
+      out, rom_superelement(res, res.M, res.K, cs.damping > 0 || md.C ? &res.C : nullptr, rom_f, cs.damping));
   out.attribute("/cb", "boundary_set", cs.boundary_set);
   std::vector<io::XdmfField> fields;
   if (write_basis) {
@@ -86,7 +88,8 @@ void run_reduce(MPI_Comm comm) {
     io::write_modes_dataset(out, "/cb/fixed_interface/mode_shapes", md, res.T.get(), res.n_b, res.n_phi);
     out.attribute("/cb/constraint_modes", "description", "Psi: [boundary DOF][node][x,y,z]");
     out.attribute("/cb/fixed_interface/mode_shapes", "description", "Phi: [mode][node][x,y,z], M_ii-normalized");
-    fields = {{"/cb/constraint_modes", "psi", (int)res.n_b}, {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};
+    fields = {{"/cb/constraint_modes", "psi", (int)res.n_b},
+              {"/cb/fixed_interface/mode_shapes", "phi", (int)res.n_phi}};
   }
   out.commit();
   if (r.xdmf && write_basis) write_xdmf_collective(comm, o.out, mesh::gather_to_rank0(*md.mesh), fields);

@@ -55,22 +55,24 @@ void run_select(MPI_Comm comm) {
   MORSE_CHECK(!(cs.n_fixed >= 0 && cs.fmax_hz > 0), "give only one of -cb_num_fixed_modes and -cb_fmax");
   MORSE_CHECK(so.error.empty(), so.error);
   MORSE_CHECK(!cs.keep_basis, "-cb_write_basis is a reduce option: select writes the selected superelement only");
-  MORSE_CHECK(!r.xdmf_set, "-cb_xdmf is a reduce option (the mode shapes of -cb_write_basis): select writes no mode "
-                           "shapes");
+  MORSE_CHECK(!r.xdmf_set,
+              "-cb_xdmf is a reduce option (the mode shapes of -cb_write_basis): select writes no mode "
+              "shapes");
 
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && !so.from.empty()),
               "-select_from reads nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
-  MORSE_CHECK(!(md.C && cs.damping > 0), "give either -matrices_C (projected on the selected superelement) or "
-                                           "-cb_damping (modal damping of the fixed-interface modes), not both");
+  MORSE_CHECK(!(md.C && cs.damping > 0),
+              "give either -matrices_C (projected on the selected superelement) or "
+              "-cb_damping (modal damping of the fixed-interface modes), not both");
   cs.keep_basis = true;
   auto res = so.from.empty() ? cb::craig_bampton(md, cs) : cb::load_basis(md, so.from, cs.boundary_set, cs.damping);
   MORSE_CHECK(res.n_phi > 0, "no candidate fixed-interface mode to select from");
   if (md.C) res.C = cb::project_symmetric(comm, md.C.get(), res.T.get());  // T^T C T, restricted below
   const PetscInt nb = res.n_b, nr = res.n(), nphi = res.n_phi;
   double f_an = so.verify.fmax_analysis_hz > 0 ? so.verify.fmax_analysis_hz
-                : cs.fmax_hz > 0       ? 0.5 * cs.fmax_hz
-                                   : 0.5 * std::sqrt(res.fixed_omega2.back()) / kTwoPi;
+                : cs.fmax_hz > 0               ? 0.5 * cs.fmax_hz
+                                               : 0.5 * std::sqrt(res.fixed_omega2.back()) / kTwoPi;
 
   select::VerifySettings& vs = so.verify;
   vs.fmax_analysis_hz = f_an;
@@ -79,8 +81,9 @@ void run_select(MPI_Comm comm) {
   check_options(comm, false);
   const auto& results = vr.methods;
   const PetscInt n_fom = static_cast<PetscInt>(vr.fom_omega2.size()), cb_in_band = vr.cb_in_band;
-  print0(comm, "\nmorse select: %d candidate fixed-interface modes (%s .. %s Hz), %d boundary DOFs; analysis band "
-               "%.6g Hz: %d full-model modes\n",
+  print0(comm,
+         "\nmorse select: %d candidate fixed-interface modes (%s .. %s Hz), %d boundary DOFs; analysis band "
+         "%.6g Hz: %d full-model modes\n",
          (int)nphi, hz_of(res.fixed_omega2.front()).c_str(), hz_of(res.fixed_omega2.back()).c_str(), (int)nb, f_an,
          (int)n_fom);
   print0(comm, "  all candidates (plain Craig-Bampton): %d superelement modes in band\n", (int)cb_in_band);

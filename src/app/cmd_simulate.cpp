@@ -31,14 +31,12 @@ struct Case {
 
 // Integrates one case and writes its file (serial: comm = PETSC_COMM_SELF of the rank that runs
 // it).
-void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm,
-              const sim::SnapshotPlan& plan, const Case& c) {
+void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim::SnapshotPlan& plan, const Case& c) {
   const std::size_t r = sm.r();
   const double hc = sim::critical_step(sm.model);
   const char* label = c.name.empty() ? "" : " case ";
   const bool implicit = so.s.scheme == sim::Scheme::Trapezoidal;
-  print0(PETSC_COMM_SELF,
-         "morse simulate%s%s: r = %d, critical step %.4e s%s, dt = %.4e s, %s, %s\n", label,
+  print0(PETSC_COMM_SELF, "morse simulate%s%s: r = %d, critical step %.4e s%s, dt = %.4e s, %s, %s\n", label,
          c.name.c_str(), (int)r, hc, implicit ? " (not a limit: implicit)" : "", so.s.dt,
          so.s.linear ? "linear" : "nonlinear", implicit ? "trapezoidal" : "central differences");
   sim::SimRecord rec;
@@ -50,17 +48,15 @@ void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm,
     print0(PETSC_COMM_SELF, "  Newton: %ld iterations (%.2f per step)\n", stats.newton_iterations,
            stats.steps ? static_cast<double>(stats.newton_iterations) / stats.steps : 0.0);
   else if (stats.kernel != "linear")
-    print0(
-        PETSC_COMM_SELF,
-        "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
-        stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6,
-        sps * stats.kernel_flops * 1e-9, sps * stats.kernel_bytes * 1e-9);
+    print0(PETSC_COMM_SELF, "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
+           stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6, sps * stats.kernel_flops * 1e-9,
+           sps * stats.kernel_bytes * 1e-9);
   io::H5Output out(PETSC_COMM_SELF, c.out);
   io::write_provenance(out, "simulate", sm.units);
   const auto& cr = rec.contact;
   if (!cr.node_ids.empty())
-    print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n",
-           cr.node_ids.size(), cr.max_normal_force, cr.time_of_max_normal_force);
+    print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", cr.node_ids.size(),
+           cr.max_normal_force, cr.time_of_max_normal_force);
   rec.rom = so.rom;
   rec.case_name = c.name;
   sim::write_sim(out, rec, so.s, stats);
@@ -89,8 +85,7 @@ void run_simulate(MPI_Comm comm) {
   check_options(comm, true);
   collective_check(comm, load_error);
   collective_check(comm, so.contact.error);
-  MORSE_CHECK(!so.rom.empty(),
-              "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
+  MORSE_CHECK(!so.rom.empty(), "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
   std::vector<std::string> sets(so.monitor);
   for (const auto& c : cases)
@@ -105,17 +100,14 @@ void run_simulate(MPI_Comm comm) {
            "morse simulate: uniform initial velocity (%g, %g, %g) m/s fitted on the basis, "
            "relative residual %.2e\n",
            so.v0_uniform[0], so.v0_uniform[1], so.v0_uniform[2], residual);
-  MORSE_CHECK(so.s.q0.empty() || so.s.q0.size() == r, "-sim_q0 has ", so.s.q0.size(),
-              " values; the model has r = ", r);
-  MORSE_CHECK(so.s.v0.empty() || so.s.v0.size() == r, "-sim_v0 has ", so.s.v0.size(),
-              " values; the model has r = ", r);
+  MORSE_CHECK(so.s.q0.empty() || so.s.q0.size() == r, "-sim_q0 has ", so.s.q0.size(), " values; the model has r = ", r);
+  MORSE_CHECK(so.s.v0.empty() || so.s.v0.size() == r, "-sim_v0 has ", so.s.v0.size(), " values; the model has r = ", r);
   sim::SnapshotPlan plan;
   if (!so.snapshots.empty()) plan = sim::read_snapshot_plan(comm, so.snapshots, sm);
   int size = 1;
   MPI_Comm_size(comm, &size);
   if (cases.size() > 1)
-    print0(comm, "morse simulate: %zu cases on %d rank(s), reduced model read once (r = %zu)\n",
-           cases.size(), size, r);
+    print0(comm, "morse simulate: %zu cases on %d rank(s), reduced model read once (r = %zu)\n", cases.size(), size, r);
   // A failed case (NaN, Newton) does not stop the others; the command fails at the end, naming
   // every failed case, and those cases leave no file.
   std::vector<std::string> names;

@@ -41,8 +41,8 @@ void run_static(MPI_Comm comm) {
   MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");
   MORSE_CHECK(ss.error.empty(), ss.error);
 
-  Model md = build_model(
-      comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  Model md =
+      build_model(comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");
   dyn::Loads loads(*md.mesh, md.dofs, load_list);
   std::vector<dyn::SetProbe> probes;
   for (const auto& m : monitor) probes.emplace_back(*md.mesh, md.dofs, m);
@@ -53,9 +53,11 @@ void run_static(MPI_Comm comm) {
 
   for (const auto& p : probes) {
     auto u = p.sample(res.u.get());
-    print0(comm, "\n  set %s: displacement [m]\n  %-10s %14s %14s %14s\n", p.name().c_str(), "node", "u_x", "u_y", "u_z");
+    print0(comm, "\n  set %s: displacement [m]\n  %-10s %14s %14s %14s\n", p.name().c_str(), "node", "u_x", "u_y",
+           "u_z");
     for (std::size_t i = 0; i < p.node_ids().size(); ++i)
-      print0(comm, "  %-10lld %14.6e %14.6e %14.6e\n", (long long)p.node_ids()[i], u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+      print0(comm, "  %-10lld %14.6e %14.6e %14.6e\n", (long long)p.node_ids()[i], u[3 * i], u[3 * i + 1],
+             u[3 * i + 2]);
   }
 
   StageTimer t(comm, "Write");

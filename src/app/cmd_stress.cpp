@@ -26,18 +26,14 @@ void run_stress(MPI_Comm comm) {
   MORSE_CALL(so.set_from_options(comm));
   if (help_requested()) return;
   check_options(comm, true);
-  MORSE_CHECK(!so.rom.empty(),
-              "morse stress: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
-  MORSE_CHECK(!so.sim.empty(),
-              "morse stress: no simulation given: use -sim FILE.h5 (a morse simulate file)");
+  MORSE_CHECK(!so.rom.empty(), "morse stress: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
+  MORSE_CHECK(!so.sim.empty(), "morse stress: no simulation given: use -sim FILE.h5 (a morse simulate file)");
   collective_check(comm, so.error);
 
   const auto sm = nlrom::read_stored_model(
-      comm, so.rom,
-      so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});
+      comm, so.rom, so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});
   const auto st = sim::stress_state(comm, so, sm);
-  Model md =
-      build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element");
+  Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   const auto u = sm.field(st.q.data());
   sim::StressField f;
@@ -47,8 +43,8 @@ void run_stress(MPI_Comm comm) {
   }
   check_options(comm, false);
   const char* mname = st.measure == sim::StressMeasure::Linear ? "linear" : "nonlinear";
-  print0(comm, "\nmorse stress: %s stress at t = %.9g s (step %lld of %lld)%s\n", mname, st.time,
-         (long long)st.step, (long long)st.n_steps,
+  print0(comm, "\nmorse stress: %s stress at t = %.9g s (step %lld of %lld)%s\n", mname, st.time, (long long)st.step,
+         (long long)st.n_steps,
          so.time_set ? "" : cat(", largest |u_r| at ", so.monitor, ": ", st.radial, " m").c_str());
 
   StageTimer t(comm, "Write");
@@ -61,8 +57,7 @@ void run_stress(MPI_Comm comm) {
     print0(PETSC_COMM_SELF,
            "  max von Mises %.4g MPa (quadrature point, element %lld), %.4g MPa at nodes (node "
            "%lld)\n",
-           f.max_mises / 1e6, (long long)f.max_element_id, rec.max_nodal_von_mises / 1e6,
-           (long long)rec.max_node_id);
+           f.max_mises / 1e6, (long long)f.max_element_id, rec.max_nodal_von_mises / 1e6, (long long)rec.max_node_id);
   }
   rec.n_nodes = md.mesh->n_global_nodes, rec.n_elements = md.mesh->n_global_elements;
   rec.time = st.time, rec.step = st.step, rec.measure = st.measure;

@@ -31,10 +31,8 @@ void run_sweep(MPI_Comm comm) {
   const std::size_t r = sm.r();
   const sim::SweepSettings s = so.settings(sm);
   const double hc = sim::critical_step(sm.model);
-  MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", hc,
-              " s)");
-  MORSE_CHECK(so.dt <= hc, "morse sweep: -sim_dt ", so.dt,
-              " s is above the critical step of central differences, ", hc,
+  MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", hc, " s)");
+  MORSE_CHECK(so.dt <= hc, "morse sweep: -sim_dt ", so.dt, " s is above the critical step of central differences, ", hc,
               " s (2 / omega_max of the reduced model); use -sim_dt <= ", hc);
   const long n_speeds = so.n_speeds();
   sim::SweepRecord rec;
@@ -55,9 +53,8 @@ void run_sweep(MPI_Comm comm) {
          "morse sweep: %ld speeds %.6g..%.6g rad/s (%ld already in %s), %.6g revolutions each, dt "
          "%.4g s (critical %.4g s), "
          "r = %zu, %s, %d lanes per rank (%s kernel) on %d rank(s)\n",
-         n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step, nd, so.out.c_str(),
-         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch,
-         so.batched ? "batched" : "per-lane", size);
+         n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step, nd, so.out.c_str(), s.revolutions,
+         so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane", size);
   sim::SweepStats st;
   {
     StageTimer timer(comm, "Sweep");
@@ -66,26 +63,21 @@ void run_sweep(MPI_Comm comm) {
       sim::write_sweep(so.out, rec);  // rank 0: atomic checkpoint
     });
   }
-  double lane_steps = static_cast<double>(st.lane_steps), kernel = st.kernel_seconds,
-         wall = st.seconds;
+  double lane_steps = static_cast<double>(st.lane_steps), kernel = st.kernel_seconds, wall = st.seconds;
   MPI_Allreduce(MPI_IN_PLACE, &lane_steps, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &kernel, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
   print0(comm,
          "morse sweep: %zu speeds in %.2f s, %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
          "in the force kernels\n",
-         todo.size(), wall, wall > 0 ? lane_steps / wall : 0.0,
-         wall > 0 ? lane_steps / wall / size : 0.0,
+         todo.size(), wall, wall > 0 ? lane_steps / wall : 0.0, wall > 0 ? lane_steps / wall / size : 0.0,
          wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)
-      if (R.status != 0)
-        failed += cat(failed.empty() ? "" : "; ", "omega ", R.omega, ": ", R.error);
+      if (R.status != 0) failed += cat(failed.empty() ? "" : "; ", "omega ", R.omega, ": ", R.error);
   print0(comm, "morse: wrote %s\n", so.out.c_str());
-  collective_check(
-      comm,
-      failed.empty() ? "" : cat("morse sweep: speeds failed (recorded with status 1): ", failed));
+  collective_check(comm, failed.empty() ? "" : cat("morse sweep: speeds failed (recorded with status 1): ", failed));
   check_options(comm, false);
 }
 

@@ -67,7 +67,9 @@ void run_command(MPI_Comm comm, const std::string& command, const std::vector<st
   else if (command == "rampup")
     detail::run_rampup(comm);
   else
-    throw Error(cat("unknown command '", command, "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, export, mesh, rampup)"));
+    throw Error(cat("unknown command '", command,
+                    "' (commands: modes, reduce, select, static, fom, nlrom, simulate, sweep, stress, compare, export, "
+                    "mesh, rampup)"));
   if ((command != "mesh" || (!args.empty() && args[0] == "info")) && !detail::help_requested()) print_stage_table(comm);
 }
 

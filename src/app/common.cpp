@@ -2,8 +2,8 @@
 // common.hpp): option getters, the unknown-option check, model building and the output writers.
 #include "app/common.hpp"
 
-#include <petscmat.h>
 #include <petscsys.h>
+#include <petscmat.h>
 
 #include <cstdint>
 #include <cstdlib>
@@ -116,8 +116,9 @@ PetscErrorCode get_reduce_options(MPI_Comm comm, ReduceOptions* r) {
                                "", buf, buf, sizeof buf, &set));
   if (set) r->write_matrices = buf;
   PetscCall(PetscStrncpy(buf, r->write_format.c_str(), sizeof buf));
-  PetscCall(MorseOptionsString("-matrices_write_format", "Format of -matrices_write: mtx (MatrixMarket) or petsc (binary)",
-                               "", buf, buf, sizeof buf, nullptr));
+  PetscCall(MorseOptionsString("-matrices_write_format",
+                               "Format of -matrices_write: mtx (MatrixMarket) or petsc (binary)", "", buf, buf,
+                               sizeof buf, nullptr));
   r->write_format = buf;
   PetscOptionsEnd();
   return PETSC_SUCCESS;

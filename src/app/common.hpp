@@ -4,9 +4,9 @@
 // cmd_<name>.cpp; run_command (commands.cpp) dispatches to them.
 #pragma once
 
+#include <petscsys.h>
 #include <mpi.h>
 #include <petscmat.h>
-#include <petscsys.h>
 
 #include <algorithm>
 #include <cmath>

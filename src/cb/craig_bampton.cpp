@@ -1,5 +1,6 @@
 #include "morse/cb/craig_bampton.hpp"
 
+#include <petscsys.h>
 #include <petscblaslapack.h>
 
 #include <algorithm>
@@ -137,7 +138,8 @@ void set_boundary(const fe::Model& md, const std::string& set, CBResult* out) {
     out->boundary_dofs.push_back(r.row);
     out->boundary_dof_node.push_back(r.node);
     out->boundary_dof_component.push_back(r.component);
-    if (out->boundary_node_ids.empty() || out->boundary_node_ids.back() != r.node) out->boundary_node_ids.push_back(r.node);
+    if (out->boundary_node_ids.empty() || out->boundary_node_ids.back() != r.node)
+      out->boundary_node_ids.push_back(r.node);
   }
 }
 
@@ -181,8 +183,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   for (PetscInt j = 0; j < out.n_b; ++j) pos[out.boundary_dofs[j]] = j;
   // Interior / boundary index sets of the owned rows, ascending.
   std::vector<PetscInt> ib, ii;
-  for (PetscInt g = dofs.first; g < dofs.first + dofs.n_owned; ++g)
-    (pos.count(g) ? ib : ii).push_back(g);
+  for (PetscInt g = dofs.first; g < dofs.first + dofs.n_owned; ++g) (pos.count(g) ? ib : ii).push_back(g);
   UIS is_b, is_i;
   MORSE_CALL(ISCreateGeneral(comm, static_cast<PetscInt>(ib.size()), ib.data(), PETSC_COPY_VALUES, is_b.ptr()));
   MORSE_CALL(ISCreateGeneral(comm, static_cast<PetscInt>(ii.size()), ii.data(), PETSC_COPY_VALUES, is_i.ptr()));
@@ -216,8 +217,8 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   eigen::Eigenpairs eig;
   const bool want_modes = s.fmax_hz > 0 || s.n_fixed > 0;
   if (want_modes) {
-    MORSE_CHECK(s.fmax_hz > 0 || s.n_fixed <= n_i, s.n_fixed, " fixed-interface modes requested but the model has only ",
-                n_i, " interior DOFs");
+    MORSE_CHECK(s.fmax_hz > 0 || s.n_fixed <= n_i, s.n_fixed,
+                " fixed-interface modes requested but the model has only ", n_i, " interior DOFs");
     Vec wi;
     MORSE_CALL(VecGetSubVector(w, is_i.get(), &wi));
     eigen::EigenSettings es;

@@ -143,7 +143,8 @@ CBResult load_basis(const fe::Model& md, const std::string& path, const std::str
   for (PetscInt j = 0; j < nr; ++j) {
     std::vector<double> field;
     if (rank == 0)
-      field = j < out.n_b ? rd->slab("/cb/constraint_modes", j) : rd->slab("/cb/fixed_interface/mode_shapes", j - out.n_b);
+      field =
+          j < out.n_b ? rd->slab("/cb/constraint_modes", j) : rd->slab("/cb/fixed_interface/mode_shapes", j - out.n_b);
     bcast(comm, field, MPI_DOUBLE);
     for (std::int64_t k = 0; k < lm.mesh.num_nodes(); ++k) {
       if (lm.node_owner[k] != rank) continue;

@@ -28,7 +28,8 @@ PetscErrorCode CBSettings::set_from_options(MPI_Comm comm) {
   PetscOptionsBegin(comm, nullptr, "morse reduce (Craig-Bampton) options", "");
   PetscCall(MorseOptionsInt("-cb_num_fixed_modes", "Number of fixed-interface modes (0 = Guyan)", "", n_fixed, &n_fixed,
                             nullptr));
-  PetscCall(MorseOptionsReal("-cb_fmax", "Keep every fixed-interface mode below this frequency [Hz] "
+  PetscCall(MorseOptionsReal("-cb_fmax",
+                             "Keep every fixed-interface mode below this frequency [Hz] "
                              "(spectrum slicing; seed 000 uses 5x the top frequency of interest)",
                              "", fmax_hz, &fmax_hz, nullptr));
   PetscCall(MorseOptionsReal("-cb_damping", "Modal damping ratio xi of the fixed-interface modes", "", damping,

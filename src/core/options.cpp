@@ -26,9 +26,7 @@ Registry& registry() {
   return r;
 }
 
-std::string bare(const std::string& name) {
-  return name.empty() || name[0] != '-' ? name : name.substr(1);
-}
+std::string bare(const std::string& name) { return name.empty() || name[0] != '-' ? name : name.substr(1); }
 
 // PETSc matches option names regardless of case: so do the suggestions and the early check.
 std::string lower(std::string s) {
@@ -36,17 +34,14 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::string first_word(const std::string& bare_name) {
-  return bare_name.substr(0, bare_name.find('_'));
-}
+std::string first_word(const std::string& bare_name) { return bare_name.substr(0, bare_name.find('_')); }
 
 bool starts_with(const std::string& s, const char* p) { return s.rfind(p, 0) == 0; }
 
 // The objects of a solver kind: option prefixes (ending in '_') or whole names.
 const std::vector<const char*>& objects(Solver kind) {
   static const std::vector<const char*> eigen = {
-      "eps_",     "st_",    "bv_",          "ds_",           "rg_",
-      "inertia_", "block_", "eigen_solver", "count_slicing", "check_inertia"};
+      "eps_", "st_", "bv_", "ds_", "rg_", "inertia_", "block_", "eigen_solver", "count_slicing", "check_inertia"};
   static const std::vector<const char*> nonlinear = {"snes_", "ksp_", "pc_", "mat_mumps_"};
   static const std::vector<const char*> linear = {"ksp_", "pc_", "mat_mumps_"};
   switch (kind) {
@@ -70,8 +65,7 @@ void add(const std::string& name, const std::string& text) {
   const std::string b = bare(name);
   auto [it, inserted] = r.help.emplace(b, text);
   if (!inserted && it->second != text) {
-    r.conflicts.push_back(
-        cat("-", b, " registered with two help texts: \"", it->second, "\" and \"", text, "\""));
+    r.conflicts.push_back(cat("-", b, " registered with two help texts: \"", it->second, "\" and \"", text, "\""));
     assert(!"an option registered twice with different help texts (morse/core/options.hpp)");
   }
 }
@@ -83,8 +77,7 @@ void add(const char* prefix, const char* name, const char* text) {
 
 void add_prefix(const std::string& prefix, Solver kind) {
   auto& p = registry().prefixes;
-  if (std::find(p.begin(), p.end(), std::make_pair(prefix, kind)) == p.end())
-    p.emplace_back(prefix, kind);
+  if (std::find(p.begin(), p.end(), std::make_pair(prefix, kind)) == p.end()) p.emplace_back(prefix, kind);
 }
 
 bool registered(const std::string& name) { return registry().help.count(bare(name)) > 0; }
@@ -196,8 +189,7 @@ void check_unknown(MPI_Comm comm, bool early) {
     if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
   }
   std::string err = bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)");
-  if (err.empty() && !registry().conflicts.empty())
-    err = cat("internal error: ", registry().conflicts.front());
+  if (err.empty() && !registry().conflicts.empty()) err = cat("internal error: ", registry().conflicts.front());
   collective_check(comm, err);
 }
 

@@ -41,8 +41,10 @@ void use_huge_pages(char** argv) {
   if (setenv("GLIBC_TUNABLES", v.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);
   // The re-exec failed (no /proc, say): go on as we are, with the variable restored.
-  if (t) setenv("GLIBC_TUNABLES", t, 1);
-  else unsetenv("GLIBC_TUNABLES");
+  if (t)
+    setenv("GLIBC_TUNABLES", t, 1);
+  else
+    unsetenv("GLIBC_TUNABLES");
 }
 
 int world_rank() {

@@ -152,7 +152,8 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
 
   UVec u0, v0, u1, v1, F0, F1, R, R_prev, x, w, g0, g1, Cv, tmp;
   MORSE_CALL(MatCreateVecs(K, u0.ptr(), v0.ptr()));
-  for (UVec* p : {&u1, &v1, &F0, &F1, &R, &R_prev, &x, &w, &g0, &g1, &Cv, &tmp}) MORSE_CALL(VecDuplicate(u0.get(), p->ptr()));
+  for (UVec* p : {&u1, &v1, &F0, &F1, &R, &R_prev, &x, &w, &g0, &g1, &Cv, &tmp})
+    MORSE_CALL(VecDuplicate(u0.get(), p->ptr()));
   if (u_init)
     MORSE_CALL(VecCopy(u_init, u0.get()));
   else
@@ -308,8 +309,8 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
         return;
       }
       if (fresh || attempt > 0)
-        throw Error(cat("fom: the Newton system's Krylov solve failed (", KSPConvergedReasons[reason], " after ",
-                        its, " iterations) with a fresh factor"));
+        throw Error(cat("fom: the Newton system's Krylov solve failed (", KSPConvergedReasons[reason], " after ", its,
+                        " iterations) with a fresh factor"));
       refactor(u0.get(), u1.get());
       fresh = true;
     }

@@ -70,7 +70,8 @@ void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>
                PetscInt snapshot_every, const FomSettings& s, const FomStats& stats, const LoadDescription& load) {
   out.write("/fom/time", h.time);
   out.write("/fom/energy", h.energy);
-  out.attribute("/fom/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy, u'^T M u'/2 + u^T K u/2 [J]");
+  out.attribute("/fom/energy", "description",
+                "seed 003 eq. 46: kinetic + linear strain energy, u'^T M u'/2 + u^T K u/2 [J]");
   out.write("/fom/energies/kinetic", h.kinetic);
   out.write("/fom/energies/strain_linear", h.strain_linear);
   out.write("/fom/energies/strain_nonlinear", h.strain_nonlinear);
@@ -136,8 +137,8 @@ FomHistory read_fom(const std::string& file, const std::vector<std::string>& set
   MORSE_CHECK(io::read_ints(file, "/fom/newton_iterations", &h.newton_iterations, &d, &err), err);
   doubles("/fom/residual", &h.residual);
   const std::size_t nt = h.time.size();
-  for (const auto* v : {&h.energy, &h.kinetic, &h.strain_linear, &h.strain_nonlinear, &h.external_work,
-                        &h.damping_loss, &h.balance, &h.residual})
+  for (const auto* v : {&h.energy, &h.kinetic, &h.strain_linear, &h.strain_nonlinear, &h.external_work, &h.damping_loss,
+                        &h.balance, &h.residual})
     MORSE_CHECK(v->size() == nt, file, ": a /fom history has ", v->size(), " values for ", nt, " times");
   MORSE_CHECK(h.newton_iterations.size() == nt, file, ": /fom/newton_iterations has ", h.newton_iterations.size(),
               " values for ", nt, " times");

@@ -36,8 +36,8 @@ std::string LoadTable::validate() const {
   for (std::size_t i = 0; i < nt; ++i) {
     if (!std::isfinite(time[i])) return cat(source, ": time ", i, " is not finite (", time[i], ")");
     if (i > 0 && !(time[i] > time[i - 1]))
-      return cat(source, ": the times are not strictly increasing: time ", i, " = ", time[i], " s follows ", time[i - 1],
-                 " s");
+      return cat(source, ": the times are not strictly increasing: time ", i, " = ", time[i], " s follows ",
+                 time[i - 1], " s");
   }
   std::vector<std::int64_t> sorted(node_ids);
   std::sort(sorted.begin(), sorted.end());
@@ -96,8 +96,8 @@ std::string read_csv(const std::string& file, LoadTable* t) {
   t->source = file;
   // Blocks of one time; the node order of the first block defines the columns.
   std::map<std::int64_t, std::size_t> column;
-  std::vector<double> row;         // the block being read, n_nodes x 3
-  std::vector<char> seen;          // per column, in the block being read
+  std::vector<double> row;  // the block being read, n_nodes x 3
+  std::vector<char> seen;   // per column, in the block being read
   std::size_t n_seen = 0;
   bool first_block = true, header_ok = true;
   std::string line;
@@ -172,7 +172,8 @@ std::string read_csv(const std::string& file, LoadTable* t) {
     }
     auto it = column.find(id);
     if (it == column.end())
-      return cat(file, ":", line_no, ": node ", id, " is not in the first time block (every time must list the same nodes)");
+      return cat(file, ":", line_no, ": node ", id,
+                 " is not in the first time block (every time must list the same nodes)");
     k = it->second;
     if (seen[k]) return cat(file, ":", line_no, ": node ", id, " appears twice at time ", f[0], " s");
     seen[k] = 1;
@@ -212,8 +213,10 @@ std::string read_h5_table(const std::string& file, const std::string& group, Loa
     return {};
   }
   if (!io::has_object(file, group)) return cat(file, ": no group ", group);
-  return cat(file, ": ", group, " is neither a load table (time, node_ids, forces) nor a morse simulate contact group "
-                                "(node_ids, mean_force, mean_force_time): no dataset ", group, "/forces");
+  return cat(file, ": ", group,
+             " is neither a load table (time, node_ids, forces) nor a morse simulate contact group "
+             "(node_ids, mean_force, mean_force_time): no dataset ",
+             group, "/forces");
 }
 
 }  // namespace
@@ -242,8 +245,9 @@ std::string read_load_table(const std::string& spec, LoadTable* table) {
         // A file that is not HDF5 says so rather than "no group".
         if (!io::read_doubles(file, "/load_history/time", &v, &d, &err) && err.find("cannot open") != std::string::npos)
           return err;
-        return cat(file, ": no load table (/load_history) nor morse simulate contact forces (/sim/contact); name the "
-                         "group as FILE:/GROUP");
+        return cat(file,
+                   ": no load table (/load_history) nor morse simulate contact forces (/sim/contact); name the "
+                   "group as FILE:/GROUP");
       }
     }
     err = read_h5_table(file, group, table);
@@ -314,7 +318,8 @@ LoadHistory::LoadHistory(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, c
   values_.resize(nt * local_.size());
   sum_.assign(nt * 3, 0.0);
   for (std::size_t i = 0; i < nt; ++i) {
-    for (std::size_t e = 0; e < src.size(); ++e) values_[i * local_.size() + e] = scale * table.forces[i * nn * 3 + src[e]];
+    for (std::size_t e = 0; e < src.size(); ++e)
+      values_[i * local_.size() + e] = scale * table.forces[i * nn * 3 + src[e]];
     for (std::size_t k = 0; k < nn; ++k)
       for (int d = 0; d < 3; ++d) sum_[3 * i + d] += scale * table.forces[(i * nn + k) * 3 + d];
   }

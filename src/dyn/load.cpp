@@ -31,7 +31,8 @@ std::string parse_direction(const std::string& text, double dir[3]) {
   return {};
 }
 
-Loads::Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::vector<NodalLoad>& loads) : loads_(loads) {
+Loads::Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::vector<NodalLoad>& loads)
+    : loads_(loads) {
   std::string err;
   for (auto& l : loads_) {
     const double norm = std::sqrt(l.dir[0] * l.dir[0] + l.dir[1] * l.dir[1] + l.dir[2] * l.dir[2]);

@@ -85,8 +85,7 @@ bool read_load_description(const std::string& file, const std::string& group, Lo
     std::istringstream in(sets);
     std::string name;
     while (std::getline(in, name)) r.loads.emplace_back().set = name;
-    MORSE_CHECK(r.loads.size() == n && dir.size() == 3 * n && amp.size() == n && omega.size() == n &&
-                    phase.size() == n,
+    MORSE_CHECK(r.loads.size() == n && dir.size() == 3 * n && amp.size() == n && omega.size() == n && phase.size() == n,
                 file, ": ", group, " does not describe its ", n, " loads (sets, direction, amplitude, omega, phase)");
     for (std::size_t k = 0; k < n; ++k) {
       auto& l = r.loads[k];

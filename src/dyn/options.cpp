@@ -1,5 +1,7 @@
 // The options of dyn's settings (see morse/dyn/dyn.hpp): the nodal loads (-load_*), the tabulated
 // load history (-load_history*) and the full-order run (-fom_*).
+#include "morse/core/options.hpp"
+
 #include <petscsys.h>
 
 #include <algorithm>
@@ -10,15 +12,14 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
-#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 
 namespace morse::dyn {
 
 PetscErrorCode get_loads(MPI_Comm comm, std::vector<NodalLoad>* loads, std::string* error, const char* prefix) {
   std::vector<std::string> sets;
-  PetscCall(options::get_string_list(comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated",
-                         &sets, prefix));
+  PetscCall(options::get_string_list(
+      comm, "-load_sets", "Node sets carrying a nodal load (force per node), comma separated", &sets, prefix));
   const std::string pre = prefix ? cat("-", prefix) : std::string("-");
   PetscOptionsBegin(comm, prefix, "morse loads (F(t) = A sin(omega t + phase) per node; omega = 0: constant A)", "");
   for (const auto& name : sets) {
@@ -62,9 +63,10 @@ PetscErrorCode LoadHistoryOptions::set_from_options(MPI_Comm comm) {
                                "", buf, buf, sizeof buf, &set));
   if (set) spec = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString("-load_history_outside",
-                               "Outside the table's time grid: error (checked before the run), zero or hold (end values)",
-                               "", text.c_str(), buf, sizeof buf, &outside_set));
+  PetscCall(
+      MorseOptionsString("-load_history_outside",
+                         "Outside the table's time grid: error (checked before the run), zero or hold (end values)", "",
+                         text.c_str(), buf, sizeof buf, &outside_set));
   if (outside_set) text = buf;
   PetscCall(MorseOptionsReal("-load_history_scale", "Factor on every force of the table", "", scale, &scale, nullptr));
   PetscOptionsEnd();
@@ -97,7 +99,8 @@ std::shared_ptr<const LoadHistory> make_load_history(MPI_Comm comm, const mesh::
 namespace morse::dyn {
 
 PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
-  PetscCall(options::get_string_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &monitor));
+  PetscCall(
+      options::get_string_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &monitor));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE, lin = linear ? PETSC_TRUE : PETSC_FALSE;
   PetscReal ray[2] = {0, 0};
@@ -119,8 +122,8 @@ PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
                              modal_xi, &modal_xi, nullptr));
   PetscCall(MorseOptionsInt("-fom_damping_modes", "Number of modes carrying -fom_damping_modal", "", damping_modes,
                             &damping_modes, nullptr));
-  PetscCall(MorseOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray,
-                                  &n_ray, &set));
+  PetscCall(MorseOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray, &n_ray,
+                                  &set));
   if (set) {
     if (n_ray != 2) error = "-fom_rayleigh takes two values: alpha,beta";
     rayleigh_alpha = ray[0];
@@ -128,10 +131,10 @@ PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
   }
   PetscCall(MorseOptionsReal("-fom_newton_rtol", "Newton tolerance: ||R|| <= rtol * force scale + atol", "",
                              newton_rtol, &newton_rtol, nullptr));
-  PetscCall(MorseOptionsReal("-fom_newton_atol", "Newton absolute tolerance [N]", "", newton_atol, &newton_atol,
-                             nullptr));
-  PetscCall(MorseOptionsInt("-fom_newton_max_it", "Newton iterations per step", "", newton_max_it, &newton_max_it,
-                            nullptr));
+  PetscCall(
+      MorseOptionsReal("-fom_newton_atol", "Newton absolute tolerance [N]", "", newton_atol, &newton_atol, nullptr));
+  PetscCall(
+      MorseOptionsInt("-fom_newton_max_it", "Newton iterations per step", "", newton_max_it, &newton_max_it, nullptr));
   PetscCall(MorseOptionsInt("-fom_refactor_every",
                             "Refactor the iteration matrix every N iterations (1: full Newton); 0: modified Newton, "
                             "refactor only when the residual falls by less than -fom_refactor_ratio",

@@ -30,7 +30,9 @@ SetProbe::SetProbe(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
     for (auto& p : nodes) ids_.push_back(p.second);
   for (auto k : lm.mesh.node_sets.at(set)) {
     if (lm.node_owner[k] != rank) continue;
-    const auto slot = std::lower_bound(nodes.begin(), nodes.end(), std::make_pair(lm.global_node[k], std::int64_t(-1))) - nodes.begin();
+    const auto slot =
+        std::lower_bound(nodes.begin(), nodes.end(), std::make_pair(lm.global_node[k], std::int64_t(-1))) -
+        nodes.begin();
     for (int d = 0; d < 3; ++d)
       if (dofs.node_dof[3 * k + d] >= 0)
         local_.emplace_back(static_cast<int>(3 * slot + d), dofs.node_dof[3 * k + d] - dofs.first);

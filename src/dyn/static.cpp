@@ -83,16 +83,19 @@ PetscErrorCode StaticSettings::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsReal("-static_load_factor", "Final load factor on the loads", "", load_factor, &load_factor,
                              nullptr));
   PetscCall(MorseOptionsInt("-static_steps", "Initial number of equal load increments", "", steps, &steps, nullptr));
-  PetscCall(MorseOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "",
-                            max_cutbacks, &max_cutbacks, nullptr));
+  PetscCall(MorseOptionsInt("-static_max_cutbacks", "Halvings of a failed increment before giving up", "", max_cutbacks,
+                            &max_cutbacks, nullptr));
   PetscCall(MorseOptionsReal("-static_rtol", "Newton tolerance: ||R|| <= rtol max(||lambda f||, ||K u||)", "", rtol,
                              &rtol, nullptr));
   PetscCall(MorseOptionsInt("-static_max_it", "Newton iterations per increment", "", max_it, &max_it, nullptr));
   PetscOptionsEnd();
   linear = lin;
-  if (steps <= 0) error = cat("-static_steps must be positive (got ", steps, ")");
-  else if (max_cutbacks < 0) error = cat("-static_max_cutbacks must be >= 0 (got ", max_cutbacks, ")");
-  else if (!(rtol > 0 && max_it > 0)) error = "-static_rtol and -static_max_it must be positive";
+  if (steps <= 0)
+    error = cat("-static_steps must be positive (got ", steps, ")");
+  else if (max_cutbacks < 0)
+    error = cat("-static_max_cutbacks must be >= 0 (got ", max_cutbacks, ")");
+  else if (!(rtol > 0 && max_it > 0))
+    error = "-static_rtol and -static_max_it must be positive";
   return PETSC_SUCCESS;
 }
 
@@ -109,8 +112,10 @@ StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSe
   loads.evaluate(s.time, F.get());
   MORSE_CALL(VecNorm(F.get(), NORM_2, &res.load_norm));
   if (res.load_norm == 0.0 || s.load_factor == 0.0) {
-    print0(comm, "morse static: the load at t = %g is zero: u = 0 (harmonic loads with phase 0 vanish at "
-                 "t = 0; see -static_time and -load_<SET>_phase)\n", s.time);
+    print0(comm,
+           "morse static: the load at t = %g is zero: u = 0 (harmonic loads with phase 0 vanish at "
+           "t = 0; see -static_time and -load_<SET>_phase)\n",
+           s.time);
     return res;
   }
 
@@ -160,7 +165,8 @@ StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSe
   Progress progress(comm, "static", 1.0);
   while (std::abs(done - target) > 1e-12 * std::abs(target)) {
     double next = done + d;
-    if ((d > 0 && next > target) || (d < 0 && next < target) || std::abs(target - next) < 1e-9 * std::abs(d0)) next = target;
+    if ((d > 0 && next > target) || (d < 0 && next < target) || std::abs(target - next) < 1e-9 * std::abs(d0))
+      next = target;
     MORSE_CALL(VecCopy(res.u.get(), u_prev.get()));
     ctx.lambda = next;
     PetscErrorCode ierr = SNESSolve(snes.get(), nullptr, res.u.get());

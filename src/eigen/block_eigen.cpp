@@ -6,9 +6,9 @@
 // (MatMatSolve: the factor is read once per block, not once per vector, which is what bounds a
 // single-vector solve). The basis Q is kept M-orthonormal by block classical Gram–Schmidt (a
 // local pass against the last two blocks, then one global pass, repeated by the DGKS test) and
-// SVQB (the eigen-decomposition of the b x b Gram matrix), all BLAS-3. The projected matrix H = Q^T M Op Q is filled from the Gram–Schmidt coefficients; the
-// Rayleigh–Ritz pairs of its leading part give the Ritz values, and the coupling block of the
-// last (residual) block gives each Ritz pair's residual ||Op x - theta x||_M = ||B y||. When the
+// SVQB (the eigen-decomposition of the b x b Gram matrix), all BLAS-3. The projected matrix H = Q^T M Op Q is filled
+// from the Gram–Schmidt coefficients; the Rayleigh–Ritz pairs of its leading part give the Ritz values, and the
+// coupling block of the last (residual) block gives each Ritz pair's residual ||Op x - theta x||_M = ||B y||. When the
 // basis is full, the method restarts à la Krylov–Schur: the best Ritz vectors are kept (their
 // projected matrix is diagonal, coupled to the residual block by B Y), and the expansion goes
 // on from the residual block. A Ritz pair is converged when ||B y|| <= tol |theta|.
@@ -23,13 +23,12 @@
 #include <memory>
 #include <numeric>
 
+#include "eigen/detail/testing.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
-
-#include "eigen/detail/testing.hpp"
 
 // LAPACK's MRRR symmetric eigensolver (not in PETSc's BLAS/LAPACK header; the LAPACK that
 // PETSc links provides it).
@@ -91,7 +90,8 @@ class BlockSolver {
     MORSE_CALL(MatGetOwnershipRange(K, &rstart_, nullptr));
     MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, Q_.ptr()));
     MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, kmax, nullptr, MQ_.ptr()));
-    for (UMat* X : {&W_, &RHS_}) MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, b, nullptr, X->ptr()));
+    for (UMat* X : {&W_, &RHS_})
+      MORSE_CALL(MatCreateDense(comm, m_, PETSC_DECIDE, PETSC_DETERMINE, b, nullptr, X->ptr()));
     H_.assign(static_cast<std::size_t>(kmax) * kmax, 0.0);
   }
 
@@ -103,7 +103,8 @@ class BlockSolver {
       Local w = local(W_.get());
       for (PetscInt c = 0; c < b_; ++c)
         for (PetscInt r = 0; r < m_; ++r)
-          w.a[r + w.ld * c] = uniform(static_cast<std::uint64_t>(rstart_ + r) * 1315423911ull + static_cast<std::uint64_t>(c));
+          w.a[r + w.ld * c] =
+              uniform(static_cast<std::uint64_t>(rstart_ + r) * 1315423911ull + static_cast<std::uint64_t>(c));
       restore(W_.get(), w);
     }
     std::vector<double> R;
@@ -265,9 +266,12 @@ class BlockSolver {
     std::vector<double> removed(b_, 0.0);
     if (k == 0) return removed;
     std::vector<std::pair<PetscInt, PetscInt>> ranges;  // [j0, j1) of Q per pass
-    if (how == Passes::Local) ranges = {{std::max<PetscInt>(0, k - 2 * b_), k}, {0, k}};
-    else if (how == Passes::Once) ranges = {{0, k}};
-    else ranges = {{0, k}, {0, k}};
+    if (how == Passes::Local)
+      ranges = {{std::max<PetscInt>(0, k - 2 * b_), k}, {0, k}};
+    else if (how == Passes::Once)
+      ranges = {{0, k}};
+    else
+      ranges = {{0, k}, {0, k}};
     std::vector<double> C;
     for (const auto& [j0, j1] : ranges) {
       const PetscInt kk = j1 - j0;
@@ -292,15 +296,14 @@ class BlockSolver {
     return removed;
   }
 
-  // M-orthonormalizes W against itself (SVQB, twice unless the block is well conditioned), given nothing; k = columns of Q it must stay
-  // orthogonal to when directions are replaced. R (b x b, column-major) is returned with
-  // W_in = W_out R. Directions that vanish (an invariant subspace) are replaced by new random
-  // vectors orthogonal to Q, with zero rows in R.
-  // M W is computed afresh at each pass (after Gram–Schmidt W can be much smaller than before,
-  // so an M W carried along would have lost its accuracy) and carried through the pass's
-  // transformation, so MW = M W on return; a well-conditioned block stops after one pass.
-  // With `removed` (the squared coefficient norms of a Local orthogonalization's global pass,
-  // recorded into H column col): if that pass removed more of a column than it left (DGKS,
+  // M-orthonormalizes W against itself (SVQB, twice unless the block is well conditioned), given nothing; k = columns
+  // of Q it must stay orthogonal to when directions are replaced. R (b x b, column-major) is returned with W_in = W_out
+  // R. Directions that vanish (an invariant subspace) are replaced by new random vectors orthogonal to Q, with zero
+  // rows in R. M W is computed afresh at each pass (after Gram–Schmidt W can be much smaller than before, so an M W
+  // carried along would have lost its accuracy) and carried through the pass's transformation, so MW = M W on return; a
+  // well-conditioned block stops after one pass. With `removed` (the squared coefficient norms of a Local
+  // orthogonalization's global pass, recorded into H column col): if that pass removed more of a column than it left
+  // (DGKS,
   // ||C_c||^2 > ||W_c||_M^2), the global pass is repeated before anything else.
   void normalize(PetscInt k, std::vector<double>* R, const std::vector<double>* removed = nullptr, PetscInt col = 0) {
     R->assign(static_cast<std::size_t>(b_) * b_, 0.0);
@@ -497,7 +500,8 @@ class BlockSolver {
                 ", ", found, " of ", want, " pairs)");
     std::vector<PetscInt> order(want);
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt b) { return std::abs(lam[a]) > std::abs(lam[b]); });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](PetscInt a, PetscInt b) { return std::abs(lam[a]) > std::abs(lam[b]); });
     nritz_ = want;
     theta_.resize(want);
     Y_.resize(static_cast<std::size_t>(m) * want);
@@ -575,8 +579,8 @@ double available_bytes() {
 // in 70 % of the memory available on each node once the factor exists, the ranks of a node
 // sharing it; the same on every rank. A cap below nev + 2 blocks is an error that says what the
 // solve needs. Collective.
-PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, PetscInt b, PetscInt kdim,
-                             double budget_gb, const EigenSettings& s, double share = 1.0) {
+PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, PetscInt b, PetscInt kdim, double budget_gb,
+                             const EigenSettings& s, double share = 1.0) {
   MPI_Comm node;
   MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
   double rows = static_cast<double>(m_local);
@@ -592,13 +596,14 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
   if (fit >= static_cast<double>(kdim)) return kdim;
   const PetscInt cap = static_cast<PetscInt>(fit / b) * b;
   const double need_gb = 2.0 * sizeof(double) * rows * static_cast<double>(nev + 2 * b) / 1e9;
-  collective_check(comm, cap >= nev + 2 * b
-                             ? std::string()
-                             : cat(s.what, ": the block basis for ", nev, " modes needs at least ", nev + 2 * b,
-                                   " vectors, about ", need_gb, " GB on a node, and the basis may use ", budget / 1e9,
-                                   " GB (-", s.prefix, "block_memory_gb, default 70 % of the memory available): "
-                                   "ask for fewer modes per solve, run on more nodes, or use -", s.prefix,
-                                   "eigen_solver krylovschur"));
+  collective_check(
+      comm, cap >= nev + 2 * b
+                ? std::string()
+                : cat(s.what, ": the block basis for ", nev, " modes needs at least ", nev + 2 * b, " vectors, about ",
+                      need_gb, " GB on a node, and the basis may use ", budget / 1e9, " GB (-", s.prefix,
+                      "block_memory_gb, default 70 % of the memory available): "
+                      "ask for fewer modes per solve, run on more nodes, or use -",
+                      s.prefix, "eigen_solver krylovschur"));
   print0(comm,
          "  %s: block basis capped at %d vectors (default %d) to fit Q and M Q in %.3g GB per node (%s): expect "
          "restarts; -%sblock_max_dim sets the basis\n",
@@ -613,8 +618,7 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
 // spectrum), its wall time in *seconds (the Factor stage if `timed`); with `for_inertia` its
 // root front stays unsplit (ICNTL(13) = 1) so that the Sylvester check can refactor it. A
 // singular K (null pivots at shift 0) is an error that names the likely cause.
-UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed,
-                    bool for_inertia) {
+UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed, bool for_inertia) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   std::unique_ptr<StageTimer> timer;
   if (timed) timer = std::make_unique<StageTimer>(comm, s.stage + "Factor");
@@ -640,12 +644,13 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
   *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const PetscInt nulls = mumps_null_pivots(F.get());
-  collective_check(comm, nulls > 0 ? (shift == 0.0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
-                                                         " null pivots): the model is not restrained against "
-                                                         "rigid-body motion; check -clamp and the boundary set")
-                                                   : cat(s.what, ": K - sigma M is singular at the shift sigma = ",
-                                                         shift, " (", nulls, " null pivots)"))
-                                   : std::string());
+  collective_check(comm, nulls > 0
+                             ? (shift == 0.0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
+                                                   " null pivots): the model is not restrained against "
+                                                   "rigid-body motion; check -clamp and the boundary set")
+                                             : cat(s.what, ": K - sigma M is singular at the shift sigma = ", shift,
+                                                   " (", nulls, " null pivots)"))
+                             : std::string());
   return F;
 }
 
@@ -659,11 +664,11 @@ void copy_columns(Mat src, const std::vector<std::pair<double, PetscInt>>& cols,
   MORSE_CALL(MatDenseGetLDA(dst, &ldd));
   MORSE_CALL(MatDenseGetArrayRead(src, &a));
   MORSE_CALL(MatDenseGetArray(dst, &d));
-  for (std::size_t j = 0; j < cols.size(); ++j) std::copy_n(a + lda * cols[j].second, m, d + ldd * static_cast<PetscInt>(j));
+  for (std::size_t j = 0; j < cols.size(); ++j)
+    std::copy_n(a + lda * cols[j].second, m, d + ldd * static_cast<PetscInt>(j));
   MORSE_CALL(MatDenseRestoreArray(dst, &d));
   MORSE_CALL(MatDenseRestoreArrayRead(src, &a));
 }
-
 
 // The block solver's options (-<prefix>block_*, -<prefix>eps_tol).
 struct BlockOptions {
@@ -678,25 +683,34 @@ BlockOptions block_options(MPI_Comm comm, const EigenSettings& s) {
   options::add_prefix(s.prefix, options::Solver::Eigen);
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse block eigen solver", "");
-    PetscCall(MorseOptionsInt("-block_size", "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
-                              "modes, else 16)", "", o.b, &o.b, nullptr));
-    PetscCall(MorseOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))", "",
-                              o.kmax, &o.kmax, nullptr));
+    PetscCall(MorseOptionsInt("-block_size",
+                              "Vectors per block (one multi-RHS MUMPS solve each; default 8 below 100 "
+                              "modes, else 16)",
+                              "", o.b, &o.b, nullptr));
+    PetscCall(MorseOptionsInt("-block_max_dim", "Largest basis before a restart (default nev + max(1.2 nev, 6 blocks))",
+                              "", o.kmax, &o.kmax, nullptr));
     PetscCall(MorseOptionsReal("-block_memory_gb",
                                "Memory for the basis (Q and M Q) per node [GB] when -block_max_dim is not given "
                                "(default: 70% of the memory available after the factorization)",
                                "", o.memory_gb, &o.memory_gb, nullptr));
-    PetscCall(MorseOptionsInt("-block_max_restarts", "Restarts before giving up", "", o.max_restarts, &o.max_restarts, nullptr));
-    PetscCall(MorseOptionsInt("-block_check_every", "Rayleigh-Ritz every N blocks (default 0: adaptive, extrapolated "
-                              "from the converged counts)", "", o.check_every, &o.check_every, nullptr));
+    PetscCall(MorseOptionsInt("-block_max_restarts", "Restarts before giving up", "", o.max_restarts, &o.max_restarts,
+                              nullptr));
+    PetscCall(MorseOptionsInt("-block_check_every",
+                              "Rayleigh-Ritz every N blocks (default 0: adaptive, extrapolated "
+                              "from the converged counts)",
+                              "", o.check_every, &o.check_every, nullptr));
     PetscCall(MorseOptionsBool("-block_monitor", "Print the converged count at every Rayleigh-Ritz", "", o.monitor,
                                &o.monitor, nullptr));
-    PetscCall(MorseOptionsInt("-block_slices", "Spectrum slicing: solve [0, cutoff] in this many slices, one shift and "
-                              "one Sylvester count each (default 1: one shift; -block_partitions if that is larger)", "",
-                              o.slices, &o.slices, nullptr));
-    PetscCall(MorseOptionsInt("-block_partitions", "Subcommunicators solving slices side by side (each holds a copy of "
-                              "K and M and its own factorizations)", "", o.partitions, &o.partitions, nullptr));
-    PetscCall(MorseOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", o.tol, &o.tol, nullptr));
+    PetscCall(MorseOptionsInt("-block_slices",
+                              "Spectrum slicing: solve [0, cutoff] in this many slices, one shift and "
+                              "one Sylvester count each (default 1: one shift; -block_partitions if that is larger)",
+                              "", o.slices, &o.slices, nullptr));
+    PetscCall(MorseOptionsInt("-block_partitions",
+                              "Subcommunicators solving slices side by side (each holds a copy of "
+                              "K and M and its own factorizations)",
+                              "", o.partitions, &o.partitions, nullptr));
+    PetscCall(
+        MorseOptionsReal("-eps_tol", "Relative residual tolerance of the Ritz pairs", "", o.tol, &o.tol, nullptr));
     PetscOptionsEnd();
     return PETSC_SUCCESS;
   };
@@ -711,7 +725,8 @@ BlockOptions block_options(MPI_Comm comm, const EigenSettings& s) {
 
 // Block size and basis for nev pairs of an n-DOF problem; false if nev + 2 blocks do not fit
 // (nearly every mode of the problem wanted).
-bool block_shape(PetscInt n, PetscInt nev, const BlockOptions& o, const EigenSettings& s, PetscInt* b_out, PetscInt* kdim) {
+bool block_shape(PetscInt n, PetscInt nev, const BlockOptions& o, const EigenSettings& s, PetscInt* b_out,
+                 PetscInt* kdim) {
   // Measured (bench/README.md, eigen_bench.py): 50 modes of the rotor 37 deck are fastest with
   // blocks of 8 (fewer vectors solved), 1000 of the stator with 16 (32 needs a restart).
   PetscInt b = o.b < 0 ? (nev < 100 ? 8 : 16) : o.b;
@@ -820,8 +835,8 @@ void gather_columns(MPI_Comm comm, Mat Vsub, PetscInt sub_rstart, PetscInt sub_r
   for (int q = 0; q < size; ++q) dcount[q] = static_cast<int>(all_ncols[q]);
   for (int q = 1; q < size; ++q) ddispl[q] = ddispl[q - 1] + dcount[q - 1];
   std::vector<PetscInt> all_dest(static_cast<std::size_t>(ddispl[size - 1] + dcount[size - 1]));
-  MPI_Allgatherv(dest.data(), static_cast<int>(ncols), MPIU_INT, all_dest.data(), dcount.data(), ddispl.data(), MPIU_INT,
-                 comm);
+  MPI_Allgatherv(dest.data(), static_cast<int>(ncols), MPIU_INT, all_dest.data(), dcount.data(), ddispl.data(),
+                 MPIU_INT, comm);
   const PetscScalar* a = nullptr;
   PetscInt lda = 1;
   if (Vsub) {
@@ -915,7 +930,8 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   const PetscInt n_out = s.omega2_max > 0 ? N : s.nev;
   // The slices' ends, and which partition takes which slice (slice i: partition i mod P).
   std::vector<double> beta(S + 1);
-  for (PetscInt i = 0; i <= S; ++i) beta[i] = top * std::pow(static_cast<double>(i) / static_cast<double>(S), 2.0 / 3.0);
+  for (PetscInt i = 0; i <= S; ++i)
+    beta[i] = top * std::pow(static_cast<double>(i) / static_cast<double>(S), 2.0 / 3.0);
   beta[S] = top;
   const int part = static_cast<int>(rank / (size / P));
   MPI_Comm sub = MPI_COMM_NULL;
@@ -971,7 +987,8 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
       // the square of the vectors' error.
       r.omega2 = rayleigh_quotients(Ks, Ms, r.V.get());
       // Fault injection: the highest slice loses its `drop_for_test` highest pairs.
-      if (i == S - 1 && detail::drop_for_test() > 0) r.omega2.resize(r.omega2.size() - std::min<std::size_t>(detail::drop_for_test(), r.omega2.size()));
+      if (i == S - 1 && detail::drop_for_test() > 0)
+        r.omega2.resize(r.omega2.size() - std::min<std::size_t>(detail::drop_for_test(), r.omega2.size()));
       PetscInt inside = 0;
       for (double w : r.omega2) inside += w >= beta[i] * (1 - 1e-12) && w <= beta[i + 1] * (1 + 1e-12) ? 1 : 0;
       if (inside != ni && err.empty())
@@ -1028,12 +1045,14 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   mine.clear();
   Ksub.reset();
   Msub.reset();
-  print0(comm, "  %s: block solver in %d slices of [0, %.6g] Hz on %d subcommunicator(s) of %d rank(s): counts %.1f s, "
-         "solves %.1f s, %d block solves (%d vectors)\n", s.what.c_str(), (int)S, hz(top), (int)P, size / (int)P, t_count,
-         t_solve, (int)solves, (int)vectors);
-  print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M, slice by slice (every mode "
-         "found%s, %.1f s in all)\n", s.what.c_str(), (int)N, hz(top),
-         n_out < N ? cat(", the ", n_out, " lowest kept").c_str() : "",
+  print0(comm,
+         "  %s: block solver in %d slices of [0, %.6g] Hz on %d subcommunicator(s) of %d rank(s): counts %.1f s, "
+         "solves %.1f s, %d block solves (%d vectors)\n",
+         s.what.c_str(), (int)S, hz(top), (int)P, size / (int)P, t_count, t_solve, (int)solves, (int)vectors);
+  print0(comm,
+         "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M, slice by slice (every mode "
+         "found%s, %.1f s in all)\n",
+         s.what.c_str(), (int)N, hz(top), n_out < N ? cat(", the ", n_out, " lowest kept").c_str() : "",
          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_all).count());
   finish_pairs(K, M, s, o.tol, sign_ref, &out);
   return out;
@@ -1065,8 +1084,8 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   if (!block_shape(n, nev, o, s, &b, &kdim)) {
     // Nearly every mode of the problem is wanted: a Krylov space that fills the whole space is
     // SLEPc's case.
-    print0(comm, "  %s: %d modes of %d DOFs leave no room for a block basis; solved by Krylov-Schur\n",
-           s.what.c_str(), (int)nev, (int)n);
+    print0(comm, "  %s: %d modes of %d DOFs leave no room for a block basis; solved by Krylov-Schur\n", s.what.c_str(),
+           (int)nev, (int)n);
     return solve_eigen_krylovschur(K, M, s, sign_ref);
   }
   CountSolve r;
@@ -1083,9 +1102,11 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
   out.omega2 = std::move(r.omega2);
   print0(comm, "  %s: block Krylov-Schur, blocks of %d, basis %d, %d restart(s), %d block solves (%d vectors)\n",
          s.what.c_str(), (int)r.b, (int)r.kdim, (int)r.restarts, (int)r.solves, (int)(r.solves * r.b));
-  print0(comm, "  %s: block solves %.2f s, orthogonalization %.2f s (%d of %d blocks reorthogonalized, %d with one "
-         "SVQB pass), Rayleigh-Ritz %.2f s, restarts %.2f s\n", s.what.c_str(), r.t_solve, r.t_orth, (int)r.extra_passes,
-         (int)r.solves, (int)r.single_svqb, r.t_rr, r.t_restart);
+  print0(comm,
+         "  %s: block solves %.2f s, orthogonalization %.2f s (%d of %d blocks reorthogonalized, %d with one "
+         "SVQB pass), Rayleigh-Ritz %.2f s, restarts %.2f s\n",
+         s.what.c_str(), r.t_solve, r.t_orth, (int)r.extra_passes, (int)r.solves, (int)r.single_svqb, r.t_rr,
+         r.t_restart);
   if (cutoff) {
     // The inertia count says how many lie below the cutoff: exactly that many must be found, all
     // below it (one above means one below was missed).
@@ -1094,10 +1115,9 @@ Eigenpairs solve_eigen_block(Mat K, Mat M, const EigenSettings& s, Vec sign_ref)
     const double top = found ? out.omega2.back() : 0.0;
     collective_check(comm, found == nev && top <= s.omega2_max * (1 + 1e-8)
                                ? std::string()
-                               : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", nev, " eigenvalues below ",
-                                     hz(s.omega2_max), " Hz but the solve returned ", found,
-                                     found ? cat(" up to ", hz(top), " Hz") : std::string(),
-                                     ": it missed modes"));
+                               : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", nev,
+                                     " eigenvalues below ", hz(s.omega2_max), " Hz but the solve returned ", found,
+                                     found ? cat(" up to ", hz(top), " Hz") : std::string(), ": it missed modes"));
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
            s.what.c_str(), (int)nev, hz(s.omega2_max));
   }

@@ -1,5 +1,6 @@
 #include "morse/eigen/eigen.hpp"
 
+#include <petscsys.h>
 #include <petscblaslapack.h>
 
 #include <algorithm>
@@ -7,12 +8,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "eigen/detail/testing.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/core/units.hpp"
-
-#include "eigen/detail/testing.hpp"
 
 namespace morse::eigen {
 
@@ -192,7 +192,8 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   std::snprintf(solver, sizeof solver, "%s", s.solver.c_str());
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
-    PetscCall(MorseOptionsString("-eigen_solver", "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
+    PetscCall(MorseOptionsString("-eigen_solver",
+                                 "Eigen solver: block (block shift-invert Krylov-Schur, multi-RHS "
                                  "solves, BLAS-3) or krylovschur (SLEPc, one vector at a time, spectrum slicing)",
                                  "", solver, solver, sizeof solver, nullptr));
     PetscOptionsEnd();
@@ -213,16 +214,14 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   MORSE_CALL(MatGetSize(K, &n, nullptr));
   bool slicing = s.omega2_max > 0;
   double omega2_max = s.omega2_max;
-  MORSE_CHECK(slicing || s.nev > 0, s.what, ": the number of modes must be positive (got ",
-              s.nev, ")");
-  MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ",
-              n, " DOFs");
+  MORSE_CHECK(slicing || s.nev > 0, s.what, ": the number of modes must be positive (got ", s.nev, ")");
+  MORSE_CHECK(slicing || s.nev <= n, s.what, ": ", s.nev, " modes requested but the problem has only ", n, " DOFs");
   PetscInt count_slicing = s.count_slicing;
   auto get_options = [&]() -> PetscErrorCode {
     PetscOptionsBegin(comm, s.prefix.c_str(), "morse eigen solver", "");
     PetscCall(MorseOptionsInt("-count_slicing",
-                              "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)",
-                              "", count_slicing, &count_slicing, nullptr));
+                              "Find N lowest modes by inertia search + spectrum slicing when N >= this (0: never)", "",
+                              count_slicing, &count_slicing, nullptr));
     PetscOptionsEnd();
     return PETSC_SUCCESS;
   };
@@ -271,8 +270,8 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     MORSE_CALL(EPSSetTarget(eps, s.shift));
     // A Krylov method finds a second copy of a repeated eigenvalue only after the first has
     // converged; asking for a few more pairs than needed keeps such copies from being missed.
-    MORSE_CALL(EPSSetDimensions(eps, std::min(n, s.nev + std::max<PetscInt>(4, s.nev / 10)), PETSC_DEFAULT,
-                                PETSC_DEFAULT));
+    MORSE_CALL(
+        EPSSetDimensions(eps, std::min(n, s.nev + std::max<PetscInt>(4, s.nev / 10)), PETSC_DEFAULT, PETSC_DEFAULT));
   }
   MORSE_CALL(EPSSetFromOptions(eps));
   {
@@ -305,20 +304,21 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   MORSE_CALL(EPSGetConverged(eps, &nconv));
   MORSE_CALL(EPSGetIterationNumber(eps, &out.iterations));
   if (!slicing || count_by_slicing)
-    MORSE_CHECK(nconv >= s.nev, s.what, ": only ", nconv, " of ", s.nev,
-                " eigenpairs converged; increase -", s.prefix, "eps_max_it or -", s.prefix,
+    MORSE_CHECK(nconv >= s.nev, s.what, ": only ", nconv, " of ", s.nev, " eigenpairs converged; increase -", s.prefix,
+                "eps_max_it or -", s.prefix,
                 count_by_slicing ? "eps_ncv, or solve with one shift (-" + s.prefix + "count_slicing 0)"
                                  : std::string("eps_ncv"));
   // Every mode, guaranteed: the pairs found below the cutoff against Sylvester's inertia.
   const PetscInt found = nconv - (slicing ? std::min(detail::drop_for_test(), nconv) : 0);
   if (slicing) {
     if (!count_by_slicing) out.inertia_count = inertia_below(eps, K, M, -1e-6 * omega2_max, omega2_max, s.prefix);
-    collective_check(comm, found == out.inertia_count
-                               ? std::string()
-                               : cat(s.what, ": ", found, " eigenpairs found below ", hz(omega2_max),
-                                     " Hz but Sylvester's inertia of K - omega^2 M counts ", out.inertia_count,
-                                     ": the solve ", found < out.inertia_count ? "missed modes" : "returned spurious pairs",
-                                     "; tighten -", s.prefix, "eps_tol or raise -", s.prefix, "eps_ncv"));
+    collective_check(
+        comm, found == out.inertia_count
+                  ? std::string()
+                  : cat(s.what, ": ", found, " eigenpairs found below ", hz(omega2_max),
+                        " Hz but Sylvester's inertia of K - omega^2 M counts ", out.inertia_count, ": the solve ",
+                        found < out.inertia_count ? "missed modes" : "returned spurious pairs", "; tighten -", s.prefix,
+                        "eps_tol or raise -", s.prefix, "eps_ncv"));
     print0(comm, "  %s: %d pairs below %.6g Hz = Sylvester inertia count of K - omega^2 M (every mode found)\n",
            s.what.c_str(), (int)found, hz(omega2_max));
   }
@@ -410,8 +410,8 @@ void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref
     collective_check(comm, out.max_residual <= tol
                                ? std::string()
                                : cat(s.what, ": mode ", worst + 1, " (", hz(out.omega2[worst]),
-                                     " Hz) has the relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = ", out.max_residual,
-                                     " above the tolerance ", tol));
+                                     " Hz) has the relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = ",
+                                     out.max_residual, " above the tolerance ", tol));
     print0(comm, "  %s: max relative residual ||Kx - w^2 Mx|| / (||K|| ||x||) = %.2e over %d pairs\n", s.what.c_str(),
            out.max_residual, (int)n_out);
   }
@@ -473,21 +473,23 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
     const PetscInt counted_inner = counted_in(inner), found_inner = found_in(inner);
     if (counted_inner == found_inner) tied = counted - found;
   }
-  collective_check(comm, counted == found || tied > 0
-                             ? std::string()
-                             : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", counted,
-                                   " eigenvalues in [", hz(out.check_lo), ", ", hz(out.check_hi),
-                                   "] Hz but the solve found ", found, ": it ",
-                                   counted > found ? "missed modes" : "returned spurious pairs", "; raise -", s.prefix,
-                                   "block_max_dim (block solver) or -", s.prefix, "eps_ncv (krylovschur)"));
-  print0(comm, "  %s: %d pairs in [%.6g, %.6g] Hz = Sylvester inertia count of K - omega^2 M (every mode found, %.1f s%s)\n",
+  collective_check(comm,
+                   counted == found || tied > 0
+                       ? std::string()
+                       : cat(s.what, ": Sylvester's inertia of K - omega^2 M counts ", counted, " eigenvalues in [",
+                             hz(out.check_lo), ", ", hz(out.check_hi), "] Hz but the solve found ", found, ": it ",
+                             counted > found ? "missed modes" : "returned spurious pairs", "; raise -", s.prefix,
+                             "block_max_dim (block solver) or -", s.prefix, "eps_ncv (krylovschur)"));
+  print0(comm,
+         "  %s: %d pairs in [%.6g, %.6g] Hz = Sylvester inertia count of K - omega^2 M (every mode found, %.1f s%s)\n",
          s.what.c_str(), (int)(found + tied), hz(out.check_lo), hz(out.check_hi),
          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
          reuse ? ", the solver's factor refactored" : "");
   // The factor now holds K - sigma M at the check's last shift: not the caller's any more.
   if (reuse) out.block_factor.reset();
   if (tied > 0)
-    print0(comm, "  %s: the farthest pair returned (%.9g Hz) is one of a cluster: %d more eigenvalue(s) within 1e-6 of it "
+    print0(comm,
+           "  %s: the farthest pair returned (%.9g Hz) is one of a cluster: %d more eigenvalue(s) within 1e-6 of it "
            "are not returned; every eigenvalue nearer the shift than the cluster is returned\n",
            s.what.c_str(), hz(far), (int)tied);
 }
@@ -518,8 +520,8 @@ void for_column_blocks(Mat K, Mat M, Mat V, Fn fn) {
 std::vector<double> relative_residuals(Mat K, Mat M, Mat V, const std::vector<double>& omega2) {
   PetscInt nv = 0;
   MORSE_CALL(MatGetSize(V, nullptr, &nv));
-  MORSE_CHECK(static_cast<std::size_t>(nv) == omega2.size(), "relative_residuals: ", nv, " vectors but ",
-              omega2.size(), " eigenvalues");
+  MORSE_CHECK(static_cast<std::size_t>(nv) == omega2.size(), "relative_residuals: ", nv, " vectors but ", omega2.size(),
+              " eigenvalues");
   PetscReal knorm = 0;
   MORSE_CALL(MatNorm(K, NORM_INFINITY, &knorm));
   std::vector<double> r(nv, 0.0);
@@ -562,16 +564,15 @@ std::vector<double> rayleigh_quotients(Mat K, Mat M, Mat V) {
   return q;
 }
 
-std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
-                                      const std::vector<double>& M, std::vector<double>* vectors,
-                                      double vectors_max) {
+std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K, const std::vector<double>& M,
+                                      std::vector<double>* vectors, double vectors_max) {
   // Row-major symmetric = column-major symmetric, so the arrays can go to LAPACK as they are.
   std::vector<double> A(K), B(M), w(n);
   PetscBLASInt itype = 1, nn = n, lwork = std::max(1, 8 * n), info = 0;
   std::vector<double> work(lwork);
   const bool all_vectors = vectors && !(vectors_max < std::numeric_limits<double>::infinity());
-  LAPACKsygv_(&itype, all_vectors ? "V" : "N", "U", &nn, A.data(), &nn, B.data(), &nn, w.data(), work.data(),
-              &lwork, &info);
+  LAPACKsygv_(&itype, all_vectors ? "V" : "N", "U", &nn, A.data(), &nn, B.data(), &nn, w.data(), work.data(), &lwork,
+              &info);
   MORSE_CHECK(info == 0, "dense generalized eigen solve failed (LAPACK sygv info = ", info,
               "): the reduced mass matrix is not positive definite");
   if (!vectors) return w;
@@ -587,14 +588,15 @@ std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
     const double unused = 0.0, abstol = 2 * std::numeric_limits<double>::min();  // most accurate (LAPACK)
     std::vector<double> wk(n), Z(static_cast<std::size_t>(n) * k);
     std::vector<PetscBLASInt> iwork(5 * static_cast<std::size_t>(n)), ifail(n);
-    LAPACKsygvx_(&itype, "V", "I", "U", &nn, A.data(), &nn, B.data(), &nn, &unused, &unused, &il, &iu, &abstol,
-                 &found, wk.data(), Z.data(), &nn, work.data(), &lwork, iwork.data(), ifail.data(), &info);
+    LAPACKsygvx_(&itype, "V", "I", "U", &nn, A.data(), &nn, B.data(), &nn, &unused, &unused, &il, &iu, &abstol, &found,
+                 wk.data(), Z.data(), &nn, work.data(), &lwork, iwork.data(), ifail.data(), &info);
     MORSE_CHECK(info == 0 && found == k, "dense generalized eigen solve failed (LAPACK sygvx info = ", info, ", ",
                 found, " of ", k, " eigenvectors)");
     A.swap(Z);
   }
   for (int i = 0; i < n; ++i)
-    for (int m = 0; m < k; ++m) (*vectors)[static_cast<std::size_t>(i) * n + m] = A[static_cast<std::size_t>(m) * n + i];
+    for (int m = 0; m < k; ++m)
+      (*vectors)[static_cast<std::size_t>(i) * n + m] = A[static_cast<std::size_t>(m) * n + i];
   return w;
 }
 

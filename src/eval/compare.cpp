@@ -1,5 +1,7 @@
 // eval/compare.cpp: the comparison of a `morse simulate` run with a `morse fom` run
 // (eval/indicator.hpp): its options, t_max from the stored load, and the indicator of the files.
+#include "morse/eval/compare.hpp"
+
 #include <petscsys.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
-#include "morse/eval/compare.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
 #include "morse/sim/sim.hpp"
@@ -87,8 +88,8 @@ Indicator compare_runs(const std::string& fom, const std::string& rom, const Com
         for (int c = 0; c < 3; ++c) v[(t * nn + k) * 3 + c] = ur[(t * nn + at[tip_f[k]]) * 3 + c];
     ur.swap(v);
   }
-  MORSE_CHECK(tr.back() >= tf.back() - 1e-12 * tf.back(), "compare: ", rom, " ends at t = ", tr.back(), " before ",
-              fom, " (t = ", tf.back(), ")");
+  MORSE_CHECK(tr.back() >= tf.back() - 1e-12 * tf.back(), "compare: ", rom, " ends at t = ", tr.back(), " before ", fom,
+              " (t = ", tf.back(), ")");
   // Align on the FOM's time samples.
   const std::size_t ntip = 3 * tip_f.size();
   auto er_f = interpolate(tr, sr.energy, 1, tf);

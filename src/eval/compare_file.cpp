@@ -46,8 +46,9 @@ void write_compare(const std::string& file, const eval::Indicator& ind, double t
     put("t_snapshot", &tsnap, 1);
     attr("fom", fom);
     attr("tip_set", tip);
-    attr("description", "seed 003 eq. 43-51: e = (e1 covariance at t_max, e2 energy, e3 tip peak-to-peak, "
-                        "e4 tip displacement), I = sum w e");
+    attr("description",
+         "seed 003 eq. 43-51: e = (e1 covariance at t_max, e2 energy, e3 tip peak-to-peak, "
+         "e4 tip displacement), I = sum w e");
   }
   if (g >= 0) H5Gclose(g);
   H5Fclose(f);

@@ -35,8 +35,8 @@ double displacement_criterion(const std::vector<double>& u_fom, const std::vecto
 }
 
 double peak_to_peak_criterion(const std::vector<double>& u_fom, const std::vector<double>& u_rom, std::size_t n) {
-  MORSE_CHECK(n > 0 && u_fom.size() == u_rom.size() && u_fom.size() % n == 0,
-              "peak-to-peak criterion: histories of ", u_fom.size(), " and ", u_rom.size(), " values for ", n, " DOFs");
+  MORSE_CHECK(n > 0 && u_fom.size() == u_rom.size() && u_fom.size() % n == 0, "peak-to-peak criterion: histories of ",
+              u_fom.size(), " and ", u_rom.size(), " values for ", n, " DOFs");
   const std::size_t nt = u_fom.size() / n;
   double s = 0;
   std::size_t used = 0;

@@ -413,8 +413,7 @@ const QuadratureRule& mass_rule(ElementType t) {
 const std::vector<std::array<double, 3>>& reference_nodes(ElementType t) {
   static const std::array<std::vector<Point>, mesh::kNumElementTypes> nodes = [] {
     const std::vector<Point> tet = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    const std::vector<Point> wedge = {{0, 0, -1}, {1, 0, -1}, {0, 1, -1},
-                                      {0, 0, 1},  {1, 0, 1},  {0, 1, 1}};
+    const std::vector<Point> wedge = {{0, 0, -1}, {1, 0, -1}, {0, 1, -1}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
     const std::vector<Point> hex = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                     {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
     std::array<std::vector<Point>, mesh::kNumElementTypes> r;
@@ -526,8 +525,7 @@ double element_stiffness(ElementType t, const double* xyz, double E, double nu, 
         for (int j = 0; j < 3; ++j) S[3 * i + j] = blk[i * nd + j];
       const double tr = S[0] + S[4] + S[8];
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          blk[i * nd + j] = lam * S[3 * i + j] + mu * (S[3 * j + i] + (i == j ? tr : 0.0));
+        for (int j = 0; j < 3; ++j) blk[i * nd + j] = lam * S[3 * i + j] + mu * (S[3 * j + i] + (i == j ? tr : 0.0));
     }
   for (int r = 0; r < nd; ++r)
     for (int c = r + 1; c < nd; ++c) Ke[c * nd + r] = Ke[r * nd + c];

@@ -143,8 +143,7 @@ void gather_labels(const DofLayout& dofs, std::vector<std::int64_t>* node, std::
   component->assign(rank == 0 ? dofs.n_global : 0, 0);
   std::vector<std::int64_t> comp(dofs.component.begin(), dofs.component.end());
   MPI_Gatherv(dofs.node.data(), m, MPI_INT64_T, node->data(), counts.data(), displs.data(), MPI_INT64_T, 0, dofs.comm);
-  MPI_Gatherv(comp.data(), m, MPI_INT64_T, component->data(), counts.data(), displs.data(), MPI_INT64_T, 0,
-              dofs.comm);
+  MPI_Gatherv(comp.data(), m, MPI_INT64_T, component->data(), counts.data(), displs.data(), MPI_INT64_T, 0, dofs.comm);
 }
 
 Model mesh_model(MPI_Comm comm, const MeshInput& in) {
@@ -206,12 +205,14 @@ Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofLayout& dofs) {
     scratch.clear();
     for (auto j = ne_off[k]; j < ne_off[k + 1]; ++j) {
       const auto e = ne_idx[j];
-      scratch.insert(scratch.end(), m.elem_nodes.begin() + m.elem_offsets[e], m.elem_nodes.begin() + m.elem_offsets[e + 1]);
+      scratch.insert(scratch.end(), m.elem_nodes.begin() + m.elem_offsets[e],
+                     m.elem_nodes.begin() + m.elem_offsets[e + 1]);
     }
     std::sort(scratch.begin(), scratch.end());
     scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
     for (auto q : scratch)
-      nbrs[k].push_back({lm.global_node[q], {dofs.node_dof[3 * q], dofs.node_dof[3 * q + 1], dofs.node_dof[3 * q + 2]}});
+      nbrs[k].push_back(
+          {lm.global_node[q], {dofs.node_dof[3 * q], dofs.node_dof[3 * q + 1], dofs.node_dof[3 * q + 2]}});
   }
   // Ghost nodes: send (global node, count, neighbours...) to the owner, as int64 words.
   std::vector<std::vector<std::int64_t>> send(size);
@@ -230,8 +231,9 @@ Pattern sparsity_pattern(const mesh::LocalMesh& lm, const DofLayout& dofs) {
     const auto cnt = rbuf[i + 1];
     i += 2;
     for (std::int64_t c = 0; c < cnt; ++c, i += 4)
-      nbrs[k].push_back({rbuf[i], {static_cast<PetscInt>(rbuf[i + 1]), static_cast<PetscInt>(rbuf[i + 2]),
-                                   static_cast<PetscInt>(rbuf[i + 3])}});
+      nbrs[k].push_back({rbuf[i],
+                         {static_cast<PetscInt>(rbuf[i + 1]), static_cast<PetscInt>(rbuf[i + 2]),
+                          static_cast<PetscInt>(rbuf[i + 3])}});
   }
   // Owned rows, in DOF order (owned nodes are numbered in local order).
   Pattern p;

@@ -178,8 +178,7 @@ void Svk::add_to_global(Vec local, Vec g) const {
   MORSE_CALL(VecScatterEnd(scatter_.get(), local, g, ADD_VALUES, SCATTER_REVERSE));
 }
 
-void Svk::element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt,
-                       double* energy) const {
+void Svk::element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt, double* energy) const {
   const std::int64_t ne = static_cast<std::int64_t>(type_n_.size());
   double ua[kMaxDofs], ub[kMaxDofs], ge[kMaxDofs], h[3 * kMaxNodes];
   std::vector<double> Ke((what & kTangent) ? kMaxDofs * kMaxDofs : 0);
@@ -255,7 +254,8 @@ void Svk::element_loop(int what, int nv, const double* a, const double* b, doubl
             const double* gc = gq + 3 * c;
             const double* hc = h + 3 * c;
             double Sg[3];
-            for (int i = 0; i < 3; ++i) Sg[i] = w * (p.S[3 * i] * gc[0] + p.S[3 * i + 1] * gc[1] + p.S[3 * i + 2] * gc[2]);
+            for (int i = 0; i < 3; ++i)
+              Sg[i] = w * (p.S[3 * i] * gc[0] + p.S[3 * i + 1] * gc[1] + p.S[3 * i + 2] * gc[2]);
             for (int d = c; d < n; ++d) {
               const double* gd = gq + 3 * d;
               const double* hd = h + 3 * d;
@@ -264,9 +264,8 @@ void Svk::element_loop(int what, int nv, const double* a, const double* b, doubl
               double* blk = &Ke[3 * c * nd + 3 * d];
               for (int i = 0; i < 3; ++i)
                 for (int k = 0; k < 3; ++k)
-                  blk[i * nd + k] += (i == k ? geo : 0.0) +
-                                     wl * (gc[i] * hd[k] + hc[i] * gd[k] + hc[i] * hd[k]) + gg * B[3 * i + k] +
-                                     wm * (gd[i] * hc[k] + hd[i] * gc[k] + hd[i] * hc[k]);
+                  blk[i * nd + k] += (i == k ? geo : 0.0) + wl * (gc[i] * hd[k] + hc[i] * gd[k] + hc[i] * hd[k]) +
+                                     gg * B[3 * i + k] + wm * (gd[i] * hc[k] + hd[i] * gc[k] + hd[i] * hc[k]);
             }
           }
         }
@@ -472,8 +471,8 @@ std::vector<double> Svk::reduced_nonlinear_forces(Mat Phi, Mat W, const std::vec
       BLASgemm_("N", "N", &n, &m, &rr, &one, phi.data(), &n, Q.data() + static_cast<std::size_t>(f0) * r, &rr, &zero,
                 a.data(), &n);
       element_loop(kForce, static_cast<int>(nv), a.data(), nullptr, g.data(), nullptr, nullptr);
-      BLASgemm_("T", "N", &rw, &m, &n, &one, w, &n, g.data(), &n, &zero,
-                out.data() + static_cast<std::size_t>(f0) * nw, &rw);
+      BLASgemm_("T", "N", &rw, &m, &n, &one, w, &n, g.data(), &n, &zero, out.data() + static_cast<std::size_t>(f0) * nw,
+                &rw);
     }
   }
   // Ghost rows of W hold the same values as their owners, and each element is evaluated by one
@@ -570,8 +569,8 @@ void Svk::project_tensors(Mat Phi, std::vector<double>* A, std::vector<double>* 
   auto flush = [&]() {
     if (kb == 0) return;
     flops += static_cast<double>(n2) * static_cast<double>(n2 + 1) * kb + 2.0 * R * n2 * kb;
-    PetscBLASInt k = static_cast<PetscBLASInt>(kb), np = static_cast<PetscBLASInt>(n2), nr = static_cast<PetscBLASInt>(R),
-                 ld = static_cast<PetscBLASInt>(kb_max);
+    PetscBLASInt k = static_cast<PetscBLASInt>(kb), np = static_cast<PetscBLASInt>(n2),
+                 nr = static_cast<PetscBLASInt>(R), ld = static_cast<PetscBLASInt>(kb_max);
     const double one = 1.0;
     BLASsyrk_("U", "T", &np, &k, &one, X.data(), &ld, &one, F.data(), &np);
     BLASgemm_("T", "N", &nr, &np, &k, &one, Y.data(), &ld, X.data(), &ld, &one, G.data(), &nr);

@@ -30,8 +30,7 @@ namespace {
 bool exactly_symmetric(const std::vector<double>& A, int n) {
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j)
-      if (A[static_cast<std::size_t>(i) * n + j] != A[static_cast<std::size_t>(j) * n + i])
-        return false;
+      if (A[static_cast<std::size_t>(i) * n + j] != A[static_cast<std::size_t>(j) * n + i]) return false;
   return true;
 }
 
@@ -100,8 +99,7 @@ std::string source_line(const Superelement& se) {
 void check_name(const std::string& name, const char* what) {
   bool ok = !name.empty() && name.size() <= 8 && std::isalpha(static_cast<unsigned char>(name[0]));
   for (char ch : name) ok = ok && std::isalnum(static_cast<unsigned char>(ch));
-  MORSE_CHECK(ok, what, " '", name,
-              "': a Nastran matrix name is 1 to 8 letters or digits, a letter first");
+  MORSE_CHECK(ok, what, " '", name, "': a Nastran matrix name is 1 to 8 letters or digits, a letter first");
 }
 
 // What an interface node's component is in the shapes written without the basis: true if it is
@@ -114,40 +112,37 @@ void check_interface_components(const Superelement& se) {
     for (std::size_t r = 0; r < se.model_dof_node.size(); ++r) {
       auto it = boundary.find(se.model_dof_node[r]);
       if (it != boundary.end() && !it->second.count(se.model_dof_component[r]))
-        throw Error(cat(se.source, ": interface node ", it->first, " has component ",
-                        se.model_dof_component[r], " (", comp_name(se.model_dof_component[r]),
+        throw Error(cat(se.source, ": interface node ", it->first, " has component ", se.model_dof_component[r], " (",
+                        comp_name(se.model_dof_component[r]),
                         ") as an interior DOF: its mode shapes there are not known without the "
                         "basis; put every "
                         "free component of the interface nodes in the boundary set"));
     }
     return;
   }
-  if (se.from_mesh)
-    return;  // solid mesh: no rotations; a translation missing from the boundary is clamped
+  if (se.from_mesh) return;  // solid mesh: no rotations; a translation missing from the boundary is clamped
   for (const auto& [node, comps] : boundary)
     for (int c = 1; c <= 3; ++c)
-      MORSE_CHECK(comps.count(c), se.source, ": interface node ", node,
-                  " has no boundary component ", c, " (", comp_name(c),
-                  ") and the file has neither /mesh nor /dofs to tell whether it is clamped");
+      MORSE_CHECK(comps.count(c), se.source, ": interface node ", node, " has no boundary component ", c, " (",
+                  comp_name(c), ") and the file has neither /mesh nor /dofs to tell whether it is clamped");
 }
 
 void check_spoints(const Superelement& se, std::int64_t offset) {
   if (se.n_modes() == 0) return;
-  MORSE_CHECK(offset >= 0 && offset + se.n_modes() <= 99999999, "SPOINT ids ", offset + 1, "..",
-              offset + se.n_modes(), " are outside Nastran's 1..99999999 (-export_spoint_offset)");
+  MORSE_CHECK(offset >= 0 && offset + se.n_modes() <= 99999999, "SPOINT ids ", offset + 1, "..", offset + se.n_modes(),
+              " are outside Nastran's 1..99999999 (-export_spoint_offset)");
   auto clash = [&](std::int64_t id) { return id > offset && id <= offset + se.n_modes(); };
   for (std::int64_t id : se.model_node_ids)
-    MORSE_CHECK(!clash(id), "SPOINT ids ", offset + 1, "..", offset + se.n_modes(),
-                " collide with node ", id, " of ", se.source, " (-export_spoint_offset)");
+    MORSE_CHECK(!clash(id), "SPOINT ids ", offset + 1, "..", offset + se.n_modes(), " collide with node ", id, " of ",
+                se.source, " (-export_spoint_offset)");
   for (std::int64_t id : se.boundary_nodes)
-    MORSE_CHECK(!clash(id), "SPOINT ids ", offset + 1, "..", offset + se.n_modes(),
-                " collide with node ", id, " of ", se.source, " (-export_spoint_offset)");
+    MORSE_CHECK(!clash(id), "SPOINT ids ", offset + 1, "..", offset + se.n_modes(), " collide with node ", id, " of ",
+                se.source, " (-export_spoint_offset)");
 }
 
 }  // namespace
 
-MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
-                          const NodalShapes* shapes) {
+MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se, const NodalShapes* shapes) {
   const int n = se.n, nb = se.n_b;
   std::size_t n_nodes = 0;
   const std::vector<std::int64_t>* ids = nullptr;
@@ -182,32 +177,27 @@ MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
     // Numbers six to a line (ReadModal reads them as a stream; short lines keep the file readable
     // and clear of its getline buffer of BUFSIZ characters), each matrix row on new lines.
     auto numbers = [&](const double* v, int count) {
-      for (int k = 0; k < count; ++k)
-        std::fprintf(f, (k + 1) % 6 && k + 1 < count ? "%.17g " : "%.17g\n", v[k]);
+      for (int k = 0; k < count; ++k) std::fprintf(f, (k + 1) % 6 && k + 1 < count ? "%.17g " : "%.17g\n", v[k]);
     };
     auto row = [&](const std::vector<double>& A) {
       for (int i = 0; i < n; ++i) numbers(&A[static_cast<std::size_t>(i) * n], n);
     };
-    std::fprintf(f, "** MBDyn MODAL DATA FILE (FEM file of the modal joint), written by morse %s\n",
-                 MORSE_VERSION);
+    std::fprintf(f, "** MBDyn MODAL DATA FILE (FEM file of the modal joint), written by morse %s\n", MORSE_VERSION);
     std::fprintf(f, "** source: %s\n", source_line(se).c_str());
     std::fprintf(f,
                  "** Craig-Bampton superelement: %d modal coordinates = %d constraint modes "
                  "(boundary DOFs, first) "
                  "+ %d fixed-interface modes\n",
                  n, nb, se.n_modes());
-    std::fprintf(
-        f, "** nodes: %s (%zu); generalized mass and stiffness: the full M_CB, K_CB of /rom\n",
-        shapes ? "every mesh node, shapes of the basis" : "the interface nodes", n_nodes);
+    std::fprintf(f, "** nodes: %s (%zu); generalized mass and stiffness: the full M_CB, K_CB of /rom\n",
+                 shapes ? "every mesh node, shapes of the basis" : "the interface nodes", n_nodes);
     std::fprintf(f, "** RECORD GROUP 1, HEADER\n");
     std::fprintf(f, "**   REVISION, NODE, NORMAL, ATTACHMENT, CONSTRAINT, REJECTED MODES\n");
     std::fprintf(f, "REV0 %zu %d 0 %d 0\n**\n", n_nodes, se.n_modes(), nb);
     std::fprintf(f, "** RECORD GROUP 2, FINITE ELEMENT NODE LIST\n");
-    for (std::size_t k = 0; k < n_nodes; ++k)
-      std::fprintf(f, "%lld\n", static_cast<long long>((*ids)[k]));
+    for (std::size_t k = 0; k < n_nodes; ++k) std::fprintf(f, "%lld\n", static_cast<long long>((*ids)[k]));
     for (int g = 3; g <= 4; ++g) {
-      std::fprintf(f, "**\n** RECORD GROUP %d, INITIAL MODAL %s\n", g,
-                   g == 3 ? "DISPLACEMENTS" : "VELOCITIES");
+      std::fprintf(f, "**\n** RECORD GROUP %d, INITIAL MODAL %s\n", g, g == 3 ? "DISPLACEMENTS" : "VELOCITIES");
       const std::vector<double> zeros(static_cast<std::size_t>(n), 0.0);
       numbers(zeros.data(), n);
     }
@@ -218,37 +208,31 @@ MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
     std::fprintf(f, "**\n** RECORD GROUP 8, MODE SHAPES (x y z rx ry rz at each node)\n");
     for (int j = 0; j < n; ++j) {
       if (j < nb)
-        std::fprintf(f, "**    CONSTRAINT MODE # %d: node %lld %s\n", j + 1,
-                     static_cast<long long>(se.dof_node[j]),
+        std::fprintf(f, "**    CONSTRAINT MODE # %d: node %lld %s\n", j + 1, static_cast<long long>(se.dof_node[j]),
                      comp_name(se.dof_component[j]).c_str());
       else
-        std::fprintf(f, "**    NORMAL MODE SHAPE # %d: fixed-interface mode %d, %.9g Hz\n", j + 1,
-                     j - nb + 1, se.modal_frequency_hz(j - nb));
+        std::fprintf(f, "**    NORMAL MODE SHAPE # %d: fixed-interface mode %d, %.9g Hz\n", j + 1, j - nb + 1,
+                     se.modal_frequency_hz(j - nb));
       for (std::size_t k = 0; k < n_nodes; ++k) {
         double v[6] = {0, 0, 0, 0, 0, 0};
         if (shapes) {
-          for (int d = 0; d < 3; ++d)
-            v[d] = shapes->shapes[(static_cast<std::size_t>(j) * n_nodes + k) * 3 + d];
+          for (int d = 0; d < 3; ++d) v[d] = shapes->shapes[(static_cast<std::size_t>(j) * n_nodes + k) * 3 + d];
         } else if (j < nb && se.dof_node[j] == (*ids)[k]) {
           v[se.dof_component[j] - 1] = 1.0;
         }
-        std::fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g\n", v[0], v[1], v[2], v[3], v[4],
-                     v[5]);
+        std::fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g\n", v[0], v[1], v[2], v[3], v[4], v[5]);
       }
     }
-    std::fprintf(f,
-                 "**\n** RECORD GROUP 9, MODAL MASS MATRIX (M_CB, row by row, 6 values a line)\n");
+    std::fprintf(f, "**\n** RECORD GROUP 9, MODAL MASS MATRIX (M_CB, row by row, 6 values a line)\n");
     row(se.M);
-    std::fprintf(
-        f, "**\n** RECORD GROUP 10, MODAL STIFFNESS MATRIX (K_CB, row by row, 6 values a line)\n");
+    std::fprintf(f, "**\n** RECORD GROUP 10, MODAL STIFFNESS MATRIX (K_CB, row by row, 6 values a line)\n");
     row(se.K);
     const RigidBodyInertia& in = info.inertia;
     if (in.valid) {
       std::fprintf(f,
                    "**\n** RECORD GROUP 12, RIGID BODY INERTIA (mass, centre of mass, inertia "
                    "tensor about it)\n");
-      std::fprintf(f, "%.17g\n%.17g %.17g %.17g\n", in.mass, in.center[0], in.center[1],
-                   in.center[2]);
+      std::fprintf(f, "%.17g\n%.17g %.17g %.17g\n", in.mass, in.center[0], in.center[1], in.center[2]);
       for (int a = 0; a < 3; ++a)
         std::fprintf(f, "%.17g %.17g %.17g\n", in.inertia_cm[3 * a], in.inertia_cm[3 * a + 1],
                      in.inertia_cm[3 * a + 2]);
@@ -266,15 +250,13 @@ MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
   return info;
 }
 
-void write_op4_matrices(const std::string& path, const Superelement& se,
-                        const NastranNames& names) {
+void write_op4_matrices(const std::string& path, const Superelement& se, const NastranNames& names) {
   check_name(names.op4_K, "OP4 name");
   check_name(names.op4_M, "OP4 name");
   if (!se.C.empty()) check_name(names.op4_C, "OP4 name");
   const std::string tmp = path + ".tmp";
   const int n = se.n;
-  std::vector<std::pair<const std::vector<double>*, std::string>> mats = {{&se.K, names.op4_K},
-                                                                          {&se.M, names.op4_M}};
+  std::vector<std::pair<const std::vector<double>*, std::string>> mats = {{&se.K, names.op4_K}, {&se.M, names.op4_M}};
   if (!se.C.empty()) mats.emplace_back(&se.C, names.op4_C);
   try {
     for (std::size_t m = 0; m < mats.size(); ++m) {
@@ -362,15 +344,14 @@ void write_dmig_deck(const std::string& path, const std::string& grids_path, con
   };
   const bool grids = !grids_path.empty() && se.boundary_xyz.size() == 3 * se.boundary_nodes.size();
   write_atomic(path, [&](FILE* f) {
-    comment(f, "$ ",
-            cat("Craig-Bampton superelement, written by morse ", MORSE_VERSION, " (morse export)"));
+    comment(f, "$ ", cat("Craig-Bampton superelement, written by morse ", MORSE_VERSION, " (morse export)"));
     comment(f, "$ ", cat("source: ", source_line(se)));
     comment(f, "$ ",
             cat(n, " DOFs: ", nb,
                 " boundary DOFs (GRID, component in the basic system: the residual's "
                 "boundary GRIDs need CD = 0), then ",
-                se.n_modes(), " modal coordinates on SPOINTs ", offset + 1, "..",
-                offset + se.n_modes(), " (modal coordinate k = SPOINT ", offset, "+k)"));
+                se.n_modes(), " modal coordinates on SPOINTs ", offset + 1, "..", offset + se.n_modes(),
+                " (modal coordinate k = SPOINT ", offset, "+k)"));
     comment(f, "$ ",
             cat("case control: K2GG = ", names.dmig_K, ", M2GG = ", names.dmig_M,
                 se.C.empty() ? std::string() : cat(", B2GG = ", names.dmig_C)));
@@ -383,13 +364,11 @@ void write_dmig_deck(const std::string& path, const std::string& grids_path, con
       // final file.
       std::string g = fs::path(grids_path).filename().string();
       if (const auto k = g.rfind(".part."); k != std::string::npos) g.erase(k, 5);
-      comment(
-          f, "$ ",
-          cat("GRID cards of the boundary nodes: ", g, " (include it if the model lacks them)"));
+      comment(f, "$ ", cat("GRID cards of the boundary nodes: ", g, " (include it if the model lacks them)"));
     }
     for (int k = 0; k < se.n_modes(); ++k)
-      std::fprintf(f, "$ SPOINT %lld: fixed-interface mode %d, %.9g Hz\n",
-                   static_cast<long long>(offset + k + 1), k + 1, se.modal_frequency_hz(k));
+      std::fprintf(f, "$ SPOINT %lld: fixed-interface mode %d, %.9g Hz\n", static_cast<long long>(offset + k + 1),
+                   k + 1, se.modal_frequency_hz(k));
     if (se.n_modes() == 1)
       std::fprintf(f, "SPOINT  %8lld\n", static_cast<long long>(offset + 1));
     else if (se.n_modes() > 1)
@@ -398,8 +377,7 @@ void write_dmig_deck(const std::string& path, const std::string& grids_path, con
     auto dmig = [&](const std::vector<double>& A, const std::string& name, const char* what) {
       const bool sym = exactly_symmetric(A, n);
       std::fprintf(f, "$ %s: %s (IFO %d, TIN 2)\n", name.c_str(), what, sym ? 6 : 1);
-      std::fprintf(f, "DMIG*   %-16s%16d%16d%16d\n*       %16d\n", name.c_str(), 0, sym ? 6 : 1, 2,
-                   0);
+      std::fprintf(f, "DMIG*   %-16s%16d%16d%16d\n*       %16d\n", name.c_str(), 0, sym ? 6 : 1, 2, 0);
       for (int j = 0; j < n; ++j) {
         bool started = false;
         for (int i = sym ? j : 0; i < n; ++i) {
@@ -423,21 +401,20 @@ void write_dmig_deck(const std::string& path, const std::string& grids_path, con
   });
   if (!grids) return;
   write_atomic(grids_path, [&](FILE* f) {
-    comment(f, "$ ",
-            cat("GRID cards of the boundary nodes of ", se.source,
-                " (basic system), written by morse ", MORSE_VERSION));
+    comment(
+        f, "$ ",
+        cat("GRID cards of the boundary nodes of ", se.source, " (basic system), written by morse ", MORSE_VERSION));
     for (std::size_t k = 0; k < se.boundary_nodes.size(); ++k) {
       const double* x = &se.boundary_xyz[3 * k];
-      std::fprintf(f, "GRID*   %16lld%16s%16s%16s\n*       %16s\n",
-                   static_cast<long long>(se.boundary_nodes[k]), "",
+      std::fprintf(f, "GRID*   %16lld%16s%16s%16s\n*       %16s\n", static_cast<long long>(se.boundary_nodes[k]), "",
                    nastran_large_real(x[0]).c_str(), nastran_large_real(x[1]).c_str(),
                    nastran_large_real(x[2]).c_str());
     }
   });
 }
 
-void write_matrix_market(const std::string& path_K, const std::string& path_M,
-                         const std::string& path_C, const Superelement& se) {
+void write_matrix_market(const std::string& path_K, const std::string& path_M, const std::string& path_C,
+                         const Superelement& se) {
   const int n = se.n;
   auto one = [&](const std::vector<double>& A, const std::string& path) {
     UMat S;
@@ -452,8 +429,8 @@ void write_matrix_market(const std::string& path_K, const std::string& path_M,
           cols.push_back(j);
           vals.push_back(A[static_cast<std::size_t>(i) * n + j]);
         }
-      MORSE_CALL(MatSetValues(S.get(), 1, &i, static_cast<PetscInt>(cols.size()), cols.data(),
-                              vals.data(), INSERT_VALUES));
+      MORSE_CALL(
+          MatSetValues(S.get(), 1, &i, static_cast<PetscInt>(cols.size()), cols.data(), vals.data(), INSERT_VALUES));
     }
     MORSE_CALL(MatAssemblyBegin(S.get(), MAT_FINAL_ASSEMBLY));
     MORSE_CALL(MatAssemblyEnd(S.get(), MAT_FINAL_ASSEMBLY));
@@ -466,20 +443,18 @@ void write_matrix_market(const std::string& path_K, const std::string& path_M,
 
 void write_dof_map_text(const std::string& path, const Superelement& se, std::int64_t offset) {
   write_atomic(path, [&](FILE* f) {
-    std::fprintf(
-        f, "# DOF map of the exported matrices (rows and columns, 1-based), written by morse %s\n",
-        MORSE_VERSION);
+    std::fprintf(f, "# DOF map of the exported matrices (rows and columns, 1-based), written by morse %s\n",
+                 MORSE_VERSION);
     std::fprintf(f, "# source: %s\n", source_line(se).c_str());
     std::fprintf(f, "# row node <node id> <component 1..6: x y z rx ry rz, basic system>\n");
     std::fprintf(f,
                  "# row modal <k: fixed-interface mode, ascending frequency> <its SPOINT id in the "
                  "DMIG deck>\n");
     for (int j = 0; j < se.n_b; ++j)
-      std::fprintf(f, "%d node %lld %d\n", j + 1, static_cast<long long>(se.dof_node[j]),
-                   se.dof_component[j]);
+      std::fprintf(f, "%d node %lld %d\n", j + 1, static_cast<long long>(se.dof_node[j]), se.dof_component[j]);
     for (int k = 0; k < se.n_modes(); ++k)
-      std::fprintf(f, "%d modal %d %lld  # %.9g Hz\n", se.n_b + k + 1, k + 1,
-                   static_cast<long long>(offset + k + 1), se.modal_frequency_hz(k));
+      std::fprintf(f, "%d modal %d %lld  # %.9g Hz\n", se.n_b + k + 1, k + 1, static_cast<long long>(offset + k + 1),
+                   se.modal_frequency_hz(k));
   });
 }
 
@@ -525,8 +500,7 @@ ExportResult export_superelement(const Superelement& se, const ExportOptions& o)
     return names.back().second;
   };
   try {
-    if (o.mbdyn)
-      res.mbdyn = write_mbdyn_fem(part(p + ".fem"), se, o.mbdyn_all_nodes ? &shapes : nullptr);
+    if (o.mbdyn) res.mbdyn = write_mbdyn_fem(part(p + ".fem"), se, o.mbdyn_all_nodes ? &shapes : nullptr);
     if (o.op4) write_op4_matrices(part(p + ".op4"), se, o.names);
     if (o.dmig) {
       const std::string deck = part(p + "_dmig.bdf");

@@ -13,10 +13,10 @@ namespace morse::io {
 
 PetscErrorCode ExportOptions::set_from_options(MPI_Comm comm) {
   std::vector<std::string> formats, op4_names, dmig_names;
-  PetscCall(options::get_string_list(comm, "-export_format",
-                                     "Formats to write, comma separated: mbdyn, op4, dmig, mtx (default: all)", &formats));
-  PetscCall(options::get_string_list(comm, "-export_op4_names", "Names of K, M, C in the OP4 file (default KAA,MAA,BAA)",
-                                     &op4_names));
+  PetscCall(options::get_string_list(
+      comm, "-export_format", "Formats to write, comma separated: mbdyn, op4, dmig, mtx (default: all)", &formats));
+  PetscCall(options::get_string_list(comm, "-export_op4_names",
+                                     "Names of K, M, C in the OP4 file (default KAA,MAA,BAA)", &op4_names));
   PetscCall(options::get_string_list(
       comm, "-export_dmig_names",
       "Names of the K, M, C DMIG matrices (case control K2GG, M2GG, B2GG; default KAAX,MAAX,BAAX)", &dmig_names));
@@ -29,31 +29,28 @@ PetscErrorCode ExportOptions::set_from_options(MPI_Comm comm) {
                                buf, sizeof buf, &set));
   if (set) from = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-out",
-      "Output prefix: PREFIX.fem, PREFIX.op4, PREFIX_dmig.bdf, PREFIX_grids.bdf, PREFIX_K.mtx, "
-      "PREFIX_M.mtx, PREFIX_C.mtx, PREFIX_dofs.txt (default: -export_from without .h5)",
-      "", buf, buf, sizeof buf, &set));
+  PetscCall(
+      MorseOptionsString("-out",
+                         "Output prefix: PREFIX.fem, PREFIX.op4, PREFIX_dmig.bdf, PREFIX_grids.bdf, PREFIX_K.mtx, "
+                         "PREFIX_M.mtx, PREFIX_C.mtx, PREFIX_dofs.txt (default: -export_from without .h5)",
+                         "", buf, buf, sizeof buf, &set));
   if (set) prefix = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-export_coordinates",
-      "Text file 'node x y z' per line: interface node coordinates for a file without /mesh "
-      "(matrix input); replaces those of /mesh",
-      "", buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-export_coordinates",
+                               "Text file 'node x y z' per line: interface node coordinates for a file without /mesh "
+                               "(matrix input); replaces those of /mesh",
+                               "", buf, buf, sizeof buf, &set));
   if (set) coordinates = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-export_mbdyn_nodes",
-      "Nodes of the MBDyn FEM file: interface, or all (every mesh node; needs a file of "
-      "morse reduce -cb_write_basis)",
-      "", nodes.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-export_mbdyn_nodes",
+                               "Nodes of the MBDyn FEM file: interface, or all (every mesh node; needs a file of "
+                               "morse reduce -cb_write_basis)",
+                               "", nodes.c_str(), buf, sizeof buf, &set));
   if (set) nodes = buf;
-  PetscCall(MorseOptionsInt(
-      "-export_spoint_offset",
-      "DMIG: modal coordinate k is SPOINT offset+k (default: the smallest power of ten above "
-      "every node id of the file)",
-      "", offset, &offset, nullptr));
+  PetscCall(MorseOptionsInt("-export_spoint_offset",
+                            "DMIG: modal coordinate k is SPOINT offset+k (default: the smallest power of ten above "
+                            "every node id of the file)",
+                            "", offset, &offset, nullptr));
   PetscOptionsEnd();
   if (prefix.empty()) {
     prefix = from;

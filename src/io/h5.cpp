@@ -70,8 +70,7 @@ void write_any(hid_t file_group, const std::string& leaf, hid_t type, const std:
 }
 }  // namespace
 
-void H5Output::write(const std::string& name, const std::vector<double>& data,
-                     std::vector<hsize_t> dims) {
+void H5Output::write(const std::string& name, const std::vector<double>& data, std::vector<hsize_t> dims) {
   if (rank_ != 0 || !error_.empty()) return;
   auto [grp, leaf] = split(name);
   hid_t g = ensure_group(grp);
@@ -124,8 +123,7 @@ void H5Output::write_row(const std::string& name, hsize_t row, const std::vector
   if (!ok) note_error(name);
 }
 
-void H5Output::write(const std::string& name, const std::vector<std::int64_t>& data,
-                     std::vector<hsize_t> dims) {
+void H5Output::write(const std::string& name, const std::vector<std::int64_t>& data, std::vector<hsize_t> dims) {
   if (rank_ != 0 || !error_.empty()) return;
   auto [grp, leaf] = split(name);
   hid_t g = ensure_group(grp);
@@ -151,8 +149,7 @@ void H5Output::write_string(const std::string& name, const std::string& value) {
   if (!ok) note_error(name);
 }
 
-void H5Output::attribute(const std::string& object, const std::string& name,
-                         const std::string& value) {
+void H5Output::attribute(const std::string& object, const std::string& name, const std::string& value) {
   if (rank_ != 0 || !error_.empty()) return;
   hid_t obj = open_object(object);
   hid_t type = H5Tcopy(H5T_C_S1);
@@ -180,8 +177,9 @@ bool write_scalar_attribute(hid_t obj, const std::string& name, hid_t type, cons
 }  // namespace
 
 hid_t H5Output::open_object(const std::string& object) {
-  return H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/" ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
-                                                                            : ensure_group(object);
+  return H5Lexists(file_, object.c_str(), H5P_DEFAULT) > 0 || object == "/"
+             ? H5Oopen(file_, object.c_str(), H5P_DEFAULT)
+             : ensure_group(object);
 }
 
 void H5Output::attribute(const std::string& object, const std::string& name, double value) {
@@ -462,7 +460,8 @@ bool read_attribute(const std::string& file, const std::string& object, const st
     return false;
   }
   bool ok = false;
-  if (H5Lexists(f, object.c_str(), H5P_DEFAULT) > 0 && H5Aexists_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
+  if (H5Lexists(f, object.c_str(), H5P_DEFAULT) > 0 &&
+      H5Aexists_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT) > 0) {
     hid_t a = H5Aopen_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
     hid_t sp = H5Aget_space(a);
     hid_t t = H5Aget_type(a);
@@ -533,7 +532,8 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
     if (d < 0) return;
     hid_t sp = H5Dget_space(d);
     out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
-    if (H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0) err = cat(file, ": cannot read ", name);
+    if (H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0)
+      err = cat(file, ": cannot read ", name);
     H5Sclose(sp);
     H5Dclose(d);
   };
@@ -543,8 +543,10 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
   hsize_t dims[2] = {0, 0};
   if (d >= 0) {
     hid_t sp = H5Dget_space(d);
-    if (H5Sget_simple_extent_ndims(sp) != 2) err = cat(file, ": ", dataset, " is not 2-D (rows x DOFs)");
-    else H5Sget_simple_extent_dims(sp, dims, nullptr);
+    if (H5Sget_simple_extent_ndims(sp) != 2)
+      err = cat(file, ": ", dataset, " is not 2-D (rows x DOFs)");
+    else
+      H5Sget_simple_extent_dims(sp, dims, nullptr);
     H5Sclose(sp);
     if (err.empty() && (dims[1] != ids.size() || comps.size() != ids.size()))
       err = cat(file, ": ", dataset, " has ", dims[1], " columns but the DOF map has ", ids.size());
@@ -553,7 +555,8 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
   std::vector<std::int64_t> col(dofs.n_owned, -1);
   if (err.empty()) {
     std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (3 id + comp, column)
-    for (std::size_t j = 0; j < ids.size(); ++j) order.emplace_back(3 * ids[j] + comps[j], static_cast<std::int64_t>(j));
+    for (std::size_t j = 0; j < ids.size(); ++j)
+      order.emplace_back(3 * ids[j] + comps[j], static_cast<std::int64_t>(j));
     std::sort(order.begin(), order.end());
     for (std::int64_t k = 0; k < lm.mesh.num_nodes() && err.empty(); ++k) {
       if (lm.node_owner[k] != rank) continue;
@@ -629,8 +632,7 @@ std::vector<double> gather_nodal(const mesh::LocalMesh& lm, const fe::DofLayout&
     for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
     all.resize(displs[size - 1] + counts[size - 1]);
   }
-  MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0,
-              lm.comm);
+  MPI_Gatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, 0, lm.comm);
   std::vector<double> out;
   if (rank != 0) return out;
   out.assign(3 * lm.n_global_nodes, 0.0);
@@ -670,12 +672,18 @@ const XdmfType& xdmf_type(mesh::ElementType t) {
   static const XdmfType tet4{6, "Tetrahedron"}, wedge6{8, "Wedge"}, hex8{9, "Hexahedron"};
   static const XdmfType tet10{38, "Tetrahedron_10"}, wedge15{40, "Wedge_15"}, hex20{48, "Hexahedron_20"};
   switch (t) {
-    case ET::Tet4: return tet4;
-    case ET::Tet10: return tet10;
-    case ET::Wedge6: return wedge6;
-    case ET::Wedge15: return wedge15;
-    case ET::Hex8: return hex8;
-    default: return hex20;
+    case ET::Tet4:
+      return tet4;
+    case ET::Tet10:
+      return tet10;
+    case ET::Wedge6:
+      return wedge6;
+    case ET::Wedge15:
+      return wedge15;
+    case ET::Hex8:
+      return hex8;
+    default:
+      return hex20;
   }
 }
 
@@ -713,8 +721,8 @@ void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const 
     f << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n";
     f << "<Grid Name=\"morse\" GridType=\"Uniform\">\n";
     f << "<Topology TopologyType=\"Mixed\" NumberOfElements=\"" << m.num_elements() << "\">\n"
-      << "<DataItem Dimensions=\"" << topo_len << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">"
-      << h5_name << ":/mesh/topology</DataItem>\n</Topology>\n";
+      << "<DataItem Dimensions=\"" << topo_len << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">" << h5_name
+      << ":/mesh/topology</DataItem>\n</Topology>\n";
     f << "<Geometry GeometryType=\"XYZ\">\n<DataItem Dimensions=\"" << m.num_nodes()
       << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5_name
       << ":/mesh/coordinates</DataItem>\n</Geometry>\n";

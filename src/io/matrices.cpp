@@ -128,7 +128,8 @@ UMat build_matrix(MPI_Comm comm, const std::vector<PetscInt>& ranges, PetscInt n
                   const std::string& file) {
   const int rank = comm_rank(comm);
   const PetscInt first = ranges[rank], m = ranges[rank + 1] - first;
-  std::sort(mine.begin(), mine.end(), [](const Entry& a, const Entry& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; });
+  std::sort(mine.begin(), mine.end(),
+            [](const Entry& a, const Entry& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; });
   std::string err;
   for (std::size_t k = 1; k < mine.size() && err.empty(); ++k)
     if (mine[k].i == mine[k - 1].i && mine[k].j == mine[k - 1].j)
@@ -186,7 +187,8 @@ std::string read_mm_header(const std::string& path, MmHeader* h) {
     return cat(path, ":1: MatrixMarket format '", format, "': only 'coordinate' (sparse) is supported");
   field = lower(field);
   if (field != "real" && field != "integer" && field != "double")
-    return cat(path, ":1: MatrixMarket field '", field, "': only real and integer are supported (not complex or pattern)");
+    return cat(path, ":1: MatrixMarket field '", field,
+               "': only real and integer are supported (not complex or pattern)");
   symmetry = lower(symmetry);
   if (symmetry != "general" && symmetry != "symmetric")
     return cat(path, ":1: MatrixMarket symmetry '", symmetry, "': only general and symmetric are supported");
@@ -572,16 +574,15 @@ DofMapFile read_dof_map(const std::string& path, std::int64_t n_rows) {
       char* end = nullptr;
       long long node = std::strtoll(f[0].c_str(), &end, 10);
       MORSE_CHECK(*end == '\0' && node > 0, where, "node id '", f[0], "' is not a positive integer");
-      MORSE_CHECK(f[1].size() == 1 && f[1][0] >= '1' && f[1][0] <= '6', where, "component '", f[1],
-                  "' is not 1 to 6");
+      MORSE_CHECK(f[1].size() == 1 && f[1][0] >= '1' && f[1][0] <= '6', where, "component '", f[1], "' is not 1 to 6");
       const auto row = static_cast<std::int64_t>(map.node.size());
       map.node.push_back(node);
       map.component.push_back(f[1][0] - '0');
       for (std::size_t k = 2; k < f.size(); ++k) map.sets[f[k]].push_back(row);
     }
-    MORSE_CHECK(static_cast<std::int64_t>(map.node.size()) == n_rows, "-matrices_dofmap ", path, ": ",
-                map.node.size(), " rows listed but the matrices have ", n_rows, " (rows ", map.node.size() + 1,
-                " to ", n_rows, " have no line)");
+    MORSE_CHECK(static_cast<std::int64_t>(map.node.size()) == n_rows, "-matrices_dofmap ", path, ": ", map.node.size(),
+                " rows listed but the matrices have ", n_rows, " (rows ", map.node.size() + 1, " to ", n_rows,
+                " have no line)");
   }
   // Each (node, component) once.
   std::vector<std::int64_t> order(map.node.size());

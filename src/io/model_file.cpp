@@ -91,9 +91,8 @@ void write_model(H5Output& out, const fe::Model& md) {
   write_dof_labels(out, node, comp, md.source, md.dofs.n_global + md.dofs.n_clamped_global);
 }
 
-void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node,
-                      const std::vector<std::int64_t>& component, const std::string& source,
-                      std::int64_t n_rows_file) {
+void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node, const std::vector<std::int64_t>& component,
+                      const std::string& source, std::int64_t n_rows_file) {
   out.write("/dofs/node", node);
   out.write("/dofs/component", component);
   out.attribute("/dofs", "description",

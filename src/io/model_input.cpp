@@ -45,8 +45,9 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
   material.name = "options";
   material.E = material.nu = material.rho = -1;
   PetscOptionsBegin(comm, nullptr, "morse model options", "");
-  PetscCall(MorseOptionsString("-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
-                               buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString(
+      "-mesh", "Mesh file: .msh (Gmsh 4.1/2.2 ASCII), .inp (Abaqus/CalculiX) or .bdf/.dat/.nas (Nastran bulk data)", "",
+      buf, buf, sizeof buf, &set));
   if (set) mesh.path = buf;
   buf[0] = 0;
   PetscCall(MorseOptionsString("-mesh_units",
@@ -54,10 +55,11 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
                                "default: from the mesh (Gmsh: SI, Abaqus: unknown)",
                                "", buf, buf, sizeof buf, &set));
   if (set) mesh.units = matrices.units = buf;
-  PetscCall(MorseOptionsBool("-mesh_skip_unsupported",
-                             "Nastran: skip element cards morse cannot represent (CQUAD4, CBAR, CELAS, ...) with a warning "
-                             "instead of an error (their stiffness and mass are then missing)",
-                             "", skip, &skip, nullptr));
+  PetscCall(
+      MorseOptionsBool("-mesh_skip_unsupported",
+                       "Nastran: skip element cards morse cannot represent (CQUAD4, CBAR, CELAS, ...) with a warning "
+                       "instead of an error (their stiffness and mass are then missing)",
+                       "", skip, &skip, nullptr));
   mesh.skip_unsupported = skip;
   PetscCall(MorseOptionsStringArray("-clamp",
                                     "Node sets whose DOFs are eliminated, comma separated; *BOUNDARY = "
@@ -69,12 +71,12 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
       PetscCall(PetscFree(sets[i]));
     }
   matrices.clamp = mesh.clamp;
-  PetscCall(MorseOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "",
-                             material.E, &material.E, nullptr));
-  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh",
-                             "", material.nu, &material.nu, nullptr));
-  PetscCall(MorseOptionsReal("-material_rho", "Density for elements without material in the mesh", "",
-                             material.rho, &material.rho, nullptr));
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "", material.E,
+                             &material.E, nullptr));
+  PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh", "",
+                             material.nu, &material.nu, nullptr));
+  PetscCall(MorseOptionsReal("-material_rho", "Density for elements without material in the mesh", "", material.rho,
+                             &material.rho, nullptr));
   n_sets = 16;
   PetscCall(MorseOptionsStringArray("-material_sets",
                                     "Element sets given their own material by -material_<set>_E, _nu, _rho "
@@ -104,7 +106,8 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
       const std::string opt = "-mesh_node_set_" + name;
       char list[4096] = "";
       PetscBool has = PETSC_FALSE;
-      PetscCall(MorseOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
+      PetscCall(
+          MorseOptionsString(opt.c_str(), "External node ids of the node set", "", list, list, sizeof list, &has));
       std::vector<std::int64_t> ids;
       std::string err = has ? parse_id_list(list, &ids) : cat("give the node ids of set ", name, " with ", opt);
       if (!err.empty() && error.empty()) error = has ? cat(opt, ": ", err) : err;
@@ -116,19 +119,23 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
     const char* help;
     std::string* dest;
   } files[] = {
-      {"-matrices_K", "Stiffness matrix instead of a mesh (reduce, select): .mtx/.mm MatrixMarket, .petsc/.bin PETSc binary, "
-                      ".op4[:NAME] Nastran OUTPUT4", &matrices.K},
+      {"-matrices_K",
+       "Stiffness matrix instead of a mesh (reduce, select): .mtx/.mm MatrixMarket, .petsc/.bin PETSc binary, "
+       ".op4[:NAME] Nastran OUTPUT4",
+       &matrices.K},
       {"-matrices_M", "Mass matrix (same formats as -matrices_K)", &matrices.M},
       {"-matrices_C", "Viscous damping matrix, projected on the superelement (optional)", &matrices.C},
-      {"-matrices_dofmap", "DOF map of the matrices: text 'node component [set ...]' per row, or .h5 /dofmap", &matrices.dofmap},
+      {"-matrices_dofmap", "DOF map of the matrices: text 'node component [set ...]' per row, or .h5 /dofmap",
+       &matrices.dofmap},
   };
   for (auto& f : files) {
     buf[0] = 0;
     PetscCall(MorseOptionsString(f.name, f.help, "", buf, buf, sizeof buf, &set));
     if (set) *f.dest = buf;
   }
-  PetscCall(MorseOptionsReal("-matrices_symmetry_tol", "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)",
-                             "", matrices.symmetry_tol, &matrices.symmetry_tol, nullptr));
+  PetscCall(MorseOptionsReal("-matrices_symmetry_tol",
+                             "Largest |A - A^T| / max|A| accepted in K, M, C (then symmetrized)", "",
+                             matrices.symmetry_tol, &matrices.symmetry_tol, nullptr));
   PetscCall(PetscStrncpy(buf, default_out, sizeof buf));
   PetscCall(MorseOptionsString("-out", "Output file", "", buf, buf, sizeof buf, nullptr));
   out = buf;
@@ -138,16 +145,17 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
 
 void ModelInput::check(const char* needs_mesh) const {
   MORSE_CHECK(error.empty(), error);
-  MORSE_CHECK(!needs_mesh || !matrices_given(),
-              needs_mesh, "; -matrices_K/-matrices_M/-matrices_C/-matrices_dofmap give none (use -mesh)");
+  MORSE_CHECK(!needs_mesh || !matrices_given(), needs_mesh,
+              "; -matrices_K/-matrices_M/-matrices_C/-matrices_dofmap give none (use -mesh)");
   MORSE_CHECK(!(matrices_given() && !mesh.path.empty()), "give either -mesh or -matrices_K/-matrices_M, not both");
   if (matrices_given()) {
     MORSE_CHECK(mesh.set_materials.empty() && mesh.material.E < 0 && mesh.material.nu < 0 && mesh.material.rho < 0,
                 "-material_* options need a mesh: the matrices already hold the material");
     return;
   }
-  MORSE_CHECK(!mesh.path.empty(), !needs_mesh ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
-                                              : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
+  MORSE_CHECK(!mesh.path.empty(),
+              !needs_mesh ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
+                          : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
 }
 
 }  // namespace morse::io

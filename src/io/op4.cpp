@@ -140,8 +140,7 @@ void scan_reals(std::string_view line, std::vector<std::string_view>* out) {
       ++i;
       while (i < n && is_digit(line[i])) ++i;
     }
-    if (i == s ||
-        (i == s + 1 && !is_digit(line[s]))) {  // not a number: keep the word for the message
+    if (i == s || (i == s + 1 && !is_digit(line[s]))) {  // not a number: keep the word for the message
       while (i < n && !is_blank(line[i])) ++i;
     }
     out->push_back(line.substr(s, i - s));
@@ -218,9 +217,7 @@ const char* form_name(std::int64_t form) {
   }
 }
 
-bool same_name(std::string_view a, std::string_view b) {
-  return upper(rtrim(a)) == upper(rtrim(b));
-}
+bool same_name(std::string_view a, std::string_view b) { return upper(rtrim(a)) == upper(rtrim(b)); }
 
 // ------------------------------------------------------------------------------------------------
 // Binary helpers
@@ -269,8 +266,7 @@ class Source {
   /// Number of values of a non-sparse record of NW words (real types).
   virtual std::int64_t dense_count(std::int64_t nw, int type) = 0;
   /// Reads the header of a string of a sparse record: row, L (words of values), header words.
-  virtual void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len,
-                                  int* header_words) = 0;
+  virtual void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len, int* header_words) = 0;
   /// Number of values of a string of L words (real types).
   virtual std::int64_t string_count(std::int64_t len, int type) = 0;
   /// Reads n values (real types) into out.
@@ -290,11 +286,9 @@ class Source {
   std::string path_;
 };
 
-std::int64_t words_to_count(const Source& src, std::int64_t words, std::int64_t per_value,
-                            const char* what) {
+std::int64_t words_to_count(const Source& src, std::int64_t words, std::int64_t per_value, const char* what) {
   if (words % per_value != 0)
-    src.fail(cat(what, " = ", words, " is not a multiple of ", per_value,
-                 " (the words of one value of this type)"));
+    src.fail(cat(what, " = ", words, " is not a multiple of ", per_value, " (the words of one value of this type)"));
   return words / per_value;
 }
 
@@ -320,8 +314,7 @@ class AsciiSource : public Source {
       if (line_.size() <= 4 * w) continue;
       std::int64_t v[4];
       bool ok = true;
-      for (std::size_t k = 0; k < 4 && ok; ++k)
-        ok = parse_int(std::string_view(line_).substr(k * w, w), &v[k]);
+      for (std::size_t k = 0; k < 4 && ok; ++k) ok = parse_int(std::string_view(line_).substr(k * w, w), &v[k]);
       if (!ok) continue;
       *h = Op4Header();
       h->ncols = v[0];
@@ -331,23 +324,18 @@ class AsciiSource : public Source {
       h->type = static_cast<int>(std::clamp<std::int64_t>(v[3], -1000000, 1000000));
       h->name = std::string(rtrim(std::string_view(line_).substr(4 * w, 8)));
       h->binary = false;
-      fmt_ = line_.size() > 4 * w + 8 ? parse_format(std::string_view(line_).substr(4 * w + 8))
-                                      : ValueFormat();
+      fmt_ = line_.size() > 4 * w + 8 ? parse_format(std::string_view(line_).substr(4 * w + 8)) : ValueFormat();
       if (h->ncols < 1 || h->nrows < 1)
-        fail(cat("matrix '", h->name, "' has ", h->ncols, " columns and ", v[1],
-                 " rows in its header"));
+        fail(cat("matrix '", h->name, "' has ", h->ncols, " columns and ", v[1], " rows in its header"));
       return true;
     }
-    fail(
-        cat("expected a matrix header (NCOL, NROW, NF, NTYPE in 4I8 or 4I16, then the name), got '",
-            line_, "'"));
+    fail(cat("expected a matrix header (NCOL, NROW, NF, NTYPE in 4I8 or 4I16, then the name), got '", line_, "'"));
   }
 
   void read_record(std::int64_t* icol, std::int64_t* irow, std::int64_t* nw) override {
     if (!next_line()) fail("end of file before the end-of-matrix record (column NCOL+1)");
     std::int64_t v[3];
-    if (!parse_ints(line_, 3, 8, v))
-      fail(cat("expected a column record (ICOL, IROW, NW in 3I8), got '", line_, "'"));
+    if (!parse_ints(line_, 3, 8, v)) fail(cat("expected a column record (ICOL, IROW, NW in 3I8), got '", line_, "'"));
     *icol = v[0];
     *irow = v[1];
     *nw = v[2];
@@ -357,8 +345,7 @@ class AsciiSource : public Source {
 
   std::int64_t dense_count(std::int64_t nw, int) override { return nw; }  // values printed
 
-  void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len,
-                          int* header_words) override {
+  void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len, int* header_words) override {
     if (!next_line()) fail("end of file inside a sparse column record");
     const auto tok = split_blanks(line_);
     std::int64_t v[2];
@@ -371,8 +358,7 @@ class AsciiSource : public Source {
       return;
     }
     if (tok.size() != 1 || !parse_int(tok[0], &v[0]))
-      fail(cat("expected a string header (IS = IROW + 65536*(L+1), or L+1 and IROW), got '", line_,
-               "'"));
+      fail(cat("expected a string header (IS = IROW + 65536*(L+1), or L+1 and IROW), got '", line_, "'"));
     *len = v[0] / 65536 - 1;
     *irow = v[0] - 65536 * (*len + 1);
     *header_words = 1;
@@ -419,10 +405,8 @@ class AsciiSource : public Source {
         std::int64_t r, len;
         int hw;
         read_string_header(bigmat, &r, &len, &hw);
-        if (len <= 0 || hw + len > left)
-          fail(cat("string length L = ", len, " inconsistent with the column record"));
-        read_numbers(words_to_count(*this, len, words_per_number, "string length L"), nullptr,
-                     false);
+        if (len <= 0 || hw + len > left) fail(cat("string length L = ", len, " inconsistent with the column record"));
+        read_numbers(words_to_count(*this, len, words_per_number, "string length L"), nullptr, false);
         left -= hw + len;
       }
     }
@@ -477,14 +461,12 @@ class AsciiSource : public Source {
       std::string bad;
       if (!parse_value_line(&vals_, &bad))
         fail(cat("'", std::string(trim(bad)), "' is not a real number (values in ",
-                 fmt_.width > 0 ? cat("fields of ", fmt_.width, " characters") : "free format",
-                 " expected)"));
+                 fmt_.width > 0 ? cat("fields of ", fmt_.width, " characters") : "free format", " expected)"));
       if (vals_.empty()) fail(cat("blank line where ", count, " more values were expected"));
       const auto got = static_cast<std::int64_t>(vals_.size());
       if (got > count) fail(cat("the line holds ", got, " values where ", count, " were expected"));
       if (out != nullptr) {
-        for (double x : vals_)
-          out->push_back(round_to_float ? static_cast<double>(static_cast<float>(x)) : x);
+        for (double x : vals_) out->push_back(round_to_float ? static_cast<double>(static_cast<float>(x)) : x);
       }
       count -= got;
     }
@@ -521,16 +503,14 @@ class BinarySource : public Source {
     if (!load_record(true)) return false;
     const std::int64_t w = lay_.word;
     if (static_cast<std::int64_t>(rec_.size()) < 6 * w)
-      fail(cat("matrix header record of ", rec_.size(), " bytes, expected ", 6 * w,
-               " (4 integers and 8 characters)"));
+      fail(cat("matrix header record of ", rec_.size(), " bytes, expected ", 6 * w, " (4 integers and 8 characters)"));
     *h = Op4Header();
     h->ncols = word();
     *nrow_raw = word();
     h->nrows = *nrow_raw < 0 ? -*nrow_raw : *nrow_raw;
     h->form = static_cast<int>(std::clamp<std::int64_t>(word(), -1000000, 1000000));
     h->type = static_cast<int>(std::clamp<std::int64_t>(word(), -1000000, 1000000));
-    std::string raw(reinterpret_cast<const char*>(rec_.data()) + 4 * w,
-                    static_cast<std::size_t>(2 * w));
+    std::string raw(reinterpret_cast<const char*>(rec_.data()) + 4 * w, static_cast<std::size_t>(2 * w));
     if (w == 4) {
       h->name = std::string(rtrim(raw));
     } else {  // two 8-byte words holding 4 characters each (2A4): drop every blank
@@ -540,8 +520,7 @@ class BinarySource : public Source {
     h->binary = true;
     item_ = rec_start_;
     if (h->ncols < 1 || h->nrows < 1)
-      fail(cat("matrix '", h->name, "' has ", h->ncols, " columns and ", *nrow_raw,
-               " rows in its header"));
+      fail(cat("matrix '", h->name, "' has ", h->ncols, " columns and ", *nrow_raw, " rows in its header"));
     return true;
   }
 
@@ -557,16 +536,15 @@ class BinarySource : public Source {
   void check_nw(std::int64_t nw) override {
     const auto bytes = static_cast<std::int64_t>(rec_.size());
     if (nw < 0 || nw > bytes || (3 + nw) * lay_.word != bytes)
-      fail(cat("NW = ", nw, " does not match the record length of ", bytes,
-               " bytes (3 + NW words of ", lay_.word, " bytes)"));
+      fail(cat("NW = ", nw, " does not match the record length of ", bytes, " bytes (3 + NW words of ", lay_.word,
+               " bytes)"));
   }
 
   std::int64_t dense_count(std::int64_t nw, int type) override {
     return words_to_count(*this, nw, words_per_value(type), "NW");
   }
 
-  void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len,
-                          int* header_words) override {
+  void read_string_header(bool bigmat, std::int64_t* irow, std::int64_t* len, int* header_words) override {
     if (bigmat) {
       *len = word() - 1;
       *irow = word();
@@ -616,8 +594,7 @@ class BinarySource : public Source {
 
   std::int64_t word() {
     item_ = rec_start_ + static_cast<std::int64_t>(pos_);
-    if (pos_ + static_cast<std::size_t>(lay_.word) > rec_.size())
-      fail("record too short for the words it announces");
+    if (pos_ + static_cast<std::size_t>(lay_.word) > rec_.size()) fail("record too short for the words it announces");
     const std::int64_t v = load_int(rec_.data() + pos_, lay_.word, lay_.swap);
     pos_ += static_cast<std::size_t>(lay_.word);
     return v;
@@ -639,11 +616,10 @@ class BinarySource : public Source {
     if (!f_) fail("read error");
     const std::int64_t len = load_int(mk, m, lay_.swap);
     if (len < 0)
-      fail(cat("negative record length ", len,
-               " (Fortran sub-records of records over 2 GiB are not supported)"));
+      fail(cat("negative record length ", len, " (Fortran sub-records of records over 2 GiB are not supported)"));
     if (len > size_ - off_ - 2 * m)
-      fail(cat("truncated file: record of ", len, " bytes starting here does not fit in the ",
-               size_, " bytes of the file"));
+      fail(cat("truncated file: record of ", len, " bytes starting here does not fit in the ", size_,
+               " bytes of the file"));
     rec_.resize(static_cast<std::size_t>(len));
     if (len > 0) f_.read(reinterpret_cast<char*>(rec_.data()), len);
     f_.read(reinterpret_cast<char*>(mk), m);
@@ -722,19 +698,16 @@ struct Op4Reader::Impl {
   std::vector<double> buf;
 
   void check_run(std::int64_t irow, std::int64_t n) {
-    if (irow < 1 || irow > h.nrows)
-      src->fail(cat("row ", irow, " of column ", col, " out of range 1..", h.nrows));
+    if (irow < 1 || irow > h.nrows) src->fail(cat("row ", irow, " of column ", col, " out of range 1..", h.nrows));
     if (n > h.nrows - irow + 1)
-      src->fail(cat("run of ", n, " values from row ", irow, " of column ", col,
-                    " passes the last row ", h.nrows));
+      src->fail(cat("run of ", n, " values from row ", irow, " of column ", col, " passes the last row ", h.nrows));
     if (irow <= last_row)
       src->fail(cat("run from row ", irow, " of column ", col, " does not follow row ", last_row,
                     " (rows must increase within a column)"));
     if (n > 0) last_row = irow + n - 1;
   }
 
-  bool emit(std::int64_t irow, std::int64_t* out_col, std::vector<std::int64_t>* rows,
-            std::vector<double>* values) {
+  bool emit(std::int64_t irow, std::int64_t* out_col, std::vector<std::int64_t>* rows, std::vector<double>* values) {
     rows->clear();
     values->clear();
     for (std::size_t k = 0; k < buf.size(); ++k) {
@@ -747,8 +720,7 @@ struct Op4Reader::Impl {
   }
 };
 
-Op4Reader::Op4Reader(const std::string& path, const std::string& name)
-    : impl_(std::make_unique<Impl>()) {
+Op4Reader::Op4Reader(const std::string& path, const std::string& name) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.src = open_source(path);
   std::vector<std::string> names;
@@ -768,17 +740,14 @@ Op4Reader::Op4Reader(const std::string& path, const std::string& name)
     if (names.empty()) throw Error(cat(path, ": no matrix in the file"));
     std::string list;
     for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-    throw Error(
-        cat(path, ": no matrix named '", std::string(wanted), "'; matrices in the file: ", list));
+    throw Error(cat(path, ": no matrix named '", std::string(wanted), "'; matrices in the file: ", list));
   }
   const Op4Header& h = m.h;
   if (h.type == 3 || h.type == 4)
-    m.src->fail(cat("matrix '", h.name, "' has type ", h.type,
-                    h.type == 3 ? " (complex single)" : " (complex double)",
+    m.src->fail(cat("matrix '", h.name, "' has type ", h.type, h.type == 3 ? " (complex single)" : " (complex double)",
                     ": complex matrices are not supported"));
   if (h.type != 1 && h.type != 2)
-    m.src->fail(
-        cat("matrix '", h.name, "' has unknown type ", h.type, " (1 real single, 2 real double)"));
+    m.src->fail(cat("matrix '", h.name, "' has unknown type ", h.type, " (1 real single, 2 real double)"));
   if (h.form != 1 && h.form != 2 && h.form != 6)
     m.src->fail(cat("matrix '", h.name, "' has form ", h.form, form_name(h.form),
                     ", which is not supported (supported forms: 1 square, 2 rectangular, "
@@ -795,8 +764,7 @@ Op4Reader& Op4Reader::operator=(Op4Reader&&) noexcept = default;
 
 const Op4Header& Op4Reader::header() const { return impl_->h; }
 
-bool Op4Reader::next(std::int64_t* col, std::vector<std::int64_t>* rows,
-                     std::vector<double>* values) {
+bool Op4Reader::next(std::int64_t* col, std::vector<std::int64_t>* rows, std::vector<double>* values) {
   Impl& m = *impl_;
   Source& src = *m.src;
   const int type = m.h.type;
@@ -807,11 +775,10 @@ bool Op4Reader::next(std::int64_t* col, std::vector<std::int64_t>* rows,
       std::int64_t irow, len;
       int hw;
       src.read_string_header(m.h.bigmat, &irow, &len, &hw);
-      if (len <= 0)
-        src.fail(cat("string length L = ", len, " in column ", m.col, " (must be > 0)"));
+      if (len <= 0) src.fail(cat("string length L = ", len, " in column ", m.col, " (must be > 0)"));
       if (hw + len > m.remaining)
-        src.fail(cat("string of ", hw, " + ", len, " words overruns column ", m.col, " (",
-                     m.remaining, " words left of its NW)"));
+        src.fail(cat("string of ", hw, " + ", len, " words overruns column ", m.col, " (", m.remaining,
+                     " words left of its NW)"));
       const std::int64_t n = src.string_count(len, type);
       m.check_run(irow, n);
       src.read_values(n, type, &m.buf);
@@ -835,11 +802,8 @@ bool Op4Reader::next(std::int64_t* col, std::vector<std::int64_t>* rows,
       break;
     }
     if (icol < 1 || icol > m.h.ncols)
-      src.fail(cat("column number ", icol, " out of range 1..", m.h.ncols, " (", m.h.ncols + 1,
-                   " ends the matrix)"));
-    if (icol < m.col)
-      src.fail(
-          cat("column ", icol, " after column ", m.col, " (columns must be in increasing order)"));
+      src.fail(cat("column number ", icol, " out of range 1..", m.h.ncols, " (", m.h.ncols + 1, " ends the matrix)"));
+    if (icol < m.col) src.fail(cat("column ", icol, " after column ", m.col, " (columns must be in increasing order)"));
     if (icol != m.col) {
       m.col = icol;
       m.last_row = 0;
@@ -896,8 +860,7 @@ void append_fortran_e(std::string* s, double x, int w, int d) {
   if (digits.size() <= 2) field += 'E';
   field += sign;
   field += digits;
-  if (static_cast<int>(field.size()) < w)
-    s->append(static_cast<std::size_t>(w) - field.size(), ' ');
+  if (static_cast<int>(field.size()) < w) s->append(static_cast<std::size_t>(w) - field.size(), ' ');
   *s += field;
 }
 
@@ -921,20 +884,17 @@ struct Entry {
 
 }  // namespace
 
-void write_op4(const std::string& path, const std::string& name, std::int64_t nrows,
-               std::int64_t ncols, const std::vector<std::int64_t>& col_ptr,
-               const std::vector<std::int64_t>& row_idx, const std::vector<double>& values,
-               const Op4WriteOptions& o, bool append) {
+void write_op4(const std::string& path, const std::string& name, std::int64_t nrows, std::int64_t ncols,
+               const std::vector<std::int64_t>& col_ptr, const std::vector<std::int64_t>& row_idx,
+               const std::vector<double>& values, const Op4WriteOptions& o, bool append) {
   // ---- checks
-  if (name.empty() || name.size() > 8)
-    write_fail(path, name, "the name must have 1 to 8 characters");
+  if (name.empty() || name.size() > 8) write_fail(path, name, "the name must have 1 to 8 characters");
   for (char c : name)
     if (c <= ' ' || c > '~') write_fail(path, name, "the name must be printable, without blanks");
   const std::string uname = upper(name);
   if (nrows < 1 || ncols < 1) write_fail(path, name, "invalid size ", nrows, " x ", ncols);
   if (static_cast<std::int64_t>(col_ptr.size()) != ncols + 1 || col_ptr[0] != 0 ||
-      col_ptr.back() != static_cast<std::int64_t>(row_idx.size()) ||
-      row_idx.size() != values.size())
+      col_ptr.back() != static_cast<std::int64_t>(row_idx.size()) || row_idx.size() != values.size())
     write_fail(path, name,
                "inconsistent CSC arrays (col_ptr must have ncols + 1 entries from 0 "
                "to the number of entries)");
@@ -945,8 +905,7 @@ void write_op4(const std::string& path, const std::string& name, std::int64_t nr
         write_fail(path, name, "row index ", row_idx[k], " out of range in column ", j);
       if (k > col_ptr[j] && row_idx[k] <= row_idx[k - 1])
         write_fail(path, name, "row indices of column ", j, " are not strictly increasing");
-      if (!std::isfinite(values[k]))
-        write_fail(path, name, "non-finite value at row ", row_idx[k], ", column ", j);
+      if (!std::isfinite(values[k])) write_fail(path, name, "non-finite value at row ", row_idx[k], ", column ", j);
     }
   }
   const int type = o.single ? 1 : 2;
@@ -963,8 +922,7 @@ void write_op4(const std::string& path, const std::string& name, std::int64_t nr
     double v = values[k];
     if (o.single) {
       v = static_cast<double>(static_cast<float>(v));
-      if (!std::isfinite(v))
-        write_fail(path, name, "value ", values[k], " overflows single precision");
+      if (!std::isfinite(v)) write_fail(path, name, "value ", values[k], " overflows single precision");
     }
     return v;
   };
@@ -994,13 +952,11 @@ void write_op4(const std::string& path, const std::string& name, std::int64_t nr
   if (o.binary && (ncols + 1 > i32max || nrows > i32max))
     write_fail(path, name, "dimensions exceed the 32-bit integers of binary OP4 files");
 
-  std::ofstream out(path,
-                    append ? std::ios::binary | std::ios::app : std::ios::binary | std::ios::trunc);
+  std::ofstream out(path, append ? std::ios::binary | std::ios::app : std::ios::binary | std::ios::trunc);
   if (!out) throw Error(cat(path, ": cannot open for writing"));
 
   auto write_record = [&](const std::string& payload) {
-    if (static_cast<std::int64_t>(payload.size()) > i32max)
-      write_fail(path, name, "a column record exceeds 2 GiB");
+    if (static_cast<std::int64_t>(payload.size()) > i32max) write_fail(path, name, "a column record exceeds 2 GiB");
     const auto len = static_cast<std::int32_t>(payload.size());
     out.write(reinterpret_cast<const char*>(&len), 4);
     out.write(payload.data(), static_cast<std::streamsize>(payload.size()));
@@ -1088,8 +1044,7 @@ void write_op4(const std::string& path, const std::string& name, std::int64_t nr
       b = k;
     }
     std::int64_t nw = 0;
-    for (const auto& s : strings)
-      nw += (bigmat ? 2 : 1) + static_cast<std::int64_t>(s.second - s.first) * wpv;
+    for (const auto& s : strings) nw += (bigmat ? 2 : 1) + static_cast<std::int64_t>(s.second - s.first) * wpv;
     auto string_header = [&](std::int64_t len, std::int64_t irow) {
       if (!bigmat && len + 1 >= 32768)
         write_fail(path, name, "a non-BIGMAT string of ", len, " words is too long for IS");

@@ -37,8 +37,7 @@ std::string shape_text(const std::vector<hsize_t>& d) {
 
 void check_finite(const std::vector<double>& a, int n, const std::string& file, const char* name) {
   for (std::size_t k = 0; k < a.size(); ++k)
-    MORSE_CHECK(std::isfinite(a[k]), file, ": ", name, "[", k / n, "][", k % n, "] is not finite (",
-                a[k], ")");
+    MORSE_CHECK(std::isfinite(a[k]), file, ": ", name, "[", k / n, "][", k % n, "] is not finite (", a[k], ")");
 }
 
 }  // namespace
@@ -59,12 +58,9 @@ Superelement read_superelement(const std::string& file) {
   if (!read_doubles(file, "/rom/K", &se.K, &dk, &err)) {
     if (err.find("cannot open") != std::string::npos)
       throw Error(cat(err, " (a superelement file of morse reduce or select is expected)"));
-    throw Error(cat(
-        file,
-        ": no /rom/K: not a superelement file (/rom is written by morse reduce and morse select)"));
+    throw Error(cat(file, ": no /rom/K: not a superelement file (/rom is written by morse reduce and morse select)"));
   }
-  MORSE_CHECK(dk.size() == 2 && dk[0] == dk[1] && dk[0] > 0, file, ": /rom/K must be square, got ",
-              shape_text(dk));
+  MORSE_CHECK(dk.size() == 2 && dk[0] == dk[1] && dk[0] > 0, file, ": /rom/K must be square, got ", shape_text(dk));
   se.n = static_cast<int>(dk[0]);
   MORSE_CHECK(read_doubles(file, "/rom/M", &se.M, &dm, &err), file, ": no /rom/M");
   MORSE_CHECK(dm == dk, file, ": /rom/M is ", shape_text(dm), " but /rom/K is ", shape_text(dk));
@@ -77,19 +73,18 @@ Superelement read_superelement(const std::string& file) {
   check_finite(se.C, se.n, file, "/rom/C");
 
   std::vector<std::int64_t> labels;
-  MORSE_CHECK(read_ints(file, "/rom/boundary_dofs", &labels, &db, &err), file,
-              ": no /rom/boundary_dofs");
+  MORSE_CHECK(read_ints(file, "/rom/boundary_dofs", &labels, &db, &err), file, ": no /rom/boundary_dofs");
   MORSE_CHECK(db.size() == 2 && db[1] == 2 && db[0] <= dk[0], file,
-              ": /rom/boundary_dofs must be [n_b][2] with n_b <= ", se.n,
-              " (the size of /rom/K), got ", shape_text(db));
+              ": /rom/boundary_dofs must be [n_b][2] with n_b <= ", se.n, " (the size of /rom/K), got ",
+              shape_text(db));
   se.n_b = static_cast<int>(db[0]);
   std::set<std::pair<std::int64_t, int>> seen;
   for (int j = 0; j < se.n_b; ++j) {
     const std::int64_t node = labels[2 * j], c = labels[2 * j + 1];
-    MORSE_CHECK(c >= 1 && c <= 6, file, ": /rom/boundary_dofs[", j, "]: component ", c, " of node ",
-                node, " is not in 1..6");
-    MORSE_CHECK(seen.insert({node, static_cast<int>(c)}).second, file,
-                ": /rom/boundary_dofs: node ", node, " component ", c, " is given twice");
+    MORSE_CHECK(c >= 1 && c <= 6, file, ": /rom/boundary_dofs[", j, "]: component ", c, " of node ", node,
+                " is not in 1..6");
+    MORSE_CHECK(seen.insert({node, static_cast<int>(c)}).second, file, ": /rom/boundary_dofs: node ", node,
+                " component ", c, " is given twice");
     se.dof_node.push_back(node);
     se.dof_component.push_back(static_cast<int>(c));
   }
@@ -101,11 +96,9 @@ Superelement read_superelement(const std::string& file) {
     MORSE_CHECK(read_ints(file, "/rom/boundary_nodes", &se.boundary_nodes, &dn, &err), err);
     auto sorted = se.boundary_nodes;
     std::sort(sorted.begin(), sorted.end());
-    MORSE_CHECK(
-        sorted == nodes && std::is_sorted(se.boundary_nodes.begin(), se.boundary_nodes.end()), file,
-        ": /rom/boundary_nodes (", se.boundary_nodes.size(),
-        " ids) is not the ascending list of the nodes of /rom/boundary_dofs (", nodes.size(),
-        " nodes)");
+    MORSE_CHECK(sorted == nodes && std::is_sorted(se.boundary_nodes.begin(), se.boundary_nodes.end()), file,
+                ": /rom/boundary_nodes (", se.boundary_nodes.size(),
+                " ids) is not the ascending list of the nodes of /rom/boundary_dofs (", nodes.size(), " nodes)");
   } else {
     se.boundary_nodes = nodes;
   }
@@ -126,15 +119,13 @@ Superelement read_superelement(const std::string& file) {
     std::vector<hsize_t> di, dx;
     MORSE_CHECK(read_ints(file, "/mesh/node_ids", &ids, &di, &err), err);
     MORSE_CHECK(read_doubles(file, "/mesh/coordinates", &xyz, &dx, &err), err);
-    MORSE_CHECK(dx.size() == 2 && dx[1] == 3 && dx[0] == ids.size(), file,
-                ": /mesh/coordinates is ", shape_text(dx), " but /mesh/node_ids has ", ids.size(),
-                " nodes");
+    MORSE_CHECK(dx.size() == 2 && dx[1] == 3 && dx[0] == ids.size(), file, ": /mesh/coordinates is ", shape_text(dx),
+                " but /mesh/node_ids has ", ids.size(), " nodes");
     std::map<std::int64_t, std::size_t> row;
     for (std::size_t k = 0; k < ids.size(); ++k) row[ids[k]] = k;
     for (std::int64_t node : se.boundary_nodes) {
       auto it = row.find(node);
-      MORSE_CHECK(it != row.end(), file, ": boundary node ", node,
-                  " of /rom/boundary_dofs is not in /mesh/node_ids");
+      MORSE_CHECK(it != row.end(), file, ": boundary node ", node, " of /rom/boundary_dofs is not in /mesh/node_ids");
       for (int d = 0; d < 3; ++d) se.boundary_xyz.push_back(xyz[3 * it->second + d]);
     }
     se.from_mesh = true;
@@ -143,17 +134,15 @@ Superelement read_superelement(const std::string& file) {
     std::vector<std::int64_t> node, comp;
     std::vector<hsize_t> d1, d2;
     MORSE_CHECK(read_ints(file, "/dofs/node", &node, &d1, &err), err);
-    MORSE_CHECK(read_ints(file, "/dofs/component", &comp, &d2, &err), file,
-                ": /dofs/node without /dofs/component");
-    MORSE_CHECK(node.size() == comp.size(), file, ": /dofs/node has ", node.size(),
-                " rows but /dofs/component ", comp.size());
+    MORSE_CHECK(read_ints(file, "/dofs/component", &comp, &d2, &err), file, ": /dofs/node without /dofs/component");
+    MORSE_CHECK(node.size() == comp.size(), file, ": /dofs/node has ", node.size(), " rows but /dofs/component ",
+                comp.size());
     se.model_dof_node = node;
     for (std::int64_t c : comp) se.model_dof_component.push_back(static_cast<int>(c));
     se.model_node_ids = node;
   }
   std::sort(se.model_node_ids.begin(), se.model_node_ids.end());
-  se.model_node_ids.erase(std::unique(se.model_node_ids.begin(), se.model_node_ids.end()),
-                          se.model_node_ids.end());
+  se.model_node_ids.erase(std::unique(se.model_node_ids.begin(), se.model_node_ids.end()), se.model_node_ids.end());
   return se;
 }
 
@@ -206,16 +195,15 @@ void set_boundary_coordinates(Superelement* se, const std::string& path) {
     const long long id = std::strtoll(first.c_str(), &end, 10);
     std::array<double, 3> x{};
     std::string extra;
-    MORSE_CHECK(*end == '\0' && (is >> x[0] >> x[1] >> x[2]) && !(is >> extra) &&
-                    std::isfinite(x[0]) && std::isfinite(x[1]) && std::isfinite(x[2]),
+    MORSE_CHECK(*end == '\0' && (is >> x[0] >> x[1] >> x[2]) && !(is >> extra) && std::isfinite(x[0]) &&
+                    std::isfinite(x[1]) && std::isfinite(x[2]),
                 path, ":", ln, ": expected 'node x y z'");
     MORSE_CHECK(xyz.emplace(id, x).second, path, ":", ln, ": node ", id, " is given twice");
   }
   std::vector<double> out;
   for (std::int64_t node : se->boundary_nodes) {
     auto it = xyz.find(node);
-    MORSE_CHECK(it != xyz.end(), path, ": no coordinates for interface node ", node, " of ",
-                se->source);
+    MORSE_CHECK(it != xyz.end(), path, ": no coordinates for interface node ", node, " of ", se->source);
     out.insert(out.end(), it->second.begin(), it->second.end());
   }
   se->boundary_xyz = std::move(out);
@@ -230,29 +218,26 @@ NodalShapes read_nodal_shapes(const Superelement& se) {
   MORSE_CHECK(read_ints(file, "/mesh/node_ids", &ns.node_ids, &di, &err), err, why);
   MORSE_CHECK(read_doubles(file, "/mesh/coordinates", &ns.xyz, &dx, &err), err, why);
   const std::size_t nn = ns.node_ids.size();
-  MORSE_CHECK(dx.size() == 2 && dx[0] == nn && dx[1] == 3, file, ": /mesh/coordinates is ",
-              shape_text(dx), " for ", nn, " nodes");
+  MORSE_CHECK(dx.size() == 2 && dx[0] == nn && dx[1] == 3, file, ": /mesh/coordinates is ", shape_text(dx), " for ", nn,
+              " nodes");
   std::vector<double> psi, phi;
   MORSE_CHECK(read_doubles(file, "/cb/constraint_modes", &psi, &dp, &err), err, why);
-  MORSE_CHECK(dp.size() == 3 && dp[0] == static_cast<hsize_t>(se.n_b) && dp[1] == nn && dp[2] == 3,
-              file, ": /cb/constraint_modes is ", shape_text(dp), ", expected [", se.n_b, "][", nn,
-              "][3]");
+  MORSE_CHECK(dp.size() == 3 && dp[0] == static_cast<hsize_t>(se.n_b) && dp[1] == nn && dp[2] == 3, file,
+              ": /cb/constraint_modes is ", shape_text(dp), ", expected [", se.n_b, "][", nn, "][3]");
   std::vector<std::int64_t> columns;
   if (se.n_modes() > 0) {
     MORSE_CHECK(read_doubles(file, "/cb/fixed_interface/mode_shapes", &phi, &df, &err), err, why);
-    MORSE_CHECK(df.size() == 3 && df[1] == nn && df[2] == 3, file,
-                ": /cb/fixed_interface/mode_shapes is ", shape_text(df), " for ", nn, " nodes");
+    MORSE_CHECK(df.size() == 3 && df[1] == nn && df[2] == 3, file, ": /cb/fixed_interface/mode_shapes is ",
+                shape_text(df), " for ", nn, " nodes");
     if (has_object(file, "/rom/selected_modes")) {
       MORSE_CHECK(read_ints(file, "/rom/selected_modes", &columns, &ds, &err), err);
     } else {
       for (int k = 0; k < se.n_modes(); ++k) columns.push_back(k);
     }
-    MORSE_CHECK(columns.size() == static_cast<std::size_t>(se.n_modes()), file, ": ",
-                columns.size(), " fixed-interface shapes for ", se.n_modes(),
-                " modal coordinates of /rom");
+    MORSE_CHECK(columns.size() == static_cast<std::size_t>(se.n_modes()), file, ": ", columns.size(),
+                " fixed-interface shapes for ", se.n_modes(), " modal coordinates of /rom");
     for (std::int64_t c : columns)
-      MORSE_CHECK(c >= 0 && static_cast<hsize_t>(c) < df[0], file,
-                  ": /rom/selected_modes names mode ", c, " but ",
+      MORSE_CHECK(c >= 0 && static_cast<hsize_t>(c) < df[0], file, ": /rom/selected_modes names mode ", c, " but ",
                   "/cb/fixed_interface/mode_shapes has ", df[0]);
   }
   ns.shapes = std::move(psi);
@@ -263,8 +248,7 @@ NodalShapes read_nodal_shapes(const Superelement& se) {
 }
 
 RigidBodyInertia rigid_body_inertia(const Superelement& se) {
-  MORSE_CHECK(se.boundary_xyz.size() == 3 * se.boundary_nodes.size() && !se.boundary_nodes.empty(),
-              se.source,
+  MORSE_CHECK(se.boundary_xyz.size() == 3 * se.boundary_nodes.size() && !se.boundary_nodes.empty(), se.source,
               ": the rigid-body inertia needs the coordinates of the interface nodes (matrix "
               "input: give them "
               "with -export_coordinates FILE)");
@@ -318,8 +302,7 @@ RigidBodyInertia rigid_body_inertia(const Superelement& se) {
       out.rigid_mass[a * 6 + b] = s;
     }
   if (out.stiffness_residual > kRigidTol) {
-    out.reason = cat("the superelement cannot move rigidly (||K_CB r|| / (||K_CB|| ||r||) = ",
-                     out.stiffness_residual,
+    out.reason = cat("the superelement cannot move rigidly (||K_CB r|| / (||K_CB|| ||r||) = ", out.stiffness_residual,
                      " for a rigid motion r: DOFs besides the interface are clamped)");
     return out;
   }
@@ -332,14 +315,12 @@ RigidBodyInertia rigid_body_inertia(const Superelement& se) {
   const double S[3] = {0.5 * (Mr[5 * 6 + 1] - Mr[4 * 6 + 2]), 0.5 * (Mr[3 * 6 + 2] - Mr[5 * 6 + 0]),
                        0.5 * (Mr[4 * 6 + 0] - Mr[3 * 6 + 1])};
   for (int d = 0; d < 3; ++d) out.center[d] = S[d] / out.mass;
-  const double c2 =
-      out.center[0] * out.center[0] + out.center[1] * out.center[1] + out.center[2] * out.center[2];
+  const double c2 = out.center[0] * out.center[0] + out.center[1] * out.center[1] + out.center[2] * out.center[2];
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) {
       const double jo = 0.5 * (Mr[(3 + a) * 6 + 3 + b] + Mr[(3 + b) * 6 + 3 + a]);
       out.inertia_origin[a * 3 + b] = jo;
-      out.inertia_cm[a * 3 + b] =
-          jo - out.mass * ((a == b ? c2 : 0.0) - out.center[a] * out.center[b]);
+      out.inertia_cm[a * 3 + b] = jo - out.mass * ((a == b ? c2 : 0.0) - out.center[a] * out.center[b]);
     }
   out.valid = true;
   return out;

@@ -67,9 +67,7 @@ const Perm& abaqus_to_morse(ElementType t) {
 // ------------------------------------------------------------------------------------------------
 // Text helpers
 
-inline bool is_blank(char c) {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
-}
+inline bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
 std::string to_upper(std::string s) {
   for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -231,8 +229,7 @@ class Reader {
   }
 
   void parse_file(const std::string& path, const Loc* from, int depth) {
-    if (from && depth > 32)
-      fail(*from, "*INCLUDE nested more than 32 deep (does '", path, "' include itself?)");
+    if (from && depth > 32) fail(*from, "*INCLUDE nested more than 32 deep (does '", path, "' include itself?)");
     std::string text, why;
     if (!read_whole_file(path, &text, &why)) {
       if (from) fail(*from, "cannot read included file '", path, "' (", why, ")");
@@ -263,8 +260,8 @@ class Reader {
       }
     }
     if (pending_)
-      fail(pending_loc_, "element ", pending_label_, " is truncated: ", pending_nodes_.size(),
-           " of ", nodes_per_element(etype_), " nodes before the end of the file");
+      fail(pending_loc_, "element ", pending_label_, " is truncated: ", pending_nodes_.size(), " of ",
+           nodes_per_element(etype_), " nodes before the end of the file");
   }
 
   std::string resolve(const Loc& from, const std::string& name) const {
@@ -276,8 +273,7 @@ class Reader {
   }
 
   // --- keyword lines
-  static void split_keyword(const char* b, const char* e, std::string* name, std::string* display,
-                            Params* params) {
+  static void split_keyword(const char* b, const char* e, std::string* name, std::string* display, Params* params) {
     // Split at commas outside double quotes.
     std::vector<std::pair<const char*, const char*>> parts;
     const char* s = b;
@@ -327,8 +323,7 @@ class Reader {
     return nullptr;
   }
 
-  const std::string& required(const Params& ps, const char* key, const std::string& kw,
-                              const Loc& loc) const {
+  const std::string& required(const Params& ps, const char* key, const std::string& kw, const Loc& loc) const {
     const std::string* v = param(ps, key);
     if (!v || v->empty()) fail(loc, kw, " needs the parameter ", key, "=");
     return *v;
@@ -342,14 +337,12 @@ class Reader {
       " CLOAD DLOAD CONTROLS TIMEPOINTS MONITOR OUTPUT NODEOUTPUT ELEMENTOUTPUT NODEPRINT ELPRINT"
       " NODEFILE ELFILE CONTACTPRINT CONTACTFILE ENERGYPRINT SECTIONPRINT ";
 
-  static bool ignored(const std::string& kw) {
-    return std::strstr(kIgnored, (" " + kw + " ").c_str()) != nullptr;
-  }
+  static bool ignored(const std::string& kw) { return std::strstr(kIgnored, (" " + kw + " ").c_str()) != nullptr; }
 
   void keyword_line(const char* b, const char* e, const Loc& loc) {
     if (pending_)
-      fail(pending_loc_, "element ", pending_label_, " is truncated: ", pending_nodes_.size(),
-           " of ", nodes_per_element(etype_), " nodes before the next keyword");
+      fail(pending_loc_, "element ", pending_label_, " is truncated: ", pending_nodes_.size(), " of ",
+           nodes_per_element(etype_), " nodes before the next keyword");
     std::string kw, display;
     Params ps;
     split_keyword(b, e, &kw, &display, &ps);
@@ -357,8 +350,8 @@ class Reader {
 
     // A material definition ends at the next model or step keyword; unknown keywords (*EXPANSION,
     // *DAMPING, ...) may be material options and keep it open.
-    static const std::set<std::string> kEndsMaterial = {
-        "NODE", "ELEMENT", "NSET", "ELSET", "BOUNDARY", "MATERIAL", "SOLIDSECTION", "STEP"};
+    static const std::set<std::string> kEndsMaterial = {"NODE",     "ELEMENT",  "NSET",         "ELSET",
+                                                        "BOUNDARY", "MATERIAL", "SOLIDSECTION", "STEP"};
     if (kEndsMaterial.count(kw) || ignored(kw)) material_ = -1;
     const std::string* input = nullptr;
     if (kw == "NODE") {
@@ -370,21 +363,18 @@ class Reader {
       input = param(ps, "INPUT");
     } else if (kw == "ELEMENT") {
       const std::string& type_param = required(ps, "TYPE", display, loc);
-      const std::string type =
-          compact_upper(type_param.data(), type_param.data() + type_param.size());
+      const std::string type = compact_upper(type_param.data(), type_param.data() + type_param.size());
       bool known = false;
       for (const auto& t : kAbaqusTypes)
         if (type == t.name) etype_ = t.type, known = true;
-      if (!known)
-        fail(loc, "unsupported element type '", type, "' (supported: ", kSupportedTypes, ")");
+      if (!known) fail(loc, "unsupported element type '", type, "' (supported: ", kSupportedTypes, ")");
       const std::string* es = param(ps, "ELSET");
       elem_set_ = es && !es->empty() ? get_set(&esets_, &eset_lookup_, *es) : -1;
       block_ = Block::kElement;
       input = param(ps, "INPUT");
     } else if (kw == "NSET" || kw == "ELSET") {
       const bool nodes = kw == "NSET";
-      if (nodes && param(ps, "ELSET"))
-        fail(loc, "*NSET, ELSET= is not supported; list the nodes or node sets instead");
+      if (nodes && param(ps, "ELSET")) fail(loc, "*NSET, ELSET= is not supported; list the nodes or node sets instead");
       const std::string& name = required(ps, nodes ? "NSET" : "ELSET", display, loc);
       set_ = nodes ? get_set(&nsets_, &nset_lookup_, name) : get_set(&esets_, &eset_lookup_, name);
       generate_ = param(ps, "GENERATE") != nullptr;
@@ -401,8 +391,7 @@ class Reader {
         fail(loc, "*BOUNDARY, TYPE=", *t, " is not supported (only zero displacements)");
       if (param(ps, "USER")) fail(loc, "*BOUNDARY, USER is not supported");
       if (in_step_)
-        notice("BOUNDARY-IN-STEP", loc,
-               "*BOUNDARY inside a *STEP is applied as a model constraint for all analyses");
+        notice("BOUNDARY-IN-STEP", loc, "*BOUNDARY inside a *STEP is applied as a model constraint for all analyses");
       block_ = Block::kBoundary;
     } else if (kw == "MATERIAL") {
       const std::string& name = required(ps, "NAME", display, loc);
@@ -428,8 +417,7 @@ class Reader {
         block_ = Block::kDensity;
       }
     } else if (kw == "SOLIDSECTION") {
-      sections_.push_back(
-          {required(ps, "ELSET", display, loc), required(ps, "MATERIAL", display, loc), loc});
+      sections_.push_back({required(ps, "ELSET", display, loc), required(ps, "MATERIAL", display, loc), loc});
       block_ = Block::kSkip;
     } else {
       if (kw == "STEP") in_step_ = true;
@@ -449,8 +437,7 @@ class Reader {
     }
   }
 
-  int get_set(std::vector<SetData>* sets, std::unordered_map<std::string, int>* names,
-              const std::string& name) {
+  int get_set(std::vector<SetData>* sets, std::unordered_map<std::string, int>* names, const std::string& name) {
     auto [it, inserted] = names->emplace(to_upper(name), static_cast<int>(sets->size()));
     if (inserted) {
       sets->emplace_back();
@@ -460,8 +447,7 @@ class Reader {
   }
 
   static void add_labels(SetData* s, const std::int64_t* labels, std::size_t n, const Loc& loc) {
-    if (s->marks.empty() || s->marks.back().second.file != loc.file ||
-        s->marks.back().second.line != loc.line)
+    if (s->marks.empty() || s->marks.back().second.file != loc.file || s->marks.back().second.line != loc.line)
       s->marks.emplace_back(s->labels.size(), loc);
     s->labels.insert(s->labels.end(), labels, labels + n);
   }
@@ -470,16 +456,14 @@ class Reader {
   std::int64_t int_field(const Field& f, const Loc& loc, const char* what) const {
     std::int64_t v = 0;
     if (f.empty()) fail(loc, "missing ", what, " in ", block_keyword_, " data line");
-    if (!parse_int(f, &v))
-      fail(loc, "invalid ", what, " '", f.str(), "' in ", block_keyword_, " data line");
+    if (!parse_int(f, &v)) fail(loc, "invalid ", what, " '", f.str(), "' in ", block_keyword_, " data line");
     return v;
   }
 
   double real_field(const Field& f, const Loc& loc, const char* what) const {
     double v = 0;
     if (f.empty()) fail(loc, "missing ", what, " in ", block_keyword_, " data line");
-    if (!parse_double(f, &v))
-      fail(loc, "invalid ", what, " '", f.str(), "' in ", block_keyword_, " data line");
+    if (!parse_double(f, &v)) fail(loc, "invalid ", what, " '", f.str(), "' in ", block_keyword_, " data line");
     return v;
   }
 
@@ -506,14 +490,12 @@ class Reader {
 
   void node_line(const char* b, const char* e, const Loc& loc) {
     split_fields(b, e, &fields_);
-    if (fields_.size() < 4)
-      fail(loc, "*NODE data line needs 'label, x, y, z' (", fields_.size(), " fields found)");
+    if (fields_.size() < 4) fail(loc, "*NODE data line needs 'label, x, y, z' (", fields_.size(), " fields found)");
     if (fields_.size() > 4) fail(loc, "*NODE data line has more than 'label, x, y, z'");
     const std::int64_t label = int_field(fields_[0], loc, "node label");
     if (label <= 0) fail(loc, "node label ", label, " is not positive");
     double x[3];
-    for (int d = 0; d < 3; ++d)
-      x[d] = fields_[1 + d].empty() ? 0.0 : real_field(fields_[1 + d], loc, "coordinate");
+    for (int d = 0; d < 3; ++d) x[d] = fields_[1 + d].empty() ? 0.0 : real_field(fields_[1 + d], loc, "coordinate");
     if (!node_index_.emplace(label, static_cast<std::int64_t>(node_ids_.size())).second)
       fail(loc, "node ", label, " is defined twice");
     node_ids_.push_back(label);
@@ -534,8 +516,7 @@ class Reader {
     }
     for (; i < fields_.size(); ++i) pending_nodes_.push_back(int_field(fields_[i], loc, "node"));
     const std::size_t n = static_cast<std::size_t>(nodes_per_element(etype_));
-    if (pending_nodes_.size() > n)
-      fail(loc, "element ", pending_label_, " has more than ", n, " nodes");
+    if (pending_nodes_.size() > n) fail(loc, "element ", pending_label_, " has more than ", n, " nodes");
     if (pending_nodes_.size() < n) return;  // continues on the next line
     pending_ = false;
     const std::int64_t label = pending_label_;
@@ -561,8 +542,7 @@ class Reader {
           fields_.size() == 3 && !fields_[2].empty() ? int_field(fields_[2], loc, "increment") : 1;
       if (step <= 0 || last < first)
         fail(loc, block_keyword_, ", GENERATE needs first <= last and a positive increment");
-      if ((last - first) / step > 100000000)
-        fail(loc, block_keyword_, ", GENERATE range is too large");
+      if ((last - first) / step > 100000000) fail(loc, block_keyword_, ", GENERATE range is too large");
       std::vector<std::int64_t>& tmp = scratch_;
       tmp.clear();
       for (std::int64_t l = first; l <= last; l += step) tmp.push_back(l);
@@ -579,8 +559,7 @@ class Reader {
       auto& names = nodes ? nset_lookup_ : eset_lookup_;
       auto it = names.find(to_upper(f.str()));
       if (it == names.end())
-        fail(loc, "undefined ", nodes ? "node" : "element", " set '", f.str(), "' in ",
-             block_keyword_);
+        fail(loc, "undefined ", nodes ? "node" : "element", " set '", f.str(), "' in ", block_keyword_);
       std::vector<SetData>& sets = nodes ? nsets_ : esets_;
       scratch_ = sets[it->second].labels;  // copy: the set may be the one being extended
       add_labels(set, scratch_.data(), scratch_.size(), loc);
@@ -597,28 +576,23 @@ class Reader {
     if (!parse_int(fields_[0], &be.label)) be.set = fields_[0].str();
     std::int64_t first = 0, last = 0;
     if (parse_int(fields_[1], &first)) {
-      last = fields_.size() > 2 && !fields_[2].empty() ? int_field(fields_[2], loc, "last DOF")
-                                                       : first;
-      if (first < 1 || last < first)
-        fail(loc, "invalid DOF range ", first, "..", last, " in *BOUNDARY");
+      last = fields_.size() > 2 && !fields_[2].empty() ? int_field(fields_[2], loc, "last DOF") : first;
+      if (first < 1 || last < first) fail(loc, "invalid DOF range ", first, "..", last, " in *BOUNDARY");
       if (fields_.size() > 3 && !fields_[3].empty()) {
         const double value = real_field(fields_[3], loc, "prescribed value");
         if (value != 0.0)
-          fail(loc, "nonzero prescribed displacement (", fields_[3].str(),
-               ") in *BOUNDARY is not supported");
+          fail(loc, "nonzero prescribed displacement (", fields_[3].str(), ") in *BOUNDARY is not supported");
       }
       if (fields_.size() > 4) fail(loc, "too many fields in *BOUNDARY data line");
       for (std::int64_t d = first; d <= std::min<std::int64_t>(last, 3); ++d)
         be.mask |= static_cast<std::uint8_t>(1u << (d - 1));
-      if (last > 3)
-        notice("BOUNDARY-DOF", loc,
-               "*BOUNDARY: DOFs above 3 are not displacements and are ignored");
+      if (last > 3) notice("BOUNDARY-DOF", loc, "*BOUNDARY: DOFs above 3 are not displacements and are ignored");
     } else {
       const std::string type = compact_upper(fields_[1].b, fields_[1].e);
       // Abaqus boundary types: translations they fix (rotations are ignored).
-      static const std::pair<const char*, std::uint8_t> kTypes[] = {
-          {"ENCASTRE", 7}, {"PINNED", 7}, {"XSYMM", 1},  {"YSYMM", 2},
-          {"ZSYMM", 4},    {"XASYMM", 6}, {"YASYMM", 5}, {"ZASYMM", 3}};
+      static const std::pair<const char*, std::uint8_t> kTypes[] = {{"ENCASTRE", 7}, {"PINNED", 7}, {"XSYMM", 1},
+                                                                    {"YSYMM", 2},    {"ZSYMM", 4},  {"XASYMM", 6},
+                                                                    {"YASYMM", 5},   {"ZASYMM", 3}};
       bool known = false;
       for (const auto& [name, mask] : kTypes)
         if (type == name) be.mask = mask, known = true;
@@ -644,8 +618,7 @@ class Reader {
       md.m.nu = real_field(fields_[1], loc, "Poisson's ratio");
       if (fields_.size() > 2 && !fields_[2].empty()) real_field(fields_[2], loc, "temperature");
       if (!(md.m.E > 0) || !(md.m.nu > -1 && md.m.nu < 0.5))
-        fail(loc, "material '", md.m.name, "': invalid elastic constants E=", md.m.E,
-             ", nu=", md.m.nu);
+        fail(loc, "material '", md.m.name, "': invalid elastic constants E=", md.m.E, ", nu=", md.m.nu);
       md.has_elastic = true;
     } else {
       if (md.density_lines++ > 0) {
@@ -662,8 +635,7 @@ class Reader {
   }
 
   // --- resolution
-  std::int64_t lookup(const std::unordered_map<std::int64_t, std::int64_t>& index,
-                      std::int64_t label) const {
+  std::int64_t lookup(const std::unordered_map<std::int64_t, std::int64_t>& index, std::int64_t label) const {
     auto it = index.find(label);
     return it == index.end() ? -1 : it->second;
   }
@@ -674,12 +646,11 @@ class Reader {
     for (std::size_t i = 0; i < s.labels.size(); ++i) {
       out[i] = lookup(index, s.labels[i]);
       if (out[i] < 0) {
-        auto it = std::upper_bound(
-            s.marks.begin(), s.marks.end(), i,
-            [](std::size_t v, const std::pair<std::size_t, Loc>& m) { return v < m.first; });
+        auto it = std::upper_bound(s.marks.begin(), s.marks.end(), i,
+                                   [](std::size_t v, const std::pair<std::size_t, Loc>& m) { return v < m.first; });
         const Loc loc = it == s.marks.begin() ? Loc{} : std::prev(it)->second;
-        fail(loc, nodes ? "node" : "element", " set '", s.name, "' contains undefined ",
-             nodes ? "node " : "element ", s.labels[i]);
+        fail(loc, nodes ? "node" : "element", " set '", s.name, "' contains undefined ", nodes ? "node " : "element ",
+             s.labels[i]);
       }
     }
     return out;
@@ -708,8 +679,7 @@ class Reader {
       for (int k = 0; k < n; ++k) {
         idx[k] = lookup(node_index_, elem_labels_[off + k]);
         if (idx[k] < 0)
-          fail(elem_locs_[el], "element ", elem_ids_[el], " references undefined node ",
-               elem_labels_[off + k]);
+          fail(elem_locs_[el], "element ", elem_ids_[el], " references undefined node ", elem_labels_[off + k]);
       }
       for (int k = 0; k < n; ++k) ordered[k] = idx[perm[k]];
       mesh.add_element(elem_ids_[el], t, ordered.data());
@@ -729,10 +699,8 @@ class Reader {
           mesh.fixed_dofs[k] |= be.mask;
         } else {
           auto it = nset_lookup_.find(to_upper(be.set));
-          if (it == nset_lookup_.end())
-            fail(be.loc, "*BOUNDARY references undefined node set '", be.set, "'");
-          for (std::int64_t k : mesh.node_sets[nsets_[it->second].name])
-            mesh.fixed_dofs[k] |= be.mask;
+          if (it == nset_lookup_.end()) fail(be.loc, "*BOUNDARY references undefined node set '", be.set, "'");
+          for (std::int64_t k : mesh.node_sets[nsets_[it->second].name]) mesh.fixed_dofs[k] |= be.mask;
         }
       }
     }
@@ -741,18 +709,14 @@ class Reader {
     for (const MaterialData& md : materials_) mesh.materials.push_back(md.m);
     for (const SectionEntry& se : sections_) {
       auto es = eset_lookup_.find(to_upper(se.elset));
-      if (es == eset_lookup_.end())
-        fail(se.loc, "*SOLID SECTION references undefined element set '", se.elset, "'");
+      if (es == eset_lookup_.end()) fail(se.loc, "*SOLID SECTION references undefined element set '", se.elset, "'");
       auto mat = material_lookup_.find(to_upper(se.material));
       if (mat == material_lookup_.end())
         fail(se.loc, "*SOLID SECTION references undefined material '", se.material, "'");
       const MaterialData& md = materials_[mat->second];
-      if (!md.has_elastic)
-        notice("NO-ELASTIC:" + md.m.name, se.loc, "material '", md.m.name, "' has no *ELASTIC");
-      if (!md.has_density)
-        notice("NO-DENSITY:" + md.m.name, se.loc, "material '", md.m.name, "' has no *DENSITY");
-      for (std::int64_t el : mesh.elem_sets[esets_[es->second].name])
-        mesh.elem_material[el] = mat->second;
+      if (!md.has_elastic) notice("NO-ELASTIC:" + md.m.name, se.loc, "material '", md.m.name, "' has no *ELASTIC");
+      if (!md.has_density) notice("NO-DENSITY:" + md.m.name, se.loc, "material '", md.m.name, "' has no *DENSITY");
+      for (std::int64_t el : mesh.elem_sets[esets_[es->second].name]) mesh.elem_material[el] = mat->second;
     }
     if (!sections_.empty()) {
       const auto bare = std::count(mesh.elem_material.begin(), mesh.elem_material.end(), -1);

@@ -80,8 +80,8 @@ class Pchip {
     const double h = kSectionRadius[k + 1] - kSectionRadius[k];
     const double s = (r - kSectionRadius[k]) / h;
     const double s2 = s * s, s3 = s2 * s;
-    return (2 * s3 - 3 * s2 + 1) * y_[k] + (s3 - 2 * s2 + s) * h * d_[k] +
-           (-2 * s3 + 3 * s2) * y_[k + 1] + (s3 - s2) * h * d_[k + 1];
+    return (2 * s3 - 3 * s2 + 1) * y_[k] + (s3 - 2 * s2 + s) * h * d_[k] + (-2 * s3 + 3 * s2) * y_[k + 1] +
+           (s3 - s2) * h * d_[k + 1];
   }
 
  private:
@@ -168,11 +168,7 @@ class Section {
 class Blade {
  public:
   explicit Blade(double thickness_scale)
-      : scale_(thickness_scale),
-        chord_(kChord),
-        stagger_(kStaggerDeg),
-        ratio_(kThicknessRatio),
-        camber_(kCamberDeg) {}
+      : scale_(thickness_scale), chord_(kChord), stagger_(kStaggerDeg), ratio_(kThicknessRatio), camber_(kCamberDeg) {}
 
   Section at(double r) const {
     const double c = chord_(r);
@@ -241,8 +237,7 @@ std::vector<double> layer_radii(int n_span) {
   std::vector<double> r;
   r.push_back(b[0]);
   for (int i = 0; i < kIntervals; ++i)
-    for (int j = 1; j <= cells[i]; ++j)
-      r.push_back(j == cells[i] ? b[i + 1] : b[i] + (b[i + 1] - b[i]) * j / cells[i]);
+    for (int j = 1; j <= cells[i]; ++j) r.push_back(j == cells[i] ? b[i + 1] : b[i] + (b[i + 1] - b[i]) * j / cells[i]);
   return r;
 }
 
@@ -251,17 +246,16 @@ std::vector<double> layer_radii(int n_span) {
 Mesh generate_blade(const BladeSpec& spec) {
   const Sizes sz = resolve_sizes(spec);
   MORSE_CHECK(sz.n_chord >= kMinBladeChordCells && sz.n_chord <= kMaxBladeCells,
-              "blade generator: n_chord = ", sz.n_chord, " must be in [", kMinBladeChordCells, ", ",
-              kMaxBladeCells, "]");
-  MORSE_CHECK(sz.n_thick >= 1 && sz.n_thick <= kMaxBladeCells,
-              "blade generator: n_thick = ", sz.n_thick, " must be in [1, ", kMaxBladeCells, "]");
-  MORSE_CHECK(sz.n_span >= kMinBladeSpanCells && sz.n_span <= kMaxBladeCells,
-              "blade generator: n_span = ", sz.n_span, " must be in [", kMinBladeSpanCells, ", ",
-              kMaxBladeCells, "]");
+              "blade generator: n_chord = ", sz.n_chord, " must be in [", kMinBladeChordCells, ", ", kMaxBladeCells,
+              "]");
+  MORSE_CHECK(sz.n_thick >= 1 && sz.n_thick <= kMaxBladeCells, "blade generator: n_thick = ", sz.n_thick,
+              " must be in [1, ", kMaxBladeCells, "]");
+  MORSE_CHECK(sz.n_span >= kMinBladeSpanCells && sz.n_span <= kMaxBladeCells, "blade generator: n_span = ", sz.n_span,
+              " must be in [", kMinBladeSpanCells, ", ", kMaxBladeCells, "]");
   MORSE_CHECK(std::isfinite(spec.thickness_scale) && spec.thickness_scale > 0 &&
                   spec.thickness_scale <= kMaxBladeThicknessScale,
-              "blade generator: thickness_scale = ", spec.thickness_scale, " must be in (0, ",
-              kMaxBladeThicknessScale, "]");
+              "blade generator: thickness_scale = ", spec.thickness_scale, " must be in (0, ", kMaxBladeThicknessScale,
+              "]");
   const std::int64_t nc = sz.n_chord, nt = sz.n_thick, ns = sz.n_span;
   // Quadratic grid: (K, I, J) = span, chord, thickness positions, 0..2n.
   const std::int64_t NK = 2 * ns + 1, NI = 2 * nc + 1, NJ = 2 * nt + 1;
@@ -273,8 +267,8 @@ Mesh generate_blade(const BladeSpec& spec) {
 
   Mesh m;
   m.units = "SI";
-  m.source = cat("morse blade generator (", spec.size, ": n_chord=", nc, " n_thick=", nt,
-                 " n_span=", ns, ", thickness_scale=", spec.thickness_scale, ")");
+  m.source = cat("morse blade generator (", spec.size, ": n_chord=", nc, " n_thick=", nt, " n_span=", ns,
+                 ", thickness_scale=", spec.thickness_scale, ")");
   m.materials.push_back(Material{"maraging steel", 1.8e11, 0.3, 8000.0});
 
   // Which quadratic grid positions carry a node. The LE (I = 0) and TE (I = 2nc) columns
@@ -328,14 +322,12 @@ Mesh generate_blade(const BladeSpec& spec) {
   // --- section triangles (vertex grid positions in quadratic indices), clockwise in (phi, t)
   // so that the wedges extruded towards the tip have a positive Jacobian.
   std::vector<std::array<std::int64_t, 6>> tris;  // (I, J) of three vertices
-  auto add_tri = [&](std::int64_t i0, std::int64_t j0, std::int64_t i1, std::int64_t j1,
-                     std::int64_t i2, std::int64_t j2) {
+  auto add_tri = [&](std::int64_t i0, std::int64_t j0, std::int64_t i1, std::int64_t j1, std::int64_t i2,
+                     std::int64_t j2) {
     // Orientation in (phi, t); the edge points sit at t = 0 (J = nt).
     auto jj = [&](std::int64_t i, std::int64_t j) { return (i == 0 || i == NI - 1) ? nt : j; };
-    const double a0 = static_cast<double>(i1 - i0),
-                 a1 = static_cast<double>(jj(i1, j1) - jj(i0, j0));
-    const double b0 = static_cast<double>(i2 - i0),
-                 b1 = static_cast<double>(jj(i2, j2) - jj(i0, j0));
+    const double a0 = static_cast<double>(i1 - i0), a1 = static_cast<double>(jj(i1, j1) - jj(i0, j0));
+    const double b0 = static_cast<double>(i2 - i0), b1 = static_cast<double>(jj(i2, j2) - jj(i0, j0));
     if (a0 * b1 - a1 * b0 > 0)
       tris.push_back({i0, j0, i2, j2, i1, j1});
     else
@@ -368,9 +360,7 @@ Mesh generate_blade(const BladeSpec& spec) {
     const std::int64_t Kb = 2 * k, Km = 2 * k + 1, Kt = 2 * k + 2;
     for (const auto& t : tris) {
       const std::int64_t I[3] = {t[0], t[2], t[4]}, J[3] = {t[1], t[3], t[5]};
-      auto mid = [&](std::int64_t K, int a, int b) {
-        return at(K, (I[a] + I[b]) / 2, (J[a] + J[b]) / 2);
-      };
+      auto mid = [&](std::int64_t K, int a, int b) { return at(K, (I[a] + I[b]) / 2, (J[a] + J[b]) / 2); };
       // Midpoints of the edge-fan edges take the J of the non-edge vertex.
       auto fan_mid = [&](std::int64_t K, int a, int b) {
         const bool ea = I[a] == 0 || I[a] == NI - 1, eb = I[b] == 0 || I[b] == NI - 1;
@@ -384,8 +374,7 @@ Mesh generate_blade(const BladeSpec& spec) {
           fan_mid(Kb, 0, 1),  fan_mid(Kb, 0, 2),  at(Km, I[0], J[0]),  // 6 (0,1) 7 (0,2) 8 (0,3)
           fan_mid(Kb, 1, 2),  at(Km, I[1], J[1]), at(Km, I[2], J[2]),  // 9 (1,2) 10 (1,4) 11 (2,5)
           fan_mid(Kt, 0, 1),  fan_mid(Kt, 0, 2),  fan_mid(Kt, 1, 2)};  // 12 (3,4) 13 (3,5) 14 (4,5)
-      for (std::int64_t v : conn)
-        MORSE_CHECK(v >= 0, "blade generator: internal error (missing grid node)");
+      for (std::int64_t v : conn) MORSE_CHECK(v >= 0, "blade generator: internal error (missing grid node)");
       m.add_element(m.num_elements() + 1, ElementType::Wedge15, conn, 0);
     }
   }
@@ -410,8 +399,7 @@ Mesh generate_blade(const BladeSpec& spec) {
         const double d = std::abs(chord_fraction(static_cast<double>(I) / (NI - 1)) - target);
         if (best < 0 || d < best_d) best = I, best_d = d;
       }
-      MORSE_CHECK(best > prev, "blade generator: n_chord = ", nc,
-                  " is too small to place the tip nodes");
+      MORSE_CHECK(best > prev, "blade generator: n_chord = ", nc, " is too small to place the tip nodes");
       prev = best;
       tip.push_back(at(NK - 1, best, nt));
     }
@@ -436,33 +424,28 @@ PetscErrorCode blade_spec_from_options(MPI_Comm comm, BladeSpec* spec) {
                                "Mesh size: default (40x4x22 cells, ~20k nodes) or coarse (16x2x7 "
                                "cells, ~1.6k nodes)",
                                "", size, size, sizeof size, nullptr));
-  PetscCall(MorseOptionsBoundedInt("-blade_n_chord",
-                                   "Cells along the chord (0 = from -blade_size: 40 / 16)", "",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_chord", "Cells along the chord (0 = from -blade_size: 40 / 16)", "",
                                    n_chord, &n_chord, nullptr, 0));
-  PetscCall(MorseOptionsBoundedInt("-blade_n_thick",
-                                   "Cells across the thickness (0 = from -blade_size: 4 / 2)", "",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_thick", "Cells across the thickness (0 = from -blade_size: 4 / 2)", "",
                                    n_thick, &n_thick, nullptr, 0));
-  PetscCall(MorseOptionsBoundedInt("-blade_n_span",
-                                   "Cells along the span, >= 7 (0 = from -blade_size: 22 / 7)", "",
+  PetscCall(MorseOptionsBoundedInt("-blade_n_span", "Cells along the span, >= 7 (0 = from -blade_size: 22 / 7)", "",
                                    n_span, &n_span, nullptr, 0));
   PetscCall(MorseOptionsReal("-blade_thickness_scale",
                              "Factor on the published thickness-to-chord ratios (calibrated "
                              "default)",
                              "", scale, &scale, nullptr));
   PetscOptionsEnd();
-  PetscCheck(std::strcmp(size, "default") == 0 || std::strcmp(size, "coarse") == 0, comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-blade_size %s: unknown size (default or coarse)", size);
+  PetscCheck(std::strcmp(size, "default") == 0 || std::strcmp(size, "coarse") == 0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-blade_size %s: unknown size (default or coarse)", size);
   PetscCheck(n_chord == 0 || (n_chord >= kMinBladeChordCells && n_chord <= kMaxBladeCells), comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-blade_n_chord %d: must be 0 or in [%d, %d]", (int)n_chord,
-             kMinBladeChordCells, kMaxBladeCells);
+             PETSC_ERR_ARG_OUTOFRANGE, "-blade_n_chord %d: must be 0 or in [%d, %d]", (int)n_chord, kMinBladeChordCells,
+             kMaxBladeCells);
   PetscCheck(n_thick == 0 || n_thick <= kMaxBladeCells, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-blade_n_thick %d: must be 0 or in [1, %d]", (int)n_thick, kMaxBladeCells);
-  PetscCheck(n_span == 0 || (n_span >= kMinBladeSpanCells && n_span <= kMaxBladeCells), comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-blade_n_span %d: must be 0 or in [%d, %d]", (int)n_span,
-             kMinBladeSpanCells, kMaxBladeCells);
-  PetscCheck(std::isfinite(scale) && scale > 0 && scale <= kMaxBladeThicknessScale, comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-blade_thickness_scale %.6g: must be in (0, %.6g]",
-             (double)scale, kMaxBladeThicknessScale);
+  PetscCheck(n_span == 0 || (n_span >= kMinBladeSpanCells && n_span <= kMaxBladeCells), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-blade_n_span %d: must be 0 or in [%d, %d]", (int)n_span, kMinBladeSpanCells, kMaxBladeCells);
+  PetscCheck(std::isfinite(scale) && scale > 0 && scale <= kMaxBladeThicknessScale, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-blade_thickness_scale %.6g: must be in (0, %.6g]", (double)scale, kMaxBladeThicknessScale);
   spec->size = size;
   spec->n_chord = static_cast<int>(n_chord);
   spec->n_thick = static_cast<int>(n_thick);

@@ -21,8 +21,7 @@ constexpr int kWedges[2][6] = {{0, 1, 3, 4, 5, 7}, {0, 3, 2, 4, 7, 6}};
 
 // Mid-edge node tables (vertex pairs), as documented in fe/element.hpp.
 constexpr int kTet10Edges[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {2, 3}, {1, 3}};
-constexpr int kWedge15Edges[9][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4},
-                                     {2, 5}, {3, 4}, {3, 5}, {4, 5}};
+constexpr int kWedge15Edges[9][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}};
 constexpr int kHex20Edges[12][2] = {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3},
                                     {2, 6}, {3, 7}, {4, 5}, {4, 7}, {5, 6}, {6, 7}};
 
@@ -52,14 +51,13 @@ Mesh generate_box(const BoxSpec& spec) {
   const double len[3] = {spec.lx, spec.ly, spec.lz};
   const std::int64_t n[3] = {spec.nx, spec.ny, spec.nz};
   for (int d = 0; d < 3; ++d) {
-    MORSE_CHECK(std::isfinite(len[d]) && len[d] > 0, "generate_box: box size ", spec.lx, " x ",
-                spec.ly, " x ", spec.lz, " must be positive");
-    MORSE_CHECK(n[d] >= 1, "generate_box: cell counts ", spec.nx, " x ", spec.ny, " x ", spec.nz,
-                " must be >= 1");
+    MORSE_CHECK(std::isfinite(len[d]) && len[d] > 0, "generate_box: box size ", spec.lx, " x ", spec.ly, " x ", spec.lz,
+                " must be positive");
+    MORSE_CHECK(n[d] >= 1, "generate_box: cell counts ", spec.nx, " x ", spec.ny, " x ", spec.nz, " must be >= 1");
     MORSE_CHECK(std::isfinite(spec.origin[d]), "generate_box: origin is not finite");
   }
-  MORSE_CHECK(spec.distortion >= 0 && spec.distortion < 0.5, "generate_box: distortion ",
-              spec.distortion, " must be in [0, 0.5)");
+  MORSE_CHECK(spec.distortion >= 0 && spec.distortion < 0.5, "generate_box: distortion ", spec.distortion,
+              " must be in [0, 0.5)");
   const std::int64_t n1[3] = {n[0] + 1, n[1] + 1, n[2] + 1};
   const std::int64_t nv = n1[0] * n1[1] * n1[2];
   // Upper bound of nodes: vertices + edges + face diagonals + cell diagonals < 8 * nv.
@@ -72,8 +70,8 @@ Mesh generate_box(const BoxSpec& spec) {
   const int npe = nodes_per_element(type);
 
   Mesh m;
-  m.source = cat("box ", element_name(type), " ", spec.nx, "x", spec.ny, "x", spec.nz, " size ",
-                 spec.lx, "x", spec.ly, "x", spec.lz);
+  m.source = cat("box ", element_name(type), " ", spec.nx, "x", spec.ny, "x", spec.nz, " size ", spec.lx, "x", spec.ly,
+                 "x", spec.lz);
   if (spec.distortion > 0) m.source += cat(" distortion ", spec.distortion, " seed ", spec.seed);
 
   // --- vertices
@@ -108,8 +106,7 @@ Mesh generate_box(const BoxSpec& spec) {
     if (added) {
       const double* pa = &m.coords[3 * a];
       const double* pb = &m.coords[3 * b];
-      m.add_node(m.num_nodes() + 1, 0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]),
-                 0.5 * (pa[2] + pb[2]));
+      m.add_node(m.num_nodes() + 1, 0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]));
       mid_ends.emplace_back(a, b);
     }
     return it->second;
@@ -159,8 +156,7 @@ Mesh generate_box(const BoxSpec& spec) {
       for (g[0] = 0; g[0] < n[0]; ++g[0]) {
         std::int64_t corner[8];
         for (int c = 0; c < 8; ++c)
-          corner[c] =
-              (g[0] + (c & 1)) + n1[0] * ((g[1] + ((c >> 1) & 1)) + n1[1] * (g[2] + (c >> 2)));
+          corner[c] = (g[0] + (c & 1)) + n1[0] * ((g[1] + ((c >> 1) & 1)) + n1[1] * (g[2] + (c >> 2)));
         for (const auto& lv : local) {
           for (int v = 0; v < nvert; ++v) conn[v] = corner[lv[v]];
           for (int k = 0; quadratic && k < npe - nvert; ++k)
@@ -173,9 +169,7 @@ Mesh generate_box(const BoxSpec& spec) {
   auto grid_index = [&](std::int64_t v, int d) {
     return d == 0 ? v % n1[0] : d == 1 ? (v / n1[0]) % n1[1] : v / (n1[0] * n1[1]);
   };
-  auto vertex_on = [&](std::int64_t v, int d, bool high) {
-    return grid_index(v, d) == (high ? n[d] : 0);
-  };
+  auto vertex_on = [&](std::int64_t v, int d, bool high) { return grid_index(v, d) == (high ? n[d] : 0); };
   static const char* const kFaceNames[3][2] = {{"x0", "x1"}, {"y0", "y1"}, {"z0", "z1"}};
   for (int d = 0; d < 3; ++d)
     for (int side = 0; side < 2; ++side) {

@@ -144,9 +144,7 @@ class TagMap {
 // ------------------------------------------------------------------------------------------------
 // Reader
 
-inline bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
-}
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
 inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
 class Reader {
@@ -190,11 +188,10 @@ class Reader {
   /// Throws for end of file or a '$' line met while data of `what` was expected.
   [[noreturn]] void premature(const char* what) const {
     if (p_ >= end_)
-      fail_eof(cat("unexpected end of file in section $", section_, " (started at line ",
-                   section_line_, ") while reading ", what, ": truncated file?"));
-    fail(cat("unexpected '", peek_token(), "' in section $", section_, " (started at line ",
-             section_line_, ") while reading ", what,
-             ": the section is shorter than its counts say (truncated file?)"));
+      fail_eof(cat("unexpected end of file in section $", section_, " (started at line ", section_line_,
+                   ") while reading ", what, ": truncated file?"));
+    fail(cat("unexpected '", peek_token(), "' in section $", section_, " (started at line ", section_line_,
+             ") while reading ", what, ": the section is shorter than its counts say (truncated file?)"));
   }
   std::int64_t read_int(const char* what) {
     skip_ws();
@@ -215,8 +212,7 @@ class Reader {
       q = e;
       neg = false;
     }
-    if (q < end_ && !is_space(*q))
-      fail(cat("expected ", what, " (an integer), found '", peek_token(), "'"));
+    if (q < end_ && !is_space(*q)) fail(cat("expected ", what, " (an integer), found '", peek_token(), "'"));
     p_ = q;
     return neg ? -v : v;
   }
@@ -235,8 +231,7 @@ class Reader {
     const auto [e, ec] = std::from_chars(q, end_, v);
     if (ec == std::errc::invalid_argument || (e < end_ && !is_space(*e)))
       fail(cat("expected ", what, " (a number), found '", peek_token(), "'"));
-    if (ec != std::errc() || !std::isfinite(v))
-      fail(cat(what, " '", peek_token(), "' is out of range or not finite"));
+    if (ec != std::errc() || !std::isfinite(v)) fail(cat(what, " '", peek_token(), "' is out of range or not finite"));
     p_ = e;
     return v;
   }
@@ -264,12 +259,12 @@ class Reader {
   void expect_end(const std::string& name) {
     skip_ws();
     if (p_ >= end_)
-      fail_eof(cat("unexpected end of file: missing $End", name, " for section $", name,
-                   " started at line ", section_line_, " (truncated file?)"));
+      fail_eof(cat("unexpected end of file: missing $End", name, " for section $", name, " started at line ",
+                   section_line_, " (truncated file?)"));
     const std::string tok = peek_token();
     if (tok != "$End" + name)
-      fail(cat("expected $End", name, " (section $", name, " started at line ", section_line_,
-               "), found '", tok, "': the section holds more data than its counts say"));
+      fail(cat("expected $End", name, " (section $", name, " started at line ", section_line_, "), found '", tok,
+               "': the section holds more data than its counts say"));
     p_ += tok.size();
   }
   /// Skips an unknown section up to its $End line.
@@ -284,8 +279,8 @@ class Reader {
           (len == end_tag.size() || is_space(ls[end_tag.size()])))
         return;
     }
-    fail_eof(cat("unexpected end of file: missing ", end_tag, " for section $", name,
-                 " started at line ", section_line_, " (truncated file?)"));
+    fail_eof(cat("unexpected end of file: missing ", end_tag, " for section $", name, " started at line ",
+                 section_line_, " (truncated file?)"));
   }
 
   // --- sections
@@ -311,8 +306,8 @@ class Reader {
   void build_sets();
   /// True if element e has type t and the nodes in nodes_.
   bool same_element(std::int64_t e, ElementType t) const {
-    return mesh_.elem_types[e] == t && std::equal(nodes_.begin(), nodes_.end(),
-                                                  mesh_.elem_nodes.data() + mesh_.elem_offsets[e]);
+    return mesh_.elem_types[e] == t &&
+           std::equal(nodes_.begin(), nodes_.end(), mesh_.elem_nodes.data() + mesh_.elem_offsets[e]);
   }
 
   const std::string& path_;
@@ -332,7 +327,7 @@ class Reader {
   TagMap node_map_;
   TagMap elem_map_;                                                 // solid elements only
   std::unordered_multimap<std::uint64_t, std::int64_t> elem_hash_;  // connectivity -> element
-  std::vector<std::int64_t> nodes_;  // scratch: node indices of the current element
+  std::vector<std::int64_t> nodes_;                                 // scratch: node indices of the current element
 
   std::map<Key, std::string> names_;                               // physical names
   std::set<Key> declared_;                                         // every physical group met
@@ -343,14 +338,12 @@ class Reader {
 
 void Reader::read_format() {
   const std::string version = read_token("the format version");
-  if (version.rfind("4.1", 0) == 0 &&
-      (version.size() == 3 || version.find_first_not_of('0', 3) == std::string::npos)) {
+  if (version.rfind("4.1", 0) == 0 && (version.size() == 3 || version.find_first_not_of('0', 3) == std::string::npos)) {
     major_ = 4;
   } else if (version.size() >= 2 && version[0] == '2' && version[1] == '.') {
     major_ = 2;
   } else {
-    fail(cat("unsupported MSH format version ", version,
-             " (supported: 4.1 and 2.2; re-save the mesh in one of them)"));
+    fail(cat("unsupported MSH format version ", version, " (supported: 4.1 and 2.2; re-save the mesh in one of them)"));
   }
   const std::int64_t file_type = read_int("the file type");
   if (file_type == 1) fail("binary .msh not supported, re-save as ASCII");
@@ -469,8 +462,8 @@ const GmshType& Reader::element_type(std::int64_t type, int block_dim) {
              "); supported 3D types: 4 (tet4), 11 (tet10), 6 (wedge6), 18 (wedge15), "
              "5 (hex8), 17 (hex20)"));
   if (block_dim >= 0 && block_dim != t.dim)
-    fail(cat("gmsh element type ", type, " (", t.name, ", dimension ", t.dim,
-             ") in a block of entity dimension ", block_dim));
+    fail(cat("gmsh element type ", type, " (", t.name, ", dimension ", t.dim, ") in a block of entity dimension ",
+             block_dim));
   return t;
 }
 
@@ -484,8 +477,8 @@ void Reader::read_element_nodes(int n) {
   }
 }
 
-void Reader::add_element(std::int64_t tag, const GmshType& t, const std::int64_t* phys,
-                         std::size_t nphys, std::int64_t elem_line) {
+void Reader::add_element(std::int64_t tag, const GmshType& t, const std::int64_t* phys, std::size_t nphys,
+                         std::int64_t elem_line) {
   if (t.dim < 3) {
     for (std::size_t k = 0; k < nphys; ++k) {
       auto& v = group_nodes_[Key{t.dim, phys[k]}];
@@ -559,8 +552,7 @@ void Reader::read_elements4() {
     }
     total += n;
   }
-  if (total != nelems)
-    fail(cat("$Elements announces ", nelems, " elements but its blocks hold ", total));
+  if (total != nelems) fail(cat("$Elements announces ", nelems, " elements but its blocks hold ", total));
   expect_end("Elements");
 }
 
@@ -769,19 +761,16 @@ void write_gmsh(const Mesh& m, const std::string& path) {
     max_elem = std::max(max_elem, id);
   }
   for (std::int64_t v : m.elem_nodes)
-    MORSE_CHECK(v >= 0 && v < nn, "write_gmsh(", path, "): element node index ", v,
-                " out of range");
+    MORSE_CHECK(v >= 0 && v < nn, "write_gmsh(", path, "): element node index ", v, " out of range");
   for (const auto& [name, set] : m.node_sets) {
     check_set_name(name);
     for (std::int64_t v : set)
-      MORSE_CHECK(v >= 0 && v < nn, "write_gmsh(", path, "): node set '", name, "' index ", v,
-                  " out of range");
+      MORSE_CHECK(v >= 0 && v < nn, "write_gmsh(", path, "): node set '", name, "' index ", v, " out of range");
   }
   for (const auto& [name, set] : m.elem_sets) {
     check_set_name(name);
     for (std::int64_t e : set)
-      MORSE_CHECK(e >= 0 && e < ne, "write_gmsh(", path, "): element set '", name, "' index ", e,
-                  " out of range");
+      MORSE_CHECK(e >= 0 && e < ne, "write_gmsh(", path, "): element set '", name, "' index ", e, " out of range");
   }
 
   // Volume entities: one per distinct combination of element sets an element belongs to.

@@ -13,8 +13,7 @@ struct TypeInfo {
   int n_vertices;
 };
 constexpr TypeInfo kInfo[kNumElementTypes] = {
-    {"tet4", 4, 4},     {"tet10", 10, 4}, {"wedge6", 6, 6},
-    {"wedge15", 15, 6}, {"hex8", 8, 8},   {"hex20", 20, 8},
+    {"tet4", 4, 4}, {"tet10", 10, 4}, {"wedge6", 6, 6}, {"wedge15", 15, 6}, {"hex8", 8, 8}, {"hex20", 20, 8},
 };
 }  // namespace
 
@@ -38,8 +37,7 @@ std::int64_t Mesh::add_node(std::int64_t id, double x, double y, double z) {
   return num_nodes() - 1;
 }
 
-std::int64_t Mesh::add_element(std::int64_t id, ElementType t, const std::int64_t* nodes,
-                               int material) {
+std::int64_t Mesh::add_element(std::int64_t id, ElementType t, const std::int64_t* nodes, int material) {
   const int n = nodes_per_element(t);
   elem_types.push_back(t);
   elem_nodes.insert(elem_nodes.end(), nodes, nodes + n);

@@ -120,9 +120,7 @@ const Ordering& ordering(ElementType t) {
 // ------------------------------------------------------------------------------------------------
 // Text and numbers
 
-inline bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
-}
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
 inline char to_upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 32) : c; }
 
@@ -256,21 +254,19 @@ std::string component_string(std::uint8_t mask) {
 
 /// Rigid elements and MPCs: their dependent DOFs would have to be eliminated.
 const std::unordered_set<std::string>& rigid_cards() {
-  static const std::unordered_set<std::string> s = {"RBE1",    "RBE2",   "RBE3",   "RBAR",
-                                                    "RBAR1",   "RROD",   "RTRPLT", "RTRPLT1",
-                                                    "RSPLINE", "RSSCON", "RJOINT", "MPC"};
+  static const std::unordered_set<std::string> s = {"RBE1",   "RBE2",    "RBE3",    "RBAR",   "RBAR1",  "RROD",
+                                                    "RTRPLT", "RTRPLT1", "RSPLINE", "RSSCON", "RJOINT", "MPC"};
   return s;
 }
 
 /// Elements and matrix inputs that carry stiffness or mass: skipping them changes the model.
 const std::unordered_set<std::string>& structural_cards() {
   static const std::unordered_set<std::string> s = {
-      "CELAS1",  "CELAS2",  "CELAS3", "CELAS4",  "CBUSH",   "CBUSH1D", "CBUSH2D", "CBAR",
-      "CBEAM",   "CBEAM3",  "CBEND",  "CROD",    "CONROD",  "CTUBE",   "CQUAD4",  "CQUAD8",
-      "CQUAD",   "CQUADR",  "CTRIA3", "CTRIA6",  "CTRIAR",  "CSHEAR",  "CPYRAM",  "CQUADX",
-      "CQUADX4", "CQUADX8", "CTRIAX", "CTRIAX3", "CTRIAX6", "CGAP",    "CFAST",   "CWELD",
-      "CSEAM",   "CONM1",   "CMASS1", "CMASS2",  "CMASS3",  "CMASS4",  "GENEL",   "DMIG",
-      "CHEXCZ",  "CPENTCZ", "CIFHEX", "CIFPENT", "CIFQUAD", "CIFQDX",  "CRAC2D",  "CRAC3D"};
+      "CELAS1", "CELAS2",  "CELAS3", "CELAS4",  "CBUSH",   "CBUSH1D", "CBUSH2D", "CBAR",    "CBEAM",   "CBEAM3",
+      "CBEND",  "CROD",    "CONROD", "CTUBE",   "CQUAD4",  "CQUAD8",  "CQUAD",   "CQUADR",  "CTRIA3",  "CTRIA6",
+      "CTRIAR", "CSHEAR",  "CPYRAM", "CQUADX",  "CQUADX4", "CQUADX8", "CTRIAX",  "CTRIAX3", "CTRIAX6", "CGAP",
+      "CFAST",  "CWELD",   "CSEAM",  "CONM1",   "CMASS1",  "CMASS2",  "CMASS3",  "CMASS4",  "GENEL",   "DMIG",
+      "CHEXCZ", "CPENTCZ", "CIFHEX", "CIFPENT", "CIFQUAD", "CIFQDX",  "CRAC2D",  "CRAC3D"};
   return s;
 }
 
@@ -498,8 +494,8 @@ class Reader {
   std::size_t skip_to_bulk(const std::string& text, const Lines& lines, int fid) {
     std::size_t begin = lines.size();
     for (std::size_t i = 0; i < lines.size(); ++i) {
-      const string_view t = trim(strip_comment(
-          string_view(text).substr(lines[i].first, lines[i].second - lines[i].first)));
+      const string_view t =
+          trim(strip_comment(string_view(text).substr(lines[i].first, lines[i].second - lines[i].first)));
       if (t.size() >= 5 && istarts_with(t, "BEGIN") && (t.size() == 5 || is_space(t[5]))) {
         if (compact_upper(t.substr(5)) == "BULK") begin = i;
         break;
@@ -508,8 +504,8 @@ class Reader {
     if (begin == lines.size()) return 0;
     int skipped = 0;
     for (std::size_t i = 0; i < begin; ++i) {
-      const string_view t = trim(strip_comment(
-          string_view(text).substr(lines[i].first, lines[i].second - lines[i].first)));
+      const string_view t =
+          trim(strip_comment(string_view(text).substr(lines[i].first, lines[i].second - lines[i].first)));
       if (t.empty()) continue;
       ++skipped;
       // Case control: PARAM,WTMASS,value (or PARAM WTMASS value).
@@ -542,8 +538,7 @@ class Reader {
 
   void parse_file(const std::string& path, const Loc* from, int depth) {
     if (from && depth > 32)
-      fail(*from, "INCLUDE", "INCLUDE nested more than 32 deep (does '", path,
-           "' include itself?)");
+      fail(*from, "INCLUDE", "INCLUDE nested more than 32 deep (does '", path, "' include itself?)");
     std::string text, why;
     if (!read_whole_file(path, &text, &why)) {
       if (from) fail(*from, "INCLUDE", "cannot read included file '", path, "' (", why, ")");
@@ -557,8 +552,7 @@ class Reader {
     for (; i < lines.size() && !stop_; ++i) {
       const string_view raw = all.substr(lines[i].first, lines[i].second - lines[i].first);
       const Loc loc{fid, static_cast<int>(i) + 1};
-      if (istarts_with(raw, "INCLUDE") &&
-          (raw.size() == 7 || is_space(raw[7]) || raw[7] == '\'' || raw[7] == '"')) {
+      if (istarts_with(raw, "INCLUDE") && (raw.size() == 7 || is_space(raw[7]) || raw[7] == '\'' || raw[7] == '"')) {
         flush();
         const std::string name = include_name(all, lines, &i, loc);
         parse_file(resolve(loc, name), &loc, depth + 1);
@@ -571,8 +565,7 @@ class Reader {
 
   /// The file name of the INCLUDE statement on line *i; advances *i over the lines of a quoted
   /// name that runs over several lines.
-  std::string include_name(string_view all, const Lines& lines, std::size_t* i,
-                           const Loc& loc) const {
+  std::string include_name(string_view all, const Lines& lines, std::size_t* i, const Loc& loc) const {
     string_view rest = all.substr(lines[*i].first + 7, lines[*i].second - lines[*i].first - 7);
     rest = trim(rest);
     std::string name;
@@ -586,8 +579,7 @@ class Reader {
           break;
         }
         name += std::string(trim(rest));
-        if (++*i >= lines.size())
-          fail(loc, "INCLUDE", "the quoted file name is not closed before the end of the file");
+        if (++*i >= lines.size()) fail(loc, "INCLUDE", "the quoted file name is not closed before the end of the file");
         rest = all.substr(lines[*i].first, lines[*i].second - lines[*i].first);
       }
     } else {
@@ -628,8 +620,7 @@ class Reader {
       std::array<string_view, 11> parts;
       while (true) {
         const std::size_t c = s.find(',', p);
-        const string_view part =
-            trim(s.substr(p, c == string_view::npos ? string_view::npos : c - p));
+        const string_view part = trim(s.substr(p, c == string_view::npos ? string_view::npos : c - p));
         if (n_parts < 11) parts[n_parts] = part;
         ++n_parts;
         if (c == string_view::npos) break;
@@ -639,8 +630,7 @@ class Reader {
       large = (!f1.empty() && f1[0] == '*') || (!f1.empty() && f1.back() == '*' && f1[0] != '+');
       const int max_parts = large ? 6 : 10;
       if (n_parts > max_parts)
-        fail(loc, card_name_for(f1), "free-field line has ", n_parts, " fields; at most ",
-             max_parts, " are allowed (",
+        fail(loc, card_name_for(f1), "free-field line has ", n_parts, " fields; at most ", max_parts, " are allowed (",
              large ? "name, 4 data fields and a continuation marker in large free field)"
                    : "name, 8 data fields and a continuation marker)");
       const int nd = large ? 4 : 8;
@@ -660,14 +650,11 @@ class Reader {
         l = line_;
       }
       if (l.size() > 80) {
-        if (!trim(l.substr(80)).empty())
-          notice("COL80", loc, "text beyond column 80 is ignored (fixed-field format)");
+        if (!trim(l.substr(80)).empty()) notice("COL80", loc, "text beyond column 80 is ignored (fixed-field format)");
         l = l.substr(0, 80);
         if (trim(l).empty()) return;  // only a sequence number beyond column 80
       }
-      auto col = [&](std::size_t b, std::size_t w) {
-        return b >= l.size() ? string_view() : trim(l.substr(b, w));
-      };
+      auto col = [&](std::size_t b, std::size_t w) { return b >= l.size() ? string_view() : trim(l.substr(b, w)); };
       f1 = col(0, 8);
       large = !f1.empty() && (f1[0] == '*' || (f1.back() == '*' && f1[0] != '+'));
       if (large) {
@@ -680,12 +667,11 @@ class Reader {
 
     const bool continuation = f1.empty() || f1[0] == '+' || f1[0] == '*';
     if (continuation) {
-      if (!card_.active)
-        throw Error(cat(where(loc), "continuation line ('", f1, "') without a parent card"));
+      if (!card_.active) throw Error(cat(where(loc), "continuation line ('", f1, "') without a parent card"));
       const std::string want = marker(card_.marker), got = marker(f1);
       if (!want.empty() && !got.empty() && want != got)
-        fail(loc, card_.name, "continuation marker '", f1, "' does not match the marker '",
-             card_.marker, "' in field 10 of line ", card_.last_line);
+        fail(loc, card_.name, "continuation marker '", f1, "' does not match the marker '", card_.marker,
+             "' in field 10 of line ", card_.last_line);
     } else {
       flush();
       string_view name = f1;
@@ -758,9 +744,7 @@ class Reader {
 
   string_view fld(int i) const { return i < card_.n ? string_view(card_.f[i]) : string_view(); }
   bool blank(int i) const { return fld(i).empty(); }
-  Loc field_loc(int i) const {
-    return Loc{card_.loc.file, i < card_.n ? card_.line[i] : card_.last_line};
-  }
+  Loc field_loc(int i) const { return Loc{card_.loc.file, i < card_.n ? card_.line[i] : card_.last_line}; }
   static int field_number(int i) { return i % 8 + 2; }
 
   template <class... T>
@@ -779,9 +763,7 @@ class Reader {
     if (!parse_int(fld(i), &v)) field_fail(i, "('", fld(i), "') is not an integer (", what, ")");
     return v;
   }
-  int64_t int_field(int i, const char* what, int64_t dflt) const {
-    return blank(i) ? dflt : int_field(i, what);
-  }
+  int64_t int_field(int i, const char* what, int64_t dflt) const { return blank(i) ? dflt : int_field(i, what); }
   int64_t id_field(int i, const char* what) const {
     const int64_t v = int_field(i, what);
     if (v <= 0) field_fail(i, "('", fld(i), "'): ", what, " must be a positive integer");
@@ -790,13 +772,10 @@ class Reader {
   double real_field(int i, const char* what) const {
     if (blank(i)) field_fail(i, "(", what, ") is blank; a real number is required");
     double v;
-    if (!parse_real(fld(i), &v))
-      field_fail(i, "('", fld(i), "') is not a real number (", what, ")");
+    if (!parse_real(fld(i), &v)) field_fail(i, "('", fld(i), "') is not a real number (", what, ")");
     return v;
   }
-  double real_field(int i, const char* what, double dflt) const {
-    return blank(i) ? dflt : real_field(i, what);
-  }
+  double real_field(int i, const char* what, double dflt) const { return blank(i) ? dflt : real_field(i, what); }
   std::uint8_t comp_field(int i, const char* what, bool* zero) const {
     std::uint8_t mask;
     if (!parse_components(fld(i), &mask, zero))
@@ -807,9 +786,7 @@ class Reader {
   /// Every field from index k on must be blank.
   void no_more(int k) const {
     for (int i = k; i < card_.n; ++i)
-      if (!blank(i))
-        field_fail(i, "('", fld(i), "'): unexpected data; ", card_.name, " has ", k,
-                   " data fields");
+      if (!blank(i)) field_fail(i, "('", fld(i), "'): unexpected data; ", card_.name, " has ", k, " data fields");
   }
   /// Ids from field index first on: integers and "a THRU b" ranges; blank fields are skipped.
   std::vector<Range> id_list(int first, const char* what) const {
@@ -907,14 +884,12 @@ class Reader {
     else
       g.cp = int_field(1, "CP");
     if (g.cp < 0) field_fail(1, "('", fld(1), "'): CP must be 0 or positive");
-    for (int j = 0; j < 3; ++j)
-      g.x[j] = real_field(2 + j, j == 0 ? "X1" : j == 1 ? "X2" : "X3", 0.0);
+    for (int j = 0; j < 3; ++j) g.x[j] = real_field(2 + j, j == 0 ? "X1" : j == 1 ? "X2" : "X3", 0.0);
     if (blank(5))
       g.blanks |= 2;
     else
       g.cd = int_field(5, "CD");
-    if (g.cd < 0)
-      field_fail(5, "('", fld(5), "'): CD = ", g.cd, " (fluid grid points) is not supported");
+    if (g.cd < 0) field_fail(5, "('", fld(5), "'): CD = ", g.cd, " (fluid grid points) is not supported");
     bool zero = false;
     if (blank(6))
       g.blanks |= 4;
@@ -924,8 +899,7 @@ class Reader {
     if (!blank(7)) int_field(7, "SEQ");
     no_more(8);
     auto [it, fresh] = grid_index_.emplace(g.id, grids_.size());
-    if (!fresh)
-      card_fail("grid ", g.id, " is defined twice (first at ", at(grids_[it->second].loc), ")");
+    if (!fresh) card_fail("grid ", g.id, " is defined twice (first at ", at(grids_[it->second].loc), ")");
     grids_.push_back(g);
   }
 
@@ -949,8 +923,7 @@ class Reader {
     c.rid = int_field(1, "RID", 0);
     if (c.rid < 0) field_fail(1, "('", fld(1), "'): RID must be 0 or positive");
     if (card_.n <= 8 || (blank(8) && blank(9) && blank(10)))
-      card_fail("coordinate system ", c.cid, " is truncated: C1 C2 C3 (the continuation line)",
-                " are missing");
+      card_fail("coordinate system ", c.cid, " is truncated: C1 C2 C3 (the continuation line)", " are missing");
     static const char* const kNames[9] = {"A1", "A2", "A3", "B1", "B2", "B3", "C1", "C2", "C3"};
     for (int j = 0; j < 3; ++j) {
       c.a[j] = real_field(2 + j, kNames[j], 0.0);
@@ -959,9 +932,7 @@ class Reader {
     }
     no_more(11);
     auto [it, fresh] = cords_.emplace(c.cid, c);
-    if (!fresh)
-      card_fail("coordinate system ", c.cid, " is defined twice (first at ", at(it->second.loc),
-                ")");
+    if (!fresh) card_fail("coordinate system ", c.cid, " is defined twice (first at ", at(it->second.loc), ")");
   }
 
   void read_solid() {
@@ -973,25 +944,22 @@ class Reader {
     r.loc = card_.loc;
     r.id = id_field(0, "EID");
     r.pid = id_field(1, "PID");
-    static const char* const kG[kMaxNodes] = {"G1",  "G2",  "G3",  "G4",  "G5",  "G6",  "G7",
-                                                  "G8",  "G9",  "G10", "G11", "G12", "G13", "G14",
-                                                  "G15", "G16", "G17", "G18", "G19", "G20"};
+    static const char* const kG[kMaxNodes] = {"G1",  "G2",  "G3",  "G4",  "G5",  "G6",  "G7",  "G8",  "G9",  "G10",
+                                              "G11", "G12", "G13", "G14", "G15", "G16", "G17", "G18", "G19", "G20"};
     std::array<int64_t, kMaxNodes> g{};
     int n_mid = 0;
     for (int k = 0; k < nq; ++k) {
       const char* what = kG[k];
       g[k] = int_field(2 + k, what, 0);
-      if (g[k] < 0)
-        field_fail(2 + k, "('", fld(2 + k), "'): ", what, " must be a positive grid id");
+      if (g[k] < 0) field_fail(2 + k, "('", fld(2 + k), "'): ", what, " must be a positive grid id");
       if (k < nv && g[k] == 0)
-        field_fail(2 + k, "(", what, ") is blank: element ", r.id, " needs its ", nv,
-                   " corner grids G1..G", nv);
+        field_fail(2 + k, "(", what, ") is blank: element ", r.id, " needs its ", nv, " corner grids G1..G", nv);
       if (k >= nv && g[k] != 0) ++n_mid;
     }
     no_more(2 + nq);
     if (n_mid != 0 && n_mid != nq - nv)
-      card_fail("element ", r.id, " has ", n_mid, " of its ", nq - nv, " midside grids (G", nv + 1,
-                "..G", nq, "): partial midside grids are not supported");
+      card_fail("element ", r.id, " has ", n_mid, " of its ", nq - nv, " midside grids (G", nv + 1, "..G", nq,
+                "): partial midside grids are not supported");
     r.type = n_mid ? sc->quadratic : sc->linear;
     const int n = nodes_per_element(r.type);
     for (int a = 0; a < n; ++a)
@@ -1007,8 +975,8 @@ class Reader {
   void add_element_id(int64_t id, const char* card) {
     auto [it, fresh] = element_ids_.emplace(id, std::make_pair(card_.loc, card));
     if (!fresh)
-      card_fail("element id ", id, " is used twice (first by the ", it->second.second, " at ",
-                at(it->second.first), ")");
+      card_fail("element id ", id, " is used twice (first by the ", it->second.second, " at ", at(it->second.first),
+                ")");
   }
 
   void read_psolid() {
@@ -1017,8 +985,7 @@ class Reader {
     p.loc = card_.loc;
     p.mid = id_field(1, "MID");
     if (!blank(6) && !iequals(fld(6), "SMECH"))
-      field_fail(6, "('", fld(6), "'): FCTN = ", fld(6),
-                 " is not supported (only structural solids, FCTN = SMECH)");
+      field_fail(6, "('", fld(6), "'): FCTN = ", fld(6), " is not supported (only structural solids, FCTN = SMECH)");
     auto [it, fresh] = psolids_.emplace(pid, p);
     if (!fresh) card_fail("PSOLID ", pid, " is defined twice (first at ", at(it->second.loc), ")");
   }
@@ -1050,8 +1017,7 @@ class Reader {
     const double w = real_field(1, "V1");
     if (!(w > 0)) field_fail(1, "('", fld(1), "'): WTMASS must be positive");
     if (bulk_wtmass_loc_.line && w != bulk_wtmass_)
-      card_fail("PARAM,WTMASS is given twice with different values (first at ",
-                at(bulk_wtmass_loc_), ")");
+      card_fail("PARAM,WTMASS is given twice with different values (first at ", at(bulk_wtmass_loc_), ")");
     bulk_wtmass_ = w;
     bulk_wtmass_loc_ = card_.loc;
   }
@@ -1072,8 +1038,7 @@ class Reader {
         r.mask = comp_field(b + 1, j == 0 ? "C1" : "C2", &r.zero);
       const double d = real_field(b + 2, j == 0 ? "D1" : "D2", 0.0);
       if (d != 0.0)
-        field_fail(b + 2, "('", fld(b + 2), "'): enforced displacements are not supported (only",
-                   " D = 0)");
+        field_fail(b + 2, "('", fld(b + 2), "'): enforced displacements are not supported (only", " D = 0)");
       r.ids.push_back({g, g, false});
       spc_.push_back(std::move(r));
     }
@@ -1177,8 +1142,7 @@ class Reader {
     if (c.rid != 0) {
       auto it = cords_.find(c.rid);
       if (it == cords_.end())
-        fail(c.loc, name, "coordinate system ", cid, " references undefined coordinate system ",
-             c.rid, " (RID)");
+        fail(c.loc, name, "coordinate system ", cid, " references undefined coordinate system ", c.rid, " (RID)");
       resolve_cord(c.rid, chain);
     }
     double a[3], b[3], p[3];
@@ -1193,15 +1157,12 @@ class Reader {
     const double l3 = std::sqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]);
     if (!(l3 > 0)) fail(c.loc, name, "coordinate system ", cid, ": points A and B coincide");
     for (double& x : e3) x /= l3;
-    double e2[3] = {e3[1] * v[2] - e3[2] * v[1], e3[2] * v[0] - e3[0] * v[2],
-                    e3[0] * v[1] - e3[1] * v[0]};
+    double e2[3] = {e3[1] * v[2] - e3[2] * v[1], e3[2] * v[0] - e3[0] * v[2], e3[0] * v[1] - e3[1] * v[0]};
     const double lv = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     const double l2 = std::sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
-    if (!(l2 > 1e-12 * lv))
-      fail(c.loc, name, "coordinate system ", cid, ": points A, B and C are on one line");
+    if (!(l2 > 1e-12 * lv)) fail(c.loc, name, "coordinate system ", cid, ": points A, B and C are on one line");
     for (double& x : e2) x /= l2;
-    const double e1[3] = {e2[1] * e3[2] - e2[2] * e3[1], e2[2] * e3[0] - e2[0] * e3[2],
-                          e2[0] * e3[1] - e2[1] * e3[0]};
+    const double e1[3] = {e2[1] * e3[2] - e2[2] * e3[1], e2[2] * e3[0] - e2[0] * e3[2], e2[0] * e3[1] - e2[1] * e3[0]};
     for (int j = 0; j < 3; ++j) {
       c.origin[j] = a[j];
       c.axes[0][j] = e1[j];
@@ -1233,8 +1194,7 @@ class Reader {
       l[1] = x[0] * std::sin(t) * std::sin(f);
       l[2] = x[0] * std::cos(t);
     }
-    for (int j = 0; j < 3; ++j)
-      out[j] = c.origin[j] + l[0] * c.axes[0][j] + l[1] * c.axes[1][j] + l[2] * c.axes[2][j];
+    for (int j = 0; j < 3; ++j) out[j] = c.origin[j] + l[0] * c.axes[0][j] + l[1] * c.axes[1][j] + l[2] * c.axes[2][j];
   }
 
   std::int64_t node_of(int64_t id) const {
@@ -1251,8 +1211,7 @@ class Reader {
   /// ids must exist; THRU ranges may have gaps but not be empty. Returns the number of scalar
   /// points met (which are errors if on_scalar is kError).
   template <class F>
-  int64_t for_each_grid(const Range& r, const Loc& loc, const char* card, OnScalar on_scalar,
-                        F f) const {
+  int64_t for_each_grid(const Range& r, const Loc& loc, const char* card, OnScalar on_scalar, F f) const {
     int64_t n_scalar = 0;
     if (!r.thru) {
       const int64_t k = node_of(r.lo);
@@ -1267,18 +1226,15 @@ class Reader {
       }
       return n_scalar;
     }
-    auto b = std::lower_bound(sorted_grids_.begin(), sorted_grids_.end(),
-                              std::make_pair(r.lo, int64_t{-1}));
+    auto b = std::lower_bound(sorted_grids_.begin(), sorted_grids_.end(), std::make_pair(r.lo, int64_t{-1}));
     int64_t n_grids = 0;
-    for (auto it = b; it != sorted_grids_.end() && it->first <= r.hi; ++it, ++n_grids)
-      f(it->second, it->first);
+    for (auto it = b; it != sorted_grids_.end() && it->first <= r.hi; ++it, ++n_grids) f(it->second, it->first);
     n_scalar = std::upper_bound(sorted_spoints_.begin(), sorted_spoints_.end(), r.hi) -
                std::lower_bound(sorted_spoints_.begin(), sorted_spoints_.end(), r.lo);
     if (n_scalar > 0 && on_scalar == OnScalar::kError)
-      fail(loc, card, "the range ", r.lo, " THRU ", r.hi, " contains scalar points (SPOINT); ",
-           card, " needs grids here");
-    if (n_grids == 0 && n_scalar == 0)
-      fail(loc, card, "the range ", r.lo, " THRU ", r.hi, " contains no grid");
+      fail(loc, card, "the range ", r.lo, " THRU ", r.hi, " contains scalar points (SPOINT); ", card,
+           " needs grids here");
+    if (n_grids == 0 && n_scalar == 0) fail(loc, card, "the range ", r.lo, " THRU ", r.hi, " contains no grid");
     return n_scalar;
   }
 
@@ -1290,9 +1246,8 @@ class Reader {
       *nu = m.nu;
       const double ratio = m.E / (2 * (1 + m.nu) * m.G);
       if (!(std::fabs(ratio - 1) <= 0.01))
-        notice(cat("EGNU", mid), l, "MAT1 ", mid, ": E, G and NU are all given and",
-               " E / (2 (1 + NU) G) = ", ratio, " differs from 1 by more than 1 %; E and NU are",
-               " used");
+        notice(cat("EGNU", mid), l, "MAT1 ", mid, ": E, G and NU are all given and", " E / (2 (1 + NU) G) = ", ratio,
+               " differs from 1 by more than 1 %; E and NU are", " used");
     } else if (m.has_E && m.has_nu) {
       *E = m.E;
       *nu = m.nu;
@@ -1315,8 +1270,8 @@ class Reader {
            " (need E > 0 and -1 < NU < 0.5)");
   }
 
-  std::string other_note(const std::unordered_map<int64_t, std::string>& others, int64_t id,
-                         const char* kind, const char* supported) const {
+  std::string other_note(const std::unordered_map<int64_t, std::string>& others, int64_t id, const char* kind,
+                         const char* supported) const {
     auto it = others.find(id);
     if (it == others.end()) return "";
     return cat(" (", kind, " ", id, " is a ", it->second, "; only ", supported, " is supported)");
@@ -1331,13 +1286,11 @@ class Reader {
     // Scalar points.
     for (const auto& [loc, ranges] : spoints_)
       for (const Range& r : ranges) {
-        if (r.hi - r.lo >= 10000000)
-          fail(loc, "SPOINT", "the range ", r.lo, " THRU ", r.hi, " is too large");
+        if (r.hi - r.lo >= 10000000) fail(loc, "SPOINT", "the range ", r.lo, " THRU ", r.hi, " is too large");
         for (int64_t id = r.lo; id <= r.hi; ++id) {
           auto g = grid_index_.find(id);
           if (g != grid_index_.end())
-            fail(loc, "SPOINT", "scalar point ", id, " has the id of the grid at ",
-                 at(grids_[g->second].loc));
+            fail(loc, "SPOINT", "scalar point ", id, " has the id of the grid at ", at(grids_[g->second].loc));
           spoint_ids_.insert(id);
         }
       }
@@ -1363,14 +1316,13 @@ class Reader {
         fail(g.loc, "GRID", "grid ", g.id, " references undefined coordinate system ", cp, " (CP",
              g.blanks & 1 ? " from GRDSET)" : ")");
       if (cd[k] != 0 && !cords_.count(cd[k]))
-        fail(g.loc, "GRID", "grid ", g.id, " references undefined coordinate system ", cd[k],
-             " (CD", g.blanks & 2 ? " from GRDSET)" : ")");
+        fail(g.loc, "GRID", "grid ", g.id, " references undefined coordinate system ", cd[k], " (CD",
+             g.blanks & 2 ? " from GRDSET)" : ")");
       mesh.node_ids[k] = g.id;
       to_basic(cp, g.x, &mesh.coords[3 * k]);
     }
     sorted_grids_.reserve(nn);
-    for (std::size_t k = 0; k < nn; ++k)
-      sorted_grids_.emplace_back(grids_[k].id, static_cast<int64_t>(k));
+    for (std::size_t k = 0; k < nn; ++k) sorted_grids_.emplace_back(grids_[k].id, static_cast<int64_t>(k));
     std::sort(sorted_grids_.begin(), sorted_grids_.end());
 
     // Elements: grid ids to indices, orientation, Nastran to morse order.
@@ -1388,8 +1340,8 @@ class Reader {
           const int64_t id = elem_grids_[r.offset + i];
           idx[i] = node_of(id);
           if (idx[i] < 0)
-            fail(r.loc, sc.name, "element ", r.id, " references ",
-                 is_spoint(id) ? "scalar point " : "undefined grid ", id);
+            fail(r.loc, sc.name, "element ", r.id, " references ", is_spoint(id) ? "scalar point " : "undefined grid ",
+                 id);
           used[idx[i]] = 1;
         }
         const int nv = vertices_per_element(r.type);
@@ -1398,13 +1350,12 @@ class Reader {
         const double det = corner_jacobian(sc.linear, xyz.data());
         const Ordering& o = ordering(r.type);
         const auto& perm = det < 0 ? o.mirrored : o.direct;
-        if (det < 0 && n_mirrored++ == 0)
-          first_mirrored = cat(sc.name, " ", r.id, " at ", at(r.loc));
+        if (det < 0 && n_mirrored++ == 0) first_mirrored = cat(sc.name, " ", r.id, " at ", at(r.loc));
         for (int i = 0; i < n; ++i) ordered[perm[i]] = idx[i];
         mesh.add_element(r.id, r.type, ordered.data());
         if (!psolids_.count(r.pid))
-          fail(r.loc, sc.name, "element ", r.id, " references PSOLID ", r.pid,
-               ", which is not defined", other_note(other_props_, r.pid, "property", "PSOLID"));
+          fail(r.loc, sc.name, "element ", r.id, " references PSOLID ", r.pid, ", which is not defined",
+               other_note(other_props_, r.pid, "property", "PSOLID"));
         pid_material.emplace(r.pid, -1);
       }
     }
@@ -1414,14 +1365,13 @@ class Reader {
       const PsolidRec& p = psolids_.at(pid);
       auto m = mat1s_.find(p.mid);
       if (m == mat1s_.end())
-        fail(p.loc, "PSOLID", "property ", pid, " references MAT1 ", p.mid,
-             ", which is not defined", other_note(other_mats_, p.mid, "material", "MAT1"));
+        fail(p.loc, "PSOLID", "property ", pid, " references MAT1 ", p.mid, ", which is not defined",
+             other_note(other_mats_, p.mid, "material", "MAT1"));
       Material mat;
       mat.name = cat("PSOLID_", pid);
       elastic(p.mid, m->second, &mat.E, &mat.nu);
       if (!m->second.has_rho)
-        notice(cat("RHO", p.mid), m->second.loc, "MAT1 ", p.mid,
-               " has no density (RHO blank):", " 0 is used");
+        notice(cat("RHO", p.mid), m->second.loc, "MAT1 ", p.mid, " has no density (RHO blank):", " 0 is used");
       if (m->second.rho < 0)
         fail(m->second.loc, "MAT1", "material ", p.mid, ": negative density RHO = ", m->second.rho);
       mat.rho = m->second.rho * wtmass;
@@ -1441,9 +1391,8 @@ class Reader {
       const std::uint8_t translations = mask & 7;
       if (mask >> 3) ++n_rotational;
       if (translations && translations != 7 && cd[k] != 0)
-        fail(loc, card, "grid ", mesh.node_ids[k],
-             " has its displacement coordinate system CD = ", cd[k], ", and components '",
-             component_string(mask), "' fix only part of its",
+        fail(loc, card, "grid ", mesh.node_ids[k], " has its displacement coordinate system CD = ", cd[k],
+             ", and components '", component_string(mask), "' fix only part of its",
              " translations, which would act along skewed directions in the basic system that",
              " morse works in: fix all of 1, 2, 3 or none");
       fixed[k] |= translations;
@@ -1454,12 +1403,10 @@ class Reader {
     for (const ListRec& r : spc_) {
       sids.insert(r.sid);
       for (const Range& range : r.ids)
-        n_scalar_spc +=
-            for_each_grid(range, r.loc, r.card, OnScalar::kIgnore, [&](int64_t k, int64_t id) {
-              if (r.zero)
-                fail(r.loc, r.card, "component 0 is for scalar points,", " but ", id, " is a grid");
-              constrain(k, r.mask, r.loc, r.card);
-            });
+        n_scalar_spc += for_each_grid(range, r.loc, r.card, OnScalar::kIgnore, [&](int64_t k, int64_t id) {
+          if (r.zero) fail(r.loc, r.card, "component 0 is for scalar points,", " but ", id, " is a grid");
+          constrain(k, r.mask, r.loc, r.card);
+        });
     }
     if (std::any_of(fixed.begin(), fixed.end(), [](std::uint8_t f) { return f != 0; }))
       mesh.fixed_dofs = std::move(fixed);
@@ -1468,8 +1415,7 @@ class Reader {
     for (const ListRec& r : set1_) {
       std::vector<int64_t>& set = mesh.node_sets[cat("SET1_", r.sid)];
       for (const Range& range : r.ids)
-        for_each_grid(range, r.loc, r.card, OnScalar::kError,
-                      [&](int64_t k, int64_t) { set.push_back(k); });
+        for_each_grid(range, r.loc, r.card, OnScalar::kError, [&](int64_t k, int64_t) { set.push_back(k); });
     }
     if (!aset_.empty()) {
       std::vector<int64_t>& set = mesh.node_sets["ASET"];
@@ -1512,11 +1458,9 @@ class Reader {
                " element uses: morse drops such grids (the mass would need a rigid element,",
                " which is not supported)");
         if (c.cid > 0 && !cords_.count(c.cid))
-          fail(c.loc, "CONM2", "mass element ", c.eid, " references undefined coordinate system ",
-               c.cid, " (CID)");
+          fail(c.loc, "CONM2", "mass element ", c.eid, " references undefined coordinate system ", c.cid, " (CID)");
         bool offset = false;
-        for (int j = 0; j < 3; ++j)
-          offset = offset || (c.cid == -1 ? c.x[j] != mesh.coords[3 * k + j] : c.x[j] != 0.0);
+        for (int j = 0; j < 3; ++j) offset = offset || (c.cid == -1 ? c.x[j] != mesh.coords[3 * k + j] : c.x[j] != 0.0);
         for (double i : c.inertia) offset = offset || i != 0.0;
         if (offset && n_offset++ == 0) offset_loc = c.loc;
         mesh.point_mass[k] += c.m * wtmass;
@@ -1544,12 +1488,11 @@ class Reader {
               " (the case control, which selects one, is not read)");
     }
     if (n_rotational)
-      summary(n_rotational, " constraint(s) on components 4-6 ignored (solid",
-              " grids have no rotations)");
+      summary(n_rotational, " constraint(s) on components 4-6 ignored (solid", " grids have no rotations)");
     if (n_scalar_spc) summary(n_scalar_spc, " constraint(s) on scalar points ignored");
     if (n_modal)
-      notice("QSET", qset_loc, "QSET/QSET1 define ", n_modal, " modal coordinates: use",
-             " -cb_num_fixed_modes ", n_modal);
+      notice("QSET", qset_loc, "QSET/QSET1 define ", n_modal, " modal coordinates: use", " -cb_num_fixed_modes ",
+             n_modal);
     if (n_offset)
       notice("CONM2", offset_loc, n_offset, " CONM2 card(s) have offsets or inertias; they act",
              " on rotations, which solid grids lack, and are ignored (only M is used)");
@@ -1567,8 +1510,7 @@ class Reader {
       if (!structural.empty())
         std::cerr << "morse: WARNING: " << path << ": elements not supported (their stiffness and"
                   << " mass are MISSING from the model): " << structural << '\n';
-      if (!other.empty())
-        std::cerr << "morse: notice: " << path << ": skipped cards: " << other << '\n';
+      if (!other.empty()) std::cerr << "morse: notice: " << path << ": skipped cards: " << other << '\n';
     }
     return mesh;
   }
@@ -1639,8 +1581,7 @@ Decimal decimal(double x, int p) {
   char buf[64];
   const std::to_chars_result r =
       p == 0 ? std::to_chars(buf, buf + sizeof buf, std::fabs(x), std::chars_format::scientific)
-             : std::to_chars(buf, buf + sizeof buf, std::fabs(x), std::chars_format::scientific,
-                             p - 1);
+             : std::to_chars(buf, buf + sizeof buf, std::fabs(x), std::chars_format::scientific, p - 1);
   Decimal dec;
   const char* s = buf;
   for (; s < r.ptr && *s != 'e'; ++s)
@@ -1693,8 +1634,7 @@ int render_real(const Decimal& dec, bool neg, int width, char* out) {
       *p++ = e < 0 ? '-' : '+';
       char exp[8];
       int n = 0;
-      for (int v = std::abs(e); n == 0 || v > 0; v /= 10)
-        exp[n++] = static_cast<char>('0' + v % 10);
+      for (int v = std::abs(e); n == 0 || v > 0; v /= 10) exp[n++] = static_cast<char>('0' + v % 10);
       while (n > 0) *p++ = exp[--n];
     }
     return static_cast<int>(p - out);
@@ -1743,8 +1683,7 @@ class CardWriter {
   std::string integer(int64_t v) const {
     std::string s = std::to_string(v);
     if (width_ && static_cast<int>(s.size()) > width_)
-      throw Error(cat("write_nastran: ", v, " does not fit a ", width_,
-                      "-column field; use the Large or Free format"));
+      throw Error(cat("write_nastran: ", v, " does not fit a ", width_, "-column field; use the Large or Free format"));
     return s;
   }
 
@@ -1801,14 +1740,12 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
                       " (elem_material = -1): Nastran needs a PSOLID and a MAT1 for every",
                       " element; assign the materials first"));
     if (m.elem_material[e] >= static_cast<int>(m.materials.size()))
-      throw Error(cat("write_nastran: element ", m.elem_ids[e], " has material index ",
-                      m.elem_material[e], " but the mesh has ", m.materials.size(), " materials"));
-    if (m.elem_ids[e] <= 0)
-      throw Error(cat("write_nastran: element id ", m.elem_ids[e], " is not positive"));
+      throw Error(cat("write_nastran: element ", m.elem_ids[e], " has material index ", m.elem_material[e],
+                      " but the mesh has ", m.materials.size(), " materials"));
+    if (m.elem_ids[e] <= 0) throw Error(cat("write_nastran: element id ", m.elem_ids[e], " is not positive"));
   }
   for (int64_t k = 0; k < nn; ++k)
-    if (m.node_ids[k] <= 0)
-      throw Error(cat("write_nastran: node id ", m.node_ids[k], " is not positive"));
+    if (m.node_ids[k] <= 0) throw Error(cat("write_nastran: node id ", m.node_ids[k], " is not positive"));
   if (!m.fixed_dofs.empty() && static_cast<int64_t>(m.fixed_dofs.size()) != nn)
     throw Error("write_nastran: fixed_dofs does not have one entry per node");
   if (!m.point_mass.empty() && static_cast<int64_t>(m.point_mass.size()) != nn)
@@ -1886,8 +1823,7 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
       for (int64_t id : m.elem_ids) eid = std::max(eid, id);
       for (int64_t k = 0; k < nn; ++k)
         if (m.point_mass[k] != 0.0)
-          w.card("CONM2",
-                 {w.integer(++eid), w.integer(m.node_ids[k]), "0", w.real(m.point_mass[k])});
+          w.card("CONM2", {w.integer(++eid), w.integer(m.node_ids[k]), "0", w.real(m.point_mass[k])});
     }
     os << "ENDDATA\n";
     os.flush();
@@ -1895,9 +1831,7 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
   }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
-  if (ec)
-    throw Error(
-        cat("write_nastran: cannot rename '", tmp, "' to '", path, "' (", ec.message(), ")"));
+  if (ec) throw Error(cat("write_nastran: cannot rename '", tmp, "' to '", path, "' (", ec.message(), ")"));
 }
 
 }  // namespace morse::mesh
@@ -1906,7 +1840,11 @@ namespace morse::mesh {
 
 PetscErrorCode NastranWriteOptions::set_from_options(MPI_Comm comm) {
   char fmt[32] = "", aset_buf[256] = "", spc_buf[256] = "";
-  PetscCall(PetscStrncpy(fmt, format == Format::Large ? "large" : format == Format::Small ? "small" : "free", sizeof fmt));
+  PetscCall(PetscStrncpy(fmt,
+                         format == Format::Large   ? "large"
+                         : format == Format::Small ? "small"
+                                                   : "free",
+                         sizeof fmt));
   PetscCall(PetscStrncpy(aset_buf, aset.c_str(), sizeof aset_buf));
   PetscCall(PetscStrncpy(spc_buf, spc.c_str(), sizeof spc_buf));
   auto& mat = material;
@@ -1914,11 +1852,12 @@ PetscErrorCode NastranWriteOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat.E, &mat.E, nullptr));
   PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat.nu, &mat.nu, nullptr));
   PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat.rho, &mat.rho, nullptr));
-  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt, fmt,
-                               sizeof fmt, nullptr));
+  PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt,
+                               fmt, sizeof fmt, nullptr));
   PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset_buf,
                                aset_buf, sizeof aset_buf, nullptr));
-  PetscCall(MorseOptionsString("-nastran_spc", "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
+  PetscCall(MorseOptionsString("-nastran_spc",
+                               "Node set whose translations are fixed by SPC1 123 (read back by -clamp '*BOUNDARY')",
                                "", spc_buf, spc_buf, sizeof spc_buf, nullptr));
   PetscOptionsEnd();
   const std::string f = fmt;

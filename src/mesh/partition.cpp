@@ -37,8 +37,10 @@ std::string check_node_set(const LocalMesh& lm, const std::string& name, const s
 void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std::int64_t>& ids,
                   const std::string& role) {
   std::string err;
-  if (lm->node_set_sizes.count(name)) err = cat(role, ": node set '", name, "' already exists in ", lm->mesh.source);
-  else if (ids.empty()) err = cat(role, ": node set '", name, "' has no node ids");
+  if (lm->node_set_sizes.count(name))
+    err = cat(role, ": node set '", name, "' already exists in ", lm->mesh.source);
+  else if (ids.empty())
+    err = cat(role, ": node set '", name, "' has no node ids");
   collective_check(lm->comm, err);
   std::vector<std::int64_t> sorted(ids);
   std::sort(sorted.begin(), sorted.end());
@@ -126,18 +128,15 @@ std::vector<int> partition_elements(const Mesh& m, int n_parts) {
   options[METIS_OPTION_SEED] = 7;
   options[METIS_OPTION_NUMBERING] = 0;
   std::vector<idx_t> epart(ne), npart(n_nodes);
-  int status = METIS_PartMeshDual(&n_el, &n_nodes, eptr.data(), eind.data(), nullptr, nullptr,
-                                  &ncommon, &nparts, nullptr, options, &objval, epart.data(),
-                                  npart.data());
-  MORSE_CHECK(status == METIS_OK, "METIS_PartMeshDual failed (status ", status, ") on ",
-              m.source);
+  int status = METIS_PartMeshDual(&n_el, &n_nodes, eptr.data(), eind.data(), nullptr, nullptr, &ncommon, &nparts,
+                                  nullptr, options, &objval, epart.data(), npart.data());
+  MORSE_CHECK(status == METIS_OK, "METIS_PartMeshDual failed (status ", status, ") on ", m.source);
   for (std::int64_t e = 0; e < ne; ++e) part[e] = static_cast<int>(epart[e]);
   return part;
 }
 
 void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<int>& owner, int r,
-                std::vector<std::int64_t>& g2l, std::vector<std::int64_t>& e2l,
-                detail::Packer& p) {
+                std::vector<std::int64_t>& g2l, std::vector<std::int64_t>& e2l, detail::Packer& p) {
   std::vector<std::int64_t> elems, nodes;
   for (std::int64_t e = 0; e < m.num_elements(); ++e)
     if (part[e] == r) elems.push_back(e);
@@ -346,8 +345,7 @@ Mesh gather_to_rank0(const LocalMesh& lm) {
     for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
     all.resize(displs[size - 1] + counts[size - 1]);
   }
-  MPI_Gatherv(p.buffer().data(), n, MPI_CHAR, all.data(), counts.data(), displs.data(), MPI_CHAR,
-              0, lm.comm);
+  MPI_Gatherv(p.buffer().data(), n, MPI_CHAR, all.data(), counts.data(), displs.data(), MPI_CHAR, 0, lm.comm);
   Mesh out;
   if (rank != 0) return out;
   out.units = m.units;
@@ -383,8 +381,7 @@ Mesh gather_to_rank0(const LocalMesh& lm) {
       econn[ge[e]].assign(conn.begin() + offs[e], conn.begin() + offs[e + 1]);
     }
   }
-  for (std::int64_t e = 0; e < lm.n_global_elements; ++e)
-    out.add_element(eid[e], etype[e], econn[e].data(), emat[e]);
+  for (std::int64_t e = 0; e < lm.n_global_elements; ++e) out.add_element(eid[e], etype[e], econn[e].data(), emat[e]);
   return out;
 }
 

@@ -27,15 +27,12 @@ constexpr int kMaxLattice = 30000;  // doubled lattice indices must fit in 16 bi
 
 // Hex20 in lattice terms: corner offsets in Gmsh order (xi, eta, zeta) and the vertex pairs of
 // the mid-edge nodes 8..19 (fe/element.hpp).
-constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
-                               {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
 constexpr int kEdge[12][2] = {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3},
                               {2, 6}, {3, 7}, {4, 5}, {4, 7}, {5, 6}, {6, 7}};
 
 /// Number of cells of size about h on a length (at least 1).
-int cells_for(double length, double h) {
-  return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9)));
-}
+int cells_for(double length, double h) { return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9))); }
 
 /// A piecewise uniform 1D lattice: breakpoints b[0] < b[1] < ... with cells[s] cells in segment
 /// s. Positions are evaluated on the doubled lattice (index 2i = vertex i, odd = mid-edge).
@@ -96,8 +93,8 @@ struct LatticePoint {
 };
 
 LatticePoint decode(std::uint64_t key) {
-  return {static_cast<int>(key >> 48), static_cast<int>((key >> 32) & 0xffff),
-          static_cast<int>((key >> 16) & 0xffff), static_cast<int>(key & 0xffff)};
+  return {static_cast<int>(key >> 48), static_cast<int>((key >> 32) & 0xffff), static_cast<int>((key >> 16) & 0xffff),
+          static_cast<int>(key & 0xffff)};
 }
 
 std::string check_spec(const StatorSpec& s, StatorLayout* out) {
@@ -114,34 +111,25 @@ std::string check_spec(const StatorSpec& s, StatorLayout* out) {
     return cat("-stator_h ", s.h, ": must be in [0.0001, 0.1] m (0 = size default)");
   if (s.n_thick < 0 || l.n_thick > 8)
     return cat("-stator_n_thick ", s.n_thick, ": must be in [1, 8] (0 = size default)");
-  const double lengths[] = {s.hub_bore_radius,
-                            s.hub_outer_radius,
-                            s.casing_inner_radius,
-                            s.casing_outer_radius,
-                            s.flange_outer_radius,
-                            s.flange_thickness,
-                            s.length,
-                            s.vane_thickness};
+  const double lengths[] = {
+      s.hub_bore_radius,  s.hub_outer_radius, s.casing_inner_radius, s.casing_outer_radius, s.flange_outer_radius,
+      s.flange_thickness, s.length,           s.vane_thickness};
   for (double v : lengths)
     if (!(std::isfinite(v) && v > 0)) return cat("stator: every dimension must be positive");
   if (!(s.vane_thickness < 0.1 * s.hub_outer_radius))
-    return cat("-stator_vane_thickness ", s.vane_thickness, ": must be positive and below ",
-               0.1 * s.hub_outer_radius, " m");
+    return cat("-stator_vane_thickness ", s.vane_thickness, ": must be positive and below ", 0.1 * s.hub_outer_radius,
+               " m");
   if (!(s.hub_bore_radius < s.hub_outer_radius && s.hub_outer_radius < s.casing_inner_radius &&
-        s.casing_inner_radius < s.casing_outer_radius &&
-        s.casing_outer_radius < s.flange_outer_radius))
+        s.casing_inner_radius < s.casing_outer_radius && s.casing_outer_radius < s.flange_outer_radius))
     return "stator: radii must increase: hub bore < hub outer < casing inner < casing outer < "
            "flange outer";
-  if (!(2 * s.flange_thickness < s.length))
-    return "stator: the two flanges must be thinner than the length";
+  if (!(2 * s.flange_thickness < s.length)) return "stator: the two flanges must be thinner than the length";
   const double a = 0.5 * s.vane_thickness;
-  const double gap_hub =
-      (2 * kPi / l.n_vanes - 2 * std::asin(a / s.hub_outer_radius)) * s.hub_outer_radius;
+  const double gap_hub = (2 * kPi / l.n_vanes - 2 * std::asin(a / s.hub_outer_radius)) * s.hub_outer_radius;
   if (!(gap_hub >= s.vane_thickness))
     return cat("-stator_n_vanes ", l.n_vanes, ": the vanes (", s.vane_thickness,
                " m thick) leave no room between them at the hub");
-  const double gap_casing =
-      (2 * kPi / l.n_vanes - 2 * std::asin(a / s.casing_inner_radius)) * s.casing_inner_radius;
+  const double gap_casing = (2 * kPi / l.n_vanes - 2 * std::asin(a / s.casing_inner_radius)) * s.casing_inner_radius;
   l.n_hub_gap = cells_for(gap_hub, l.h);
   l.n_casing_gap = cells_for(gap_casing, l.h);
   l.n_vane_span = cells_for(s.casing_inner_radius - s.hub_outer_radius, l.h);
@@ -151,13 +139,12 @@ std::string check_spec(const StatorSpec& s, StatorLayout* out) {
   const std::int64_t nz = l.n_vane_chord + 2 * l.n_thick;
   const std::int64_t jh = static_cast<std::int64_t>(l.n_vanes) * (l.n_thick + l.n_hub_gap);
   const std::int64_t jc = static_cast<std::int64_t>(l.n_vanes) * (l.n_thick + l.n_casing_gap);
-  const std::int64_t ne =
-      jh * l.n_thick * nz + jc * l.n_thick * nz + jc * l.n_flange * 2 * l.n_thick +
-      static_cast<std::int64_t>(l.n_vanes) * l.n_vane_span * l.n_thick * l.n_vane_chord;
-  if (nz > kMaxLattice || jh > kMaxLattice || jc > kMaxLattice || l.n_vane_span > kMaxLattice ||
-      ne > kMaxElements || l.n_vanes > kMaxLattice)
-    return cat("stator: -stator_h ", l.h, " with ", l.n_vanes, " vanes gives ", ne,
-               " elements, more than the ", kMaxElements, " allowed");
+  const std::int64_t ne = jh * l.n_thick * nz + jc * l.n_thick * nz + jc * l.n_flange * 2 * l.n_thick +
+                          static_cast<std::int64_t>(l.n_vanes) * l.n_vane_span * l.n_thick * l.n_vane_chord;
+  if (nz > kMaxLattice || jh > kMaxLattice || jc > kMaxLattice || l.n_vane_span > kMaxLattice || ne > kMaxElements ||
+      l.n_vanes > kMaxLattice)
+    return cat("stator: -stator_h ", l.h, " with ", l.n_vanes, " vanes gives ", ne, " elements, more than the ",
+               kMaxElements, " allowed");
   *out = l;
   return "";
 }
@@ -201,11 +188,10 @@ class Builder {
           for (int i = 0; i < l_.n_vane_span; ++i) add_hex(kVane0 + p, i, j, k, "vanes");
     make_sets();
     m_.source =
-        cat("stator ", s_.size, ": ", l_.n_vanes, " vanes ", s_.vane_thickness, " m thick, hub r ",
-            s_.hub_bore_radius, "-", s_.hub_outer_radius, ", casing r ", s_.casing_inner_radius,
-            "-", s_.casing_outer_radius, ", flanges to r ", s_.flange_outer_radius, " x ",
-            s_.flange_thickness, ", length ", s_.length, ", h ", l_.h, ", ", l_.n_thick,
-            " element(s) through the walls, hex20, ", s_.material.name);
+        cat("stator ", s_.size, ": ", l_.n_vanes, " vanes ", s_.vane_thickness, " m thick, hub r ", s_.hub_bore_radius,
+            "-", s_.hub_outer_radius, ", casing r ", s_.casing_inner_radius, "-", s_.casing_outer_radius,
+            ", flanges to r ", s_.flange_outer_radius, " x ", s_.flange_thickness, ", length ", s_.length, ", h ", l_.h,
+            ", ", l_.n_thick, " element(s) through the walls, hex20, ", s_.material.name);
     m_.normalize_sets();
     return std::move(m_);
   }
@@ -217,8 +203,7 @@ class Builder {
     if (block == kCasing) return make_key(kCasing, i, casing_.wrap(j), k);
     const int p = block - kVane0;
     if (i == 0) return make_key(kHub, 2 * hub_r_.n(), hub_.wrap(2 * p * hub_.per_pitch() + j), k);
-    if (i == 2 * l_.n_vane_span)
-      return make_key(kCasing, 0, casing_.wrap(2 * p * casing_.per_pitch() + j), k);
+    if (i == 2 * l_.n_vane_span) return make_key(kCasing, 0, casing_.wrap(2 * p * casing_.per_pitch() + j), k);
     return make_key(block, i, j, k);
   }
 
@@ -308,8 +293,7 @@ class Builder {
       }
     const double lugs[3] = {90, 210, 330};
     for (int a = 0; a < 3; ++a) {
-      const std::int64_t n =
-          nearest_on_ring(kCasing, 2 * casing_r_.n(), l_.n_thick, lugs[a] * kPi / 180);
+      const std::int64_t n = nearest_on_ring(kCasing, 2 * casing_r_.n(), l_.n_thick, lugs[a] * kPi / 180);
       m_.node_sets[cat("suspension", a + 1)] = {n};
       iface.push_back(n);
     }
@@ -326,9 +310,7 @@ class Builder {
 };
 
 /// Integral of sqrt(r^2 - s^2) ds over [-a, a].
-double chord_area(double r, double a) {
-  return a * std::sqrt(r * r - a * a) + r * r * std::asin(a / r);
-}
+double chord_area(double r, double a) { return a * std::sqrt(r * r - a * a) + r * r * std::asin(a / r); }
 
 }  // namespace
 
@@ -345,10 +327,9 @@ double stator_volume(const StatorSpec& s) {
   auto annulus = [](double r0, double r1) { return kPi * (r1 * r1 - r0 * r0); };
   const double hub = annulus(s.hub_bore_radius, s.hub_outer_radius) * s.length;
   const double casing = annulus(s.casing_inner_radius, s.casing_outer_radius) * s.length;
-  const double flanges =
-      2 * annulus(s.casing_outer_radius, s.flange_outer_radius) * s.flange_thickness;
-  const double vane = (chord_area(s.casing_inner_radius, a) - chord_area(s.hub_outer_radius, a)) *
-                      (s.length - 2 * s.flange_thickness);
+  const double flanges = 2 * annulus(s.casing_outer_radius, s.flange_outer_radius) * s.flange_thickness;
+  const double vane =
+      (chord_area(s.casing_inner_radius, a) - chord_area(s.hub_outer_radius, a)) * (s.length - 2 * s.flange_thickness);
   return hub + casing + flanges + l.n_vanes * vane;
 }
 
@@ -363,22 +344,19 @@ PetscErrorCode stator_spec_from_options(MPI_Comm comm, StatorSpec* spec) {
   PetscInt n_vanes = spec->n_vanes, n_thick = spec->n_thick;
   PetscReal h = spec->h, vane_thickness = spec->vane_thickness;
   PetscOptionsBegin(comm, nullptr, "morse mesh stator options", "");
-  PetscCall(MorseOptionsString("-stator_size",
-                               "Mesh size preset: default (100-200k DOFs) or coarse (~10k DOFs)",
-                               "", size, size, sizeof size, nullptr));
-  PetscCall(MorseOptionsInt("-stator_n_vanes", "Number of radial vanes (0 = 14, coarse: 8)", "",
-                            n_vanes, &n_vanes, nullptr));
-  PetscCall(MorseOptionsReal("-stator_h",
-                             "Target element edge length along the walls [m] (0 = from the size)",
-                             "", h, &h, nullptr));
-  PetscCall(MorseOptionsInt("-stator_n_thick", "Elements through each wall thickness (0 = 1)", "",
-                            n_thick, &n_thick, nullptr));
-  PetscCall(MorseOptionsReal("-stator_vane_thickness", "Vane thickness [m]", "", vane_thickness,
-                             &vane_thickness, nullptr));
+  PetscCall(MorseOptionsString("-stator_size", "Mesh size preset: default (100-200k DOFs) or coarse (~10k DOFs)", "",
+                               size, size, sizeof size, nullptr));
+  PetscCall(
+      MorseOptionsInt("-stator_n_vanes", "Number of radial vanes (0 = 14, coarse: 8)", "", n_vanes, &n_vanes, nullptr));
+  PetscCall(MorseOptionsReal("-stator_h", "Target element edge length along the walls [m] (0 = from the size)", "", h,
+                             &h, nullptr));
+  PetscCall(MorseOptionsInt("-stator_n_thick", "Elements through each wall thickness (0 = 1)", "", n_thick, &n_thick,
+                            nullptr));
+  PetscCall(
+      MorseOptionsReal("-stator_vane_thickness", "Vane thickness [m]", "", vane_thickness, &vane_thickness, nullptr));
   PetscOptionsEnd();
   PetscCheck(n_vanes >= 0 && n_vanes <= kMaxLattice, comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-stator_n_vanes %" PetscInt_FMT ": need at least 3 vanes (0 = size default)",
-             n_vanes);
+             "-stator_n_vanes %" PetscInt_FMT ": need at least 3 vanes (0 = size default)", n_vanes);
   PetscCheck(n_thick >= 0 && n_thick <= 8, comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-stator_n_thick %" PetscInt_FMT ": must be in [1, 8] (0 = size default)", n_thick);
   StatorSpec s = *spec;

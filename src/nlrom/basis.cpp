@@ -91,7 +91,8 @@ std::vector<double> linear_training(const std::vector<double>& M, const std::vec
     // (4/h^2 M + K) q1 = f0 + f1 - K q0 + M (4/h^2 q0 + 4/h v0)
     for (PetscInt i = 0; i < r; ++i) {
       double x = f0[i] + f1[i];
-      for (PetscInt j = 0; j < r; ++j) x += -K[i * r + j] * q[j] + M[i * r + j] * (4.0 / (dt * dt) * q[j] + 4.0 / dt * v[j]);
+      for (PetscInt j = 0; j < r; ++j)
+        x += -K[i * r + j] * q[j] + M[i * r + j] * (4.0 / (dt * dt) * q[j] + 4.0 / dt * v[j]);
       rhs[i] = x;
     }
     const char tr = 'T';  // A is row-major (symmetric anyway)
@@ -207,9 +208,10 @@ UMat pod(Mat X, PetscInt n, std::vector<double>* sigma) {
   sigma->resize(ns);
   for (PetscInt k = 0; k < ns; ++k) (*sigma)[k] = std::sqrt(std::max(0.0, w[ns - 1 - k]));
   // X^T X squares the condition number: below sqrt(eps) sigma_1 a singular value is round-off.
-  MORSE_CHECK((*sigma)[n - 1] > 1e-7 * (*sigma)[0], "POD: ", n, " modes asked but the snapshots span fewer "
-              "independent fields (sigma_", n, " / sigma_1 = ", (*sigma)[n - 1] / std::max((*sigma)[0], 1e-300),
-              " < 1e-7)");
+  MORSE_CHECK((*sigma)[n - 1] > 1e-7 * (*sigma)[0], "POD: ", n,
+              " modes asked but the snapshots span fewer "
+              "independent fields (sigma_",
+              n, " / sigma_1 = ", (*sigma)[n - 1] / std::max((*sigma)[0], 1e-300), " < 1e-7)");
   std::vector<double> U(static_cast<std::size_t>(ns) * n);
   for (PetscInt k = 0; k < n; ++k)
     for (PetscInt i = 0; i < ns; ++i) U[k * ns + i] = C[(ns - 1 - k) * ns + i] / (*sigma)[k];
@@ -284,8 +286,7 @@ std::vector<PetscInt> mgs(Mat M, Mat base, PetscInt b0, PetscInt nb, Mat cand, c
 
 std::vector<std::string> cb_labels(const cb::CBResult& c) {
   std::vector<std::string> l;
-  for (PetscInt j = 0; j < c.n_b; ++j)
-    l.push_back(cat("u_b node ", c.boundary_node_ids[j / 3], " ", "xyz"[j % 3]));
+  for (PetscInt j = 0; j < c.n_b; ++j) l.push_back(cat("u_b node ", c.boundary_node_ids[j / 3], " ", "xyz"[j % 3]));
   for (PetscInt j = 0; j < c.n_phi; ++j) l.push_back(cat("phi ", j + 1));
   return l;
 }
@@ -360,7 +361,8 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
     }
     std::vector<PetscInt> order(b.md_pairs.size());
     std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(), [&](PetscInt a, PetscInt c) { return b.md_weights[a] > b.md_weights[c]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](PetscInt a, PetscInt c) { return b.md_weights[a] > b.md_weights[c]; });
     if (s.random_derivatives) {  // Fisher–Yates with a portable generator: the same order everywhere
       std::mt19937 gen(s.derivative_seed);
       for (std::size_t k = order.size(); k > 1; --k) std::swap(order[k - 1], order[gen() % k]);

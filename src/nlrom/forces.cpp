@@ -74,8 +74,8 @@ CubicForce exact_forces(const fe::Svk& svk, Mat Phi) {
 }
 
 CubicForce step_forces(const fe::Svk& svk, Mat Phi, const StepSettings& s) {
-  MORSE_CHECK(s.displacement > 0 && std::isfinite(s.displacement),
-              "-step_displacement must be positive (got ", s.displacement, ")");
+  MORSE_CHECK(s.displacement > 0 && std::isfinite(s.displacement), "-step_displacement must be positive (got ",
+              s.displacement, ")");
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)Phi, &comm));
   StageTimer stage(comm, "Step");
@@ -163,7 +163,7 @@ CubicForce step_forces(const fe::Svk& svk, Mat Phi, const StepSettings& s) {
         const double cu = Brow(i, i, i)[p] * a * a * a, cv = Brow(j, j, j)[p] * b * b * b;
         const double aij = ((f1 + f2) / 2 - sq) / (a * b);
         Arow(i, j)[p] = aij;
-        const double s1 = (f1 - f2) / 2 - cu - cv;           // B_iij a^2 b + B_ijj a b^2
+        const double s1 = (f1 - f2) / 2 - cu - cv;            // B_iij a^2 b + B_ijj a b^2
         const double s2 = f3 - (sq - aij * a * b) - cu + cv;  // -B_iij a^2 b + B_ijj a b^2
         Brow(i, j, j)[p] = (s1 + s2) / (2 * a * b * b);
         Brow(i, i, j)[p] = (s1 - s2) / (2 * a * a * b);

@@ -1,5 +1,7 @@
 // The options of the offline stage (see morse/nlrom/nlrom.hpp: OfflineSettings) and the POD
 // filter of the reduced force.
+#include "morse/core/options.hpp"
+
 #include <petscsys.h>
 
 #include <string>
@@ -7,7 +9,6 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
-#include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
@@ -32,10 +33,14 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   if (set) b.snapshots = buf;
   PetscCall(MorseOptionsReal("-nlrom_training_tfinal", "Length of the linear training run of cbmd [s]", "",
                              b.training_tfinal, &b.training_tfinal, nullptr));
-  PetscCall(MorseOptionsReal("-nlrom_training_dt", "Time step of the training run [s] (default: 1/200 of the "
-                             "fastest load period)", "", b.training_dt, &b.training_dt, nullptr));
-  PetscCall(MorseOptionsReal("-nlrom_mgs_tol", "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
-                             "times its norm before projection", "", b.mgs_tol, &b.mgs_tol, nullptr));
+  PetscCall(MorseOptionsReal("-nlrom_training_dt",
+                             "Time step of the training run [s] (default: 1/200 of the "
+                             "fastest load period)",
+                             "", b.training_dt, &b.training_dt, nullptr));
+  PetscCall(MorseOptionsReal("-nlrom_mgs_tol",
+                             "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
+                             "times its norm before projection",
+                             "", b.mgs_tol, &b.mgs_tol, nullptr));
   const char* sel[] = {"weight", "random", "DerivativeSelection", "", nullptr};
   PetscEnum e = b.random_derivatives ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
   PetscCall(MorseOptionsEnum("-nlrom_derivative_selection",
@@ -52,10 +57,14 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   if (set) forces = buf;
   PetscCall(MorseOptionsReal("-step_displacement", "STEP: target displacement of the imposed fields [m]", "",
                              step_displacement, &step_displacement, nullptr));
-  PetscCall(MorseOptionsInt("-nlrom_filter_pod", "POD filtering of g_nl (eq. 38-39): number of filter vectors from the "
-                            "snapshots' nonlinear forces (0: none)", "", n_filter, &n_filter, nullptr));
-  PetscCall(MorseOptionsReal("-nlrom_damping_modal", "Modal damping ratio on the first -nlrom_damping_modes modes of "
-                             "the reduced model", "", damping_xi, &damping_xi, nullptr));
+  PetscCall(MorseOptionsInt("-nlrom_filter_pod",
+                            "POD filtering of g_nl (eq. 38-39): number of filter vectors from the "
+                            "snapshots' nonlinear forces (0: none)",
+                            "", n_filter, &n_filter, nullptr));
+  PetscCall(MorseOptionsReal("-nlrom_damping_modal",
+                             "Modal damping ratio on the first -nlrom_damping_modes modes of "
+                             "the reduced model",
+                             "", damping_xi, &damping_xi, nullptr));
   PetscCall(MorseOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "", damping_modes,
                             &damping_modes, nullptr));
   PetscOptionsEnd();

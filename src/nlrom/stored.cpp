@@ -53,7 +53,8 @@ std::vector<double> StoredModel::radial_row(const std::string& set, const std::s
   const double rho = std::hypot(x[0], x[1]);
   MORSE_CHECK(rho > 0, option, " ", set, ": node ", node_ids[k], " lies on the rotation axis (no radial direction)");
   std::vector<double> m(r());
-  for (std::size_t j = 0; j < r(); ++j) m[j] = (x[0] * basis[(j * nn + k) * 3] + x[1] * basis[(j * nn + k) * 3 + 1]) / rho;
+  for (std::size_t j = 0; j < r(); ++j)
+    m[j] = (x[0] * basis[(j * nn + k) * 3] + x[1] * basis[(j * nn + k) * 3 + 1]) / rho;
   return m;
 }
 
@@ -138,10 +139,13 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     auto& m = s.model;
     std::vector<hsize_t> d;
     bool ok = io::read_doubles(file, "/nlrom/M", &m.M, &d, &err) && d.size() == 2 && d[0] == d[1];
-    if (ok) m.r = static_cast<PetscInt>(d[0]);
-    else if (err.empty()) err = cat(file, ": /nlrom/M is not square");
-    ok = ok && io::read_doubles(file, "/nlrom/K", &m.K, &d, &err) && io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) &&
-         io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) && io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err) &&
+    if (ok)
+      m.r = static_cast<PetscInt>(d[0]);
+    else if (err.empty())
+      err = cat(file, ": /nlrom/M is not square");
+    ok = ok && io::read_doubles(file, "/nlrom/K", &m.K, &d, &err) &&
+         io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) && io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) &&
+         io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err) &&
          io::read_doubles(file, "/nlrom/basis", &s.basis, &d, &err) &&
          io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err) &&
          io::read_doubles(file, "/mesh/coordinates", &s.coords, &d, &err) &&
@@ -237,7 +241,8 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   out.write("/nlrom/C", rm.C, {R, R});
   out.write("/nlrom/A", rm.g.A, {static_cast<hsize_t>(n_quadratic(r)), R});
   out.write("/nlrom/B", rm.g.B, {static_cast<hsize_t>(n_cubic(r)), R});
-  out.attribute("/nlrom/A", "description", "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
+  out.attribute("/nlrom/A", "description",
+                "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
   out.attribute("/nlrom/B", "description",
                 "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
   std::vector<double> nodal;

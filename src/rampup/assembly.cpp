@@ -12,8 +12,7 @@
 
 namespace morse::rampup {
 
-std::vector<std::int64_t> resolve_nodes(const std::string& file,
-                                        const std::vector<std::string>& spec,
+std::vector<std::int64_t> resolve_nodes(const std::string& file, const std::vector<std::string>& spec,
                                         const std::string& who) {
   std::vector<std::int64_t> ids;
   auto add = [&](std::int64_t id) {
@@ -28,8 +27,8 @@ std::vector<std::int64_t> resolve_nodes(const std::string& file,
     std::vector<std::int64_t> set;
     std::vector<hsize_t> dims;
     std::string err;
-    MORSE_CHECK(io::read_ints(file, "/mesh/node_sets/" + item, &set, &dims, &err), who, ": ",
-                item, " is neither a node id nor a node set of ", file,
+    MORSE_CHECK(io::read_ints(file, "/mesh/node_sets/" + item, &set, &dims, &err), who, ": ", item,
+                " is neither a node id nor a node set of ", file,
                 " (/mesh/node_sets/<NAME>, written with the mesh; superelements of matrix input "
                 "have no sets: give node ids)");
     MORSE_CHECK(!set.empty(), who, ": node set ", item, " of ", file, " is empty");
@@ -38,22 +37,21 @@ std::vector<std::int64_t> resolve_nodes(const std::string& file,
   return ids;
 }
 
-StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes,
-                         double f_cut_hz, double damping_ratio) {
+StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes, double f_cut_hz,
+                         double damping_ratio) {
   const std::string who = cat("superelement ", se.source, ": ");
   const std::size_t n = static_cast<std::size_t>(se.n);
-  MORSE_CHECK(
-      se.n > 0 && se.n_b >= 0 && se.n_b <= se.n && se.K.size() == n * n && se.M.size() == n * n,
-      who, "inconsistent sizes (n = ", se.n, ", n_b = ", se.n_b, ")");
+  MORSE_CHECK(se.n > 0 && se.n_b >= 0 && se.n_b <= se.n && se.K.size() == n * n && se.M.size() == n * n, who,
+              "inconsistent sizes (n = ", se.n, ", n_b = ", se.n_b, ")");
   MORSE_CHECK(se.C.empty() || se.C.size() == n * n, who, "C is not n x n");
   MORSE_CHECK(se.dof_node.size() == static_cast<std::size_t>(se.n_b) &&
                   se.dof_component.size() == static_cast<std::size_t>(se.n_b),
               who, "needs a node and a component for each of its ", se.n_b, " boundary DOFs");
-  MORSE_CHECK(f_cut_hz > 0.0 && std::isfinite(f_cut_hz), who,
-              "the truncation frequency must be positive, got ", f_cut_hz, " Hz");
+  MORSE_CHECK(f_cut_hz > 0.0 && std::isfinite(f_cut_hz), who, "the truncation frequency must be positive, got ",
+              f_cut_hz, " Hz");
   for (std::int64_t c : clamped_nodes)
-    MORSE_CHECK(std::find(se.dof_node.begin(), se.dof_node.end(), c) != se.dof_node.end(), who,
-                "clamped node ", c, " is not a boundary (interface) node");
+    MORSE_CHECK(std::find(se.dof_node.begin(), se.dof_node.end(), c) != se.dof_node.end(), who, "clamped node ", c,
+                " is not a boundary (interface) node");
   StatorModes sm;
   sm.name = se.source;
   sm.f_cut_hz = f_cut_hz;
@@ -61,8 +59,7 @@ StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>
   std::vector<std::size_t> keep;
   for (std::size_t i = 0; i < n; ++i) {
     const bool clamped = static_cast<int>(i) < se.n_b &&
-                         std::find(clamped_nodes.begin(), clamped_nodes.end(), se.dof_node[i]) !=
-                             clamped_nodes.end();
+                         std::find(clamped_nodes.begin(), clamped_nodes.end(), se.dof_node[i]) != clamped_nodes.end();
     if (clamped) continue;
     keep.push_back(i);
     if (static_cast<int>(i) < se.n_b) {
@@ -128,21 +125,17 @@ StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>
 double default_cut_hz(const std::vector<RotorSpec>& rotors, double omega_max, double factor) {
   double top = 0.0;
   for (const RotorSpec& r : rotors) top = std::max(top, std::fabs(r.speed_ratio * omega_max));
-  MORSE_CHECK(top > 0.0 && factor > 0.0,
-              "stator truncation: the top spin speed and the factor must be positive");
+  MORSE_CHECK(top > 0.0 && factor > 0.0, "stator truncation: the top spin speed and the factor must be positive");
   return factor * top / (2.0 * M_PI);
 }
 
 // ------------------------------------------------------------------------------------------
 
-Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators,
-                   std::vector<Bearing> bearings)
+Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings)
     : rotors_(std::move(rotors)), stators_(std::move(stators)), bearings_(std::move(bearings)) {
   for (const StatorModes& s : stators_) {
-    MORSE_CHECK(s.omega.size() == static_cast<std::size_t>(s.n_modes) &&
-                    s.damping.size() == s.omega.size() &&
-                    s.phi.size() == s.dof_node.size() * s.omega.size() &&
-                    s.dof_component.size() == s.dof_node.size(),
+    MORSE_CHECK(s.omega.size() == static_cast<std::size_t>(s.n_modes) && s.damping.size() == s.omega.size() &&
+                    s.phi.size() == s.dof_node.size() * s.omega.size() && s.dof_component.size() == s.dof_node.size(),
                 "stator ", s.name, ": inconsistent modal basis sizes");
     stator_offset_.push_back(n_stator_);
     n_stator_ += s.n_modes;
@@ -163,8 +156,7 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
     for (int i = 0; i < m.n; ++i)
       for (int j = 0; j < m.n; ++j) {
         const std::size_t g = static_cast<std::size_t>(i) * m.n + j;
-        if (m.M[g] != 0.0 || m.K[g] != 0.0 || m.G[g] != 0.0 || m.C[g] != 0.0)
-          bw_ = std::max(bw_, std::abs(i - j));
+        if (m.M[g] != 0.0 || m.K[g] != 0.0 || m.G[g] != 0.0 || m.C[g] != 0.0) bw_ = std::max(bw_, std::abs(i - j));
       }
   const std::size_t ld = 2 * static_cast<std::size_t>(bw_) + 1;
   for (auto* b : {&bM_, &bC_, &bK_, &bG_}) b->assign(ld * n_rotor_, 0.0);
@@ -183,25 +175,22 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
     for (const Unbalance& u : rotors_[r].unbalances) {
       const auto d = std::find_if(rotors_[r].disks.begin(), rotors_[r].disks.end(),
                                   [&](const Disk& k) { return k.name == u.disk; });
-      unbalance_.push_back(
-          {rotor_dof(static_cast<int>(r), d->station, 0), rotors_[r].speed_ratio, u.me, u.phase});
+      unbalance_.push_back({rotor_dof(static_cast<int>(r), d->station, 0), rotors_[r].speed_ratio, u.me, u.phase});
     }
   }
   for (const Bearing& b : bearings_) {
     const std::string who = cat("bearing '", b.name, "': ");
-    MORSE_CHECK(b.rotor >= 0 && b.rotor < static_cast<int>(rotors_.size()), who, "rotor index ",
-                b.rotor, " is not in 0..", static_cast<int>(rotors_.size()) - 1);
+    MORSE_CHECK(b.rotor >= 0 && b.rotor < static_cast<int>(rotors_.size()), who, "rotor index ", b.rotor,
+                " is not in 0..", static_cast<int>(rotors_.size()) - 1);
     const int ns = static_cast<int>(rotors_[b.rotor].z.size());
-    MORSE_CHECK(b.station >= 0 && b.station < ns, who, "station ", b.station, " is not in 0..",
-                ns - 1, " of rotor '", rotors_[b.rotor].name, "'");
-    MORSE_CHECK(b.stator >= -1 && b.stator < static_cast<int>(stators_.size()), who,
-                "stator index ", b.stator, " is not -1 (ground) or in 0..",
-                static_cast<int>(stators_.size()) - 1);
+    MORSE_CHECK(b.station >= 0 && b.station < ns, who, "station ", b.station, " is not in 0..", ns - 1, " of rotor '",
+                rotors_[b.rotor].name, "'");
+    MORSE_CHECK(b.stator >= -1 && b.stator < static_cast<int>(stators_.size()), who, "stator index ", b.stator,
+                " is not -1 (ground) or in 0..", static_cast<int>(stators_.size()) - 1);
     const double kc[4] = {b.kxx, b.kyy, b.cxx, b.cyy};
     for (double v : kc)
-      MORSE_CHECK(v >= 0.0 && std::isfinite(v), who,
-                  "stiffness and damping must be finite and >= 0 (kxx ", b.kxx, ", kyy ", b.kyy,
-                  ", cxx ", b.cxx, ", cyy ", b.cyy, ")");
+      MORSE_CHECK(v >= 0.0 && std::isfinite(v), who, "stiffness and damping must be finite and >= 0 (kxx ", b.kxx,
+                  ", kyy ", b.kyy, ", cxx ", b.cxx, ", cyy ", b.cyy, ")");
     for (int d = 0; d < 2; ++d) {
       Coupling c;
       c.rotor_index = rotor_offset_[b.rotor] + 4 * b.station + d;
@@ -209,28 +198,24 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
       c.c = d == 0 ? b.cxx : b.cyy;
       if (b.stator >= 0) {
         const StatorModes& s = stators_[b.stator];
-        const std::vector<std::int64_t> nodes =
-            b.nodes.empty() ? std::vector<std::int64_t>{b.node} : b.nodes;
+        const std::vector<std::int64_t> nodes = b.nodes.empty() ? std::vector<std::int64_t>{b.node} : b.nodes;
         c.stator_offset = stator_offset_[b.stator];
         c.n_modes = s.n_modes;
         c.phi.assign(static_cast<std::size_t>(s.n_modes), 0.0);
         for (std::size_t q = 0; q < nodes.size(); ++q) {
           const std::int64_t node = nodes[q];
-          MORSE_CHECK(std::find(nodes.begin(), nodes.begin() + q, node) == nodes.begin() + q, who,
-                      "node ", node, " is listed twice");
-          const bool clamped = std::find(s.clamped_nodes.begin(), s.clamped_nodes.end(), node) !=
-                               s.clamped_nodes.end();
+          MORSE_CHECK(std::find(nodes.begin(), nodes.begin() + q, node) == nodes.begin() + q, who, "node ", node,
+                      " is listed twice");
+          const bool clamped = std::find(s.clamped_nodes.begin(), s.clamped_nodes.end(), node) != s.clamped_nodes.end();
           MORSE_CHECK(!clamped, who, "node ", node, " of stator ", s.name, " is clamped");
           std::size_t row = s.dof_node.size();
           for (std::size_t i = 0; i < s.dof_node.size(); ++i)
             if (s.dof_node[i] == node && s.dof_component[i] == d + 1) row = i;
-          MORSE_CHECK(row < s.dof_node.size(), who, "node ", node,
-                      " is not in the interface of stator ", s.name, " (no boundary DOF ",
-                      d == 0 ? "x" : "y", ")");
+          MORSE_CHECK(row < s.dof_node.size(), who, "node ", node, " is not in the interface of stator ", s.name,
+                      " (no boundary DOF ", d == 0 ? "x" : "y", ")");
           // The housing point is the mean of the nodes (equal weights).
           const double w = 1.0 / static_cast<double>(nodes.size());
-          for (int m = 0; m < s.n_modes; ++m)
-            c.phi[m] += w * s.phi[row * static_cast<std::size_t>(s.n_modes) + m];
+          for (int m = 0; m < s.n_modes; ++m) c.phi[m] += w * s.phi[row * static_cast<std::size_t>(s.n_modes) + m];
         }
       }
       couplings_.push_back(std::move(c));
@@ -238,8 +223,7 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
   }
 }
 
-void Assembly::apply(double cM, double cD, double cK, double omega, const double* x,
-                     double* y) const {
+void Assembly::apply(double cM, double cD, double cK, double omega, const double* x, double* y) const {
   for (int i = 0; i < n_stator_; ++i) y[i] = (cM + cD * cs_[i] + cK * om2_[i]) * x[i];
   const double* xr = x + n_stator_;
   double* yr = y + n_stator_;
@@ -287,8 +271,7 @@ AssembledMatrices Assembly::dense() const {
     A.C[i * N + i] = cs_[i];
     A.K[i * N + i] = om2_[i];
   }
-  const std::size_t ld = 2 * static_cast<std::size_t>(bw_) + 1,
-                    o = static_cast<std::size_t>(n_stator_);
+  const std::size_t ld = 2 * static_cast<std::size_t>(bw_) + 1, o = static_cast<std::size_t>(n_stator_);
   for (int j = 0; j < n_rotor_; ++j)
     for (int i = std::max(0, j - bw_); i < std::min(n_rotor_, j + bw_ + 1); ++i) {
       const std::size_t b = ld * j + static_cast<std::size_t>(bw_ + i - j), g = (o + i) * N + o + j;
@@ -306,8 +289,7 @@ AssembledMatrices Assembly::dense() const {
         const std::size_t sp = static_cast<std::size_t>(c.stator_offset + p);
         X[r * N + sp] -= a * c.phi[p];
         X[sp * N + r] -= a * c.phi[p];
-        for (int q = 0; q < c.n_modes; ++q)
-          X[sp * N + c.stator_offset + q] += a * c.phi[p] * c.phi[q];
+        for (int q = 0; q < c.n_modes; ++q) X[sp * N + c.stator_offset + q] += a * c.phi[p] * c.phi[q];
       }
     }
   }
@@ -354,9 +336,7 @@ std::vector<std::complex<double>> whirl_eigenvalues(const Assembly& a, double om
   const double s0 = kmax > 0.0 && mmax > 0.0 ? std::sqrt(kmax / mmax) : 1.0;
   // Column-major 2n x 2n: P = [0 I; -K/s0^2 -D/s0], Q = [I 0; 0 M].
   std::vector<double> P(n2 * n2, 0.0), Q(n2 * n2, 0.0);
-  auto at = [n2](std::vector<double>& X, std::size_t i, std::size_t j) -> double& {
-    return X[i + n2 * j];
-  };
+  auto at = [n2](std::vector<double>& X, std::size_t i, std::size_t j) -> double& { return X[i + n2 * j]; };
   for (std::size_t i = 0; i < n; ++i) {
     at(P, i, n + i) = 1.0;
     at(Q, i, i) = 1.0;
@@ -366,12 +346,11 @@ std::vector<std::complex<double>> whirl_eigenvalues(const Assembly& a, double om
       at(Q, n + i, n + j) = A.M[i * n + j];
     }
   }
-  PetscBLASInt N = static_cast<PetscBLASInt>(n2), one = 1,
-               lwork = static_cast<PetscBLASInt>(16 * n2), info = 0;
+  PetscBLASInt N = static_cast<PetscBLASInt>(n2), one = 1, lwork = static_cast<PetscBLASInt>(16 * n2), info = 0;
   std::vector<double> ar(n2), ai(n2), be(n2), work(static_cast<std::size_t>(lwork));
   double dummy = 0.0;
-  dggev_("N", "N", &N, P.data(), &N, Q.data(), &N, ar.data(), ai.data(), be.data(), &dummy, &one,
-         &dummy, &one, work.data(), &lwork, &info);
+  dggev_("N", "N", &N, P.data(), &N, Q.data(), &N, ar.data(), ai.data(), be.data(), &dummy, &one, &dummy, &one,
+         work.data(), &lwork, &info);
   MORSE_CHECK(info == 0, "whirl eigenvalues: LAPACK dggev failed (info = ", info, ")");
   std::vector<std::complex<double>> out;
   for (std::size_t k = 0; k < n2; ++k) {
@@ -380,16 +359,14 @@ std::vector<std::complex<double>> whirl_eigenvalues(const Assembly& a, double om
     const std::complex<double> l(s0 * ar[k] / be[k], s0 * ai[k] / be[k]);
     if (l.imag() >= 0.0) out.push_back(l);
   }
-  std::sort(out.begin(), out.end(),
-            [](const std::complex<double>& x, const std::complex<double>& y) {
-              return x.imag() != y.imag() ? x.imag() < y.imag() : x.real() < y.real();
-            });
+  std::sort(out.begin(), out.end(), [](const std::complex<double>& x, const std::complex<double>& y) {
+    return x.imag() != y.imag() ? x.imag() < y.imag() : x.real() < y.real();
+  });
   return out;
 }
 
 std::vector<std::complex<double>> unbalance_response(const Assembly& a, double omega, int rotor) {
-  MORSE_CHECK(rotor >= 0 && rotor < static_cast<int>(a.rotors().size()),
-              "unbalance response: no rotor ", rotor);
+  MORSE_CHECK(rotor >= 0 && rotor < static_cast<int>(a.rotors().size()), "unbalance response: no rotor ", rotor);
   const AssembledMatrices A = a.dense();
   const std::size_t n = static_cast<std::size_t>(A.n), n2 = 2 * n;
   const double s = a.rotors()[rotor].speed_ratio, w = s * omega;
@@ -397,8 +374,7 @@ std::vector<std::complex<double>> unbalance_response(const Assembly& a, double o
   std::vector<double> S(n2 * n2), b(n2, 0.0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
-      const double k = A.K[i * n + j] - w * w * A.M[i * n + j],
-                   d = w * (A.C[i * n + j] + omega * A.G[i * n + j]);
+      const double k = A.K[i * n + j] - w * w * A.M[i * n + j], d = w * (A.C[i * n + j] + omega * A.G[i * n + j]);
       S[i + n2 * j] = k;
       S[n + i + n2 * (n + j)] = k;
       S[i + n2 * (n + j)] = -d;
@@ -407,8 +383,7 @@ std::vector<std::complex<double>> unbalance_response(const Assembly& a, double o
   // Only this rotor's unbalances: F_x = m e w^2 e^{i phase}, F_y = -i F_x.
   for (const Unbalance& u : a.rotors()[rotor].unbalances) {
     const auto& disks = a.rotors()[rotor].disks;
-    const auto d =
-        std::find_if(disks.begin(), disks.end(), [&](const Disk& k) { return k.name == u.disk; });
+    const auto d = std::find_if(disks.begin(), disks.end(), [&](const Disk& k) { return k.name == u.disk; });
     const std::size_t ix = static_cast<std::size_t>(a.rotor_dof(rotor, d->station, 0));
     const double f = u.me * w * w;
     b[ix] += f * std::cos(u.phase);
@@ -419,8 +394,8 @@ std::vector<std::complex<double>> unbalance_response(const Assembly& a, double o
   PetscBLASInt N = static_cast<PetscBLASInt>(n2), one = 1, info = 0;
   std::vector<PetscBLASInt> piv(n2);
   LAPACKgesv_(&N, &one, S.data(), &N, piv.data(), b.data(), &N, &info);
-  MORSE_CHECK(info == 0, "unbalance response: the dynamic stiffness is singular at ", omega,
-              " rad/s (info = ", info, ")");
+  MORSE_CHECK(info == 0, "unbalance response: the dynamic stiffness is singular at ", omega, " rad/s (info = ", info,
+              ")");
   std::vector<std::complex<double>> X(n);
   for (std::size_t i = 0; i < n; ++i) X[i] = {b[i], b[n + i]};
   return X;

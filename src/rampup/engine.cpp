@@ -18,8 +18,8 @@ namespace morse::rampup {
 
 namespace {
 
-PetscErrorCode get_list(PetscOptionItems* PetscOptionsObject, const std::string& name,
-                        const char* help, std::vector<std::string>* out) {
+PetscErrorCode get_list(PetscOptionItems* PetscOptionsObject, const std::string& name, const char* help,
+                        std::vector<std::string>* out) {
   char* v[256];
   PetscInt n = 256;
   PetscBool set = PETSC_FALSE;
@@ -32,8 +32,8 @@ PetscErrorCode get_list(PetscOptionItems* PetscOptionsObject, const std::string&
   return PETSC_SUCCESS;
 }
 
-PetscErrorCode get_reals(PetscOptionItems* PetscOptionsObject, const std::string& name,
-                         const char* help, std::vector<double>* out, PetscBool* set) {
+PetscErrorCode get_reals(PetscOptionItems* PetscOptionsObject, const std::string& name, const char* help,
+                         std::vector<double>* out, PetscBool* set) {
   std::vector<PetscReal> v(4096);
   PetscInt n = static_cast<PetscInt>(v.size());
   PetscCall(MorseOptionsRealArray(name.c_str(), help, "", v.data(), &n, set));
@@ -41,8 +41,8 @@ PetscErrorCode get_reals(PetscOptionItems* PetscOptionsObject, const std::string
   return PETSC_SUCCESS;
 }
 
-PetscErrorCode get_string(PetscOptionItems* PetscOptionsObject, const std::string& name,
-                          const char* help, std::string* out, PetscBool* set) {
+PetscErrorCode get_string(PetscOptionItems* PetscOptionsObject, const std::string& name, const char* help,
+                          std::string* out, PetscBool* set) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscCall(MorseOptionsString(name.c_str(), help, "", out->c_str(), buf, sizeof buf, set));
   if (*set) *out = buf;
@@ -56,8 +56,7 @@ int station_of(const RotorSpec& r, double z, const std::string& who) {
     if (std::abs(r.z[i] - z) <= tol) return static_cast<int>(i);
   std::string list;
   for (double v : r.z) list += cat(list.empty() ? "" : ",", v);
-  throw Error(
-      cat(who, " z = ", z, " is not a station of rotor '", r.name, "' (stations: ", list, ")"));
+  throw Error(cat(who, " z = ", z, " is not a station of rotor '", r.name, "' (stations: ", list, ")"));
 }
 
 }  // namespace
@@ -69,35 +68,30 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
     if (o->error.empty()) o->error = msg;
   };
   std::vector<std::string> stators, rotors, bearings;
-  PetscOptionsBegin(comm, nullptr, "morse rampup options (run/engine.opts documents every one)",
-                    "");
+  PetscOptionsBegin(comm, nullptr, "morse rampup options (run/engine.opts documents every one)", "");
   PetscCall(get_string(PetscOptionsObject, "-out", "Output HDF5 file", &o->out, &set));
   PetscCall(get_list(PetscOptionsObject, "-rampup_stators",
                      "Stator superelements, by name (each: -rampup_stator_<name>_*)", &stators));
-  PetscCall(get_list(PetscOptionsObject, "-rampup_rotors",
-                     "Rotors, by name (each: -rampup_rotor_<name>_*)", &rotors));
-  PetscCall(get_list(PetscOptionsObject, "-rampup_bearings",
-                     "Bearings, by name (each: -rampup_bearing_<name>_*)", &bearings));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_rotors", "Rotors, by name (each: -rampup_rotor_<name>_*)", &rotors));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_bearings", "Bearings, by name (each: -rampup_bearing_<name>_*)",
+                     &bearings));
   for (const auto& s : stators) {
     StatorOptions so;
     so.name = s;
     const std::string p = "-rampup_stator_" + s + "_";
-    PetscCall(get_string(PetscOptionsObject, p + "file",
-                         "Superelement file (/rom of morse reduce or select)", &so.file, &set));
+    PetscCall(get_string(PetscOptionsObject, p + "file", "Superelement file (/rom of morse reduce or select)", &so.file,
+                         &set));
     if (!set) fail(cat("stator ", s, ": give its superelement file with ", p, "file"));
     PetscCall(get_list(PetscOptionsObject, p + "clamp",
-                       "Interface nodes clamped in the assembly: node ids or node sets",
-                       &so.clamp));
-    PetscCall(MorseOptionsReal(
-        (p + "cut_hz").c_str(),
-        "Truncation frequency of its modal basis [Hz] (default: -rampup_cut_factor x the top "
-        "spin frequency)",
-        "", so.cut_hz, &so.cut_hz, &set));
+                       "Interface nodes clamped in the assembly: node ids or node sets", &so.clamp));
+    PetscCall(MorseOptionsReal((p + "cut_hz").c_str(),
+                               "Truncation frequency of its modal basis [Hz] (default: -rampup_cut_factor x the top "
+                               "spin frequency)",
+                               "", so.cut_hz, &so.cut_hz, &set));
     if (set && !(so.cut_hz > 0)) fail(cat(p, "cut_hz ", so.cut_hz, " must be > 0"));
-    PetscCall(MorseOptionsReal(
-        (p + "damping_ratio").c_str(),
-        "Modal damping ratio of its modes (default: the superelement's C, 0 without)", "",
-        so.damping_ratio, &so.damping_ratio, &set));
+    PetscCall(MorseOptionsReal((p + "damping_ratio").c_str(),
+                               "Modal damping ratio of its modes (default: the superelement's C, 0 without)", "",
+                               so.damping_ratio, &so.damping_ratio, &set));
     if (set && !(so.damping_ratio >= 0 && so.damping_ratio < 1))
       fail(cat(p, "damping_ratio ", so.damping_ratio, " must be in [0, 1)"));
     o->stators.push_back(so);
@@ -106,28 +100,22 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
     RotorOptions ro;
     ro.name = r;
     const std::string p = "-rampup_rotor_" + r + "_";
-    PetscCall(get_reals(PetscOptionsObject, p + "z",
-                        "Station positions along the axis z [m], increasing", &ro.z, &set));
-    if (!set) fail(cat("rotor ", r, ": give its stations with ", p, "z z0,z1,..."));
-    PetscCall(get_reals(PetscOptionsObject, p + "d_outer",
-                        "Outer diameter [m]: one value, or one per element", &ro.d_outer, &set));
-    if (!set && ro.z.size() > 1)
-      fail(cat("rotor ", r, ": give its shaft diameter with ", p, "d_outer"));
-    PetscCall(get_reals(PetscOptionsObject, p + "d_inner",
-                        "Inner diameter [m] (hollow shaft): one value or one per element",
-                        &ro.d_inner, &set));
-    PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E,
-                               nullptr));
     PetscCall(
-        MorseOptionsReal((p + "nu").c_str(), "Poisson ratio", "", ro.mat.nu, &ro.mat.nu, nullptr));
-    PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho,
-                               nullptr));
-    PetscCall(MorseOptionsReal((p + "speed_ratio").c_str(),
-                               "Spin speed / driving speed (negative: counter-rotating)", "",
-                               ro.speed_ratio, &ro.speed_ratio, nullptr));
+        get_reals(PetscOptionsObject, p + "z", "Station positions along the axis z [m], increasing", &ro.z, &set));
+    if (!set) fail(cat("rotor ", r, ": give its stations with ", p, "z z0,z1,..."));
+    PetscCall(get_reals(PetscOptionsObject, p + "d_outer", "Outer diameter [m]: one value, or one per element",
+                        &ro.d_outer, &set));
+    if (!set && ro.z.size() > 1) fail(cat("rotor ", r, ": give its shaft diameter with ", p, "d_outer"));
+    PetscCall(get_reals(PetscOptionsObject, p + "d_inner",
+                        "Inner diameter [m] (hollow shaft): one value or one per element", &ro.d_inner, &set));
+    PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E, nullptr));
+    PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson ratio", "", ro.mat.nu, &ro.mat.nu, nullptr));
+    PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho, nullptr));
+    PetscCall(MorseOptionsReal((p + "speed_ratio").c_str(), "Spin speed / driving speed (negative: counter-rotating)",
+                               "", ro.speed_ratio, &ro.speed_ratio, nullptr));
     std::vector<double> ab;
-    PetscCall(get_reals(PetscOptionsObject, p + "rayleigh",
-                        "Rayleigh damping alpha [1/s],beta [s] of the rotor", &ab, &set));
+    PetscCall(
+        get_reals(PetscOptionsObject, p + "rayleigh", "Rayleigh damping alpha [1/s],beta [s] of the rotor", &ab, &set));
     if (set) {
       if (ab.size() != 2)
         fail(cat(p, "rayleigh needs two values alpha,beta"));
@@ -135,87 +123,70 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
         ro.alpha = ab[0], ro.beta = ab[1];
     }
     PetscCall(get_list(PetscOptionsObject, p + "disks",
-                       "Rigid disks on this rotor, by name (each: -rampup_disk_<name>_*)",
-                       &ro.disks));
+                       "Rigid disks on this rotor, by name (each: -rampup_disk_<name>_*)", &ro.disks));
     for (const auto& d : ro.disks) {
-      if (o->disks.count(d))
-        fail(cat("disk ", d, " is listed twice (disk names are unique across rotors)"));
+      if (o->disks.count(d)) fail(cat("disk ", d, " is listed twice (disk names are unique across rotors)"));
       DiskOptions dk;
       dk.name = d;
       const std::string q = "-rampup_disk_" + d + "_";
-      PetscCall(MorseOptionsReal((q + "z").c_str(), "Axial position [m] (a station of its rotor)",
-                                 "", dk.z, &dk.z, &set));
-      if (!set) fail(cat("disk ", d, ": give its position with ", q, "z"));
       PetscCall(
-          MorseOptionsReal((q + "mass").c_str(), "Mass [kg]", "", dk.mass, &dk.mass, nullptr));
-      PetscCall(MorseOptionsReal((q + "Ip").c_str(), "Polar moment of inertia [kg m^2]", "", dk.Ip,
-                                 &dk.Ip, nullptr));
-      PetscCall(MorseOptionsReal((q + "Id").c_str(), "Diametral moment of inertia [kg m^2]", "",
-                                 dk.Id, &dk.Id, nullptr));
+          MorseOptionsReal((q + "z").c_str(), "Axial position [m] (a station of its rotor)", "", dk.z, &dk.z, &set));
+      if (!set) fail(cat("disk ", d, ": give its position with ", q, "z"));
+      PetscCall(MorseOptionsReal((q + "mass").c_str(), "Mass [kg]", "", dk.mass, &dk.mass, nullptr));
+      PetscCall(MorseOptionsReal((q + "Ip").c_str(), "Polar moment of inertia [kg m^2]", "", dk.Ip, &dk.Ip, nullptr));
+      PetscCall(
+          MorseOptionsReal((q + "Id").c_str(), "Diametral moment of inertia [kg m^2]", "", dk.Id, &dk.Id, nullptr));
       if (!(dk.mass >= 0 && dk.Ip >= 0 && dk.Id >= 0))
         fail(cat("disk ", d, ": ", q, "mass, ", q, "Ip and ", q, "Id must be >= 0"));
       o->disks[d] = dk;
     }
     o->rotors.push_back(ro);
   }
-  PetscCall(get_list(PetscOptionsObject, "-rampup_unbalance", "Disks carrying an unbalance",
-                     &o->unbalance_disks));
-  PetscCall(get_reals(PetscOptionsObject, "-rampup_unbalance_me",
-                      "Unbalance mass x eccentricity [kg m], one per disk", &o->unbalance_me,
-                      &set));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_unbalance", "Disks carrying an unbalance", &o->unbalance_disks));
+  PetscCall(get_reals(PetscOptionsObject, "-rampup_unbalance_me", "Unbalance mass x eccentricity [kg m], one per disk",
+                      &o->unbalance_me, &set));
   PetscCall(get_reals(PetscOptionsObject, "-rampup_unbalance_phase_deg",
-                      "Unbalance angle from +x at t = 0 [deg], one per disk",
-                      &o->unbalance_phase_deg, &set));
+                      "Unbalance angle from +x at t = 0 [deg], one per disk", &o->unbalance_phase_deg, &set));
   for (const auto& b : bearings) {
     BearingOptions bo;
     bo.name = b;
     const std::string p = "-rampup_bearing_" + b + "_";
     PetscCall(get_string(PetscOptionsObject, p + "rotor", "Rotor", &bo.rotor, &set));
     if (!set) fail(cat("bearing ", b, ": give its rotor with ", p, "rotor"));
-    PetscCall(MorseOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "",
-                               bo.z, &bo.z, &set));
+    PetscCall(
+        MorseOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "", bo.z, &bo.z, &set));
     if (!set) fail(cat("bearing ", b, ": give its position with ", p, "z"));
-    PetscCall(get_string(PetscOptionsObject, p + "stator", "Stator it sits in, or ground",
-                         &bo.stator, &set));
+    PetscCall(get_string(PetscOptionsObject, p + "stator", "Stator it sits in, or ground", &bo.stator, &set));
     PetscCall(get_list(PetscOptionsObject, p + "nodes",
-                       "Housing nodes of the stator (ids or node sets; several: their mean)",
-                       &bo.nodes));
+                       "Housing nodes of the stator (ids or node sets; several: their mean)", &bo.nodes));
     PetscCall(get_reals(PetscOptionsObject, p + "k", "Stiffness kxx[,kyy] [N/m]", &bo.k, &set));
     if (!set) fail(cat("bearing ", b, ": give its stiffness with ", p, "k kxx[,kyy]"));
     PetscCall(get_reals(PetscOptionsObject, p + "c", "Damping cxx[,cyy] [N s/m]", &bo.c, &set));
-    if (bo.k.size() > 2 || bo.c.size() > 2)
-      fail(cat("bearing ", b, ": ", p, "k and ", p, "c take 1 or 2 values"));
+    if (bo.k.size() > 2 || bo.c.size() > 2) fail(cat("bearing ", b, ": ", p, "k and ", p, "c take 1 or 2 values"));
     o->bearings.push_back(bo);
   }
-  PetscCall(MorseOptionsReal("-rampup_rpm_max", "Top driving speed [rpm]", "", o->rpm_max,
-                             &o->rpm_max, nullptr));
-  PetscCall(MorseOptionsReal("-rampup_ramp_time", "Ramp duration 0 -> top speed [s]", "",
-                             o->ramp_time, &o->ramp_time, nullptr));
-  PetscCall(MorseOptionsBool("-rampup_constant_speed",
-                             "Constant top speed from t = 0 instead of the ramp", "", o->constant,
-                             &o->constant, nullptr));
+  PetscCall(MorseOptionsReal("-rampup_rpm_max", "Top driving speed [rpm]", "", o->rpm_max, &o->rpm_max, nullptr));
+  PetscCall(MorseOptionsReal("-rampup_ramp_time", "Ramp duration 0 -> top speed [s]", "", o->ramp_time, &o->ramp_time,
+                             nullptr));
+  PetscCall(MorseOptionsBool("-rampup_constant_speed", "Constant top speed from t = 0 instead of the ramp", "",
+                             o->constant, &o->constant, nullptr));
   PetscCall(MorseOptionsReal("-rampup_dt", "Time step [s]", "", o->dt, &o->dt, nullptr));
-  PetscCall(MorseOptionsReal("-rampup_t_final", "End time [s] (default: the ramp time)", "",
-                             o->t_final, &o->t_final, nullptr));
-  PetscCall(MorseOptionsReal("-rampup_alpha",
-                             "HHT alpha in [-1/3, 0] (0: Newmark average acceleration)", "",
-                             o->alpha, &o->alpha, nullptr));
-  PetscCall(MorseOptionsInt("-rampup_output_every", "Write every K-th step", "", o->output_every,
-                            &o->output_every, nullptr));
-  PetscCall(MorseOptionsReal(
-      "-rampup_cut_factor",
-      "Stator modal bases keep the modes below this factor x the top spin frequency", "",
-      o->cut_factor, &o->cut_factor, nullptr));
-  PetscCall(MorseOptionsBool(
-      "-rampup_dense", "Dense LU of the whole effective matrix every step (reference, O(n^3))", "",
-      o->dense, &o->dense, nullptr));
-  PetscCall(MorseOptionsBool("-rampup_write_matrices",
-                             "Write the assembled M, C, K, G to /rampup/matrices", "",
+  PetscCall(MorseOptionsReal("-rampup_t_final", "End time [s] (default: the ramp time)", "", o->t_final, &o->t_final,
+                             nullptr));
+  PetscCall(MorseOptionsReal("-rampup_alpha", "HHT alpha in [-1/3, 0] (0: Newmark average acceleration)", "", o->alpha,
+                             &o->alpha, nullptr));
+  PetscCall(
+      MorseOptionsInt("-rampup_output_every", "Write every K-th step", "", o->output_every, &o->output_every, nullptr));
+  PetscCall(MorseOptionsReal("-rampup_cut_factor",
+                             "Stator modal bases keep the modes below this factor x the top spin frequency", "",
+                             o->cut_factor, &o->cut_factor, nullptr));
+  PetscCall(MorseOptionsBool("-rampup_dense", "Dense LU of the whole effective matrix every step (reference, O(n^3))",
+                             "", o->dense, &o->dense, nullptr));
+  PetscCall(MorseOptionsBool("-rampup_write_matrices", "Write the assembled M, C, K, G to /rampup/matrices", "",
                              o->write_matrices, &o->write_matrices, nullptr));
-  PetscCall(get_string(
-      PetscOptionsObject, "-rampup_reference",
-      "A morse rampup file of the same engine: report seed 000's eq. 24 errors against it",
-      &o->reference, &set));
+  PetscCall(get_string(PetscOptionsObject, "-rampup_reference",
+                       "A morse rampup file of the same engine: report seed 000's eq. 24 errors against it",
+                       &o->reference, &set));
   PetscOptionsEnd();
   return PETSC_SUCCESS;
 }
@@ -251,39 +222,34 @@ IntegratorSettings RampupOptions::integrator() const {
 
 Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
   Engine e;
-  MORSE_CHECK(!o.rotors.empty(),
-              "morse rampup: no rotor: give -rampup_rotors NAME[,NAME] (see run/engine.opts)");
+  MORSE_CHECK(!o.rotors.empty(), "morse rampup: no rotor: give -rampup_rotors NAME[,NAME] (see run/engine.opts)");
   for (const auto& ro : o.rotors) {
     RotorSpec r;
     r.name = ro.name;
     r.z = ro.z;
     const std::size_t ne = r.z.size() > 1 ? r.z.size() - 1 : 0;
     const std::string p = "-rampup_rotor_" + ro.name + "_";
-    MORSE_CHECK(ro.d_outer.size() <= 1 || ro.d_outer.size() == ne, p, "d_outer has ",
-                ro.d_outer.size(), " values: give 1 or one per element (", ne, ")");
-    MORSE_CHECK(ro.d_inner.size() <= 1 || ro.d_inner.size() == ro.d_outer.size(), p, "d_inner has ",
-                ro.d_inner.size(), " values: give 1 or as many as ", p, "d_outer");
+    MORSE_CHECK(ro.d_outer.size() <= 1 || ro.d_outer.size() == ne, p, "d_outer has ", ro.d_outer.size(),
+                " values: give 1 or one per element (", ne, ")");
+    MORSE_CHECK(ro.d_inner.size() <= 1 || ro.d_inner.size() == ro.d_outer.size(), p, "d_inner has ", ro.d_inner.size(),
+                " values: give 1 or as many as ", p, "d_outer");
     for (std::size_t k = 0; k < ro.d_outer.size(); ++k)
-      r.sections.push_back({ro.d_outer[k],
-                            ro.d_inner.empty() ? 0.0 : ro.d_inner[ro.d_inner.size() == 1 ? 0 : k],
-                            ro.mat});
+      r.sections.push_back(
+          {ro.d_outer[k], ro.d_inner.empty() ? 0.0 : ro.d_inner[ro.d_inner.size() == 1 ? 0 : k], ro.mat});
     r.speed_ratio = ro.speed_ratio;
     r.rayleigh_alpha = ro.alpha;
     r.rayleigh_beta = ro.beta;
     for (const auto& dn : ro.disks) {
       const DiskOptions& d = o.disks.at(dn);
-      r.disks.push_back(
-          {dn, station_of(r, d.z, cat("-rampup_disk_", dn, "_z:")), d.mass, d.Ip, d.Id});
+      r.disks.push_back({dn, station_of(r, d.z, cat("-rampup_disk_", dn, "_z:")), d.mass, d.Ip, d.Id});
     }
     e.rotors.push_back(std::move(r));
   }
-  MORSE_CHECK(o.unbalance_me.size() == o.unbalance_disks.size(), "-rampup_unbalance_me has ",
-              o.unbalance_me.size(), " values for ", o.unbalance_disks.size(),
-              " disks of -rampup_unbalance");
-  MORSE_CHECK(
-      o.unbalance_phase_deg.empty() || o.unbalance_phase_deg.size() == o.unbalance_disks.size(),
-      "-rampup_unbalance_phase_deg has ", o.unbalance_phase_deg.size(), " values for ",
-      o.unbalance_disks.size(), " disks of -rampup_unbalance");
+  MORSE_CHECK(o.unbalance_me.size() == o.unbalance_disks.size(), "-rampup_unbalance_me has ", o.unbalance_me.size(),
+              " values for ", o.unbalance_disks.size(), " disks of -rampup_unbalance");
+  MORSE_CHECK(o.unbalance_phase_deg.empty() || o.unbalance_phase_deg.size() == o.unbalance_disks.size(),
+              "-rampup_unbalance_phase_deg has ", o.unbalance_phase_deg.size(), " values for ",
+              o.unbalance_disks.size(), " disks of -rampup_unbalance");
   for (std::size_t u = 0; u < o.unbalance_disks.size(); ++u) {
     const std::string& dn = o.unbalance_disks[u];
     auto it = std::find_if(o.rotors.begin(), o.rotors.end(), [&](const RotorOptions& r) {
@@ -291,10 +257,9 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
     });
     std::string all;
     for (const auto& kv : o.disks) all += (all.empty() ? "" : ", ") + kv.first;
-    MORSE_CHECK(it != o.rotors.end(), "-rampup_unbalance ", dn,
-                ": no such disk (disks: ", all.empty() ? "none" : all, ")");
-    MORSE_CHECK(o.unbalance_me[u] >= 0, "-rampup_unbalance_me ", o.unbalance_me[u],
-                " must be >= 0");
+    MORSE_CHECK(it != o.rotors.end(), "-rampup_unbalance ", dn, ": no such disk (disks: ", all.empty() ? "none" : all,
+                ")");
+    MORSE_CHECK(o.unbalance_me[u] >= 0, "-rampup_unbalance_me ", o.unbalance_me[u], " must be >= 0");
     const double ph = o.unbalance_phase_deg.empty() ? 0.0 : o.unbalance_phase_deg[u] * M_PI / 180.0;
     e.rotors[it - o.rotors.begin()].unbalances.push_back({dn, o.unbalance_me[u], ph});
   }
@@ -308,8 +273,7 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
                   "run/engine.opts, "
                   "run/rampup makes it)");
       auto se = read_superelement(so.file);
-      const auto clamp =
-          resolve_nodes(so.file, so.clamp, cat("-rampup_stator_", so.name, "_clamp"));
+      const auto clamp = resolve_nodes(so.file, so.clamp, cat("-rampup_stator_", so.name, "_clamp"));
       auto sm = stator_modes(se, clamp, so.cut_hz > 0 ? so.cut_hz : cut_default, so.damping_ratio);
       sm.name = so.name;
       e.stators.push_back(std::move(sm));
@@ -320,8 +284,7 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
     Bearing b;
     b.name = bo.name;
     const std::string p = "-rampup_bearing_" + bo.name + "_";
-    auto rit = std::find_if(e.rotors.begin(), e.rotors.end(),
-                            [&](const auto& r) { return r.name == bo.rotor; });
+    auto rit = std::find_if(e.rotors.begin(), e.rotors.end(), [&](const auto& r) { return r.name == bo.rotor; });
     MORSE_CHECK(rit != e.rotors.end(), p, "rotor ", bo.rotor, ": no such rotor (-rampup_rotors)");
     b.rotor = static_cast<int>(rit - e.rotors.begin());
     b.station = station_of(*rit, bo.z, p + "z:");
@@ -329,13 +292,10 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
       b.stator = -1;
       MORSE_CHECK(bo.nodes.empty(), p, "nodes: a bearing on the ground has no housing nodes");
     } else {
-      auto sit = std::find_if(o.stators.begin(), o.stators.end(),
-                              [&](const auto& s) { return s.name == bo.stator; });
-      MORSE_CHECK(sit != o.stators.end(), p, "stator ", bo.stator,
-                  ": no such stator (-rampup_stators) or ground");
+      auto sit = std::find_if(o.stators.begin(), o.stators.end(), [&](const auto& s) { return s.name == bo.stator; });
+      MORSE_CHECK(sit != o.stators.end(), p, "stator ", bo.stator, ": no such stator (-rampup_stators) or ground");
       b.stator = static_cast<int>(sit - o.stators.begin());
-      MORSE_CHECK(!bo.nodes.empty(), p, "nodes: give the housing nodes of the bearing in stator ",
-                  bo.stator);
+      MORSE_CHECK(!bo.nodes.empty(), p, "nodes: give the housing nodes of the bearing in stator ", bo.stator);
       b.nodes = resolve_nodes(sit->file, bo.nodes, p + "nodes");
     }
     b.kxx = bo.k.empty() ? 0.0 : bo.k[0];
@@ -347,8 +307,8 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
   return e;
 }
 
-void write_run(io::H5Output& out, const std::string& group, const RampupOptions& o, const Engine& e,
-               const Assembly& a, const IntegratorStats& st, const HistoryErrors& he) {
+void write_run(io::H5Output& out, const std::string& group, const RampupOptions& o, const Engine& e, const Assembly& a,
+               const IntegratorStats& st, const HistoryErrors& he) {
   std::string names;
   for (const auto& b : e.bearings) names += (names.empty() ? "" : ",") + b.name;
   out.attribute(group, "bearings", names);

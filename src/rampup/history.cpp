@@ -10,8 +10,8 @@
 
 namespace morse::rampup {
 
-History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
-               IntegratorStats* stats, const std::function<void(double)>& progress) {
+History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s, IntegratorStats* stats,
+               const std::function<void(double)>& progress) {
   History h;
   h.n_bearings = static_cast<int>(a.bearings().size());
   const std::size_t nb2 = 2 * a.bearings().size();
@@ -49,8 +49,7 @@ void write_history(io::H5Output& out, const std::string& group, const History& h
   out.write(group + "/omega", h.omega);
   out.attribute(group + "/omega", "description", "driving speed [rad/s]");
   const std::pair<const char*, const std::vector<double>*> sets[] = {
-      {"bearing_force", &h.force}, {"rotor_displacement", &h.rotor_disp},
-      {"stator_displacement", &h.stator_disp}};
+      {"bearing_force", &h.force}, {"rotor_displacement", &h.rotor_disp}, {"stator_displacement", &h.stator_disp}};
   const char* what[] = {
       "[time][bearing][x,y] bearing force F = k (u_rotor - u_housing) + c (v_rotor - v_housing) [N] "
       "(on the housing; the rotor gets -F)",
@@ -66,11 +65,9 @@ History read_history(const std::string& file, const std::string& group) {
   History h;
   std::vector<hsize_t> d;
   std::string err;
-  MORSE_CHECK(io::read_doubles(file, group + "/time", &h.t, &d, &err), err,
-              " (not a `morse rampup` file?)");
+  MORSE_CHECK(io::read_doubles(file, group + "/time", &h.t, &d, &err), err, " (not a `morse rampup` file?)");
   MORSE_CHECK(io::read_doubles(file, group + "/omega", &h.omega, &d, &err), err);
-  MORSE_CHECK(d.size() == 1 && d[0] == h.t.size(), file, ": ", group,
-              "/omega and /time differ in length");
+  MORSE_CHECK(d.size() == 1 && d[0] == h.t.size(), file, ": ", group, "/omega and /time differ in length");
   std::vector<double>* sets[] = {&h.force, &h.rotor_disp, &h.stator_disp};
   const char* names[] = {"bearing_force", "rotor_displacement", "stator_displacement"};
   for (int k = 0; k < 3; ++k) {
@@ -78,34 +75,33 @@ History read_history(const std::string& file, const std::string& group) {
     MORSE_CHECK(d.size() == 3 && d[0] == h.t.size() && d[2] == 2, file, ": ", group, "/", names[k],
                 " must be [time][bearing][2]");
     if (k == 0) h.n_bearings = static_cast<int>(d[1]);
-    MORSE_CHECK(static_cast<int>(d[1]) == h.n_bearings, file, ": ", group,
-                ": the bearing datasets disagree in size");
+    MORSE_CHECK(static_cast<int>(d[1]) == h.n_bearings, file, ": ", group, ": the bearing datasets disagree in size");
   }
   return h;
 }
 
 HistoryErrors compare(const History& h, const History& ref) {
-  MORSE_CHECK(h.n_bearings == ref.n_bearings, "the reference has ", ref.n_bearings,
-              " bearings, this run ", h.n_bearings, ": not the same engine model");
-  MORSE_CHECK(h.n_out() == ref.n_out() && h.n_out() > 0, "the reference has ", ref.n_out(),
-              " output times, this run ", h.n_out(),
-              ": run both with the same -rampup_dt, -rampup_t_final and -rampup_output_every");
+  MORSE_CHECK(h.n_bearings == ref.n_bearings, "the reference has ", ref.n_bearings, " bearings, this run ",
+              h.n_bearings, ": not the same engine model");
+  MORSE_CHECK(h.n_out() == ref.n_out() && h.n_out() > 0, "the reference has ", ref.n_out(), " output times, this run ",
+              h.n_out(), ": run both with the same -rampup_dt, -rampup_t_final and -rampup_output_every");
   for (std::size_t i = 0; i < h.n_out(); ++i)
-    MORSE_CHECK(std::abs(h.t[i] - ref.t[i]) <= 1e-9 * std::max(1.0, std::abs(ref.t[i])),
-                "output time ", i, " is ", h.t[i], " s here and ", ref.t[i],
+    MORSE_CHECK(std::abs(h.t[i] - ref.t[i]) <= 1e-9 * std::max(1.0, std::abs(ref.t[i])), "output time ", i, " is ",
+                h.t[i], " s here and ", ref.t[i],
                 " s in the reference: run both with the same time step and output interval");
   HistoryErrors e;
   const std::size_t nf = 2 * static_cast<std::size_t>(h.n_bearings);
   auto summary = [](const std::vector<double>& v, double* worst, double* best, double* mean) {
     *worst = 0.0, *best = std::numeric_limits<double>::infinity(), *mean = 0.0;
     for (double x : v) *worst = std::max(*worst, x), *best = std::min(*best, x), *mean += x;
-    if (v.empty()) *best = 0.0;
-    else *mean /= static_cast<double>(v.size());
+    if (v.empty())
+      *best = 0.0;
+    else
+      *mean /= static_cast<double>(v.size());
   };
   for (std::size_t f = 0; f < nf; ++f) {
     e.force.push_back(feature_error(h.force.data() + f, ref.force.data() + f, h.n_out(), nf));
-    e.displacement.push_back(
-        feature_error(h.rotor_disp.data() + f, ref.rotor_disp.data() + f, h.n_out(), nf));
+    e.displacement.push_back(feature_error(h.rotor_disp.data() + f, ref.rotor_disp.data() + f, h.n_out(), nf));
   }
   summary(e.force, &e.force_worst, &e.force_best, &e.force_mean);
   summary(e.displacement, &e.displacement_worst, &e.displacement_best, &e.displacement_mean);
@@ -128,13 +124,12 @@ void write_errors(io::H5Output& out, const std::string& group, const HistoryErro
   out.attribute(g, "description",
                 "seed 000 eq. 24: max over the run of |x - x_ref| / (max x_ref - min x_ref), per bearing "
                 "and direction (fractions, not %)");
-  const std::pair<const char*, double> sums[] = {
-      {"force_worst", he.force_worst},
-      {"force_best", he.force_best},
-      {"force_mean", he.force_mean},
-      {"displacement_worst", he.displacement_worst},
-      {"displacement_best", he.displacement_best},
-      {"displacement_mean", he.displacement_mean}};
+  const std::pair<const char*, double> sums[] = {{"force_worst", he.force_worst},
+                                                 {"force_best", he.force_best},
+                                                 {"force_mean", he.force_mean},
+                                                 {"displacement_worst", he.displacement_worst},
+                                                 {"displacement_best", he.displacement_best},
+                                                 {"displacement_mean", he.displacement_mean}};
   for (const auto& [k, v] : sums) out.attribute(g, k, v);
 }
 

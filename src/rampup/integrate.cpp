@@ -36,17 +36,14 @@ class StepSolver {
 // Dense LU of the whole matrix (reference path, O(n^3) per factorization).
 class DenseSolver : public StepSolver {
  public:
-  explicit DenseSolver(const Assembly& a)
-      : A_(a.dense()), n_(A_.n), S_(static_cast<std::size_t>(n_) * n_), piv_(n_) {}
+  explicit DenseSolver(const Assembly& a) : A_(a.dense()), n_(A_.n), S_(static_cast<std::size_t>(n_) * n_), piv_(n_) {}
   void factor(double cM, double cD, double cK, double omega) override {
     const std::size_t nn = static_cast<std::size_t>(n_) * n_;
     // Row-major S is column-major S^T: solve with "T".
-    for (std::size_t g = 0; g < nn; ++g)
-      S_[g] = cM * A_.M[g] + cD * (A_.C[g] + omega * A_.G[g]) + cK * A_.K[g];
+    for (std::size_t g = 0; g < nn; ++g) S_[g] = cM * A_.M[g] + cD * (A_.C[g] + omega * A_.G[g]) + cK * A_.K[g];
     PetscBLASInt n = n_, info = 0;
     LAPACKgetrf_(&n, &n, S_.data(), &n, piv_.data(), &info);
-    MORSE_CHECK(info == 0, "rampup: the effective matrix is singular (LAPACK getrf info = ", info,
-                ")");
+    MORSE_CHECK(info == 0, "rampup: the effective matrix is singular (LAPACK getrf info = ", info, ")");
   }
   void solve(const double* b, double* x) override {
     std::copy(b, b + n_, x);
@@ -70,11 +67,7 @@ class DenseSolver : public StepSolver {
 class CondensedSolver : public StepSolver {
  public:
   explicit CondensedSolver(const Assembly& a)
-      : a_(a),
-        N_(a.n_stator()),
-        R_(a.n_rotor()),
-        m_(static_cast<int>(a.couplings().size())),
-        bw_(a.rotor_bandwidth()) {
+      : a_(a), N_(a.n_stator()), R_(a.n_rotor()), m_(static_cast<int>(a.couplings().size())), bw_(a.rotor_bandwidth()) {
     ldab_ = 3 * bw_ + 1;
     ab_.resize(static_cast<std::size_t>(ldab_) * R_);
     piv_.resize(R_);
@@ -106,8 +99,7 @@ class CondensedSolver : public StepSolver {
         for (int l = 0; l < m_; ++l) {
           double s = 0.0;
           if (cp[j].stator_offset >= 0 && cp[j].stator_offset == cp[l].stator_offset)
-            for (int p = 0; p < cp[j].n_modes; ++p)
-              s += cp[j].phi[p] * cp[l].phi[p] * dinv_[cp[j].stator_offset + p];
+            for (int p = 0; p < cp[j].n_modes; ++p) s += cp[j].phi[p] * cp[l].phi[p] * dinv_[cp[j].stator_offset + p];
           F_[j + static_cast<std::size_t>(m_) * l] = s;  // column-major
         }
     }
@@ -125,14 +117,13 @@ class CondensedSolver : public StepSolver {
             cM * bM[b] + cD * (bC[b] + omega * bG[b]) + cK * bK[b];
       }
     for (int j = 0; j < m_; ++j)
-      ab_[static_cast<std::size_t>(2 * bw_) +
-          static_cast<std::size_t>(ldab_) * cp[j].rotor_index] += kb_[j];
+      ab_[static_cast<std::size_t>(2 * bw_) + static_cast<std::size_t>(ldab_) * cp[j].rotor_index] += kb_[j];
     PetscBLASInt n = R_, kl = bw_, info = 0;
     dgbtrf_(&n, &n, &kl, &kl, ab_.data(), &ldab_, piv_.data(), &info);
-    MORSE_CHECK(info == 0, "rampup: the rotor block of the ",
-                cD == 0.0 && cK == 0.0 ? "mass matrix is singular (a massless rotor DOF)"
-                                       : "effective matrix is singular",
-                " (LAPACK gbtrf info = ", info, ")");
+    MORSE_CHECK(
+        info == 0, "rampup: the rotor block of the ",
+        cD == 0.0 && cK == 0.0 ? "mass matrix is singular (a massless rotor DOF)" : "effective matrix is singular",
+        " (LAPACK gbtrf info = ", info, ")");
     if (m_ == 0) return;
     // X = A_r^-1 B_r^T Kb, then S_y = I + F Kb (I - B_r X).
     std::fill(X_.begin(), X_.end(), 0.0);
@@ -143,8 +134,7 @@ class CondensedSolver : public StepSolver {
     for (int l = 0; l < m_; ++l)
       for (int j = 0; j < m_; ++j)
         E[l + static_cast<std::size_t>(m_) * j] =
-            kb_[l] *
-            ((l == j ? 1.0 : 0.0) - X_[cp[l].rotor_index + static_cast<std::size_t>(R_) * j]);
+            kb_[l] * ((l == j ? 1.0 : 0.0) - X_[cp[l].rotor_index + static_cast<std::size_t>(R_) * j]);
     for (int i = 0; i < m_; ++i)
       for (int j = 0; j < m_; ++j) {
         double s = i == j ? 1.0 : 0.0;
@@ -154,9 +144,7 @@ class CondensedSolver : public StepSolver {
       }
     PetscBLASInt mm = m_;
     LAPACKgetrf_(&mm, &mm, Sy_.data(), &mm, pivy_.data(), &info);
-    MORSE_CHECK(info == 0,
-                "rampup: the condensed bearing system is singular (LAPACK getrf info = ", info,
-                ")");
+    MORSE_CHECK(info == 0, "rampup: the condensed bearing system is singular (LAPACK getrf info = ", info, ")");
   }
   void solve(const double* b, double* x) override {
     const auto& cp = a_.couplings();
@@ -166,8 +154,7 @@ class CondensedSolver : public StepSolver {
     double* r = x + N_;
     std::copy(br, br + R_, r1_.begin());
     PetscBLASInt n = R_, kl = bw_, one = 1, info = 0;
-    if (R_ > 0)
-      dgbtrs_("N", &n, &kl, &kl, &one, ab_.data(), &ldab_, piv_.data(), r1_.data(), &n, &info);
+    if (R_ > 0) dgbtrs_("N", &n, &kl, &kl, &one, ab_.data(), &ldab_, piv_.data(), r1_.data(), &n, &info);
     for (int j = 0; j < m_; ++j) {
       double s = 0.0;
       if (cp[j].stator_offset >= 0)
@@ -176,8 +163,7 @@ class CondensedSolver : public StepSolver {
       y_[j] = s;
     }
     for (int j = 0; j < m_; ++j)
-      for (int l = 0; l < m_; ++l)
-        y_[j] += F_[j + static_cast<std::size_t>(m_) * l] * kb_[l] * r1_[cp[l].rotor_index];
+      for (int l = 0; l < m_; ++l) y_[j] += F_[j + static_cast<std::size_t>(m_) * l] * kb_[l] * r1_[cp[l].rotor_index];
     if (m_ > 0) {
       PetscBLASInt mm = m_;
       LAPACKgetrs_("N", &mm, &one, Sy_.data(), &mm, pivy_.data(), y_.data(), &mm, &info);
@@ -209,10 +195,8 @@ class CondensedSolver : public StepSolver {
 
 IntegratorStats integrate(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
                           const std::function<void(const StepOutput&)>& callback) {
-  MORSE_CHECK(s.dt > 0.0 && std::isfinite(s.dt), "rampup: the time step must be positive, got ",
-              s.dt, " s");
-  MORSE_CHECK(s.alpha >= -1.0 / 3.0 - 1e-15 && s.alpha <= 0.0,
-              "rampup: HHT alpha must be in [-1/3, 0], got ", s.alpha);
+  MORSE_CHECK(s.dt > 0.0 && std::isfinite(s.dt), "rampup: the time step must be positive, got ", s.dt, " s");
+  MORSE_CHECK(s.alpha >= -1.0 / 3.0 - 1e-15 && s.alpha <= 0.0, "rampup: HHT alpha must be in [-1/3, 0], got ", s.alpha);
   MORSE_CHECK(s.output_every >= 1, "rampup: output_every must be >= 1, got ", s.output_every);
   MORSE_CHECK(std::isfinite(load.omega_max), "rampup: the top speed must be finite");
   MORSE_CHECK(load.kind == LoadCase::Kind::Constant || load.ramp_time > 0.0,
@@ -221,25 +205,22 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
   MORSE_CHECK(t_final > 0.0, "rampup: the final time must be positive (t_final or the ramp time)");
   const int n = a.n();
   const std::size_t nn = static_cast<std::size_t>(n);
-  MORSE_CHECK(s.x0.empty() || s.x0.size() == nn, "rampup: x0 has ", s.x0.size(),
-              " values, the model ", n);
-  MORSE_CHECK(s.v0.empty() || s.v0.size() == nn, "rampup: v0 has ", s.v0.size(),
-              " values, the model ", n);
+  MORSE_CHECK(s.x0.empty() || s.x0.size() == nn, "rampup: x0 has ", s.x0.size(), " values, the model ", n);
+  MORSE_CHECK(s.v0.empty() || s.v0.size() == nn, "rampup: v0 has ", s.v0.size(), " values, the model ", n);
   IntegratorStats st;
   double top = 0.0;
-  for (const RotorSpec& r : a.rotors())
-    top = std::max(top, std::fabs(r.speed_ratio * load.omega_max));
+  for (const RotorSpec& r : a.rotors()) top = std::max(top, std::fabs(r.speed_ratio * load.omega_max));
   if (top * s.dt > 2.0 * M_PI / 20.0)
     st.warnings.push_back(cat("dt = ", s.dt, " s gives ", 2.0 * M_PI / (top * s.dt),
                               " steps per revolution at the top spin speed (", top,
                               " rad/s); fewer than 20 loses accuracy"));
   const long steps = static_cast<long>(std::ceil(t_final / s.dt - 1e-9));
   const double h = s.dt, al = s.alpha, gam = 0.5 - al, bet = 0.25 * (1.0 - al) * (1.0 - al);
-  const double a0 = 1.0 / (bet * h * h), a1 = gam / (bet * h), a2 = 1.0 / (bet * h),
-               a3 = 0.5 / bet - 1.0, a4 = gam / bet - 1.0, a5 = h * (0.5 * gam / bet - 1.0);
+  const double a0 = 1.0 / (bet * h * h), a1 = gam / (bet * h), a2 = 1.0 / (bet * h), a3 = 0.5 / bet - 1.0,
+               a4 = gam / bet - 1.0, a5 = h * (0.5 * gam / bet - 1.0);
   std::vector<double> x(s.x0.empty() ? std::vector<double>(nn, 0.0) : s.x0),
-      v(s.v0.empty() ? std::vector<double>(nn, 0.0) : s.v0), acc(nn), f0(nn, 0.0), f1(nn), rhs(nn),
-      w(nn), tmp(nn), xn(nn);
+      v(s.v0.empty() ? std::vector<double>(nn, 0.0) : s.v0), acc(nn), f0(nn, 0.0), f1(nn), rhs(nn), w(nn), tmp(nn),
+      xn(nn);
   const std::size_t nb = 2 * a.bearings().size();
   std::vector<double> force(nb), rdisp(nb), sdisp(nb);
   std::unique_ptr<StepSolver> solver;

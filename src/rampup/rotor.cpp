@@ -9,8 +9,7 @@ namespace morse::rampup {
 
 double shear_coefficient(double nu, double d_outer, double d_inner) {
   MORSE_CHECK(d_outer > 0.0 && d_inner >= 0.0 && d_inner < d_outer,
-              "shaft section: need 0 <= d_inner < d_outer, got d_outer = ", d_outer,
-              " m, d_inner = ", d_inner, " m");
+              "shaft section: need 0 <= d_inner < d_outer, got d_outer = ", d_outer, " m, d_inner = ", d_inner, " m");
   const double m = d_inner / d_outer, s = (1.0 + m * m) * (1.0 + m * m);
   return 6.0 * (1.0 + nu) * s / ((7.0 + 6.0 * nu) * s + (20.0 + 12.0 * nu) * m * m);
 }
@@ -48,14 +47,12 @@ void add_outer(std::array<double, 64>& A, double w, const double* a, const doubl
 ShaftElement shaft_element(double L, double d_outer, double d_inner, const Material& mat) {
   MORSE_CHECK(L > 0.0 && std::isfinite(L), "shaft element: length must be positive, got ", L, " m");
   MORSE_CHECK(mat.E > 0.0, "shaft material: E must be positive, got ", mat.E, " Pa");
-  MORSE_CHECK(mat.nu > -1.0 && mat.nu < 0.5, "shaft material: nu must be in (-1, 0.5), got ",
-              mat.nu);
+  MORSE_CHECK(mat.nu > -1.0 && mat.nu < 0.5, "shaft material: nu must be in (-1, 0.5), got ", mat.nu);
   MORSE_CHECK(mat.rho >= 0.0, "shaft material: rho must be >= 0, got ", mat.rho, " kg/m^3");
   ShaftElement e;
   e.kappa = shear_coefficient(mat.nu, d_outer, d_inner);
   const double ro = d_outer / 2, ri = d_inner / 2;
-  const double A = M_PI * (ro * ro - ri * ri),
-               I = M_PI * (ro * ro * ro * ro - ri * ri * ri * ri) / 4.0;
+  const double A = M_PI * (ro * ro - ri * ri), I = M_PI * (ro * ro * ro * ro - ri * ri * ri * ri) / 4.0;
   const double G = mat.E / (2.0 * (1.0 + mat.nu));
   e.phi = 12.0 * mat.E * I / (e.kappa * G * A * L * L);
   const double phi = e.phi;
@@ -78,12 +75,10 @@ ShaftElement shaft_element(double L, double d_outer, double d_inner, const Mater
   const int ix[4] = {0, 3, 4, 7}, iy[4] = {1, 2, 5, 6};
   const double sy[4] = {1, -1, 1, -1};
   // 5-point Gauss–Legendre on [0, 1] (exact to degree 9; the mass integrands are degree 6).
-  const double gx[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                        0.9061798459386640};
-  const double gw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
-                        0.4786286704993665, 0.2369268850561891};
-  const double rhoA = mat.rho * A, rhoI = mat.rho * I, EI = mat.E * I, kGA = e.kappa * G * A,
-               rhoIp = 2.0 * mat.rho * I;
+  const double gx[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+  const double gw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
+                        0.2369268850561891};
+  const double rhoA = mat.rho * A, rhoI = mat.rho * I, EI = mat.E * I, kGA = e.kappa * G * A, rhoIp = 2.0 * mat.rho * I;
   for (int g = 0; g < 5; ++g) {
     const double xi = 0.5 * (gx[g] + 1.0), w = 0.5 * gw[g] * L;
     double Nw[4], dNw[4], Nb[4], dNb[4];
@@ -94,8 +89,7 @@ ShaftElement shaft_element(double L, double d_outer, double d_inner, const Mater
       Nb[a] = (b1 + 2 * b2 * xi + 3 * b3 * xi * xi + b3 * phi / 2) / L;
       dNb[a] = (2 * b2 + 6 * b3 * xi) / (L * L);
     }
-    double Ux[8] = {}, Uy[8] = {}, Tx[8] = {}, Ty[8] = {}, dTx[8] = {}, dTy[8] = {}, Gx[8] = {},
-           Gy[8] = {};
+    double Ux[8] = {}, Uy[8] = {}, Tx[8] = {}, Ty[8] = {}, dTx[8] = {}, dTy[8] = {}, Gx[8] = {}, Gy[8] = {};
     for (int a = 0; a < 4; ++a) {
       Ux[ix[a]] = Nw[a];
       Ty[ix[a]] = Nb[a];
@@ -136,14 +130,13 @@ RotorMatrices rotor_matrices(const RotorSpec& r) {
   const int ns = static_cast<int>(r.z.size());
   MORSE_CHECK(ns >= 1, who, "needs at least one station");
   for (int k = 0; k + 1 < ns; ++k)
-    MORSE_CHECK(r.z[k + 1] > r.z[k], who, "stations must be strictly increasing in z: z[", k,
-                "] = ", r.z[k], ", z[", k + 1, "] = ", r.z[k + 1], " m");
+    MORSE_CHECK(r.z[k + 1] > r.z[k], who, "stations must be strictly increasing in z: z[", k, "] = ", r.z[k], ", z[",
+                k + 1, "] = ", r.z[k + 1], " m");
   const std::size_t ne = static_cast<std::size_t>(ns - 1);
   MORSE_CHECK(ne == 0 || r.sections.size() == ne || r.sections.size() == 1, who, "needs ", ne,
               " shaft sections (one per element) or 1 (uniform), got ", r.sections.size());
   MORSE_CHECK(std::isfinite(r.speed_ratio), who, "speed ratio must be finite");
-  MORSE_CHECK(r.rayleigh_alpha >= 0.0 && r.rayleigh_beta >= 0.0, who,
-              "Rayleigh damping must be >= 0");
+  MORSE_CHECK(r.rayleigh_alpha >= 0.0 && r.rayleigh_beta >= 0.0, who, "Rayleigh damping must be >= 0");
   RotorMatrices m;
   m.n = 4 * ns;
   const std::size_t n = static_cast<std::size_t>(m.n);
@@ -170,10 +163,9 @@ RotorMatrices rotor_matrices(const RotorSpec& r) {
   for (const Disk& d : r.disks) {
     MORSE_CHECK(!d.name.empty(), who, "a disk has no name");
     MORSE_CHECK(names.insert(d.name).second, who, "two disks are named '", d.name, "'");
-    MORSE_CHECK(d.station >= 0 && d.station < ns, who, "disk '", d.name, "' is at station ",
-                d.station, ", not in 0..", ns - 1);
-    MORSE_CHECK(d.mass >= 0.0 && d.Ip >= 0.0 && d.Id >= 0.0, who, "disk '", d.name,
-                "': mass, Ip and Id must be >= 0");
+    MORSE_CHECK(d.station >= 0 && d.station < ns, who, "disk '", d.name, "' is at station ", d.station, ", not in 0..",
+                ns - 1);
+    MORSE_CHECK(d.mass >= 0.0 && d.Ip >= 0.0 && d.Id >= 0.0, who, "disk '", d.name, "': mass, Ip and Id must be >= 0");
     const std::size_t b = 4 * static_cast<std::size_t>(d.station);
     m.M[b * n + b] += d.mass;
     m.M[(b + 1) * n + b + 1] += d.mass;
@@ -183,14 +175,11 @@ RotorMatrices rotor_matrices(const RotorSpec& r) {
     m.G[(b + 3) * n + b + 2] -= d.Ip;
   }
   for (const Unbalance& u : r.unbalances) {
-    MORSE_CHECK(names.count(u.disk), who, "unbalance on disk '", u.disk,
-                "': the rotor has no such disk");
-    MORSE_CHECK(std::isfinite(u.me) && std::isfinite(u.phase), who, "unbalance on disk '", u.disk,
-                "' is not finite");
+    MORSE_CHECK(names.count(u.disk), who, "unbalance on disk '", u.disk, "': the rotor has no such disk");
+    MORSE_CHECK(std::isfinite(u.me) && std::isfinite(u.phase), who, "unbalance on disk '", u.disk, "' is not finite");
   }
   m.C.resize(n * n);
-  for (std::size_t i = 0; i < n * n; ++i)
-    m.C[i] = r.rayleigh_alpha * m.M[i] + r.rayleigh_beta * m.K[i];
+  for (std::size_t i = 0; i < n * n; ++i) m.C[i] = r.rayleigh_alpha * m.M[i] + r.rayleigh_beta * m.K[i];
   return m;
 }
 

@@ -70,8 +70,10 @@ std::string parse_load_table(const std::string& path, const cb::CBResult& cb, Ex
     ex->load[k][dof] = std::polar(amp, phase * M_PI / 180.0);
   }
   if (in.bad()) return cat("-select_ebr_load ", path, ": read error");
-  if (ex->freq_hz.empty()) return cat("-select_ebr_load ", path, ": no load line (freq_hz node component amplitude "
-                                      "[phase_deg])");
+  if (ex->freq_hz.empty())
+    return cat("-select_ebr_load ", path,
+               ": no load line (freq_hz node component amplitude "
+               "[phase_deg])");
   return {};
 }
 

@@ -1,3 +1,6 @@
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -5,8 +8,6 @@
 #include "morse/core/error.hpp"
 #include "morse/core/units.hpp"
 #include "morse/select/select.hpp"
-
-#include <petscblaslapack.h>
 
 namespace morse::select {
 
@@ -222,13 +223,26 @@ std::vector<double> scores(MPI_Comm comm, Method m, const InterfaceCoupling& ic,
     for (PetscInt r = 0; r < nb; ++r) p2 += (a[r] + g[r]) * (a[r] + g[r]);
     switch (m) {
       case Method::Frequency:
-      case Method::EIM: s[i] = p2; break;
-      case Method::VEIM: s[i] = p2 / l; break;
-      case Method::DEIM: s[i] = p2 / (l * l); break;
-      case Method::LPF: s[i] = dot(g, g, nb); break;
-      case Method::OMR: s[i] = l * dot(a, a, nb) - 2.0 * dot(a, c, nb) + dot(c, c, nb) / l; break;
-      case Method::CMSChi: s[i] = p2 / l; break;
-      default: break;
+      case Method::EIM:
+        s[i] = p2;
+        break;
+      case Method::VEIM:
+        s[i] = p2 / l;
+        break;
+      case Method::DEIM:
+        s[i] = p2 / (l * l);
+        break;
+      case Method::LPF:
+        s[i] = dot(g, g, nb);
+        break;
+      case Method::OMR:
+        s[i] = l * dot(a, a, nb) - 2.0 * dot(a, c, nb) + dot(c, c, nb) / l;
+        break;
+      case Method::CMSChi:
+        s[i] = p2 / l;
+        break;
+      default:
+        break;
     }
   }
   return s;
@@ -240,7 +254,8 @@ Selection truncate(Method m, const std::vector<double>& score, PetscInt count, d
   sel.ranking.resize(n);
   std::iota(sel.ranking.begin(), sel.ranking.end(), 0);
   if (m != Method::Frequency)
-    std::stable_sort(sel.ranking.begin(), sel.ranking.end(), [&](PetscInt x, PetscInt y) { return score[x] > score[y]; });
+    std::stable_sort(sel.ranking.begin(), sel.ranking.end(),
+                     [&](PetscInt x, PetscInt y) { return score[x] > score[y]; });
   double total = 0;
   for (double v : score) total += v;
   sel.cumulative.resize(n);

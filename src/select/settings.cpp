@@ -50,12 +50,13 @@ PetscErrorCode Settings::set_from_options(MPI_Comm comm) {
                              "(default: -cb_fmax / 2, seed 000's 2.5x vs 5x; or half the top candidate frequency)",
                              "", v.fmax_analysis_hz, &v.fmax_analysis_hz, nullptr));
   PetscCall(MorseOptionsInt("-select_fom_modes",
-                            "Number of full-model modes for the MAC check (default: all below the analysis cutoff)",
-                            "", v.fom_modes, &v.fom_modes, nullptr));
+                            "Number of full-model modes for the MAC check (default: all below the analysis cutoff)", "",
+                            v.fom_modes, &v.fom_modes, nullptr));
   PetscCall(MorseOptionsReal("-select_mac_threshold", "MAC above which a full-model mode counts as matched", "",
                              v.mac_threshold, &v.mac_threshold, nullptr));
-  PetscCall(MorseOptionsString("-select_rom_method", "Method whose superelement is written to /rom (default: the first)",
-                               "", buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-select_rom_method",
+                               "Method whose superelement is written to /rom (default: the first)", "", buf, buf,
+                               sizeof buf, &set));
   if (set) rom_method = buf;
   PetscInt nv = 256;
   PetscCall(MorseOptionsRealArray("-select_ebr_freq",
@@ -68,8 +69,8 @@ PetscErrorCode Settings::set_from_options(MPI_Comm comm) {
                                   vals, &nv, &set));
   if (set) v.ebr_amp.assign(vals, vals + nv), v.ebr_given = true;
   nv = 256;
-  PetscCall(MorseOptionsRealArray("-select_ebr_phase", "EBR phase per harmonic [deg] (uniform: no effect on the scores)",
-                                  "", vals, &nv, &set));
+  PetscCall(MorseOptionsRealArray(
+      "-select_ebr_phase", "EBR phase per harmonic [deg] (uniform: no effect on the scores)", "", vals, &nv, &set));
   if (set) v.ebr_phase.assign(vals, vals + nv), v.ebr_given = true;
   buf[0] = 0;
   PetscCall(MorseOptionsString("-select_ebr_load",
@@ -79,10 +80,11 @@ PetscErrorCode Settings::set_from_options(MPI_Comm comm) {
   if (set) v.ebr_load = buf;
   buf[0] = 0;
   PetscCall(PetscStrncpy(buf, v.imr_support.c_str(), sizeof buf));
-  PetscCall(MorseOptionsString("-select_imr_support",
-                               "IMR: full-system modes with the interface free, spring (-select_imr_support_stiffness) or "
-                               "clamped",
-                               "", buf, buf, sizeof buf, nullptr));
+  PetscCall(
+      MorseOptionsString("-select_imr_support",
+                         "IMR: full-system modes with the interface free, spring (-select_imr_support_stiffness) or "
+                         "clamped",
+                         "", buf, buf, sizeof buf, nullptr));
   v.imr_support = buf;
   PetscCall(MorseOptionsReal("-select_imr_support_stiffness", "IMR: spring stiffness on every boundary DOF", "",
                              v.imr_stiffness, &v.imr_stiffness, nullptr));
@@ -101,8 +103,10 @@ PetscErrorCode Settings::set_from_options(MPI_Comm comm) {
   v.names = methods;
   for (const auto& name : methods) {
     Method m;
-    if (!parse_method(name, &m)) bad(cat("-select_method ", name, ": unknown method (frequency lpf eim veim deim omr cmschi ebr imr)"));
-    else v.methods.push_back(m);
+    if (!parse_method(name, &m))
+      bad(cat("-select_method ", name, ": unknown method (frequency lpf eim veim deim omr cmschi ebr imr)"));
+    else
+      v.methods.push_back(m);
   }
   for (std::size_t i = 0; i < v.methods.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "morse/eigen/eigen.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/core/log.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/select/select.hpp"
 
@@ -108,8 +108,12 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
       if (modes.empty())
         for (PetscInt i = 0; i < n_sys; ++i) modes.push_back(i);
       for (auto m : modes)
-        MORSE_CHECK(m >= 0 && m < n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys,
-                    " system modes", s.fom_modes > 0 && s.imr_support == "free" ? "" : cat(" below ", f_an, " Hz"),
+        MORSE_CHECK(m >= 0 &&
+                            m<n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys, " system modes",
+                              s.fom_modes> 0 &&
+                            s.imr_support == "free"
+                        ? ""
+                        : cat(" below ", f_an, " Hz"),
                     ")");
       imr = std::make_unique<ImrData>(imr_data(comm, M, res, use->V.get(), use->omega2, modes, s.imr_shift));
     }

@@ -137,8 +137,8 @@ struct SortedIndex {
 // in (T, p)). Each c has up to n estimates; returns their mean and sets *dev to the largest
 // distance of an estimate from it.
 template <class RowTuples, class At>
-std::vector<double> potential_of(const std::vector<double>& C, std::size_t r, std::size_t n_out, RowTuples rows,
-                                 At at, double* dev) {
+std::vector<double> potential_of(const std::vector<double>& C, std::size_t r, std::size_t n_out, RowTuples rows, At at,
+                                 double* dev) {
   // Two passes over the estimates (mean, then spread) instead of storing them: they number
   // n_cubic(r) r, 54 MB at r = 79.
   std::vector<double> sum(n_out, 0.0);
@@ -434,12 +434,14 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
   const std::size_t r = static_cast<std::size_t>(m.r);
   const double h = s.dt;
   MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
-  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final, ")");
+  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
+              ")");
   Stats st;
   st.critical_dt = critical_step(m);
   MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h, " s is above the critical step of central differences, ",
               st.critical_dt, " s (2 / omega_max of the reduced model); use -sim_dt <= ", st.critical_dt);
-  for (const auto& l : loads) MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
+  for (const auto& l : loads)
+    MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   std::vector<double> P1, P2, P3;
   detail::step_operators(m, h, &P1, &P2, &P3);
   std::vector<std::vector<double>> lp;  // P3 p_l

@@ -38,7 +38,8 @@ std::vector<double> contact_normals(const ContactSettings& c) {
   if (c.obstacle == Obstacle::Plane) {
     const double* nv = c.plane.normal;
     const double nn = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
-    MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn, ")");
+    MORSE_CHECK(nn > 0 && std::abs(nn - 1.0) < 1e-12, "contact: the plane normal must be a unit vector (norm ", nn,
+                ")");
     for (std::size_t k = 0; k < n; ++k)
       for (int d = 0; d < 3; ++d) normal[3 * k + d] = nv[d];
   } else {

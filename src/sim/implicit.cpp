@@ -7,8 +7,8 @@
 // solved by Newton with a dense LU of J at every iteration (r x r); g and dg/dq come from one pass of
 // TangentKernel. The same convergence test
 // as fom, ||R|| <= rtol max(||inertia||, ||internal||, ||load||), or a correction at round-off
-// (max|dq| <= 1e-13 max|q|: stiff constraint modes put the floor of ||R|| above small rtol). With a basis that spans the
-// whole space this is the full model's discrete solution.
+// (max|dq| <= 1e-13 max|q|: stiff constraint modes put the floor of ||R|| above small rtol). With a basis that spans
+// the whole space this is the full model's discrete solution.
 #include <petscsys.h>
 
 #include <algorithm>
@@ -215,8 +215,8 @@ double TangentKernel::flops() const {
   const double rows = static_cast<double>(n_panels_ * detail::kPanel);
   // 2 flops per stored coefficient and use (the off-diagonal blocks of S are used twice), plus
   // the monomials and Euler's sum.
-  return 2.0 * static_cast<double>(Hp_.size()) + (symmetric_ ? 4.0 * static_cast<double>(S_.size()) - 2.0 * rows * detail::kPanel : 0.0) +
-         n2 + 4.0 * r * r;
+  return 2.0 * static_cast<double>(Hp_.size()) +
+         (symmetric_ ? 4.0 * static_cast<double>(S_.size()) - 2.0 * rows * detail::kPanel : 0.0) + n2 + 4.0 * r * r;
 }
 
 double TangentKernel::bytes() const { return 8.0 * static_cast<double>(Hp_.size() + S_.size()); }
@@ -226,8 +226,10 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   const std::size_t r = static_cast<std::size_t>(m.r);
   const double h = s.dt;
   MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
-  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final, ")");
-  for (const auto& l : loads) MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
+  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
+              ")");
+  for (const auto& l : loads)
+    MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   const bool nonlinear = !s.linear;
   MORSE_CHECK(s.contact.nodes.empty(), "simulate: contact needs the explicit scheme (-sim_scheme central)");
   MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
@@ -254,7 +256,8 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
     double big = 0.0, dev = 0.0;
     for (std::size_t i = 0; i < r; ++i)
       for (std::size_t j = 0; j < r; ++j)
-        big = std::max(big, std::abs(Jlin[i * r + j])), dev = std::max(dev, std::abs(Jlin[i * r + j] - Jlin[j * r + i]));
+        big = std::max(big, std::abs(Jlin[i * r + j])),
+        dev = std::max(dev, std::abs(Jlin[i * r + j] - Jlin[j * r + i]));
     symmetric = symmetric && dev <= 1e-12 * big;
   }
   auto load = [&](double t, std::vector<double>& f) {

@@ -27,74 +27,62 @@ PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
     if (o->error.empty()) o->error = e;
   };
   auto& c = o->casing;
-  PetscOptionsBegin(comm, nullptr,
-                    "morse contact (seed 003 §3.4: blade tip against a rigid obstacle)", "");
-  PetscCall(MorseOptionsString(
-      "-contact_set",
-      "Node set in contact (physical boundary nodes of the reduced model: its -boundary set "
-      "or a subset); no contact if not given",
-      "", buf, buf, sizeof buf, &set));
+  PetscOptionsBegin(comm, nullptr, "morse contact (seed 003 §3.4: blade tip against a rigid obstacle)", "");
+  PetscCall(MorseOptionsString("-contact_set",
+                               "Node set in contact (physical boundary nodes of the reduced model: its -boundary set "
+                               "or a subset); no contact if not given",
+                               "", buf, buf, sizeof buf, &set));
   if (set) o->set = buf;
   const char* obstacles[] = {"plane", "casing", "Obstacle", "", nullptr};
   PetscEnum ob = static_cast<PetscEnum>(o->obstacle);
-  PetscCall(MorseOptionsEnum(
-      "-contact_obstacle",
-      "casing (rigid, of revolution about z, two-lobe distortion growing in time: eq. 52-53) or "
-      "plane (-contact_plane_point, -contact_plane_normal)",
-      "", obstacles, ob, &ob, nullptr));
+  PetscCall(MorseOptionsEnum("-contact_obstacle",
+                             "casing (rigid, of revolution about z, two-lobe distortion growing in time: eq. 52-53) or "
+                             "plane (-contact_plane_point, -contact_plane_normal)",
+                             "", obstacles, ob, &ob, nullptr));
   o->obstacle = static_cast<Obstacle>(ob);
-  PetscCall(
-      MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
+  PetscCall(MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
   if (!(o->mu >= 0)) bad(cat("-contact_mu must be >= 0 (got ", o->mu, ")"));
   PetscInt n = 3;
-  PetscCall(MorseOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "",
-                                  o->plane.point, &n, &set));
+  PetscCall(
+      MorseOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
   if (set && n != 3) bad("-contact_plane_point needs 3 values x,y,z");
   o->plane_given = set;
   n = 3;
-  PetscCall(MorseOptionsRealArray("-contact_plane_normal",
-                                  "Normal of the plane x,y,z, pointing to the free side", "",
+  PetscCall(MorseOptionsRealArray("-contact_plane_normal", "Normal of the plane x,y,z, pointing to the free side", "",
                                   o->plane.normal, &n, &set));
   if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
   o->plane_given = o->plane_given || set;
-  const double nn =
-      std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
-                o->plane.normal[2] * o->plane.normal[2]);
+  const double nn = std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
+                              o->plane.normal[2] * o->plane.normal[2]);
   if (!(nn > 0))
     bad("-contact_plane_normal must not be zero");
   else
     for (double& x : o->plane.normal) x /= nn;
-  PetscCall(MorseOptionsReal("-casing_clearance",
-                             "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
+  PetscCall(MorseOptionsReal("-casing_clearance", "Casing: nominal radial clearance c0 [m] (seed: 0.356 mm)", "",
                              c.clearance, &c.clearance, nullptr));
   c.bump_height = 2.0 * c.clearance;
-  PetscCall(MorseOptionsReal("-casing_bump_height",
-                             "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)", "",
-                             c.bump_height, &c.bump_height, &bump_set));
+  PetscCall(MorseOptionsReal("-casing_bump_height", "Casing: height h_b of each lobe [m] (default 2 c0, as the seed)",
+                             "", c.bump_height, &c.bump_height, &bump_set));
   if (!bump_set) c.bump_height = 2.0 * c.clearance;
   PetscInt lobes = c.lobes;
-  PetscCall(MorseOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)",
-                            "", lobes, &lobes, nullptr));
+  PetscCall(MorseOptionsInt("-casing_lobes", "Casing: number of lobes of the distortion (seed: 2)", "", lobes, &lobes,
+                            nullptr));
   c.lobes = static_cast<int>(lobes);
-  PetscCall(MorseOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)",
-                             "", c.width, &c.width, nullptr));
-  PetscCall(MorseOptionsReal(
-      "-casing_alpha",
-      "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "", c.alpha,
-      &c.alpha, nullptr));
+  PetscCall(MorseOptionsReal("-casing_width", "Casing: angular width of each lobe [rad] (eq. 52)", "", c.width,
+                             &c.width, nullptr));
+  PetscCall(MorseOptionsReal("-casing_alpha",
+                             "Casing: growth rate of the distortion [1/s]; 0 = 99% of h_b at 20% of the run", "",
+                             c.alpha, &c.alpha, nullptr));
   PetscBool omega_set = PETSC_FALSE;
-  PetscCall(MorseOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)",
-                             "", c.omega, &c.omega, &omega_set));
+  PetscCall(MorseOptionsReal("-sim_omega", "Rotation speed of the blade [rad/s] (casing contact)", "", c.omega,
+                             &c.omega, &omega_set));
   o->omega_given = omega_set;
-  PetscCall(MorseOptionsReal("-sim_revolutions",
-                             "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
+  PetscCall(MorseOptionsReal("-sim_revolutions", "Run length in revolutions at -sim_omega (instead of -sim_tfinal)", "",
                              o->revolutions, &o->revolutions, &set));
-  if (set && !(o->revolutions > 0))
-    bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
+  if (set && !(o->revolutions > 0)) bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
   PetscOptionsEnd();
   if (!(c.clearance > 0)) bad(cat("-casing_clearance must be positive (got ", c.clearance, " m)"));
-  if (!(c.bump_height >= 0))
-    bad(cat("-casing_bump_height must be >= 0 (got ", c.bump_height, " m)"));
+  if (!(c.bump_height >= 0)) bad(cat("-casing_bump_height must be >= 0 (got ", c.bump_height, " m)"));
   if (c.lobes < 1) bad(cat("-casing_lobes must be >= 1 (got ", c.lobes, ")"));
   if (!(c.width > 0)) bad(cat("-casing_width must be positive (got ", c.width, " rad)"));
   if (!(c.alpha >= 0)) bad(cat("-casing_alpha must be >= 0 (got ", c.alpha, " 1/s)"));
@@ -103,64 +91,53 @@ PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
 
 PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
   SimOptions* o = this;
-  PetscCall(options::get_string_list(
-      comm, "-sim_monitor", "Node sets whose reconstructed displacements u = Phi q are written",
-      &o->monitor));
-  PetscCall(options::get_string_list(
-      comm, "-sim_cases",
-      "Independent load cases run one per rank; case c takes its loads from -c_load_sets, "
-      "-c_load_<SET>_* and writes <out>_c.h5",
-      &o->cases));
+  PetscCall(options::get_string_list(comm, "-sim_monitor",
+                                     "Node sets whose reconstructed displacements u = Phi q are written", &o->monitor));
+  PetscCall(
+      options::get_string_list(comm, "-sim_cases",
+                               "Independent load cases run one per rank; case c takes its loads from -c_load_sets, "
+                               "-c_load_<SET>_* and writes <out>_c.h5",
+                               &o->cases));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse simulate options", "");
-  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf,
-                               sizeof buf, &set));
+  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf, sizeof buf, &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(
-      MorseOptionsString("-out", "Output HDF5 file", "", o->out.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-out", "Output HDF5 file", "", o->out.c_str(), buf, sizeof buf, &set));
   if (set) o->out = buf;
-  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "",
-                             o->s.dt, &o->s.dt, nullptr));
-  PetscCall(
-      MorseOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step, printed)", "", o->s.dt, &o->s.dt,
+                             nullptr));
+  PetscCall(MorseOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
   o->tfinal_set = set;
   const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
   PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
-  PetscCall(MorseOptionsEnum(
-      "-sim_scheme",
-      "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
-      "Newton on the reduced model: morse fom's scheme, any dt)",
-      "", schemes, scheme, &scheme, nullptr));
+  PetscCall(MorseOptionsEnum("-sim_scheme",
+                             "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
+                             "Newton on the reduced model: morse fom's scheme, any dt)",
+                             "", schemes, scheme, &scheme, nullptr));
   o->s.scheme = static_cast<Scheme>(scheme);
-  PetscCall(MorseOptionsReal("-sim_newton_rtol",
-                             "trapezoidal: Newton tolerance relative to the force scale", "",
+  PetscCall(MorseOptionsReal("-sim_newton_rtol", "trapezoidal: Newton tolerance relative to the force scale", "",
                              o->s.newton_rtol, &o->s.newton_rtol, nullptr));
   PetscInt max_it = o->s.newton_max_it;
-  PetscCall(MorseOptionsInt("-sim_newton_max_it",
-                            "trapezoidal: Newton iterations per step before the run stops", "",
+  PetscCall(MorseOptionsInt("-sim_newton_max_it", "trapezoidal: Newton iterations per step before the run stops", "",
                             max_it, &max_it, nullptr));
   o->s.newton_max_it = static_cast<int>(max_it);
   const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
   PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
-  PetscCall(MorseOptionsEnum(
-      "-sim_kernel",
-      "Nonlinear force in the time loop: folded (P3 [A;B] times the monomials), potential "
-      "(symmetric energy coefficients, ~4 times fewer bytes; exact or STEP tensors), auto "
-      "(potential when A, B derive from a potential and the folded matrix exceeds 12 MB)",
-      "", layouts, layout, &layout, nullptr));
+  PetscCall(MorseOptionsEnum("-sim_kernel",
+                             "Nonlinear force in the time loop: folded (P3 [A;B] times the monomials), potential "
+                             "(symmetric energy coefficients, ~4 times fewer bytes; exact or STEP tensors), auto "
+                             "(potential when A, B derive from a potential and the folded matrix exceeds 12 MB)",
+                             "", layouts, layout, &layout, nullptr));
   o->s.kernel = static_cast<KernelLayout>(layout);
-  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear,
-                             &o->linear, nullptr));
-  PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every,
-                            nullptr));
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
+  PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-sim_snapshots",
-      "A morse fom file: write the full field u = Phi q (and v) at its snapshot times and "
-      "on its DOF map (/sim/snapshots)",
-      "", buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-sim_snapshots",
+                               "A morse fom file: write the full field u = Phi q (and v) at its snapshot times and "
+                               "on its DOF map (/sim/snapshots)",
+                               "", buf, buf, sizeof buf, &set));
   if (set) o->snapshots = buf;
   std::vector<PetscReal> v(4096);
   const char* names[2] = {"-sim_q0", "-sim_v0"};
@@ -174,14 +151,12 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
   }
   PetscInt n3 = 3;
   PetscReal u3[3] = {0, 0, 0};
-  PetscCall(MorseOptionsRealArray(
-      "-sim_v0_uniform",
-      "Initial velocity vx,vy,vz of every node [m/s], fitted on the basis by least squares "
-      "(for impact tests; the fit residual is printed)",
-      "", u3, &n3, &set));
+  PetscCall(MorseOptionsRealArray("-sim_v0_uniform",
+                                  "Initial velocity vx,vy,vz of every node [m/s], fitted on the basis by least squares "
+                                  "(for impact tests; the fit residual is printed)",
+                                  "", u3, &n3, &set));
   if (set) {
-    if (n3 != 3 && o->contact.error.empty())
-      o->contact.error = "-sim_v0_uniform needs 3 values vx,vy,vz";
+    if (n3 != 3 && o->contact.error.empty()) o->contact.error = "-sim_v0_uniform needs 3 values vx,vy,vz";
     o->v0_uniform.assign(u3, u3 + 3);
   }
   PetscOptionsEnd();
@@ -220,8 +195,7 @@ void SimOptions::resolve(const nlrom::StoredModel& sm, double* v0_residual) {
 std::string case_path(const std::string& out, const std::string& c) {
   auto dot = out.rfind('.');
   auto slash = out.rfind('/');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
-    return out + "_" + c + ".h5";
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return out + "_" + c + ".h5";
   return out.substr(0, dot) + "_" + c + out.substr(dot);
 }
 
@@ -230,45 +204,36 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse sweep options", "");
-  PetscCall(MorseOptionsString(
-      "-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "", buf,
-      buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "",
+                               buf, buf, sizeof buf, &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-out", "Sweep file (HDF5), rewritten after every speed; resumed if it exists", "",
-      o->out.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-out", "Sweep file (HDF5), rewritten after every speed; resumed if it exists", "",
+                               o->out.c_str(), buf, sizeof buf, &set));
   if (set) o->out = buf;
-  PetscCall(MorseOptionsReal("-sweep_omega_min", "Lowest rotation speed [rad/s]", "", o->omega_min,
-                             &o->omega_min, nullptr));
-  PetscCall(MorseOptionsReal("-sweep_omega_max", "Highest rotation speed [rad/s]", "", o->omega_max,
-                             &o->omega_max, nullptr));
-  PetscCall(MorseOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step,
-                             &o->omega_step, nullptr));
-  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt,
-                             &o->dt, nullptr));
-  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear,
-                             &o->linear, nullptr));
+  PetscCall(
+      MorseOptionsReal("-sweep_omega_min", "Lowest rotation speed [rad/s]", "", o->omega_min, &o->omega_min, nullptr));
+  PetscCall(
+      MorseOptionsReal("-sweep_omega_max", "Highest rotation speed [rad/s]", "", o->omega_max, &o->omega_max, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step, &o->omega_step, nullptr));
+  PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt, &o->dt, nullptr));
+  PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
   buf[0] = 0;
-  PetscCall(MorseOptionsString("-sweep_monitor",
-                               "Node set of one node whose radial displacement is recorded", "",
+  PetscCall(MorseOptionsString("-sweep_monitor", "Node set of one node whose radial displacement is recorded", "",
                                o->monitor.c_str(), buf, sizeof buf, &set));
   if (set) o->monitor = buf;
-  PetscCall(MorseOptionsReal("-sweep_spectrum_fmax", "Highest frequency of the spectrum [Hz]", "",
-                             o->fmax, &o->fmax, nullptr));
-  PetscCall(MorseOptionsInt("-sweep_spectrum_bins",
-                            "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "", o->bins,
-                            &o->bins, nullptr));
-  PetscCall(MorseOptionsInt("-sweep_batch",
-                            "Speeds advanced together per rank (one pass of the cubic tensor)", "",
+  PetscCall(MorseOptionsReal("-sweep_spectrum_fmax", "Highest frequency of the spectrum [Hz]", "", o->fmax, &o->fmax,
+                             nullptr));
+  PetscCall(MorseOptionsInt("-sweep_spectrum_bins", "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "",
+                            o->bins, &o->bins, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
                             o->batch, &o->batch, nullptr));
-  PetscCall(MorseOptionsBool(
-      "-sweep_batched",
-      "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
-      "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
-      "", o->batched, &o->batched, nullptr));
-  PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "",
-                             o->restart, &o->restart, nullptr));
+  PetscCall(MorseOptionsBool("-sweep_batched",
+                             "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
+                             "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
+                             "", o->batched, &o->batched, nullptr));
+  PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
+                             &o->restart, nullptr));
   PetscOptionsEnd();
   return o->contact.set_from_options(comm);
 }
@@ -276,21 +241,19 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
 std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::size_t r) {
   char b[2048];
   const auto& c = o.contact.casing;
-  std::snprintf(
-      b, sizeof b,
-      "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
-      "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
-      "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
-      "spectrum_decimation=block_mean\n",
-      o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
-      s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes,
-      c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
+  std::snprintf(b, sizeof b,
+                "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
+                "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
+                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
+                "spectrum_decimation=block_mean\n",
+                o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
+                s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes, c.width,
+                c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
   return b;
 }
 
 void SweepOptions::check() const {
-  MORSE_CHECK(!rom.empty(),
-              "morse sweep: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
+  MORSE_CHECK(!rom.empty(), "morse sweep: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(!contact.set.empty(), "morse sweep: give the contact nodes with -contact_set SET");
   MORSE_CHECK(contact.obstacle == sim::Obstacle::Casing && !contact.plane_given,
               "morse sweep: the obstacle is the casing (-contact_obstacle casing; -contact_plane_* "
@@ -298,13 +261,10 @@ void SweepOptions::check() const {
   MORSE_CHECK(!contact.omega_given,
               "morse sweep: the speeds are -sweep_omega_min/_max/_step; -sim_omega does not apply");
   MORSE_CHECK(omega_min > 0 && omega_max >= omega_min,
-              "morse sweep: give 0 < -sweep_omega_min <= -sweep_omega_max (got ", omega_min, ", ",
-              omega_max, ")");
-  MORSE_CHECK(omega_step > 0 || omega_max == omega_min,
-              "morse sweep: -sweep_omega_step must be positive");
+              "morse sweep: give 0 < -sweep_omega_min <= -sweep_omega_max (got ", omega_min, ", ", omega_max, ")");
+  MORSE_CHECK(omega_step > 0 || omega_max == omega_min, "morse sweep: -sweep_omega_step must be positive");
   MORSE_CHECK(batch > 0, "-sweep_batch must be positive (got ", batch, ")");
-  MORSE_CHECK(fmax > 0 && bins > 0,
-              "-sweep_spectrum_fmax and -sweep_spectrum_bins must be positive");
+  MORSE_CHECK(fmax > 0 && bins > 0, "-sweep_spectrum_fmax and -sweep_spectrum_bins must be positive");
 }
 
 SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
@@ -322,9 +282,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
 }
 
 long SweepOptions::n_speeds() const {
-  return omega_max == omega_min
-             ? 1
-             : static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) + 1;
+  return omega_max == omega_min ? 1 : static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) + 1;
 }
 
 std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_idx) const {
@@ -335,8 +293,7 @@ std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_
   return todo;
 }
 
-std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart,
-                                       SweepRecord* rec) {
+std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart, SweepRecord* rec) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::string err;
@@ -378,32 +335,28 @@ PetscErrorCode StressOptions::set_from_options(MPI_Comm comm) {
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse stress options", "");
-  PetscCall(MorseOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "",
-                               buf, buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-rom", "Reduced model: the morse nlrom file of the simulation", "", buf, buf,
+                               sizeof buf, &set));
   if (set) o->rom = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf,
-                               sizeof buf, &set));
+  PetscCall(MorseOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf, sizeof buf, &set));
   if (set) o->sim = buf;
-  PetscCall(
-      MorseOptionsReal("-stress_time",
-                       "Time [s] of the stress (the nearest stored step); default: the time of "
-                       "the largest |radial displacement| at -stress_monitor",
-                       "", o->time, &o->time, &o->time_set));
+  PetscCall(MorseOptionsReal("-stress_time",
+                             "Time [s] of the stress (the nearest stored step); default: the time of "
+                             "the largest |radial displacement| at -stress_monitor",
+                             "", o->time, &o->time, &o->time_set));
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-stress_monitor", "Node set of one node whose largest radial displacement picks the time",
-      "", o->monitor.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-stress_monitor",
+                               "Node set of one node whose largest radial displacement picks the time", "",
+                               o->monitor.c_str(), buf, sizeof buf, &set));
   if (set) o->monitor = buf;
   buf[0] = 0;
-  PetscCall(MorseOptionsString(
-      "-stress_measure",
-      "linear (small strain) | nonlinear (Cauchy stress of St Venant-Kirchhoff); default: "
-      "as the simulation (its /sim attribute linear)",
-      "", "", buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString("-stress_measure",
+                               "linear (small strain) | nonlinear (Cauchy stress of St Venant-Kirchhoff); default: "
+                               "as the simulation (its /sim attribute linear)",
+                               "", "", buf, sizeof buf, &set));
   if (set) o->measure = buf;
-  PetscCall(MorseOptionsBool("-stress_xdmf",
-                             "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
+  PetscCall(MorseOptionsBool("-stress_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", o->xdmf,
                              &o->xdmf, nullptr));
   PetscOptionsEnd();
   if (!(o->measure.empty() || o->measure == "linear" || o->measure == "nonlinear"))
@@ -414,8 +367,7 @@ PetscErrorCode StressOptions::set_from_options(MPI_Comm comm) {
 StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::StoredModel& sm) {
   StressState st;
   const std::size_t r = sm.r();
-  const std::vector<double> radial =
-      so.time_set ? std::vector<double>{} : sm.radial_row(so.monitor, "-stress_monitor");
+  const std::vector<double> radial = so.time_set ? std::vector<double>{} : sm.radial_row(so.monitor, "-stress_monitor");
 
   // Rank 0 reads the simulation and picks the state: the stored time nearest -stress_time, or the
   // largest |u_r| at the monitor node. The others receive that state only.
@@ -428,19 +380,16 @@ StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::St
   if (rank == 0) {
     std::vector<double> time, q;
     std::vector<hsize_t> dt, dq;
-    if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) &&
-        io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) && so.measure.empty() &&
-        !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
+    if (io::read_doubles(so.sim, "/sim/time", &time, &dt, &err) && io::read_doubles(so.sim, "/sim/q", &q, &dq, &err) &&
+        so.measure.empty() && !io::read_attribute(so.sim, "/sim", "linear", &linear, &err))
       err = cat(err, " (give -stress_measure)");
     if (err.empty() && (dq.size() != 2 || dq[0] != time.size() || time.empty()))
       err = cat(so.sim, ": /sim/q and /sim/time disagree (a morse simulate file is expected)");
     else if (err.empty() && dq[1] != r)
       err = cat(so.sim, " has ", dq[1], " reduced coordinates; ", so.rom, " has r = ", r,
                 " (not the model of this simulation)");
-    else if (err.empty() && so.time_set &&
-             !(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12))
-      err = cat("-stress_time ", so.time, " s lies outside the simulation [", time.front(), ", ",
-                time.back(), "] s");
+    else if (err.empty() && so.time_set && !(so.time >= time.front() - 1e-12 && so.time <= time.back() + 1e-12))
+      err = cat("-stress_time ", so.time, " s lies outside the simulation [", time.front(), ", ", time.back(), "] s");
     if (err.empty()) {
       nt = static_cast<std::int64_t>(time.size());
       for (std::int64_t i = 0; i < nt; ++i) {
@@ -463,16 +412,15 @@ StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::St
   MPI_Bcast(ints, 2, MPI_INT64_T, 0, comm);
   MPI_Bcast(q_step.data(), static_cast<int>(r), MPI_DOUBLE, 0, comm);
   st.radial = scalars[1], st.time = scalars[2], st.step = ints[0], st.n_steps = ints[1];
-  st.measure = so.measure.empty()
-                   ? (scalars[0] != 0.0 ? StressMeasure::Linear : StressMeasure::Nonlinear)
+  st.measure = so.measure.empty()       ? (scalars[0] != 0.0 ? StressMeasure::Linear : StressMeasure::Nonlinear)
                : so.measure == "linear" ? StressMeasure::Linear
                                         : StressMeasure::Nonlinear;
   st.q = std::move(q_step);
   return st;
 }
 
-void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u,
-                  const mesh::Mesh& gm, const StressField& f, StressRecord* rec) {
+void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, const mesh::Mesh& gm,
+                  const StressField& f, StressRecord* rec) {
   std::map<std::int64_t, std::size_t> row;
   for (std::size_t k = 0; k < node_ids.size(); ++k) row[node_ids[k]] = k;
   const std::size_t nn = gm.node_ids.size();
@@ -487,8 +435,7 @@ void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<d
   }
 }
 
-SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
-                                const nlrom::StoredModel& sm) {
+SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom, const nlrom::StoredModel& sm) {
   SnapshotPlan plan;
   plan.fom = fom;
   std::string err;
@@ -497,8 +444,7 @@ SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
     if (!io::read_doubles(fom, "/fom/snapshots/time", &plan.time, &d, &err) ||
         !io::read_ints(fom, "/fom/snapshots/dof_node_ids", &plan.ids, &d, &err) ||
         !io::read_ints(fom, "/fom/snapshots/dof_components", &plan.comps, &d, &err))
-      err = cat("-sim_snapshots: ", err,
-                " (a morse fom file run with -fom_snapshot_every K is expected)");
+      err = cat("-sim_snapshots: ", err, " (a morse fom file run with -fom_snapshot_every K is expected)");
     else
       plan.rows = sm.dof_rows(plan.ids, plan.comps);
   } catch (const std::exception& e) {
@@ -508,9 +454,9 @@ SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
   return plan;
 }
 
-Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& nodal,
-               const Settings& s, long every, const std::vector<std::string>& monitor,
-               const std::string& contact_set, const SnapshotPlan& plan, SimRecord* out) {
+Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& nodal, const Settings& s, long every,
+               const std::vector<std::string>& monitor, const std::string& contact_set, const SnapshotPlan& plan,
+               SimRecord* out) {
   const std::size_t r = sm.r();
   std::vector<ReducedLoad> loads;
   for (const auto& l : nodal) {
@@ -558,15 +504,13 @@ Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& 
     if (nc && x.step > 0) {
       for (std::size_t k = 0; k < nc; ++k)
         for (int d = 0; d < 3; ++d)
-          c_sum[3 * k + d] +=
-              x.contact_normal[k] * c_normal[3 * k + d] + x.contact_friction[3 * k + d];
+          c_sum[3 * k + d] += x.contact_normal[k] * c_normal[3 * k + d] + x.contact_friction[3 * k + d];
       ++c_count;
     }
     if (x.step % every != 0) return;
     if (nc) {
       // Row 0 (the initial state) has no force; row i the mean over the steps since row i - 1.
-      for (std::size_t j = 0; j < 3 * nc; ++j)
-        cr.mean_force.push_back(c_count ? c_sum[j] / c_count : 0.0);
+      for (std::size_t j = 0; j < 3 * nc; ++j) cr.mean_force.push_back(c_count ? c_sum[j] / c_count : 0.0);
       cr.mean_force_time.push_back(x.step == 0 ? 0.0 : 0.5 * (t_prev_out + x.t));
       std::fill(c_sum.begin(), c_sum.end(), 0.0);
       c_count = 0;
@@ -601,8 +545,7 @@ Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& 
   return stats;
 }
 
-void run_cases(MPI_Comm comm, const std::vector<std::string>& names,
-               const std::function<void(std::size_t)>& task) {
+void run_cases(MPI_Comm comm, const std::vector<std::string>& names, const std::function<void(std::size_t)>& task) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);

@@ -17,7 +17,8 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
   const auto nt = static_cast<hsize_t>(rec.time.size());
   out.write("/sim/time", rec.time);
   out.write("/sim/energy", rec.energy);
-  out.attribute("/sim/energy", "description", "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
+  out.attribute("/sim/energy", "description",
+                "seed 003 eq. 46: kinetic + linear strain energy of the reduced model [J]");
   out.write("/sim/q", rec.q, {nt, static_cast<hsize_t>(rec.final_q.size())});
   out.write("/sim/final/q", rec.final_q);
   out.write("/sim/final/v", rec.final_v);
@@ -28,7 +29,8 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
     out.attribute("/sim/sets/" + m.name + "/u", "description", "[time][node][x,y,z] displacement u = Phi q [m]");
   }
   if (!rec.snapshots_fom.empty()) {
-    const auto ns = static_cast<hsize_t>(rec.snapshot_time.size()), nd = static_cast<hsize_t>(rec.snapshot_node_ids.size());
+    const auto ns = static_cast<hsize_t>(rec.snapshot_time.size()),
+               nd = static_cast<hsize_t>(rec.snapshot_node_ids.size());
     out.write("/sim/snapshots/time", rec.snapshot_time);
     out.write("/sim/snapshots/u", rec.snapshot_u, {ns, nd});
     out.write("/sim/snapshots/v", rec.snapshot_v, {ns, nd});
@@ -162,9 +164,11 @@ void write_stress(io::H5Output& out, const StressField& f, const StressRecord& r
   out.attribute("/stress/stress", "description",
                 "[1][node][xx,xy,xz,yy,yz,zz] stress at the node, mean over its elements [Pa]");
   out.write("/stress/von_mises_element", f.element_mises, {1, ne});
-  out.attribute("/stress/von_mises_element", "description", "[1][element] volume mean of von Mises over the element [Pa]");
+  out.attribute("/stress/von_mises_element", "description",
+                "[1][element] volume mean of von Mises over the element [Pa]");
   out.write("/stress/von_mises_element_max", f.element_mises_max, {1, ne});
-  out.attribute("/stress/von_mises_element_max", "description", "[1][element] max of von Mises at its quadrature points [Pa]");
+  out.attribute("/stress/von_mises_element_max", "description",
+                "[1][element] max of von Mises at its quadrature points [Pa]");
   out.attribute("/stress", "time", r.time);
   out.attribute_int("/stress", "step", r.step);
   out.attribute("/stress", "measure", r.measure == StressMeasure::Linear ? "linear" : "nonlinear");

@@ -39,8 +39,8 @@ void stress_from_gradient(StressMeasure m, double E, double nu, const double H[9
   if (m == StressMeasure::Nonlinear) {  // sigma = F S F^T / J
     double F[9], FS[9], sig[9];
     for (int i = 0; i < 9; ++i) F[i] = H[i] + (i % 4 == 0 ? 1.0 : 0.0);
-    const double J = F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) +
-                     F[2] * (F[3] * F[7] - F[4] * F[6]);
+    const double J =
+        F[0] * (F[4] * F[8] - F[5] * F[7]) - F[1] * (F[3] * F[8] - F[5] * F[6]) + F[2] * (F[3] * F[7] - F[4] * F[6]);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {
         FS[3 * i + j] = 0.0;
@@ -82,14 +82,16 @@ StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fall
   MPI_Comm_size(comm, &size);
   const auto& mm = lm.mesh;
   std::string err;
-  if (u.size() != 3 * node_ids.size()) err = cat("stress: ", u.size(), " displacement values for ", node_ids.size(), " nodes");
+  if (u.size() != 3 * node_ids.size())
+    err = cat("stress: ", u.size(), " displacement values for ", node_ids.size(), " nodes");
   std::unordered_map<std::int64_t, std::size_t> row;
   for (std::size_t k = 0; k < node_ids.size(); ++k) row.emplace(node_ids[k], k);
   std::vector<const double*> ul(mm.node_ids.size(), nullptr);
   for (std::size_t k = 0; k < mm.node_ids.size() && err.empty(); ++k) {
     auto it = row.find(mm.node_ids[k]);
     if (it == row.end())
-      err = cat("stress: mesh node ", mm.node_ids[k], " has no displacement (the reduced model was built on another mesh?)");
+      err = cat("stress: mesh node ", mm.node_ids[k],
+                " has no displacement (the reduced model was built on another mesh?)");
     else
       ul[k] = &u[3 * it->second];
   }

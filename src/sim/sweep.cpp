@@ -67,7 +67,8 @@ std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const s
   return a;
 }
 
-std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f) {
+std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s,
+                                       const std::vector<double>& f) {
   const double T = static_cast<double>(s) * h;
   auto a = amplitude_spectrum(std::move(block_means), T, f);
   for (std::size_t b = 0; b < f.size(); ++b) {  // the gain of a mean of s samples (Dirichlet kernel)
@@ -160,8 +161,10 @@ void batch_cubic(std::size_t r, std::size_t L, const std::size_t* groups, std::s
       const std::size_t m1 = std::min(n, m0 + kChunk);
       for (std::size_t pb = 0; pb < rp / 4; ++pb) {
         const double* w = Wp + pb * 4 * n;
-        if (gi + 1 < ng) panel_chunk<2>(L, g, w, Z, m0, m1, Y, 4 * pb);
-        else panel_chunk<1>(L, g, w, Z, m0, m1, Y, 4 * pb);
+        if (gi + 1 < ng)
+          panel_chunk<2>(L, g, w, Z, m0, m1, Y, 4 * pb);
+        else
+          panel_chunk<1>(L, g, w, Z, m0, m1, Y, 4 * pb);
       }
     }
   }
@@ -240,7 +243,8 @@ class Batch {
     groups_.clear();
     for (std::size_t g = 0; g * kGroup < lanes_.size(); ++g) {
       bool busy = false;
-      for (std::size_t l = g * kGroup; l < std::min(lanes_.size(), (g + 1) * kGroup); ++l) busy = busy || lanes_[l].busy;
+      for (std::size_t l = g * kGroup; l < std::min(lanes_.size(), (g + 1) * kGroup); ++l)
+        busy = busy || lanes_[l].busy;
       if (busy) groups_.push_back(g);
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -271,8 +275,7 @@ class Batch {
       try {
         if (ln.contact) ln.contact->correct(col_.data(), colm_.data(), h, t);
         for (std::size_t j = 0; j < r_ && !fail; ++j) fail = !std::isfinite(col_[j]);
-        if (fail)
-          ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
+        if (fail) ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
       } catch (const std::exception& e) {
         fail = true;
         ln.res.error = e.what();
@@ -371,7 +374,8 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   const double hc = critical_step(m);
   MORSE_CHECK(s.base.dt <= hc, "sweep: -sim_dt ", s.base.dt, " s is above the critical step of central differences, ",
               hc, " s; use -sim_dt <= ", hc);
-  for (const auto& t : todo) MORSE_CHECK(t.omega != 0.0 && std::isfinite(t.omega), "sweep: speed ", t.index, " is zero");
+  for (const auto& t : todo)
+    MORSE_CHECK(t.omega != 0.0 && std::isfinite(t.omega), "sweep: speed ", t.index, " is zero");
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -441,8 +445,10 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
     };
     auto got_reply = [&]() {
       --outstanding;
-      if (reply < 0) exhausted = true;
-      else batch.start(todo[static_cast<std::size_t>(reply)]);
+      if (reply < 0)
+        exhausted = true;
+      else
+        batch.start(todo[static_cast<std::size_t>(reply)]);
       if (outstanding > 0) MPI_Irecv(&reply, 1, MPI_LONG, 0, kTagTask, comm, &req);
     };
     for (std::size_t k = batch.free_slots(); k > 0; --k) send(kRequest, nullptr);

@@ -1,9 +1,10 @@
 // The sweep file: one HDF5 file rewritten atomically after every finished speed (see
 // morse/sim/sim.hpp, write_sweep; docs/hdf5-schema.md, /sweep).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <map>
 #include <sstream>
-#include <sys/stat.h>
 
 #include "morse/core/error.hpp"
 #include "morse/io/h5.hpp"
@@ -38,7 +39,8 @@ void write_sweep(const std::string& path, SweepRecord rec) {
   out.write("/sweep/frequency", rec.frequencies);
   out.attribute("/sweep/frequency", "description", "[Hz] frequencies of /sweep/spectrum");
   out.write("/sweep/eigenfrequencies", rec.eigenfrequencies_hz);
-  out.attribute("/sweep/eigenfrequencies", "description", "[Hz] natural frequencies of the reduced model without contact");
+  out.attribute("/sweep/eigenfrequencies", "description",
+                "[Hz] natural frequencies of the reduced model without contact");
   out.write("/sweep/index", icolumn(rs, [](const SpeedResult& r) { return r.index; }));
   out.write("/sweep/omega", column(rs, [](const SpeedResult& r) { return r.omega; }));
   out.write("/sweep/status", icolumn(rs, [](const SpeedResult& r) { return r.status; }));
@@ -81,9 +83,12 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   bool ok = io::read_string(path, "/sweep/settings", &rec->settings, error) &&
             io::read_doubles(path, "/sweep/frequency", &rec->frequencies, &d, error) &&
             io::read_doubles(path, "/sweep/eigenfrequencies", &rec->eigenfrequencies_hz, &d, error) &&
-            io::read_ints(path, "/sweep/index", &index, &d, error) && io::read_doubles(path, "/sweep/omega", &omega, &d, error) &&
-            io::read_ints(path, "/sweep/status", &status, &d, error) && io::read_ints(path, "/sweep/steps", &steps, &d, error) &&
-            io::read_doubles(path, "/sweep/t_final", &tf, &d, error) && io::read_doubles(path, "/sweep/rms", &rms, &d, error) &&
+            io::read_ints(path, "/sweep/index", &index, &d, error) &&
+            io::read_doubles(path, "/sweep/omega", &omega, &d, error) &&
+            io::read_ints(path, "/sweep/status", &status, &d, error) &&
+            io::read_ints(path, "/sweep/steps", &steps, &d, error) &&
+            io::read_doubles(path, "/sweep/t_final", &tf, &d, error) &&
+            io::read_doubles(path, "/sweep/rms", &rms, &d, error) &&
             io::read_doubles(path, "/sweep/mean", &mean, &d, error) &&
             io::read_doubles(path, "/sweep/max_displacement", &umax, &d, error) &&
             io::read_doubles(path, "/sweep/time_of_max", &tmax, &d, error) &&
@@ -116,7 +121,8 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     r.t_final = tf[i], r.rms = rms[i], r.mean = mean[i], r.max_displacement = umax[i], r.time_of_max = tmax[i];
     r.max_force = fmax[i], r.time_of_max_force = tfmax[i], r.max_node_force = fnode[i];
     r.max_active = static_cast<int>(act[i]), r.seconds = secs[i];
-    r.spectrum.assign(spec.begin() + static_cast<std::ptrdiff_t>(i * nf), spec.begin() + static_cast<std::ptrdiff_t>((i + 1) * nf));
+    r.spectrum.assign(spec.begin() + static_cast<std::ptrdiff_t>(i * nf),
+                      spec.begin() + static_cast<std::ptrdiff_t>((i + 1) * nf));
     if (r.status != 0) r.error = msg[r.index];
     rec->results.push_back(std::move(r));
   }

@@ -15,8 +15,8 @@
 // by the eigen solver (shift 0) is reused for the constraint modes, so K_ii is factored once.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <string>
 #include <vector>
@@ -26,12 +26,12 @@
 namespace morse::cb {
 
 struct CBSettings {
-  std::string boundary_set;   ///< node set (mesh) or row set (matrices) of the interface
-  PetscInt n_fixed = -1;      ///< number of fixed-interface modes (-cb_num_fixed_modes), or
-  double fmax_hz = -1;        ///< all fixed-interface modes below this frequency (-cb_fmax)
-  double damping = 0.0;       ///< modal damping ratio xi of the fixed-interface modes
-  bool keep_basis = false;    ///< keep T (Psi and Phi) in the result
-  std::string prefix = "cb_"; ///< options prefix of the eigen solver
+  std::string boundary_set;    ///< node set (mesh) or row set (matrices) of the interface
+  PetscInt n_fixed = -1;       ///< number of fixed-interface modes (-cb_num_fixed_modes), or
+  double fmax_hz = -1;         ///< all fixed-interface modes below this frequency (-cb_fmax)
+  double damping = 0.0;        ///< modal damping ratio xi of the fixed-interface modes
+  bool keep_basis = false;     ///< keep T (Psi and Phi) in the result
+  std::string prefix = "cb_";  ///< options prefix of the eigen solver
 
   /// Reads -boundary (read_boundary_option), -cb_num_fixed_modes, -cb_fmax, -cb_damping and
   /// -cb_write_basis (keep_basis); the fields of the options not given are left unchanged.
@@ -45,16 +45,16 @@ struct CBSettings {
 PetscErrorCode read_boundary_option(MPI_Comm comm, std::string* boundary);
 
 struct CBResult {
-  PetscInt n_b = 0;    ///< boundary DOFs
-  PetscInt n_phi = 0;  ///< fixed-interface modes
-  std::vector<std::int64_t> boundary_node_ids;     ///< ascending
-  std::vector<std::int64_t> boundary_global_nodes; ///< global node index, same order
-  std::vector<PetscInt> boundary_dofs;  ///< free-DOF number of each boundary DOF (reduced order)
+  PetscInt n_b = 0;                                 ///< boundary DOFs
+  PetscInt n_phi = 0;                               ///< fixed-interface modes
+  std::vector<std::int64_t> boundary_node_ids;      ///< ascending
+  std::vector<std::int64_t> boundary_global_nodes;  ///< global node index, same order
+  std::vector<PetscInt> boundary_dofs;              ///< free-DOF number of each boundary DOF (reduced order)
   /// What each boundary DOF is, in reduced order: node (grid) id and component 1..6 (1..3 =
   /// x, y, z translations; 4..6 rotations, only from matrix input).
   std::vector<std::int64_t> boundary_dof_node;
   std::vector<int> boundary_dof_component;
-  std::vector<double> fixed_omega2;                ///< eigenvalues of eq. 4, ascending
+  std::vector<double> fixed_omega2;  ///< eigenvalues of eq. 4, ascending
   /// Reduced operators, dense row-major (n_b + n_phi)^2, identical on every rank.
   std::vector<double> M, K, C;
   /// T on the free DOFs of the model (MPIDENSE, n_free x (n_b + n_phi)); only if keep_basis.

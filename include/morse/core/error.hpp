@@ -7,8 +7,8 @@
 // left waiting in a collective call.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <sstream>
 #include <stdexcept>
@@ -35,8 +35,7 @@ std::string cat(const T&... pieces) {
 }
 
 namespace detail {
-[[noreturn]] void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file,
-                                    int line);
+[[noreturn]] void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file, int line);
 }
 
 /// Collective verdict. Every rank of comm passes its own (possibly empty) error message; if any
@@ -50,15 +49,14 @@ bool any_rank(MPI_Comm comm, bool flag);
 }  // namespace morse
 
 /// Calls a PETSc function and throws morse::Error if it fails.
-#define MORSE_CALL(...)                                                                 \
-  do {                                                                                  \
-    PetscErrorCode morse_ierr_ = (__VA_ARGS__);                                         \
-    if (morse_ierr_) ::morse::detail::throw_petsc_error(morse_ierr_, #__VA_ARGS__,      \
-                                                        __FILE__, __LINE__);            \
+#define MORSE_CALL(...)                                                                                 \
+  do {                                                                                                  \
+    PetscErrorCode morse_ierr_ = (__VA_ARGS__);                                                         \
+    if (morse_ierr_) ::morse::detail::throw_petsc_error(morse_ierr_, #__VA_ARGS__, __FILE__, __LINE__); \
   } while (0)
 
 /// Throws morse::Error(message pieces...) if cond is false. Not collective.
-#define MORSE_CHECK(cond, ...)                                            \
-  do {                                                                    \
-    if (!(cond)) throw ::morse::Error(::morse::cat(__VA_ARGS__));         \
+#define MORSE_CHECK(cond, ...)                                    \
+  do {                                                            \
+    if (!(cond)) throw ::morse::Error(::morse::cat(__VA_ARGS__)); \
   } while (0)

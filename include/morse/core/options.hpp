@@ -19,8 +19,8 @@
 // every rank reads the same options.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <cstddef>
 #include <string>
@@ -100,26 +100,18 @@ PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help
 // Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same
 // arguments; each registers the option (under the block's prefix) with its help text, then calls
 // PETSc's. Use them as PETSc's: PetscCall(MorseOptionsReal("-x", "help", "", x, &x, nullptr)).
-#define MORSE_OPTIONS_ADD_(opt, text) \
-  ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
-#define MorseOptionsReal(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
-#define MorseOptionsInt(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
+#define MORSE_OPTIONS_ADD_(opt, text) ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
+#define MorseOptionsReal(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
+#define MorseOptionsInt(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
 #define MorseOptionsBoundedInt(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoundedInt(opt, text, __VA_ARGS__))
 #define MorseOptionsRangeInt(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRangeInt(opt, text, __VA_ARGS__))
-#define MorseOptionsBool(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
-#define MorseOptionsString(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
-#define MorseOptionsEnum(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
-#define MorseOptionsEList(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
-#define MorseOptionsName(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
+#define MorseOptionsBool(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
+#define MorseOptionsString(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
+#define MorseOptionsEnum(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
+#define MorseOptionsEList(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
+#define MorseOptionsName(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
 #define MorseOptionsRealArray(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRealArray(opt, text, __VA_ARGS__))
 #define MorseOptionsIntArray(opt, text, ...) \

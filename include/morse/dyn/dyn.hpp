@@ -42,7 +42,7 @@
 namespace morse::io {
 class H5Output;
 class H5SliceWriter;
-}
+}  // namespace morse::io
 
 namespace morse::dyn {
 
@@ -137,8 +137,8 @@ class LoadHistory {
   /// Collective. Throws (collectively) if the table does not validate or if a node id is not a
   /// node of the mesh (naming up to 10 of them and the table's source). Every rank keeps the
   /// columns of the nodes it owns only.
-  LoadHistory(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const LoadTable& table, Outside outside = Outside::Error,
-              double scale = 1.0);
+  LoadHistory(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const LoadTable& table,
+              Outside outside = Outside::Error, double scale = 1.0);
   /// F += scale f(t) on the owned DOFs. Not collective (the same time on every rank gives the same
   /// verdict). Throws if t is outside the grid and outside() is Error.
   void add_to(double t, Vec F) const;
@@ -154,7 +154,7 @@ class LoadHistory {
   std::vector<double> total(double t) const;
 
  private:
-  LoadTable grid_;  // the time grid and source only (the forces are kept per owned DOF below)
+  LoadTable grid_;               // the time grid and source only (the forces are kept per owned DOF below)
   std::vector<PetscInt> local_;  // local index in F of each owned, free entry
   std::vector<double> values_;   // [time][entry], scaled
   std::vector<double> sum_;      // [time][x,y,z], scaled total over every node
@@ -164,10 +164,10 @@ class LoadHistory {
 
 /// The options of a tabulated load history (`morse fom`, docs/user-guide.md).
 struct LoadHistoryOptions {
-  std::string spec;  ///< -load_history FILE[:/GROUP]; empty: none
+  std::string spec;                  ///< -load_history FILE[:/GROUP]; empty: none
   Outside outside = Outside::Error;  ///< -load_history_outside error|zero|hold
   double scale = 1.0;                ///< -load_history_scale S (finite)
-  std::string error;  ///< a bad value, naming the option (raised by the caller, after -help)
+  std::string error;                 ///< a bad value, naming the option (raised by the caller, after -help)
   /// Reads -load_history, -load_history_outside and -load_history_scale. A bad outside value, a
   /// non-finite scale or -load_history_outside without -load_history is recorded in `error`.
   /// Uses PetscOptionsBegin: returns a PETSc error code. Collective.
@@ -215,8 +215,8 @@ class Loads {
 
 struct LoadDescription {
   std::vector<NodalLoad> loads;  ///< the harmonic (and constant) nodal loads, in option order
-  std::string history;           ///< the tabulated history's source (FILE or FILE:/GROUP, as -load_history takes it), "" if none
-  double history_scale = 1.0;    ///< -load_history_scale
+  std::string history;  ///< the tabulated history's source (FILE or FILE:/GROUP, as -load_history takes it), "" if none
+  double history_scale = 1.0;                ///< -load_history_scale
   Outside history_outside = Outside::Error;  ///< -load_history_outside
 };
 
@@ -259,15 +259,15 @@ class SetProbe {
 // Statics
 
 struct StaticSettings {
-  double time = 0.0;         ///< loads evaluated at this time
-  double load_factor = 1.0;  ///< final load factor lambda
-  PetscInt steps = 1;        ///< initial number of equal load increments
-  PetscInt max_cutbacks = 10;  ///< halvings of a failed increment before giving up
-  bool linear = false;       ///< solve K u = lambda f (no g_nl)
-  double rtol = 1e-9;        ///< converged when ||R|| <= rtol max(||lambda f||, ||K u||)
-  PetscInt max_it = 25;      ///< Newton iterations per increment
+  double time = 0.0;               ///< loads evaluated at this time
+  double load_factor = 1.0;        ///< final load factor lambda
+  PetscInt steps = 1;              ///< initial number of equal load increments
+  PetscInt max_cutbacks = 10;      ///< halvings of a failed increment before giving up
+  bool linear = false;             ///< solve K u = lambda f (no g_nl)
+  double rtol = 1e-9;              ///< converged when ||R|| <= rtol max(||lambda f||, ||K u||)
+  PetscInt max_it = 25;            ///< Newton iterations per increment
   std::string prefix = "static_";  ///< options prefix of the SNES (and its KSP/PC)
-  std::string error;         ///< a bad option value, naming the option (set_from_options)
+  std::string error;               ///< a bad option value, naming the option (set_from_options)
 
   /// Reads -static_linear, -static_time, -static_load_factor, -static_steps,
   /// -static_max_cutbacks, -static_rtol and -static_max_it; a bad value (steps <= 0,
@@ -281,7 +281,7 @@ struct StaticIncrement {
   PetscInt newton_iterations = 0;
   double residual = 0.0;  ///< final ||f_int - lambda f||
   bool converged = false;
-  std::string reason;     ///< SNES converged reason
+  std::string reason;  ///< SNES converged reason
 };
 
 struct StaticResult {
@@ -319,12 +319,12 @@ struct FomSettings {
   double dt = 0.0;
   double t_final = 0.0;
   Scheme scheme = Scheme::Trapezoidal;
-  bool linear = false;           ///< g_nl = 0 (the linear twin, same everything else)
-  double modal_xi = 0.0;         ///< modal damping ratio on the first damping_modes modes
+  bool linear = false;    ///< g_nl = 0 (the linear twin, same everything else)
+  double modal_xi = 0.0;  ///< modal damping ratio on the first damping_modes modes
   PetscInt damping_modes = 0;
-  double rayleigh_alpha = 0.0;   ///< C += alpha M
-  double rayleigh_beta = 0.0;    ///< C += beta K
-  double newton_rtol = 1e-8;     ///< ||R|| <= rtol * force scale + atol
+  double rayleigh_alpha = 0.0;  ///< C += alpha M
+  double rayleigh_beta = 0.0;   ///< C += beta K
+  double newton_rtol = 1e-8;    ///< ||R|| <= rtol * force scale + atol
   double newton_atol = 1e-12;
   PetscInt newton_max_it = 25;
   /// Refactor the iteration matrix every `refactor_every` iterations within a step (1 = full
@@ -333,16 +333,16 @@ struct FomSettings {
   PetscInt refactor_every = 0;
   double refactor_ratio = 0.25;
   Newton newton = Newton::Krylov;
-  double krylov_rtol = 1e-2;         ///< smallest forcing term of the inexact Newton solves
-  PetscInt krylov_max_it = 60;       ///< CG iterations before the factor is refreshed and CG rerun
-  PetscInt krylov_refactor_its = 12; ///< refresh the factor for the next solve above this count
-  std::string prefix = "fom_";   ///< options prefix of the KSP/PC and of the damping eigen solve
+  double krylov_rtol = 1e-2;          ///< smallest forcing term of the inexact Newton solves
+  PetscInt krylov_max_it = 60;        ///< CG iterations before the factor is refreshed and CG rerun
+  PetscInt krylov_refactor_its = 12;  ///< refresh the factor for the next solve above this count
+  std::string prefix = "fom_";        ///< options prefix of the KSP/PC and of the damping eigen solve
   // What a `morse fom` run records and starts from (read by set_from_options; integrate() does
   // not use them).
-  std::vector<std::string> monitor;             ///< -fom_monitor: node sets whose histories are written
-  PetscInt snapshot_every = 0;                  ///< -fom_snapshot_every K: full fields every K steps (0: none)
-  std::string initial;                          ///< -fom_initial FILE: initial displacement ("" = zero)
-  std::string initial_dataset = "/static/u";    ///< -fom_initial_dataset: the nodal dataset of -fom_initial
+  std::vector<std::string> monitor;           ///< -fom_monitor: node sets whose histories are written
+  PetscInt snapshot_every = 0;                ///< -fom_snapshot_every K: full fields every K steps (0: none)
+  std::string initial;                        ///< -fom_initial FILE: initial displacement ("" = zero)
+  std::string initial_dataset = "/static/u";  ///< -fom_initial_dataset: the nodal dataset of -fom_initial
   std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
 
   /// Reads -fom_monitor, -fom_dt, -fom_tfinal, -fom_linear, -fom_scheme energy|trapezoidal,
@@ -361,8 +361,8 @@ struct Energies {
   double kinetic = 0.0;
   double strain_linear = 0.0;
   double strain_nonlinear = 0.0;
-  double external_work = 0.0;   ///< work of f_e since t = 0
-  double damping_loss = 0.0;    ///< energy dissipated by C since t = 0
+  double external_work = 0.0;  ///< work of f_e since t = 0
+  double damping_loss = 0.0;   ///< energy dissipated by C since t = 0
   double eq46() const { return kinetic + strain_linear; }
   /// kinetic + strain + damping loss - external work: constant in an exact balance.
   double balance() const { return kinetic + strain_linear + strain_nonlinear + damping_loss - external_work; }
@@ -381,7 +381,7 @@ struct FomStats {
   PetscInt steps = 0;
   PetscInt newton_iterations = 0;
   PetscInt factorizations = 0;
-  PetscInt rejected_steps = 0;  ///< Newton steps with a stale factor undone and refactored (modified Newton)
+  PetscInt rejected_steps = 0;     ///< Newton steps with a stale factor undone and refactored (modified Newton)
   PetscInt krylov_iterations = 0;  ///< CG iterations (Newton = Krylov)
   double seconds_force = 0, seconds_tangent = 0, seconds_factor = 0, seconds_solve = 0, seconds_total = 0;
   std::vector<double> damping_omega;  ///< natural angular frequencies of the damped modes

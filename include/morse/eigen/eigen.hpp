@@ -16,11 +16,11 @@
 namespace morse::eigen {
 
 struct EigenSettings {
-  PetscInt nev = 0;         ///< number of pairs wanted (count mode), or
-  double omega2_max = -1;   ///< cutoff in (rad/s)^2: all pairs with omega^2 <= cutoff (slicing)
-  double shift = 0.0;       ///< shift-invert target in (rad/s)^2 (count mode)
-  double tol = 1e-10;       ///< relative residual tolerance (overridable with -<prefix>eps_tol)
-  std::string prefix;       ///< options prefix of the EPS (its ST/KSP/PC inherit it)
+  PetscInt nev = 0;                   ///< number of pairs wanted (count mode), or
+  double omega2_max = -1;             ///< cutoff in (rad/s)^2: all pairs with omega^2 <= cutoff (slicing)
+  double shift = 0.0;                 ///< shift-invert target in (rad/s)^2 (count mode)
+  double tol = 1e-10;                 ///< relative residual tolerance (overridable with -<prefix>eps_tol)
+  std::string prefix;                 ///< options prefix of the EPS (its ST/KSP/PC inherit it)
   std::string what = "eigenproblem";  ///< name used in messages
   /// Count mode with nev >= count_slicing (and shift 0): find the cutoff below which lie nev to
   /// ~1.2 nev eigenvalues by inertia counts (Sylvester: negative pivots of K - sigma M), then
@@ -50,10 +50,10 @@ struct Eigenpairs {
   UMat V;                      ///< MPIDENSE, one M-normalized eigenvector per column
   UEPS eps;                    ///< the solver, kept alive so its factorization can be reused
   PetscInt iterations = 0;
-  double factor_seconds = 0;   ///< numeric factorization time (count mode)
-  bool slicing = false;        ///< solved by spectrum slicing
-  double slice_omega2 = 0;     ///< count mode by slicing: the cutoff used
-  PetscInt inertia_counts = 0; ///< count mode by slicing: factorizations spent finding it
+  double factor_seconds = 0;    ///< numeric factorization time (count mode)
+  bool slicing = false;         ///< solved by spectrum slicing
+  double slice_omega2 = 0;      ///< count mode by slicing: the cutoff used
+  PetscInt inertia_counts = 0;  ///< count mode by slicing: factorizations spent finding it
   /// Slicing (Krylov–Schur): subcommunicators that solved slices concurrently
   /// (-<prefix>eps_krylovschur_partitions; 1: all ranks on every slice).
   PetscInt partitions = 1;
@@ -168,8 +168,7 @@ double count_cutoff(Mat K, Mat M, PetscInt nev, const std::string& prefix, const
 /// row-major n x n). With vectors_max finite, only the eigenvectors of the eigenvalues
 /// <= vectors_max are computed (LAPACK sygvx, bisection and inverse iteration: a few times
 /// cheaper than all of them when they are few); the other columns are zero.
-std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K,
-                                      const std::vector<double>& M,
+std::vector<double> dense_eigenvalues(int n, const std::vector<double>& K, const std::vector<double>& M,
                                       std::vector<double>* vectors = nullptr,
                                       double vectors_max = std::numeric_limits<double>::infinity());
 

@@ -4,8 +4,8 @@
 // indicator computed from the two files.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <string>
 #include <vector>
@@ -19,8 +19,8 @@ struct CompareSettings {
   std::string tip = "tip";  ///< -compare_tip: the node set of the blade tip (e3, e4), monitored in both runs
   double tmax = -1;         ///< -compare_tmax: the time of e1 [s]; < 0: from the load (load_tmax)
   std::vector<double> w = {0.25, 0.25, 0.25, 0.25};  ///< -compare_weights w1,w2,w3,w4 (eq. 43)
-  std::string rom_model;    ///< -compare_rom_model: the nlrom file ("" = the one /sim names)
-  std::string error;        ///< a bad option value (not four weights), naming the option
+  std::string rom_model;                             ///< -compare_rom_model: the nlrom file ("" = the one /sim names)
+  std::string error;                                 ///< a bad option value (not four weights), naming the option
   /// Reads -compare_tip, -compare_tmax, -compare_weights and -compare_rom_model; a weight list
   /// that is not four values is recorded in `error` (w unchanged). Uses PetscOptionsBegin:
   /// returns a PETSc error code. Collective.

@@ -30,9 +30,9 @@ namespace morse::fe {
 /// (io/matrix_model.hpp).
 struct DofLayout {
   MPI_Comm comm = MPI_COMM_NULL;
-  PetscInt n_owned = 0;   ///< free DOFs owned by this rank
-  PetscInt first = 0;     ///< first global DOF owned by this rank
-  PetscInt n_global = 0;  ///< free DOFs in all
+  PetscInt n_owned = 0;               ///< free DOFs owned by this rank
+  PetscInt first = 0;                 ///< first global DOF owned by this rank
+  PetscInt n_global = 0;              ///< free DOFs in all
   std::int64_t n_clamped_global = 0;  ///< eliminated DOFs in all
   /// Mesh model: global DOF of component d of local node k at 3k+d, or -1 if eliminated. Empty
   /// for a matrix model (no mesh).
@@ -70,8 +70,8 @@ DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>&
 
 /// Assembled operators.
 struct Operators {
-  UMat K;  ///< MPIAIJ stiffness on the free DOFs (owned rows as in DofLayout)
-  UMat M;  ///< MPIAIJ consistent mass, same layout and non-zero pattern as K
+  UMat K;               ///< MPIAIJ stiffness on the free DOFs (owned rows as in DofLayout)
+  UMat M;               ///< MPIAIJ consistent mass, same layout and non-zero pattern as K
   double volume = 0.0;  ///< total volume of the mesh
   double mass = 0.0;    ///< total mass, sum of rho * element volume
 };
@@ -85,25 +85,25 @@ Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh:
 /// A model: the layout of its free DOFs and its operators on them; a mesh model also holds its
 /// distributed mesh. Move-only (it owns K, M, C).
 struct Model {
-  std::optional<mesh::LocalMesh> mesh;  ///< the distributed mesh; none for a matrix model
-  DofLayout dofs;                        ///< rows of K, M and C
-  UMat K;  ///< MPIAIJ stiffness on the free DOFs
-  UMat M;  ///< MPIAIJ mass, same layout
-  UMat C;  ///< MPIAIJ viscous damping (matrix input with -matrices_C), else null
-  double volume = 0.0;  ///< mesh model: total volume
-  double mass = 0.0;    ///< mesh model: total mass, sum of rho * element volume
-  std::string units;    ///< unit system recorded in the output ("unknown" if not known)
-  std::string source;   ///< the mesh file, or the K file of a matrix model
+  std::optional<mesh::LocalMesh> mesh;      ///< the distributed mesh; none for a matrix model
+  DofLayout dofs;                           ///< rows of K, M and C
+  UMat K;                                   ///< MPIAIJ stiffness on the free DOFs
+  UMat M;                                   ///< MPIAIJ mass, same layout
+  UMat C;                                   ///< MPIAIJ viscous damping (matrix input with -matrices_C), else null
+  double volume = 0.0;                      ///< mesh model: total volume
+  double mass = 0.0;                        ///< mesh model: total mass, sum of rho * element volume
+  std::string units;                        ///< unit system recorded in the output ("unknown" if not known)
+  std::string source;                       ///< the mesh file, or the K file of a matrix model
   double asymmetry_K = 0, asymmetry_M = 0;  ///< matrix model: measured max |A - A^T| / max |A|
 };
 
 /// What a mesh model is made of (the model options of docs/user-guide.md).
 struct MeshInput {
-  std::string path;   ///< mesh file (.msh, .inp, .bdf/.dat/.nas), read by mesh::read_and_distribute
-  std::string units;  ///< overrides the mesh's unit system if not empty
-  bool skip_unsupported = false;       ///< Nastran: skip element cards morse cannot represent
-  std::vector<std::string> clamp;      ///< node sets eliminated (number_dofs)
-  mesh::Material material;             ///< for elements without a material (assemble's fallback)
+  std::string path;                ///< mesh file (.msh, .inp, .bdf/.dat/.nas), read by mesh::read_and_distribute
+  std::string units;               ///< overrides the mesh's unit system if not empty
+  bool skip_unsupported = false;   ///< Nastran: skip element cards morse cannot represent
+  std::vector<std::string> clamp;  ///< node sets eliminated (number_dofs)
+  mesh::Material material;         ///< for elements without a material (assemble's fallback)
   std::vector<mesh::Material> set_materials;  ///< per element set (name = set), overriding the mesh's
   /// Node sets added to the mesh (-mesh_node_set_NAME): name, external node ids.
   std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;

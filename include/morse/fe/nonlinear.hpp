@@ -123,17 +123,17 @@ class Svk {
   Mat K_;
   PetscInt n_local_ = 0;  // owned + ghost free DOFs of the local elements
   // Per local element.
-  std::vector<int> type_n_;                     // nodes per element
-  std::vector<std::int64_t> elem_off_;          // into elem_pos_ / elem_glob_
-  std::vector<PetscInt> elem_pos_;              // compact local DOF (3 per node, -1 clamped)
-  std::vector<PetscInt> elem_glob_;             // global DOF (-1 clamped)
-  std::vector<int> elem_nq_;                    // quadrature points
-  std::vector<std::int64_t> grad_off_;          // into grad_ (3 n nq) and wdet_ via wdet_off_
+  std::vector<int> type_n_;             // nodes per element
+  std::vector<std::int64_t> elem_off_;  // into elem_pos_ / elem_glob_
+  std::vector<PetscInt> elem_pos_;      // compact local DOF (3 per node, -1 clamped)
+  std::vector<PetscInt> elem_glob_;     // global DOF (-1 clamped)
+  std::vector<int> elem_nq_;            // quadrature points
+  std::vector<std::int64_t> grad_off_;  // into grad_ (3 n nq) and wdet_ via wdet_off_
   std::vector<std::int64_t> wdet_off_;
   std::vector<double> grad_, wdet_;
   std::vector<double> lambda_, mu_;
   Unique<VecScatter, VecScatterDestroy> scatter_;
-  UVec la_, lb_, lg_;  // local work vectors (sequential, n_local_)
+  UVec la_, lb_, lg_;                        // local work vectors (sequential, n_local_)
   mutable std::vector<double> point_cache_;  // per quadrature point: H (9), S (9) of tangent_point()
 };
 

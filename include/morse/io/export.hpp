@@ -7,8 +7,8 @@
 // file. The coordinates of the superelement are ordered as in /rom (io/superelement.hpp).
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <cstdint>
 #include <string>
@@ -39,8 +39,7 @@ struct MbdynInfo {
   bool inertia_written = false;
   RigidBodyInertia inertia;
 };
-MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se,
-                          const NodalShapes* shapes = nullptr);
+MbdynInfo write_mbdyn_fem(const std::string& path, const Superelement& se, const NodalShapes* shapes = nullptr);
 
 /// Names of the Nastran matrices (OP4 and DMIG), 1-8 characters, a letter first.
 struct NastranNames {
@@ -50,8 +49,7 @@ struct NastranNames {
 
 /// OUTPUT4 ASCII file of K, M (and C as a third matrix) in /rom order, double precision
 /// ("1P,3E23.16": exact round trip), form 6 when exactly symmetric; written by io::write_op4.
-void write_op4_matrices(const std::string& path, const Superelement& se,
-                        const NastranNames& names = {});
+void write_op4_matrices(const std::string& path, const Superelement& se, const NastranNames& names = {});
 
 /// Default id offset of the SPOINTs that carry the modal coordinates in the DMIG deck: the
 /// smallest power of ten above every node id the file names (its mesh or DOF map, else the
@@ -75,14 +73,13 @@ std::string nastran_large_real(double v);
 
 /// MatrixMarket coordinate files of K, M (and C) at 17 significant digits (io::write_matrix:
 /// "symmetric" with the lower triangle when exactly symmetric, else "general").
-void write_matrix_market(const std::string& path_K, const std::string& path_M,
-                         const std::string& path_C, const Superelement& se);
+void write_matrix_market(const std::string& path_K, const std::string& path_M, const std::string& path_C,
+                         const Superelement& se);
 
 /// Text DOF map of the exported matrices: one line per row, `row node <id> <component>` for a
 /// boundary DOF and `row modal <k> <spoint id>` for modal coordinate k (1-based), with the
 /// frequency as a comment.
-void write_dof_map_text(const std::string& path, const Superelement& se,
-                        std::int64_t spoint_offset);
+void write_dof_map_text(const std::string& path, const Superelement& se, std::int64_t spoint_offset);
 
 // ---------------------------------------------------------------------------------------------
 // The whole export (what `morse export` does).

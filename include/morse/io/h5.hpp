@@ -28,10 +28,8 @@ class H5Output {
 
   /// Dataset writers; data significant on rank 0 only. dims empty = 1-D of data.size().
   /// Intermediate groups are created. Not collective.
-  void write(const std::string& name, const std::vector<double>& data,
-             std::vector<hsize_t> dims = {});
-  void write(const std::string& name, const std::vector<std::int64_t>& data,
-             std::vector<hsize_t> dims = {});
+  void write(const std::string& name, const std::vector<double>& data, std::vector<hsize_t> dims = {});
+  void write(const std::string& name, const std::vector<std::int64_t>& data, std::vector<hsize_t> dims = {});
   void write_string(const std::string& name, const std::string& value);
   /// A dataset of doubles of shape dims written one row (first index) at a time, so that rank 0
   /// never holds all of it: create_rows, then write_row for each row (data = the row, of the
@@ -75,7 +73,8 @@ class H5Output {
 /// rank.
 class H5SliceWriter {
  public:
-  H5SliceWriter(MPI_Comm comm, const std::string& file, std::int64_t n_global, std::int64_t first, std::int64_t n_local);
+  H5SliceWriter(MPI_Comm comm, const std::string& file, std::int64_t n_global, std::int64_t first,
+                std::int64_t n_local);
   ~H5SliceWriter();
   H5SliceWriter(const H5SliceWriter&) = delete;
   H5SliceWriter& operator=(const H5SliceWriter&) = delete;
@@ -177,9 +176,8 @@ void write_model(H5Output& out, const fe::Model& md);
 /// /dofs of a model given by its matrices (matrix input, docs/hdf5-schema.md): the node id and
 /// component (1..6) of every free row in row order (gathered on rank 0), the matrix files
 /// (source) and the number of rows of the files. Rank 0 data; not collective.
-void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node,
-                      const std::vector<std::int64_t>& component, const std::string& source,
-                      std::int64_t n_rows_file);
+void write_dof_labels(H5Output& out, const std::vector<std::int64_t>& node, const std::vector<std::int64_t>& component,
+                      const std::string& source, std::int64_t n_rows_file);
 
 /// Writes an XDMF file next to the HDF5 file that shows the mesh and, for each listed dataset
 /// (shape [count][n][components], n = nodes or, with cell, elements), one field per entry, named

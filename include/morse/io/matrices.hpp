@@ -59,8 +59,8 @@ void write_matrix(Mat A, const std::string& path, bool symmetric);
 
 /// The DOF map of a matrix model (see the file comment).
 struct DofMapFile {
-  std::vector<std::int64_t> node;  ///< node id per row
-  std::vector<int> component;      ///< 1..6 per row
+  std::vector<std::int64_t> node;                         ///< node id per row
+  std::vector<int> component;                             ///< 1..6 per row
   std::map<std::string, std::vector<std::int64_t>> sets;  ///< row sets, 0-based rows, ascending
 };
 

@@ -4,8 +4,8 @@
 // Nastran"). The result is the same fe::Model as a mesh model's, without a mesh.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <cstdint>
 #include <string>
@@ -18,8 +18,8 @@ namespace morse::io {
 
 /// What a matrix model is made of (the -matrices_* options).
 struct MatrixInput {
-  std::string K, M, C;  ///< files (C optional)
-  std::string dofmap;   ///< DOF map file (optional)
+  std::string K, M, C;             ///< files (C optional)
+  std::string dofmap;              ///< DOF map file (optional)
   std::vector<std::string> clamp;  ///< row sets (or node sets) whose rows are removed
   /// Node sets given by node ids (-mesh_node_set_NAME): all rows of those nodes.
   std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;

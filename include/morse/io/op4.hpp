@@ -153,9 +153,8 @@ struct Op4WriteOptions {
 /// matrix `name` (1 to 8 characters, no blanks; written in upper case) to path: a new file if
 /// append is false, appended to the file otherwise. Serial. Throws morse::Error on invalid input
 /// (including non-finite values) or I/O failure.
-void write_op4(const std::string& path, const std::string& name, std::int64_t nrows,
-               std::int64_t ncols, const std::vector<std::int64_t>& col_ptr,
-               const std::vector<std::int64_t>& row_idx, const std::vector<double>& values,
-               const Op4WriteOptions& o, bool append = false);
+void write_op4(const std::string& path, const std::string& name, std::int64_t nrows, std::int64_t ncols,
+               const std::vector<std::int64_t>& col_ptr, const std::vector<std::int64_t>& row_idx,
+               const std::vector<double>& values, const Op4WriteOptions& o, bool append = false);
 
 }  // namespace morse::io

@@ -23,15 +23,15 @@ namespace morse::io {
 
 /// A Craig-Bampton superelement as read from a morse HDF5 file.
 struct Superelement {
-  std::string source;                  ///< the file (for messages and provenance comments)
-  std::string units = "unknown";       ///< /meta/units ("unknown" if absent)
-  std::string command;                 ///< /meta/command (reduce, select), empty if absent
-  std::string selection_method;        ///< /rom@selection_method (select files), empty otherwise
-  int n = 0;                           ///< reduced size n = n_b + n_modes
-  int n_b = 0;                         ///< boundary DOFs
-  std::vector<double> K, M, C;         ///< row-major n x n; C empty if the file has no /rom/C
-  std::vector<std::int64_t> dof_node;  ///< n_b: node id of each boundary DOF
-  std::vector<int> dof_component;      ///< n_b: its component 1..6
+  std::string source;                        ///< the file (for messages and provenance comments)
+  std::string units = "unknown";             ///< /meta/units ("unknown" if absent)
+  std::string command;                       ///< /meta/command (reduce, select), empty if absent
+  std::string selection_method;              ///< /rom@selection_method (select files), empty otherwise
+  int n = 0;                                 ///< reduced size n = n_b + n_modes
+  int n_b = 0;                               ///< boundary DOFs
+  std::vector<double> K, M, C;               ///< row-major n x n; C empty if the file has no /rom/C
+  std::vector<std::int64_t> dof_node;        ///< n_b: node id of each boundary DOF
+  std::vector<int> dof_component;            ///< n_b: its component 1..6
   std::vector<std::int64_t> boundary_nodes;  ///< ascending, unique (/rom/boundary_nodes)
   /// Coordinates of boundary_nodes (3 per node, same order): from /mesh (mesh input) or
   /// set_boundary_coordinates(); empty if unknown (matrix input).
@@ -110,11 +110,11 @@ NodalShapes read_nodal_shapes(const Superelement& se);
 /// coordinates of rigid motion vanish, and R^T M_CB R is the rigid-body mass matrix of the full
 /// model (the Guyan mass is exact for rigid motion). K_CB R = 0 checks it.
 struct RigidBodyInertia {
-  bool valid = false;              ///< the superelement can move rigidly (stiffness_residual small)
-  std::string reason;              ///< why not, if !valid
-  double stiffness_residual = 0;   ///< max_k ||K_CB r_k|| / (||K_CB||_F ||r_k||) over the 6 motions
-  double mass = 0;                 ///< total mass
-  std::array<double, 3> center{};  ///< centre of mass
+  bool valid = false;                      ///< the superelement can move rigidly (stiffness_residual small)
+  std::string reason;                      ///< why not, if !valid
+  double stiffness_residual = 0;           ///< max_k ||K_CB r_k|| / (||K_CB||_F ||r_k||) over the 6 motions
+  double mass = 0;                         ///< total mass
+  std::array<double, 3> center{};          ///< centre of mass
   std::array<double, 9> inertia_cm{};      ///< inertia tensor about the centre of mass, row-major
   std::array<double, 9> inertia_origin{};  ///< about the origin of the basic system
   std::array<double, 36> rigid_mass{};     ///< R^T M_CB R (6 x 6, row-major; about the origin)

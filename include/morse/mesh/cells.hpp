@@ -67,8 +67,7 @@ inline void jacobian(int n, const double* dN, const double* xyz, double* J) {
 
 /// Determinant of a 3 x 3 row-major matrix. Not collective.
 inline double det3(const double* J) {
-  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
-         J[2] * (J[3] * J[7] - J[4] * J[6]);
+  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) + J[2] * (J[3] * J[7] - J[4] * J[6]);
 }
 
 }  // namespace morse::mesh

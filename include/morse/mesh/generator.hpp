@@ -1,8 +1,8 @@
 // morse/mesh/generator.hpp: built-in structured meshes of a box (beams, plates, blocks).
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <array>
 #include <string>

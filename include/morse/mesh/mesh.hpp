@@ -79,8 +79,7 @@ struct Mesh {
   /// Appends a node and returns its index.
   std::int64_t add_node(std::int64_t id, double x, double y, double z);
   /// Appends an element (nodes are indices, in morse ordering) and returns its index.
-  std::int64_t add_element(std::int64_t id, ElementType t, const std::int64_t* nodes,
-                           int material = -1);
+  std::int64_t add_element(std::int64_t id, ElementType t, const std::int64_t* nodes, int material = -1);
   /// Sorts and de-duplicates every set.
   void normalize_sets();
 };

@@ -118,8 +118,8 @@
 // [0.1, 1e5), fewer outside (-1.23-12 has 3): use it only for models that tolerate that.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <string>
 
@@ -130,8 +130,9 @@ namespace morse::mesh {
 /// Reads the Nastran input file at path (serial, call on one rank) into a new Mesh owned by the
 /// caller. An element or matrix card that carries stiffness or mass but is not supported (CQUAD4,
 /// CBAR, CELASi, CONM1, DMIG, ...) is an error, unless skip_unsupported: then such cards are
-/// skipped and listed in a WARNING (their stiffness and mass are MISSING). Notices (skipped sections and cards, mirrored elements, WTMASS, ...) go to stderr if
-/// verbose. Throws morse::Error ("file:line: card NAME: what") on any input error.
+/// skipped and listed in a WARNING (their stiffness and mass are MISSING). Notices (skipped sections and cards,
+/// mirrored elements, WTMASS, ...) go to stderr if verbose. Throws morse::Error ("file:line: card NAME: what") on any
+/// input error.
 Mesh read_nastran(const std::string& path, bool verbose = true, bool skip_unsupported = false);
 
 /// Options of write_nastran().

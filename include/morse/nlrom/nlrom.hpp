@@ -73,11 +73,11 @@ enum class BasisKind { CB, CBMD, POD };
 
 struct BasisSettings {
   BasisKind kind = BasisKind::CB;
-  std::string boundary_set;       ///< -boundary
-  PetscInt n_fixed = 0;           ///< -nlrom_num_fixed_modes (CB, CB + MD)
-  PetscInt n_derivatives = 0;     ///< -nlrom_num_derivatives (CB + MD)
-  PetscInt n_pod = 0;             ///< -nlrom_num_pod (POD)
-  std::string snapshots;          ///< -nlrom_snapshots: a morse fom file (POD; POD filtering)
+  std::string boundary_set;    ///< -boundary
+  PetscInt n_fixed = 0;        ///< -nlrom_num_fixed_modes (CB, CB + MD)
+  PetscInt n_derivatives = 0;  ///< -nlrom_num_derivatives (CB + MD)
+  PetscInt n_pod = 0;          ///< -nlrom_num_pod (POD)
+  std::string snapshots;       ///< -nlrom_snapshots: a morse fom file (POD; POD filtering)
   /// Modified Gram–Schmidt: a vector whose M-norm falls below mgs_tol times its norm before the
   /// projection is dependent and dropped (-nlrom_mgs_tol).
   double mgs_tol = 1e-6;
@@ -89,22 +89,22 @@ struct BasisSettings {
   double training_dt = 0.0;
   /// Order in which the modal derivatives enter the basis: by descending W_ij (eq. 24), or a
   /// random order (a fixed-seed shuffle, the same on every rank: seed 003 Fig. 9's control).
-  bool random_derivatives = false;     ///< -nlrom_derivative_selection random
-  unsigned derivative_seed = 1;        ///< -nlrom_derivative_seed
-  std::string prefix = "nlrom_";  ///< options prefix of the fixed-interface eigen solve
+  bool random_derivatives = false;  ///< -nlrom_derivative_selection random
+  unsigned derivative_seed = 1;     ///< -nlrom_derivative_seed
+  std::string prefix = "nlrom_";    ///< options prefix of the fixed-interface eigen solve
 };
 
 struct Basis {
   BasisKind kind = BasisKind::CB;
-  cb::CBResult cb;  ///< boundary layout (n_b, node ids, DOFs) and the CB part (CB, CB + MD)
-  UMat V;           ///< the basis, MPIDENSE n_free x r
+  cb::CBResult cb;                             ///< boundary layout (n_b, node ids, DOFs) and the CB part (CB, CB + MD)
+  UMat V;                                      ///< the basis, MPIDENSE n_free x r
   PetscInt n_b = 0, n_fixed = 0, n_extra = 0;  ///< r = n_b + n_fixed + n_extra
   std::vector<std::string> labels;             ///< one per column
   /// CB + MD: every pair (i <= j) of CB coordinates with its weight W_ij (eq. 24), the chosen
   /// order (descending W) and which pairs entered the basis after MGS.
   std::vector<std::pair<PetscInt, PetscInt>> md_pairs;
   std::vector<double> md_weights;
-  std::vector<int> md_selected;  ///< 1 if the pair's derivative is a basis column
+  std::vector<int> md_selected;             ///< 1 if the pair's derivative is a basis column
   std::vector<double> pod_singular_values;  ///< POD: all singular values of the snapshots
   double seconds = 0.0;                     ///< t1 of seed 003 §4.3.2
   PetscInt r() const { return n_b + n_fixed + n_extra; }
@@ -147,7 +147,7 @@ struct OfflineSettings {
   double step_displacement = 0.01;  ///< -step_displacement (StepSettings::displacement)
   double damping_xi = 0.0;          ///< -nlrom_damping_modal (project_model's xi)
   PetscInt damping_modes = 0;       ///< -nlrom_damping_modes (project_model's k)
-  std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
+  std::string error;                ///< a bad option value, naming the option (raised by the caller, after -help)
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
   /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
@@ -164,8 +164,8 @@ struct OfflineSettings {
 
 struct ReducedModel {
   PetscInt r = 0, n_b = 0;
-  std::vector<double> M, K, C;  ///< r x r row-major, identical on every rank
-  CubicForce g;                 ///< reduced nonlinear force
+  std::vector<double> M, K, C;        ///< r x r row-major, identical on every rank
+  CubicForce g;                       ///< reduced nonlinear force
   std::vector<double> damping_omega;  ///< reduced natural angular frequencies carrying xi
 };
 
@@ -174,11 +174,11 @@ struct ReducedModel {
 struct StoredModel {
   std::string file, units = "SI";
   ReducedModel model;
-  std::vector<double> basis;                              ///< [r][node][3]
-  std::vector<std::int64_t> node_ids;                     ///< node of each basis row
-  std::map<std::string, std::vector<std::size_t>> sets;   ///< node set -> basis rows (ascending id)
-  std::vector<double> coords;                             ///< [node][3] reference positions (/mesh/coordinates)
-  std::vector<std::int64_t> boundary_nodes;               ///< q[3k..3k+2] = u of boundary_nodes[k] (eq. 9)
+  std::vector<double> basis;                             ///< [r][node][3]
+  std::vector<std::int64_t> node_ids;                    ///< node of each basis row
+  std::map<std::string, std::vector<std::size_t>> sets;  ///< node set -> basis rows (ascending id)
+  std::vector<double> coords;                            ///< [node][3] reference positions (/mesh/coordinates)
+  std::vector<std::int64_t> boundary_nodes;              ///< q[3k..3k+2] = u of boundary_nodes[k] (eq. 9)
 
   std::size_t r() const { return static_cast<std::size_t>(model.r); }
   /// Phi^T f for a unit force per node of `set` along `dir` (normalized here).
@@ -205,22 +205,22 @@ struct StoredModel {
   std::vector<double> fit(const std::vector<double>& u, double* rel_residual) const;
 };
 
-/// Reads /nlrom/{M,K,C,A,B,basis,boundary_nodes}, /mesh/{node_ids,coordinates}, /meta/units and the node sets `sets` of a
-/// `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the
-/// missing or inconsistent dataset, or the missing set (listing the file's sets). Collective.
+/// Reads /nlrom/{M,K,C,A,B,basis,boundary_nodes}, /mesh/{node_ids,coordinates}, /meta/units and the node sets `sets` of
+/// a `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the missing or
+/// inconsistent dataset, or the missing set (listing the file's sets). Collective.
 StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets);
 
 /// How a `morse nlrom` file's model was built, recorded as attributes of /nlrom.
 struct StoredInfo {
-  std::string basis = "cb";           ///< -nlrom_basis: cb, cbmd or pod
-  std::string forces = "step";        ///< -nlrom_forces: step or exact
-  std::string boundary_set;           ///< the interface node set
+  std::string basis = "cb";                     ///< -nlrom_basis: cb, cbmd or pod
+  std::string forces = "step";                  ///< -nlrom_forces: step or exact
+  std::string boundary_set;                     ///< the interface node set
   std::string derivative_selection = "weight";  ///< cbmd: weight or random
-  double step_displacement = 0;       ///< -step_displacement (STEP)
-  PetscInt filter_pod = 0;            ///< -nlrom_filter_pod
-  double modal_damping_ratio = 0;     ///< -nlrom_damping_modal
-  double t2_forces_seconds = 0;       ///< offline time of the forces (t1 is basis.seconds)
-  double t3_projection_seconds = 0;   ///< offline time of the projection
+  double step_displacement = 0;                 ///< -step_displacement (STEP)
+  PetscInt filter_pod = 0;                      ///< -nlrom_filter_pod
+  double modal_damping_ratio = 0;               ///< -nlrom_damping_modal
+  double t2_forces_seconds = 0;                 ///< offline time of the forces (t1 is basis.seconds)
+  double t3_projection_seconds = 0;             ///< offline time of the projection
 };
 
 /// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on

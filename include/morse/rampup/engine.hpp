@@ -4,8 +4,8 @@
 // run's /rampup group.
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <cmath>
 #include <map>
@@ -94,7 +94,7 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max);
 /// step_solver, steps, seconds, n_dofs, n_stator_modes, n_rotor_dofs), the stators
 /// (write_stator), the assembled matrices (-rampup_write_matrices) and the errors against
 /// -rampup_reference (he). Rank 0 data; not collective.
-void write_run(io::H5Output& out, const std::string& group, const RampupOptions& o, const Engine& e,
-               const Assembly& a, const IntegratorStats& st, const HistoryErrors& he);
+void write_run(io::H5Output& out, const std::string& group, const RampupOptions& o, const Engine& e, const Assembly& a,
+               const IntegratorStats& st, const HistoryErrors& he);
 
 }  // namespace morse::rampup

@@ -38,8 +38,8 @@
 #pragma once
 
 #include <array>
-#include <cstddef>
 #include <complex>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -171,16 +171,15 @@ struct StatorModes {
 /// C), and reports the relative size of its dropped off-diagonal part (the stator block is kept
 /// diagonal, see integrate()). Throws if a clamped node is not a boundary node, if f_cut_hz <= 0
 /// or if M is not positive definite on the free DOFs.
-StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes,
-                         double f_cut_hz, double damping_ratio = -1.0);
+StatorModes stator_modes(const Superelement& se, const std::vector<std::int64_t>& clamped_nodes, double f_cut_hz,
+                         double damping_ratio = -1.0);
 
 /// The node ids of `spec` for a superelement file: each entry of the list is either a node id
 /// (digits) or the name of a node set of the mesh the superelement was made from
 /// (/mesh/node_sets/<NAME>, written by every command that writes /mesh). Ids are returned in
 /// the order given, duplicates removed. Throws naming `who` (e.g. the option), the file and the
 /// entry if a set is missing (listing the sets the file has).
-std::vector<std::int64_t> resolve_nodes(const std::string& file,
-                                        const std::vector<std::string>& spec,
+std::vector<std::int64_t> resolve_nodes(const std::string& file, const std::vector<std::string>& spec,
                                         const std::string& who);
 
 /// The seed's truncation frequency of the stator modal bases (seed 000 §1, §3.3): factor times
@@ -219,8 +218,7 @@ class Assembly {
   /// Validates and assembles: every rotor (rotor_matrices()), every bearing (rotor, station,
   /// stator index, node: the node must carry free boundary DOFs x and y in that stator's modes;
   /// stiffness and damping >= 0). Keeps copies of everything. Throws naming the bad entry.
-  Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators,
-           std::vector<Bearing> bearings);
+  Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings);
 
   const std::vector<RotorSpec>& rotors() const { return rotors_; }
   const std::vector<StatorModes>& stators() const { return stators_; }
@@ -230,9 +228,7 @@ class Assembly {
   int n_rotor() const { return n_rotor_; }
   int stator_offset(int s) const { return stator_offset_[s]; }
   /// Index of DOF `dof` (0..3 = u_x, u_y, theta_x, theta_y) of a rotor station in x.
-  int rotor_dof(int rotor, int station, int dof) const {
-    return n_stator_ + rotor_offset_[rotor] + 4 * station + dof;
-  }
+  int rotor_dof(int rotor, int station, int dof) const { return n_stator_ + rotor_offset_[rotor] + 4 * station + dof; }
 
   /// Dense M, C, K, G in the coordinates x. Cost O(n^2) memory.
   AssembledMatrices dense() const;
@@ -244,8 +240,7 @@ class Assembly {
   /// Bearing outputs of a state: per bearing b, F[2b], F[2b+1] = F_x, F_y (as in Bearing), and
   /// the displacements x, y of the rotor station and of the stator node (0 for the ground).
   /// Any pointer may be null.
-  void bearing_state(const double* x, const double* v, double* force, double* rotor_disp,
-                     double* stator_disp) const;
+  void bearing_state(const double* x, const double* v, double* force, double* rotor_disp, double* stator_disp) const;
 
   /// Structured operator y = (cM M + cD (C + omega G) + cK K) x, without forming the matrices:
   /// O(n_stator + rotor DOFs x bandwidth + bearings x stator modes).
@@ -322,8 +317,8 @@ struct IntegratorSettings {
   double dt = 0.0;       ///< fixed step [s]
   double t_final = 0.0;  ///< 0: the ramp time
   double alpha = 0.0;
-  int output_every = 1;  ///< callback after every k-th step (and the initial state)
-  bool dense = false;    ///< LU of the dense n x n effective matrix every step (reference, O(n^3))
+  int output_every = 1;        ///< callback after every k-th step (and the initial state)
+  bool dense = false;          ///< LU of the dense n x n effective matrix every step (reference, O(n^3))
   std::vector<double> x0, v0;  ///< initial state (empty: zero)
 };
 
@@ -366,15 +361,15 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
 /// every output step (IntegratorSettings::output_every, the initial state included), per
 /// bearing b its F_x, F_y and the x, y displacements of the rotor station and of the housing.
 struct History {
-  std::vector<double> t, omega;                      ///< n_out: time [s], driving speed [rad/s]
+  std::vector<double> t, omega;                        ///< n_out: time [s], driving speed [rad/s]
   std::vector<double> force, rotor_disp, stator_disp;  ///< n_out x bearings x 2, row-major
   int n_bearings = 0;
   std::size_t n_out() const { return t.size(); }
 };
 /// Integrates (integrate()) and records the history. `progress`, if given, is called after every
 /// output step with the fraction of the run done (for a progress line). Serial; not collective.
-History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
-               IntegratorStats* stats, const std::function<void(double)>& progress = nullptr);
+History record(const Assembly& a, const LoadCase& load, const IntegratorSettings& s, IntegratorStats* stats,
+               const std::function<void(double)>& progress = nullptr);
 
 /// Seed 000 eq. 24: the maximum over the run of |x - x_ref| / (max x_ref - min x_ref), for one
 /// feature sampled n times with the given stride (x[i * stride], x_ref[i * stride]). Returns 0 if

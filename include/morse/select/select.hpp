@@ -58,8 +58,8 @@ InterfaceCoupling interface_coupling(MPI_Comm comm, Mat K, Mat M, const cb::CBRe
 /// with phase_deg[k] on every boundary DOF.
 struct Excitation {
   std::vector<double> freq_hz;
-  std::vector<double> amplitude;  ///< per harmonic, applied to every boundary DOF (load empty)
-  std::vector<double> phase_deg;  ///< per harmonic (load empty)
+  std::vector<double> amplitude;                        ///< per harmonic, applied to every boundary DOF (load empty)
+  std::vector<double> phase_deg;                        ///< per harmonic (load empty)
   std::vector<std::vector<std::complex<double>>> load;  ///< per harmonic, n_b values, or empty
   bool all_components = true;
 };
@@ -77,9 +77,9 @@ Excitation read_ebr_load(MPI_Comm comm, const std::string& path, const cb::CBRes
 struct ImrData {
   std::vector<double> lambda;
   std::vector<double> X1, X2, vb;
-  bool clamped = false;  ///< the system modes are the fixed-interface modes themselves
+  bool clamped = false;                 ///< the system modes are the fixed-interface modes themselves
   std::vector<PetscInt> clamped_modes;  ///< with clamped: the chosen fixed-interface modes
-  double shift = 0.01;   ///< omega_f = (1 + shift) omega_zeta
+  double shift = 0.01;                  ///< omega_f = (1 + shift) omega_zeta
 };
 
 /// Score of every candidate mode (length n_phi, >= 0). cb.M / cb.K are the full Craig–Bampton
@@ -92,10 +92,10 @@ std::vector<double> scores(MPI_Comm comm, Method m, const InterfaceCoupling& ic,
 
 /// Ranking and truncation.
 struct Selection {
-  std::vector<PetscInt> ranking;     ///< candidate indices, best first
-  std::vector<double> cumulative;    ///< cumulative fraction of the total score along ranking
-  std::vector<PetscInt> selected;    ///< kept candidates, ascending (i.e. by frequency)
-  double retained = 0;               ///< fraction of the total score kept
+  std::vector<PetscInt> ranking;   ///< candidate indices, best first
+  std::vector<double> cumulative;  ///< cumulative fraction of the total score along ranking
+  std::vector<PetscInt> selected;  ///< kept candidates, ascending (i.e. by frequency)
+  double retained = 0;             ///< fraction of the total score kept
 };
 
 /// Ranks by decreasing score (Frequency: by ascending frequency) and keeps the first `count`
@@ -190,23 +190,23 @@ struct MethodCheck {
   std::string name;
   std::vector<double> score;  ///< per candidate mode
   Selection sel;
-  std::vector<double> rom_f;  ///< frequencies [Hz] of the restricted superelement, ascending
-  PetscInt in_band = 0;       ///< of them below the cutoff
-  PetscInt matches = 0;       ///< full-model modes with best pairwise MAC above the threshold
+  std::vector<double> rom_f;      ///< frequencies [Hz] of the restricted superelement, ascending
+  PetscInt in_band = 0;           ///< of them below the cutoff
+  PetscInt matches = 0;           ///< full-model modes with best pairwise MAC above the threshold
   PetscInt subspace_matches = 0;  ///< full-model modes with subspace MAC above the threshold
-  double worst_err = 0;       ///< largest relative frequency error of a matched pair
-  std::vector<double> mac;    ///< [full-model mode][in-band superelement mode] (n_fom x max(in_band, 1))
+  double worst_err = 0;           ///< largest relative frequency error of a matched pair
+  std::vector<double> mac;        ///< [full-model mode][in-band superelement mode] (n_fom x max(in_band, 1))
   std::vector<double> best_mac, subspace_mac;  ///< per full-model mode
-  std::vector<double> M, K;   ///< the restricted superelement (restrict_operator), row-major
+  std::vector<double> M, K;                    ///< the restricted superelement (restrict_operator), row-major
 };
 
 struct VerifyResult {
   double fmax_analysis_hz = 0;
   InterfaceCoupling ic;
   Excitation excitation;
-  std::vector<double> fom_omega2;  ///< the full-model eigenvalues of the MAC reference, ascending
-  std::vector<MethodCheck> methods;  ///< same order as the settings' methods
-  PetscInt cb_in_band = 0;  ///< superelement modes in band with every candidate (plain Craig-Bampton)
+  std::vector<double> fom_omega2;     ///< the full-model eigenvalues of the MAC reference, ascending
+  std::vector<MethodCheck> methods;   ///< same order as the settings' methods
+  PetscInt cb_in_band = 0;            ///< superelement modes in band with every candidate (plain Craig-Bampton)
   std::vector<double> eim_fractions;  ///< EIM score of each candidate over their sum (effective mass)
 };
 

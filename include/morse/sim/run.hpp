@@ -4,8 +4,8 @@
 // (SimRecord) and the cases run round robin over the ranks (docs/user-guide.md).
 #pragma once
 
-#include <mpi.h>
 #include <petscsys.h>
+#include <mpi.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -98,8 +98,7 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
 /// of rec, takes its finished speeds into rec; then writes rec as the first checkpoint (which also
 /// proves that `out` is writable). Returns the indices of the finished speeds on every rank.
 /// Throws collectively if `out` holds another sweep or cannot be read or written. Collective.
-std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart,
-                                       SweepRecord* rec);
+std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart, SweepRecord* rec);
 
 /// The options of `morse stress`.
 struct StressOptions {
@@ -118,9 +117,8 @@ struct StressState {
   std::vector<double> q;               ///< r: the reduced coordinates of the state
   double time = 0.0;                   ///< its time
   std::int64_t step = 0, n_steps = 0;  ///< its output row, and the rows of the file
-  double radial = 0.0;  ///< the largest |radial displacement| at the monitor (no -stress_time)
-  StressMeasure measure =
-      StressMeasure::Nonlinear;  ///< -stress_measure, else the file's (/sim@linear)
+  double radial = 0.0;                 ///< the largest |radial displacement| at the monitor (no -stress_time)
+  StressMeasure measure = StressMeasure::Nonlinear;  ///< -stress_measure, else the file's (/sim@linear)
 };
 /// Rank 0 reads /sim/time and /sim/q of so.sim (and /sim@linear without -stress_measure) and picks
 /// the stored time nearest so.time (so.time_set), else the time of the largest |radial
@@ -131,8 +129,8 @@ StressState stress_state(MPI_Comm comm, const StressOptions& so, const nlrom::St
 /// The displacement u ([k][3] at the nodes node_ids) in the node order of the gathered mesh gm
 /// (rec->displacement), and the largest nodal von Mises of f with its node's id. Rank 0 (gm and f
 /// are rank 0 data); not collective.
-void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u,
-                  const mesh::Mesh& gm, const StressField& f, StressRecord* rec);
+void nodal_fields(const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, const mesh::Mesh& gm,
+                  const StressField& f, StressRecord* rec);
 
 /// The file of case `c` of a run writing `out`: <out stem>_<c><extension> (<out>_<c>.h5 if out
 /// has no extension).
@@ -148,8 +146,7 @@ struct SnapshotPlan {
 };
 /// Reads the snapshot plan of fom file `fom` for stored model sm; an error names -sim_snapshots.
 /// Collective on comm (every rank throws alike).
-SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
-                                const nlrom::StoredModel& sm);
+SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom, const nlrom::StoredModel& sm);
 
 /// Integrates the reduced model of sm under `loads` (sim::integrate) and records the run in
 /// *rec: every `every`-th step the time, energy, q, the contact histories (the mean contact force
@@ -157,15 +154,14 @@ SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom,
 /// of the monitored sets; the full fields at the snapshot steps of plan (the step nearest each
 /// snapshot time within [0, t_final]); the final state; the node ids of the monitored sets and of
 /// the contact set `contact_set` (s.contact has its nodes) and the loads. Serial.
-Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& loads,
-               const Settings& s, long every, const std::vector<std::string>& monitor,
-               const std::string& contact_set, const SnapshotPlan& plan, SimRecord* rec);
+Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& loads, const Settings& s, long every,
+               const std::vector<std::string>& monitor, const std::string& contact_set, const SnapshotPlan& plan,
+               SimRecord* rec);
 
 /// Runs task(i) for every case i, round robin over the ranks of comm (case i on rank i % size). A
 /// failed case does not stop the others: at the end every rank throws one morse::Error naming
 /// every failure in rank order ("case <name>: <message>", or the message alone for an unnamed
 /// case). Collective.
-void run_cases(MPI_Comm comm, const std::vector<std::string>& names,
-               const std::function<void(std::size_t)>& task);
+void run_cases(MPI_Comm comm, const std::vector<std::string>& names, const std::function<void(std::size_t)>& task);
 
 }  // namespace morse::sim

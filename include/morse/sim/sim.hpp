@@ -47,7 +47,7 @@ enum class KernelLayout { Auto, Folded, Potential };
 /// predicted sliding velocity. The active set is iterated until every normal multiplier is
 /// compressive. Central differences only.
 struct ContactNode {
-  std::size_t dof = 0;           ///< index of u_x of the node in q (u_y, u_z follow)
+  std::size_t dof = 0;            ///< index of u_x of the node in q (u_y, u_z follow)
   double x[3] = {0.0, 0.0, 0.0};  ///< reference position
 };
 /// A rigid plane: gap = (x + u - point) . normal, normal pointing into the free side.
@@ -64,9 +64,9 @@ struct Casing {
   double clearance = 0.356e-3;    ///< c0 [m]
   double bump_height = 0.712e-3;  ///< h_b [m]
   int lobes = 2;
-  double width = 0.15;            ///< of each bump [rad]
-  double alpha = 0.0;             ///< growth rate [1/s]; 0: 99 % of h_b at 20 % of t_final
-  double omega = 0.0;             ///< rotation speed [rad/s]
+  double width = 0.15;  ///< of each bump [rad]
+  double alpha = 0.0;   ///< growth rate [1/s]; 0: 99 % of h_b at 20 % of t_final
+  double omega = 0.0;   ///< rotation speed [rad/s]
 };
 enum class Obstacle { Plane, Casing };
 struct ContactSettings {
@@ -74,7 +74,7 @@ struct ContactSettings {
   Obstacle obstacle = Obstacle::Plane;
   Plane plane;
   Casing casing;
-  double mu = 0.15;                ///< Coulomb friction coefficient
+  double mu = 0.15;  ///< Coulomb friction coefficient
 };
 
 /// The unit normal n_k of each contact node, pointing to the free side (3 values per node, global
@@ -99,13 +99,13 @@ enum class Scheme { Central, Trapezoidal };
 struct Settings {
   Scheme scheme = Scheme::Central;
   ContactSettings contact;
-  double newton_rtol = 1e-8;    ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
-  int newton_max_it = 100;   ///< reduced Newton is cheap; stiff constraint modes need many at large dt
+  double newton_rtol = 1e-8;  ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
+  int newton_max_it = 100;    ///< reduced Newton is cheap; stiff constraint modes need many at large dt
   double dt = 0.0;
   KernelLayout kernel = KernelLayout::Auto;
   double t_final = 0.0;
-  bool linear = false;          ///< g~ = 0
-  std::vector<double> q0, v0;   ///< initial state (empty: zero)
+  bool linear = false;         ///< g~ = 0
+  std::vector<double> q0, v0;  ///< initial state (empty: zero)
 };
 
 struct StepState {
@@ -127,7 +127,7 @@ struct StepState {
 };
 
 struct Stats {
-  std::string kernel = "linear";  ///< folded | potential | implicit | linear (no nonlinear force)
+  std::string kernel = "linear";                  ///< folded | potential | implicit | linear (no nonlinear force)
   double kernel_flops = 0.0, kernel_bytes = 0.0;  ///< per step (CubicKernel::flops(), bytes())
   long steps = 0;
   long newton_iterations = 0;  ///< Trapezoidal
@@ -168,8 +168,8 @@ class CubicKernel {
   std::size_t r_ = 0, n_ = 0;
   bool potential_ = false;
   double asymmetry_ = 0.0;
-  std::vector<double> W_;          // Folded: (n2 + n3) x r, row-major
-  mutable std::vector<double> z_;  // Folded: monomials; Potential: g
+  std::vector<double> W_;             // Folded: (n2 + n3) x r, row-major
+  mutable std::vector<double> z_;     // Folded: monomials; Potential: g
   std::vector<double> c3_, c4_, P3_;  // Potential: energy coefficients (sorted indices), P3
 };
 
@@ -235,17 +235,17 @@ struct SpeedTask {
 struct SpeedResult {
   long index = -1;
   double omega = 0.0;
-  int status = 0;           ///< 0 done; 1 failed (error says why; the other fields hold what was reached)
+  int status = 0;  ///< 0 done; 1 failed (error says why; the other fields hold what was reached)
   std::string error;
-  long steps = 0;           ///< states after the initial one
-  double t_final = 0.0;     ///< revolutions * 2 pi / |Omega|
-  double rms = 0.0;         ///< RMS of the monitored displacement over t >= t_final / 2
-  double mean = 0.0;        ///< its mean over the same window
+  long steps = 0;                                    ///< states after the initial one
+  double t_final = 0.0;                              ///< revolutions * 2 pi / |Omega|
+  double rms = 0.0;                                  ///< RMS of the monitored displacement over t >= t_final / 2
+  double mean = 0.0;                                 ///< its mean over the same window
   double max_displacement = 0.0, time_of_max = 0.0;  ///< max |monitored displacement| over the run
   double max_force = 0.0, time_of_max_force = 0.0;   ///< max over time of the total normal force [N]
   double max_node_force = 0.0;                       ///< max over time and nodes of one normal force
-  int max_active = 0;       ///< most nodes in contact at once
-  double seconds = 0.0;     ///< wall time on its rank (shared with the other lanes of its batch)
+  int max_active = 0;                                ///< most nodes in contact at once
+  double seconds = 0.0;          ///< wall time on its rank (shared with the other lanes of its batch)
   std::vector<double> spectrum;  ///< amplitude at SweepSettings::frequencies(), same window, mean removed
 };
 
@@ -254,10 +254,10 @@ struct SweepSettings {
   /// speed. The run starts at rest (no q0, v0, loads).
   Settings base;
   double revolutions = 200.0;
-  std::vector<double> monitor;   ///< r: the recorded displacement is monitor . q (e.g. e_r . u at LE)
-  double spectrum_fmax = 0.0;    ///< [Hz]; 0: no spectrum
-  int spectrum_bins = 0;         ///< frequencies k fmax / bins, k = 0..bins
-  int batch = 8;                 ///< speeds advanced together per rank (lanes)
+  std::vector<double> monitor;  ///< r: the recorded displacement is monitor . q (e.g. e_r . u at LE)
+  double spectrum_fmax = 0.0;   ///< [Hz]; 0: no spectrum
+  int spectrum_bins = 0;        ///< frequencies k fmax / bins, k = 0..bins
+  int batch = 8;                ///< speeds advanced together per rank (lanes)
   /// The cubic force of the lanes: true = one batched pass of the folded tensor for all lanes
   /// (matrix-matrix product); false = CubicKernel (KernelLayout::Auto) lane by lane. Measured on
   /// the 2-core EPYC at r = 54 (bench/sweep_bench.py): 2,200 lane-steps/s batched (16 lanes, 7
@@ -281,7 +281,7 @@ std::vector<double> decimated_spectrum(std::vector<double> block_means, double h
 
 /// Throughput counters of one rank's part of a sweep.
 struct SweepStats {
-  long lane_steps = 0;     ///< sum over speeds of their steps
+  long lane_steps = 0;  ///< sum over speeds of their steps
   double seconds = 0.0;
   double kernel_seconds = 0.0;  ///< in the batched linear + cubic product
 };
@@ -305,7 +305,7 @@ struct SweepRecord {
   std::string units = "SI", rom;
   std::vector<double> frequencies, eigenfrequencies_hz;
   std::vector<SpeedResult> results;
-  long n_speeds = 0;     ///< size of the whole speed grid
+  long n_speeds = 0;  ///< size of the whole speed grid
 };
 /// Writes the record atomically (temporary file renamed into place), results sorted by index.
 /// Serial: call on one rank. Throws naming the file if it cannot be written.
@@ -321,8 +321,8 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error);
 
 /// What a run records at its output steps (every -sim_output_every steps from the initial state).
 struct SimRecord {
-  std::vector<double> time, energy;  ///< energy: seed 003 eq. 46 (StepState::energy)
-  std::vector<double> q;             ///< [time][r] reduced coordinates
+  std::vector<double> time, energy;      ///< energy: seed 003 eq. 46 (StepState::energy)
+  std::vector<double> q;                 ///< [time][r] reduced coordinates
   std::vector<double> final_q, final_v;  ///< the state at final_time (the last step)
   double final_time = 0.0;
   /// Displacements u = Phi q of monitored node sets: u is [time][node][x,y,z].
@@ -340,18 +340,18 @@ struct SimRecord {
   /// Contact at the output steps (written when Settings::contact has nodes), per contact node.
   struct Contact {
     std::vector<std::int64_t> node_ids;
-    std::vector<double> normal;      ///< [time][node] lambda >= 0 [N]
-    std::vector<double> tangential;  ///< [time][node][3] friction force [N]
-    std::vector<double> normals;     ///< [node][3] contact_normals()
-    std::vector<double> mean_force;  ///< [time][node][3] mean force since the previous output row
-    std::vector<double> mean_force_time;  ///< centre of each row's output interval (0 for row 0)
-    std::vector<double> gap;              ///< [time][node]
-    std::vector<std::int64_t> active;     ///< [time] nodes in contact
+    std::vector<double> normal;               ///< [time][node] lambda >= 0 [N]
+    std::vector<double> tangential;           ///< [time][node][3] friction force [N]
+    std::vector<double> normals;              ///< [node][3] contact_normals()
+    std::vector<double> mean_force;           ///< [time][node][3] mean force since the previous output row
+    std::vector<double> mean_force_time;      ///< centre of each row's output interval (0 for row 0)
+    std::vector<double> gap;                  ///< [time][node]
+    std::vector<std::int64_t> active;         ///< [time] nodes in contact
     std::vector<double> radial_displacement;  ///< [time][node] e_r . u
     double max_normal_force = 0.0, time_of_max_normal_force = 0.0;
   } contact;
-  std::string rom;        ///< the nlrom file of the model
-  std::string case_name;  ///< -sim_cases: the case, "" for a single run
+  std::string rom;            ///< the nlrom file of the model
+  std::string case_name;      ///< -sim_cases: the case, "" for a single run
   dyn::LoadDescription load;  ///< the run's nodal loads (/sim/load)
 };
 
@@ -406,14 +406,14 @@ StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fall
 /// What `morse stress` writes besides the field (/stress, docs/hdf5-schema.md).
 struct StressRecord {
   std::int64_t n_nodes = 0, n_elements = 0;  ///< of the global mesh
-  std::vector<double> displacement;  ///< [node][3] u = Phi q in global node order (rank 0)
-  double time = 0.0;                 ///< of the state
-  std::int64_t step = 0;             ///< its output row in the simulate file
+  std::vector<double> displacement;          ///< [node][3] u = Phi q in global node order (rank 0)
+  double time = 0.0;                         ///< of the state
+  std::int64_t step = 0;                     ///< its output row in the simulate file
   StressMeasure measure = StressMeasure::Nonlinear;
   double max_nodal_von_mises = 0.0;  ///< largest nodal von Mises and its node's id
   std::int64_t max_node_id = -1;
-  std::string rom, sim;              ///< the nlrom and simulate files
-  std::string monitor;               ///< the set whose radial displacement chose the state ("" if a time did)
+  std::string rom, sim;  ///< the nlrom and simulate files
+  std::string monitor;   ///< the set whose radial displacement chose the state ("" if a time did)
   double monitor_radial_displacement = 0.0;
 };
 /// Writes /stress: the displacement, the nodal stress (in XDMF Tensor6 order xx, xy, xz, yy, yz,

@@ -30,8 +30,8 @@ inline Received exchange(MPI_Comm comm, const std::vector<std::vector<std::int64
   std::vector<std::int64_t> sbuf(sd[size]);
   for (int q = 0; q < size; ++q) std::copy(send[q].begin(), send[q].end(), sbuf.begin() + sd[q]);
   r.words.resize(r.offset[size]);
-  MPI_Alltoallv(sbuf.data(), sn.data(), sd.data(), MPI_INT64_T, r.words.data(), rn.data(), r.offset.data(),
-                MPI_INT64_T, comm);
+  MPI_Alltoallv(sbuf.data(), sn.data(), sd.data(), MPI_INT64_T, r.words.data(), rn.data(), r.offset.data(), MPI_INT64_T,
+                comm);
   return r;
 }
 
