@@ -157,6 +157,10 @@ endfunction()
 
 morse_add_ok_case(modes_ok modes_ok.h5
   modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 6 ${MORSE_CASE_MATERIAL_STR})
+# A free-free model (no clamp): K is singular; modes shifts below zero by itself and returns the six
+# rigid-body modes at zero frequency (tests/test_free_free.cpp checks them).
+morse_add_ok_case(modes_free_free modes_free_free.h5
+  modes -mesh '${MORSE_CASE_BOX}' -modes_nev 8 ${MORSE_CASE_MATERIAL_STR})
 # The eigen solver's check and monitor options are accepted on the command line.
 morse_add_ok_case(modes_solver_options modes_solver_options.h5
   modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 6 -modes_check_inertia false -modes_block_monitor

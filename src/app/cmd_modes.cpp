@@ -27,8 +27,9 @@ const char* const kSolverPrefix = "modes_";  // options prefix of the eigen solv
 PetscErrorCode get_modes_options(MPI_Comm comm, PetscInt* nev, PetscReal* shift, PetscBool* xdmf) {
   PetscOptionsBegin(comm, nullptr, "morse modes options", "");
   PetscCall(MorseOptionsInt("-modes_nev", "Number of lowest eigenpairs of the clamped model", "", *nev, nev, nullptr));
-  PetscCall(MorseOptionsReal("-modes_shift", "Shift-invert target (rad/s)^2; negative for free-free models", "", *shift,
-                             shift, nullptr));
+  PetscCall(MorseOptionsReal("-modes_shift",
+                             "Shift-invert target (rad/s)^2 (a singular K, a free model, is shifted below 0 by itself)",
+                             "", *shift, shift, nullptr));
   PetscCall(MorseOptionsBool("-modes_xdmf", "Write an XDMF file for ParaView next to the HDF5 file", "", *xdmf, xdmf,
                              nullptr));
   PetscOptionsEnd();

@@ -23,6 +23,7 @@
 #include <memory>
 #include <numeric>
 
+#include "eigen/detail/singular.hpp"
 #include "eigen/detail/testing.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
@@ -617,7 +618,8 @@ PetscInt memory_capped_basis(MPI_Comm comm, PetscInt m_local, PetscInt nev, Pets
 // One MUMPS symmetric factorization of K - shift M (LDL^T: indefinite for a shift inside the
 // spectrum), its wall time in *seconds (the Factor stage if `timed`); with `for_inertia` its
 // root front stays unsplit (ICNTL(13) = 1) so that the Sylvester check can refactor it. A
-// singular K (null pivots at shift 0) is an error that names the likely cause.
+// singular K (null pivots at shift 0) throws detail::SingularAtZero, which solve_eigen answers
+// with a negative shift.
 UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* seconds, bool timed, bool for_inertia) {
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   std::unique_ptr<StageTimer> timer;
@@ -643,14 +645,7 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatCholeskyFactorSymbolic(F.get(), Ash, nullptr, &info));
   MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
   *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const PetscInt nulls = mumps_null_pivots(F.get());
-  collective_check(comm, nulls > 0
-                             ? (shift == 0.0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
-                                                   " null pivots): the model is not restrained against "
-                                                   "rigid-body motion; check -clamp and the boundary set")
-                                             : cat(s.what, ": K - sigma M is singular at the shift sigma = ", shift,
-                                                   " (", nulls, " null pivots)"))
-                             : std::string());
+  detail::check_null_pivots(comm, F.get(), shift, s.what);
   return F;
 }
 
@@ -933,6 +928,10 @@ Eigenpairs solve_block_slices(Mat K, Mat M, const EigenSettings& s, const BlockO
   for (PetscInt i = 0; i <= S; ++i)
     beta[i] = top * std::pow(static_cast<double>(i) / static_cast<double>(S), 2.0 / 3.0);
   beta[S] = top;
+  // The lowest slice starts below 0 (at -1e-10 of the stiffness scale): the zero eigenvalues of a
+  // model free in some rigid-body motions, computed as round-off of either sign, lie inside it,
+  // and N(beta_0) = 0 holds for any model.
+  beta[0] = -1e-10 * detail::stiffness_scale(K, M);
   const int part = static_cast<int>(rank / (size / P));
   MPI_Comm sub = MPI_COMM_NULL;
   MPI_Comm_split(comm, part, rank, &sub);

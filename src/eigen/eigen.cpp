@@ -7,7 +7,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numeric>
 
+#include "eigen/detail/singular.hpp"
 #include "eigen/detail/testing.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
@@ -32,6 +35,39 @@ PetscInt mumps_null_pivots(Mat F) {
   MORSE_CALL(MatMumpsGetInfog(F, 28, &n));
   return n;
 }
+
+namespace detail {
+
+void check_null_pivots(MPI_Comm comm, Mat F, double shift, const std::string& what) {
+  // INFOG(28) is global: every rank takes the same branch.
+  const bool singular = any_rank(comm, mumps_null_pivots(F) > 0);
+  if (!singular) return;
+  if (shift == 0.0) throw SingularAtZero(what);
+  collective_check(comm, cat(what, ": K - sigma M is singular at the shift sigma = ", shift,
+                             " (an eigenvalue lies at the shift); move the shift"));
+}
+
+double stiffness_scale(Mat K, Mat M) {
+  UVec dk, dm;
+  MORSE_CALL(MatCreateVecs(K, dk.ptr(), nullptr));
+  MORSE_CALL(VecDuplicate(dk.get(), dm.ptr()));
+  MORSE_CALL(MatGetDiagonal(K, dk.get()));
+  MORSE_CALL(MatGetDiagonal(M, dm.get()));
+  PetscInt m = 0;
+  MORSE_CALL(VecGetLocalSize(dk.get(), &m));
+  const PetscScalar *k = nullptr, *d = nullptr;
+  MORSE_CALL(VecGetArrayRead(dk.get(), &k));
+  MORSE_CALL(VecGetArrayRead(dm.get(), &d));
+  double r = 0;
+  for (PetscInt i = 0; i < m; ++i)
+    if (PetscRealPart(d[i]) > 0) r = std::max(r, PetscRealPart(k[i]) / PetscRealPart(d[i]));
+  MORSE_CALL(VecRestoreArrayRead(dm.get(), &d));
+  MORSE_CALL(VecRestoreArrayRead(dk.get(), &k));
+  MPI_Allreduce(MPI_IN_PLACE, &r, 1, MPI_DOUBLE, MPI_MAX, PetscObjectComm(reinterpret_cast<PetscObject>(K)));
+  return r;
+}
+
+}  // namespace detail
 
 Mat Eigenpairs::factor() const {
   if (block_factor) return block_factor.get();
@@ -203,8 +239,64 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
   const std::string which = solver;
   MORSE_CHECK(which == "block" || which == "krylovschur", "-", s.prefix, "eigen_solver ", which,
               ": expected block or krylovschur");
-  if (which == "block") return solve_eigen_block(K, M, s, sign_ref);
-  return solve_eigen_krylovschur(K, M, s, sign_ref);
+  auto solve = [&](const EigenSettings& st) {
+    return which == "block" ? solve_eigen_block(K, M, st, sign_ref) : solve_eigen_krylovschur(K, M, st, sign_ref);
+  };
+  try {
+    return solve(s);
+  } catch (const detail::SingularAtZero&) {
+    // K is singular: the model moves freely (a free-free part, or one held only at an interface
+    // that the caller left free). As Lanczos codes do, solve again about a negative shift, where
+    // K - sigma M is positive definite: the nev lowest are still the nev nearest the shift, the
+    // rigid-body modes come first at zero frequency, and the Sylvester checks hold about it.
+    EigenSettings shifted = s;
+    PetscInt below = 0;
+    double lo = 0, hi = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    {
+      StageTimer timer(comm, s.stage + "AutoShift");
+      shifted.shift = detail::auto_shift(K, M, s.prefix, &below, &lo, &hi);
+    }
+    print0(comm,
+           "  %s: K is singular (rigid-body or mechanism modes): %d eigenvalue(s) below %.4g Hz, the next in [%.4g, "
+           "%.4g] Hz (Sylvester inertia counts, %.1f s): shift-invert about sigma = %.6g (rad/s)^2 (= -(%.6g Hz)^2) "
+           "instead of 0\n",
+           s.what.c_str(), (int)below, hz(lo > 0 ? lo : hi), hz(lo), hz(hi),
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), shifted.shift,
+           hz(-shifted.shift));
+    return solve(shifted);
+  }
+}
+
+double detail::auto_shift(Mat K, Mat M, const std::string& prefix, PetscInt* below, double* lowest_lo,
+                          double* lowest_hi) {
+  // A shift-invert solve about sigma amplifies the zero modes by 1/|sigma| against 1/lambda_1 for
+  // the lowest nonzero eigenvalue lambda_1. The factorization of K - sigma M, of condition
+  // lambda_max / |sigma|, leaves a backward error eps lambda_max |y| in every solve, and y is
+  // dominated by the zero modes: measured, the flexible modes' residuals grow as
+  // 5e-17 lambda_1 / |sigma| (1.5e-8 for lambda_1 / |sigma| = 3e8 on a coarse free box), while a
+  // shift far below lambda_1 slows convergence (|sigma| = 3000 lambda_1: 5 times the restarts on
+  // the free blade). So sigma is put 10 to 1000 times below lambda_1, which Sylvester's inertia
+  // brackets by counts at 1e-10, 1e-8, ... of the stiffness scale (one factorization each; a fine mesh,
+  // whose scale is far above lambda_1, needs two). When eigenvalues lie below the first count,
+  // sigma = -1e-11 scale is at most 10 times below them, which is what is wanted.
+  const double scale = stiffness_scale(K, M);
+  InertiaCounter c(K, M, prefix);
+  double tau = 1e-10 * scale, sigma = -0.1 * tau;
+  *below = c.count(tau);
+  *lowest_lo = 0;
+  *lowest_hi = tau;
+  for (int j = 0; j < 12; ++j) {
+    const PetscInt next = c.count(100 * tau);
+    if (next > *below) {
+      *lowest_lo = tau;
+      *lowest_hi = 100 * tau;
+      break;
+    }
+    tau *= 100;
+    sigma = -0.1 * tau;
+  }
+  return sigma;
 }
 
 Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
@@ -280,13 +372,7 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     MORSE_CALL(EPSSetUp(eps));
     out.factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
-  if (Mat F = out.factor()) {
-    PetscInt nulls = mumps_null_pivots(F);
-    collective_check(comm, nulls > 0 ? cat(s.what, ": the stiffness matrix is singular (", nulls,
-                                           " null pivots): the model is not restrained against "
-                                           "rigid-body motion; check -clamp and the boundary set")
-                                     : std::string());
-  }
+  if (Mat F = out.factor()) detail::check_null_pivots(comm, F, s.shift, s.what);
   {
     StageTimer timer(comm, s.stage + "EigenSolve");
     Progress progress(comm, s.what, static_cast<double>(slicing ? 1 : s.nev));
@@ -387,12 +473,139 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   return out;
 }
 
+double zero_threshold(Mat K, Mat M) { return detail::zero_threshold(detail::stiffness_scale(K, M)); }
+
+std::vector<UVec> zero_mode_references(Vec sign_ref, PetscInt k) {
+  std::vector<UVec> W(static_cast<std::size_t>(k));
+  PetscInt m = 0;
+  MORSE_CALL(VecGetLocalSize(sign_ref, &m));
+  const PetscScalar* u = nullptr;
+  MORSE_CALL(VecGetArrayRead(sign_ref, &u));
+  for (PetscInt j = 0; j < k; ++j) {
+    MORSE_CALL(VecDuplicate(sign_ref, W[static_cast<std::size_t>(j)].ptr()));
+    PetscScalar* a = nullptr;
+    MORSE_CALL(VecGetArray(W[static_cast<std::size_t>(j)].get(), &a));
+    for (PetscInt i = 0; i < m; ++i) a[i] = std::cos(kTwoPi * static_cast<double>(j + 1) * (PetscRealPart(u[i]) - 0.5));
+    MORSE_CALL(VecRestoreArray(W[static_cast<std::size_t>(j)].get(), &a));
+  }
+  MORSE_CALL(VecRestoreArrayRead(sign_ref, &u));
+  return W;
+}
+
+bool canonical_rotation(PetscInt k, const std::vector<double>& C, std::vector<double>* Q_out) {
+  // Modified Gram-Schmidt on the columns of C, twice: C = Q R with R's diagonal positive.
+  std::vector<double>& Q = *Q_out;
+  Q = C;
+  for (PetscInt j = 0; j < k; ++j) {
+    double* q = &Q[static_cast<std::size_t>(k * j)];
+    const double before = std::sqrt(std::inner_product(q, q + k, q, 0.0));
+    for (int pass = 0; pass < 2; ++pass)
+      for (PetscInt i = 0; i < j; ++i) {
+        const double* p = &Q[static_cast<std::size_t>(k * i)];
+        const double r = std::inner_product(p, p + k, q, 0.0);
+        for (PetscInt a = 0; a < k; ++a) q[a] -= r * p[a];
+      }
+    const double norm = std::sqrt(std::inner_product(q, q + k, q, 0.0));
+    // A reference vector (nearly) dependent on the previous ones on this space.
+    if (!(norm > 1e-8 * before)) return false;
+    for (PetscInt a = 0; a < k; ++a) q[a] /= norm;
+  }
+  return true;
+}
+
+namespace {
+
+// The zero-frequency (rigid-body) modes among the pairs returned: the leading ones below
+// detail::zero_threshold. Their eigenvalue is 0 to round-off and is stored as 0 (the round-off is
+// printed). Any M-orthonormal basis of their eigenspace is a solution, and which one a solver
+// returns depends on the rank count; with sign_ref, the basis is made canonical: the
+// M-orthonormal Gram-Schmidt basis of the M-projections onto the eigenspace of fixed reference
+// vectors w_j(u) = cos(2 pi (j+1) u), u = sign_ref - 1/2 (a function of the mesh only). With
+// X the basis found and C = X^T M W = Q R (R with a positive diagonal), X Q is that basis, the
+// same for any X that spans the space. The count is proved by Sylvester's inertia at the
+// threshold unless the checks are off. Returns the number of zero modes put in the canonical
+// basis (their signs are fixed by it), else 0. Collective.
+PetscInt zero_modes(Mat K, Mat M, const EigenSettings& s, Vec sign_ref, Eigenpairs* out_) {
+  Eigenpairs& out = *out_;
+  MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
+  const auto n_out = static_cast<PetscInt>(out.omega2.size());
+  if (n_out == 0 || out.omega2[0] >= 0.5 * std::numeric_limits<double>::max()) return 0;
+  const double scale = detail::stiffness_scale(K, M);
+  const double tau = zero_threshold(K, M);
+  PetscInt k = 0;
+  double roundoff = 0;
+  while (k < n_out && out.omega2[k] < tau) roundoff = std::max(roundoff, std::abs(out.omega2[k++]));
+  if (k == 0) return 0;
+  bool canonical = false;
+  if (sign_ref && k > 1) {
+    const auto W = zero_mode_references(sign_ref, k);
+    UVec mw;
+    MORSE_CALL(VecDuplicate(sign_ref, mw.ptr()));
+    // C (k x k, column-major by reference vector): C[a + k j] = x_a^T M w_j.
+    std::vector<double> C(static_cast<std::size_t>(k * k)), Q;
+    for (PetscInt j = 0; j < k; ++j) {
+      MORSE_CALL(MatMult(M, W[static_cast<std::size_t>(j)].get(), mw.get()));
+      for (PetscInt c = 0; c < k; ++c) {
+        Vec x;
+        PetscScalar d = 0;
+        MORSE_CALL(MatDenseGetColumnVecRead(out.V.get(), c, &x));
+        MORSE_CALL(VecDot(x, mw.get(), &d));
+        MORSE_CALL(MatDenseRestoreColumnVecRead(out.V.get(), c, &x));
+        C[static_cast<std::size_t>(c + k * j)] = PetscRealPart(d);
+      }
+    }
+    canonical = canonical_rotation(k, C, &Q);
+    if (canonical) {
+      PetscScalar* v = nullptr;
+      PetscInt lda = 0, rows = 0;
+      MORSE_CALL(MatGetLocalSize(out.V.get(), &rows, nullptr));
+      MORSE_CALL(MatDenseGetLDA(out.V.get(), &lda));
+      MORSE_CALL(MatDenseGetArray(out.V.get(), &v));
+      std::vector<double> row(static_cast<std::size_t>(k));
+      for (PetscInt r = 0; r < rows; ++r) {
+        for (PetscInt j = 0; j < k; ++j) {
+          double t = 0;
+          for (PetscInt a = 0; a < k; ++a) t += PetscRealPart(v[r + lda * a]) * Q[static_cast<std::size_t>(a + k * j)];
+          row[static_cast<std::size_t>(j)] = t;
+        }
+        for (PetscInt j = 0; j < k; ++j) v[r + lda * j] = row[static_cast<std::size_t>(j)];
+      }
+      MORSE_CALL(MatDenseRestoreArray(out.V.get(), &v));
+    }
+  }
+  for (PetscInt j = 0; j < k; ++j) out.omega2[j] = 0.0;
+  print0(comm,
+         "  %s: %d zero-frequency (rigid-body) mode(s): |omega^2| <= %.2e (rad/s)^2 computed, round-off below "
+         "1e-12 of the stiffness scale %.3g; stored as 0%s\n",
+         s.what.c_str(), (int)k, roundoff, scale, canonical ? ", in a basis fixed by the mesh" : "");
+
+  if (count_check_wanted(comm, s)) {
+    // Sylvester: the number of eigenvalues below tau. All of them must be returned, unless every
+    // pair returned is a zero mode (then more may exist than were asked for).
+    InertiaCounter c(K, M, s.prefix);
+    const PetscInt counted = c.count(tau);
+    collective_check(comm, counted == k || (k == n_out && counted > k)
+                               ? std::string()
+                               : cat(s.what, ": Sylvester's inertia counts ", counted, " eigenvalues below ", tau,
+                                     " (rad/s)^2 (zero frequency to round-off) but the solve returned ", k,
+                                     ": it missed rigid-body modes"));
+    print0(comm, "  %s: %d eigenvalue(s) below %.3g (rad/s)^2 = Sylvester inertia count of K - tau M%s\n",
+           s.what.c_str(), (int)counted, tau,
+           counted > k ? cat(": the model has ", counted, " zero modes, ", k, " asked for").c_str() : "");
+  }
+  out.zero_modes = k;
+  return canonical ? k : 0;
+}
+
+}  // namespace
+
 void finish_pairs(Mat K, Mat M, const EigenSettings& s, double tol, Vec sign_ref, Eigenpairs* out_) {
   Eigenpairs& out = *out_;
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   const auto n_out = static_cast<PetscInt>(out.omega2.size());
+  const PetscInt fixed = zero_modes(K, M, s, sign_ref, &out);
   if (sign_ref)
-    for (PetscInt j = 0; j < n_out; ++j) {
+    for (PetscInt j = fixed; j < n_out; ++j) {
       Vec x;
       MORSE_CALL(MatDenseGetColumnVecWrite(out.V.get(), j, &x));
       PetscScalar wx = 0;
@@ -437,6 +650,9 @@ void check_count_by_inertia(Mat K, Mat M, const EigenSettings& s, const std::vec
   MPI_Comm comm = PetscObjectComm(reinterpret_cast<PetscObject>(K));
   const bool check = count_check_wanted(comm, s);
   if (!check || out.omega2.empty()) return;
+  // Only zero modes returned: their count is already proved (zero_modes), and a window about the
+  // shift that holds them would end inside their round-off.
+  if (out.zero_modes == static_cast<PetscInt>(out.omega2.size())) return;
   StageTimer timer(comm, s.stage + "InertiaCheck");
   const auto t0 = std::chrono::steady_clock::now();
   // The window [shift - d, shift + d] holds every pair returned; widened by 1e-6 so that its

@@ -13,6 +13,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/select/select.hpp"
@@ -21,9 +22,32 @@ namespace morse::select {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
-
-double hz(double omega2) { return std::sqrt(std::max(0.0, omega2)) / kTwoPi; }
+// The zero-frequency (rigid-body) modes of a restricted superelement of a model free in some
+// motions, the leading `k` columns of `vec` (row-major n x n, column = mode; rows = the CB
+// coordinates idx): rotated to the basis eigen::solve_eigen gives the full model's zero modes
+// (eigen::canonical_rotation with the same reference vectors), so that each pairs with one full-
+// model mode by MAC instead of mixing freely in their eigenspace. G = W^T M T (k x nr, row-major).
+void canonical_zero_modes(int n, PetscInt k, PetscInt nr, const std::vector<PetscInt>& idx,
+                          const std::vector<double>& G, std::vector<double>* vec_) {
+  auto& vec = *vec_;
+  std::vector<double> C(static_cast<std::size_t>(k * k), 0.0), Q;
+  for (PetscInt j = 0; j < k; ++j)
+    for (PetscInt a = 0; a < k; ++a)
+      for (int row = 0; row < n; ++row)
+        C[static_cast<std::size_t>(a + k * j)] +=
+            vec[static_cast<std::size_t>(row) * n + a] * G[static_cast<std::size_t>(j * nr + idx[row])];
+  if (!eigen::canonical_rotation(k, C, &Q)) return;
+  std::vector<double> t(static_cast<std::size_t>(k));
+  for (int row = 0; row < n; ++row) {
+    for (PetscInt j = 0; j < k; ++j) {
+      double x = 0;
+      for (PetscInt a = 0; a < k; ++a)
+        x += vec[static_cast<std::size_t>(row) * n + a] * Q[static_cast<std::size_t>(a + k * j)];
+      t[static_cast<std::size_t>(j)] = x;
+    }
+    for (PetscInt j = 0; j < k; ++j) vec[static_cast<std::size_t>(row) * n + j] = t[static_cast<std::size_t>(j)];
+  }
+}
 
 }  // namespace
 
@@ -127,6 +151,28 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
     mb = mac_basis(comm, fom.V.get(), MV.get(), res.T.get());
   }
   auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
+  // A model free in some rigid-body motions (no clamp, the interface left free): the superelement
+  // has the same zero modes as the full model, put in the same basis before the MAC.
+  const double zero_tau = fom.zero_modes > 0 ? eigen::zero_threshold(K, M) : 0.0;
+  std::vector<double> zero_G;  // W^T M T for the zero modes' reference vectors
+  PetscInt zero_G_k = 0;
+  auto zero_refs = [&](PetscInt k) {
+    if (k == zero_G_k || !w) return;
+    const auto W = eigen::zero_mode_references(w, k);
+    PetscInt m = 0, ng = 0;
+    MORSE_CALL(VecGetLocalSize(w, &m));
+    MORSE_CALL(VecGetSize(w, &ng));
+    UMat MW;
+    MORSE_CALL(MatCreateDense(comm, m, PETSC_DECIDE, ng, k, nullptr, MW.ptr()));
+    for (PetscInt j = 0; j < k; ++j) {
+      Vec col;
+      MORSE_CALL(MatDenseGetColumnVecWrite(MW.get(), j, &col));
+      MORSE_CALL(MatMult(M, W[static_cast<std::size_t>(j)].get(), col));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(MW.get(), j, &col));
+    }
+    zero_G = cb::transpose_product(comm, MW.get(), res.T.get());
+    zero_G_k = k;
+  };
   for (std::size_t mi = 0; mi < s.methods.size(); ++mi) {
     MethodCheck mr;
     mr.name = s.names[mi];
@@ -143,6 +189,8 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
     const int n = static_cast<int>(nb + mr.sel.selected.size());
     std::vector<double> vec;
     auto lam = eigen::dense_eigenvalues(n, mr.K, mr.M, &vec, l_an);
+    PetscInt zeros = 0;
+    while (zero_tau > 0 && zeros < n && lam[zeros] < zero_tau) lam[zeros++] = 0.0;
     for (double l : lam) mr.rom_f.push_back(hz(l));
     while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
     // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
@@ -151,6 +199,10 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
     std::vector<PetscInt> idx(nb);
     std::iota(idx.begin(), idx.end(), 0);
     for (auto sidx : mr.sel.selected) idx.push_back(nb + sidx);
+    if (zeros > 1 && w) {
+      zero_refs(zeros);
+      canonical_zero_modes(n, zeros, nr, idx, zero_G, &vec);
+    }
     for (PetscInt k = 0; k < mr.in_band; ++k)
       for (int row = 0; row < n; ++row) Q[idx[row] * nq + k] = vec[static_cast<std::size_t>(row) * n + k];
     mr.mac = mac_matrix(mb, Q, nq);
@@ -168,7 +220,8 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
         if (mr.mac[j * nq + k] > mr.best_mac[j]) mr.best_mac[j] = mr.mac[j * nq + k], best = k;
       if (best >= 0 && mr.best_mac[j] > s.mac_threshold) {
         ++mr.matches;
-        mr.worst_err = std::max(mr.worst_err, std::abs(mr.rom_f[best] / f_fom(j) - 1.0));
+        // Zero modes (f = 0 in both) have no relative frequency error.
+        if (f_fom(j) > 0) mr.worst_err = std::max(mr.worst_err, std::abs(mr.rom_f[best] / f_fom(j) - 1.0));
       }
     }
     if (mr.in_band == 0) mr.mac.assign(n_fom, 0.0);

@@ -65,6 +65,10 @@ struct Eigenpairs {
   double check_lo = 0, check_hi = 0;  ///< count mode with one shift: the window checked
   /// max over the returned pairs of ||K x - omega^2 M x|| / (||K||_inf ||x||) (checked <= tol).
   double max_residual = 0;
+  /// The leading pairs of zero frequency (rigid-body modes of a model free in some motions):
+  /// omega^2 below 1e-12 max_i K_ii / M_ii, stored as exactly 0, their basis fixed by sign_ref
+  /// (not by the rank count), their number checked by Sylvester's inertia.
+  PetscInt zero_modes = 0;
   /// The block solver's own factorization (the Krylov–Schur solver's lives in its EPS).
   UMat block_factor;
   /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
@@ -75,11 +79,28 @@ struct Eigenpairs {
 /// null. Every mode is guaranteed: a solve that claims all pairs below a cutoff (cutoff, or
 /// count by slicing) is checked against Sylvester's inertia of K - cutoff*M, and every returned
 /// pair against its residual ||K x - omega^2 M x|| / (||K||_inf ||x||) <= tol; both are printed.
-/// Throws morse::Error (collectively) if nev exceeds the problem size, if K - shift*M is
-/// singular (MUMPS null pivots: the model is not restrained), if fewer pairs converge than
+/// A singular K (a model free in rigid-body motion) is solved about an automatic negative shift
+/// (theory §2), its zero modes returned first as omega^2 = 0 in a basis fixed by sign_ref
+/// (Eigenpairs::zero_modes). Throws morse::Error (collectively) if nev exceeds the problem size,
+/// if K - shift*M is singular at a nonzero shift, if fewer pairs converge than
 /// requested, if the inertia count disagrees with the pairs found (a missed or spurious mode) or
 /// if a residual exceeds the tolerance. Collective.
 Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref);
+
+/// Eigenvalues below this are zero to round-off (rigid-body modes): 1e-12 max_i K_ii / M_ii.
+/// Collective.
+double zero_threshold(Mat K, Mat M);
+
+/// The k reference vectors that fix the basis of a cluster of zero modes independently of the
+/// solver and the rank count: w_j = cos(2 pi (j+1) (sign_ref - 1/2)) elementwise, j < k (sign_ref
+/// depends on the mesh only). Collective.
+std::vector<UVec> zero_mode_references(Vec sign_ref, PetscInt k);
+
+/// The canonical basis of a k-dimensional eigenspace: with X any M-orthonormal basis of it and
+/// C = X^T M W (k x k, column-major, W = zero_mode_references), C = Q R (R with a positive
+/// diagonal) and X Q is the M-orthonormal Gram-Schmidt basis of the projections of w_1..w_k,
+/// the same for every X. False if the projections are (nearly) dependent. Not collective.
+bool canonical_rotation(PetscInt k, const std::vector<double>& C, std::vector<double>* Q);
 
 /// The last steps of every solver: the signs of out->V from sign_ref (may be null), then the
 /// residual check of every pair against tol (printed). Collective.
