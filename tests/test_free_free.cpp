@@ -229,3 +229,48 @@ TEST(FreeFree, SelectOnAModelHeldByItsInterface) {
     EXPECT_LT(m.worst_err, 0.01) << m.name;
   }
 }
+
+// A negated K (an assembled matrix of the wrong sign): the factorization at shift 0 shows
+// negative pivots, and the error says K is not positive semi-definite instead of a solver that
+// does not converge.
+TEST(FreeFree, IndefiniteStiffnessIsNamed) {
+  auto s = beam({"x0"});
+  MORSE_CALL(MatScale(s.ops.K.get(), -1.0));
+  for (const std::string solver : {"block", "krylovschur"}) {
+    eigen::EigenSettings es;
+    es.prefix = "neg_";
+    es.what = "negated K";
+    es.solver = solver;
+    es.nev = 4;
+    try {
+      eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), es, s.w.get());
+      ADD_FAILURE() << solver << ": no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("K is not positive semi-definite"), std::string::npos)
+          << solver << ": " << e.what();
+    }
+  }
+}
+
+// Krylov-Schur's slicing partitions must divide the ranks (SLEPc crashed in its split).
+TEST(FreeFree, KrylovSchurPartitionsChecked) {
+  auto s = beam({"x0"});
+  int size = 1;
+  MPI_Comm_size(PETSC_COMM_WORLD, &size);
+  const std::string bad = std::to_string(size + 1);
+  MORSE_CALL(PetscOptionsSetValue(nullptr, "-ksp_parts_eps_krylovschur_partitions", bad.c_str()));
+  eigen::EigenSettings es;
+  es.prefix = "ksp_parts_";
+  es.what = "partitions";
+  es.solver = "krylovschur";
+  es.omega2_max = omega2_of_hz(2000.0);
+  try {
+    eigen::solve_eigen(s.ops.K.get(), s.ops.M.get(), es, s.w.get());
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("-ksp_parts_eps_krylovschur_partitions " + bad + " must divide"),
+              std::string::npos)
+        << e.what();
+  }
+  MORSE_CALL(PetscOptionsClearValue(nullptr, "-ksp_parts_eps_krylovschur_partitions"));
+}

@@ -41,7 +41,18 @@ namespace detail {
 void check_null_pivots(MPI_Comm comm, Mat F, double shift, const std::string& what) {
   // INFOG(28) is global: every rank takes the same branch.
   const bool singular = any_rank(comm, mumps_null_pivots(F) > 0);
-  if (!singular) return;
+  if (!singular) {
+    // At a shift <= 0, K - sigma M of a positive semi-definite K has no negative pivot (Sylvester):
+    // one means K itself is indefinite, which no eigen solver can recover from.
+    PetscInt negative = 0;
+    if (shift <= 0.0) MORSE_CALL(MatMumpsGetInfog(F, 12, &negative));
+    collective_check(
+        comm, negative > 0 ? cat(what, ": K - sigma M has ", negative, " negative pivot(s) at sigma = ", shift,
+                                 " <= 0, so K is not positive semi-definite (Sylvester's law of inertia): check the "
+                                 "material constants, inverted elements, or the sign of an assembled K")
+                           : std::string());
+    return;
+  }
   if (shift == 0.0) throw SingularAtZero(what);
   collective_check(comm, cat(what, ": K - sigma M is singular at the shift sigma = ", shift,
                              " (an eigenvalue lies at the shift); move the shift"));
@@ -322,6 +333,20 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
   const bool count_by_slicing =
       !slicing && count_slicing > 0 && s.nev >= count_slicing && s.shift == 0.0 && 4 * s.nev <= n;
   const std::string p = "-" + s.prefix;
+  {
+    // Krylov-Schur's slicing partitions: SLEPc takes a count that does not divide the ranks, or
+    // exceeds them, and crashes in its subcommunicator split; check it as the block solver does.
+    PetscInt parts = 1;
+    PetscBool given = PETSC_FALSE;
+    MORSE_CALL(PetscOptionsGetInt(nullptr, nullptr, (p + "eps_krylovschur_partitions").c_str(), &parts, &given));
+    int size = 1;
+    MPI_Comm_size(comm, &size);
+    MORSE_CHECK(!given || (parts >= 1 && parts <= size && size % parts == 0), p, "eps_krylovschur_partitions ", parts,
+                " must divide the number of ranks (", size, ")");
+    MORSE_CHECK(!given || parts == 1 || slicing || count_by_slicing, p,
+                "eps_krylovschur_partitions applies to spectrum slicing only (a cutoff, or -", s.prefix,
+                "count_slicing with as many modes)");
+  }
   set_default_option(p + "st_ksp_type", "preonly");
   set_default_option(p + "st_pc_type", "cholesky");
   set_default_option(p + "st_pc_factor_mat_solver_type", "mumps");
