@@ -172,3 +172,10 @@ morse_add_error_case(modes_bad_partitions
 morse_add_ok_case(reduce_ok reduce_ok.h5
   reduce -mesh '${MORSE_CASE_BOX}' -clamp x0 -boundary x1 -cb_num_fixed_modes 4 -cb_write_basis
   ${MORSE_CASE_MATERIAL_STR})
+
+# --- rank count: tiny decks (fewer elements than ranks) on 1, 2, 3 and 4 ranks give the same
+# clamped DOFs, frequencies, superelement, static and dynamic solutions (tests/case_rank_count.sh).
+add_test(NAME case_rank_count
+         COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_rank_count.sh ${MORSE_CASE_DIR}/rank_count
+                 $<TARGET_FILE:morse> ${MORSE_CASE_DATA} ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS})
+set_tests_properties(case_rank_count PROPERTIES LABELS "case;np4" TIMEOUT 300 ENVIRONMENT "${MORSE_CASE_ENV}")
