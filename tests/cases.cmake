@@ -129,6 +129,31 @@ morse_add_error_case(unknown_cb_option
   ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 3 -cb_dampign 0.01
        ${MORSE_CASE_MATERIAL})
 
+# Options files are checked before PETSc reads them (it would recurse on a cycle until SIGSEGV
+# and dump a page for a missing file). The files name each other by absolute path: written here.
+set(MORSE_CASE_OPTS ${MORSE_CASE_DIR}/options_files)
+file(MAKE_DIRECTORY ${MORSE_CASE_OPTS})
+file(WRITE ${MORSE_CASE_OPTS}/self.opts "# includes itself\n-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/self.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/a.opts "-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/b.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/b.opts "-options_file ${MORSE_CASE_OPTS}/a.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/includes_missing.opts "-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/no_such.opts\n")
+morse_add_error_case(options_file_self
+  "morse: error: options file .*/self\\.opts includes itself \\(.*/self\\.opts:3: -options_file .*/self\\.opts\\)"
+  options_file_self.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/self.opts)
+morse_add_error_case(options_file_cycle
+  "morse: error: options files include each other: .*/a\\.opts -> .*/b\\.opts -> .*/a\\.opts"
+  options_file_cycle.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/a.opts)
+morse_add_error_case(options_file_missing
+  "^morse: error: -options_file .*/no_such\\.opts: cannot open \\(No such file or directory\\)$"
+  options_file_missing.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/no_such.opts)
+morse_add_error_case(options_file_includes_missing
+  "^morse: error: .*/includes_missing\\.opts:2: -options_file .*/no_such\\.opts: cannot open"
+  options_file_includes_missing.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/includes_missing.opts)
+
 morse_add_error_case(bad_box_type
   "morse: error: .*-box_type pyr5: unknown element type"
   bad_box_type.msh
