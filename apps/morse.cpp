@@ -77,7 +77,9 @@ int main(int argc, char** argv) {
     }
     MPI_Comm_free(&err_comm);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "morse: error: %s\n", e.what());
+    // The session failed (e.g. an options file that includes itself): every rank has the same
+    // message, and MPI is down again.
+    if (morse::world_rank() == 0) std::fprintf(stderr, "morse: error: %s\n", e.what());
     return 1;
   }
   return status;

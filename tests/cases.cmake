@@ -129,6 +129,31 @@ morse_add_error_case(unknown_cb_option
   ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 3 -cb_dampign 0.01
        ${MORSE_CASE_MATERIAL})
 
+# Options files are checked before PETSc reads them (it would recurse on a cycle until SIGSEGV
+# and dump a page for a missing file). The files name each other by absolute path: written here.
+set(MORSE_CASE_OPTS ${MORSE_CASE_DIR}/options_files)
+file(MAKE_DIRECTORY ${MORSE_CASE_OPTS})
+file(WRITE ${MORSE_CASE_OPTS}/self.opts "# includes itself\n-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/self.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/a.opts "-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/b.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/b.opts "-options_file ${MORSE_CASE_OPTS}/a.opts\n")
+file(WRITE ${MORSE_CASE_OPTS}/includes_missing.opts "-modes_nev 3\n-options_file ${MORSE_CASE_OPTS}/no_such.opts\n")
+morse_add_error_case(options_file_self
+  "morse: error: options file .*/self\\.opts includes itself \\(.*/self\\.opts:3: -options_file .*/self\\.opts\\)"
+  options_file_self.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/self.opts)
+morse_add_error_case(options_file_cycle
+  "morse: error: options files include each other: .*/a\\.opts -> .*/b\\.opts -> .*/a\\.opts"
+  options_file_cycle.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/a.opts)
+morse_add_error_case(options_file_missing
+  "^morse: error: -options_file .*/no_such\\.opts: cannot open \\(No such file or directory\\)$"
+  options_file_missing.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/no_such.opts)
+morse_add_error_case(options_file_includes_missing
+  "^morse: error: .*/includes_missing\\.opts:2: -options_file .*/no_such\\.opts: cannot open"
+  options_file_includes_missing.h5
+  ARGS modes -options_file ${MORSE_CASE_OPTS}/includes_missing.opts)
+
 morse_add_error_case(bad_box_type
   "morse: error: .*-box_type pyr5: unknown element type"
   bad_box_type.msh
@@ -176,3 +201,10 @@ morse_add_error_case(modes_bad_partitions
 morse_add_ok_case(reduce_ok reduce_ok.h5
   reduce -mesh '${MORSE_CASE_BOX}' -clamp x0 -boundary x1 -cb_num_fixed_modes 4 -cb_write_basis
   ${MORSE_CASE_MATERIAL_STR})
+
+# --- rank count: tiny decks (fewer elements than ranks) on 1, 2, 3 and 4 ranks give the same
+# clamped DOFs, frequencies, superelement, static and dynamic solutions (tests/case_rank_count.sh).
+add_test(NAME case_rank_count
+         COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_rank_count.sh ${MORSE_CASE_DIR}/rank_count
+                 $<TARGET_FILE:morse> ${MORSE_CASE_DATA} ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS})
+set_tests_properties(case_rank_count PROPERTIES LABELS "case;np4" TIMEOUT 300 ENVIRONMENT "${MORSE_CASE_ENV}")

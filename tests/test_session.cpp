@@ -5,8 +5,10 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "morse/core/session.hpp"
+#include "scratch.hpp"
 
 namespace {
 
@@ -65,4 +67,49 @@ TEST(Session, HugePagesNoLoop) {
   char* argv[] = {self, nullptr};
   morse::use_huge_pages(argv);  // returns: either off, not offered, or already requested
   SUCCEED();
+}
+
+// The options files are checked before PETSc reads them: a file that includes itself, directly or
+// through another, is refused naming the chain (PETSc would recurse until the stack overflows); a
+// missing file, a directory and a -options_file without a name give one line naming the file;
+// nested, valid files and a file included twice (not a cycle) pass.
+TEST(Session, OptionsFileChecks) {
+  morse::test::ScratchDir tmp("options_files");
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(tmp.path(name)) << text;
+    return tmp.path(name);
+  };
+  auto error = [](std::vector<std::string> args) {
+    args.insert(args.begin(), "morse");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    return morse::options_file_error(static_cast<int>(args.size()), argv.data());
+  };
+  const std::string self = tmp.path("self.opts");
+  write("self.opts", "# a comment\n-modes_nev 3\n-options_file " + self + "\n");
+  EXPECT_EQ(error({"modes", "-options_file", self}),
+            "options file " + self + " includes itself (" + self + ":3: -options_file " + self + ")");
+  const std::string a = tmp.path("a.opts"), b = tmp.path("b.opts");
+  write("a.opts", "-options_file\t" + b + "   # to b\n");
+  write("b.opts", "-modes_nev 3\n-OPTIONS_FILE " + a + "\n");
+  EXPECT_EQ(error({"-options_file", a}), "options files include each other: " + a + " -> " + b + " -> " + a);
+  EXPECT_EQ(error({"-options_file", b}), "options files include each other: " + b + " -> " + a + " -> " + b);
+  const std::string nope = tmp.path("nope.opts");
+  EXPECT_EQ(error({"-options_file", nope}), "-options_file " + nope + ": cannot open (No such file or directory)");
+  const std::string m = write("m.opts", "-modes_nev 3\n\n-options_file " + nope + "\n");
+  EXPECT_EQ(error({"-mesh", "x.msh", "-options_file", m}),
+            m + ":3: -options_file " + nope + ": cannot open (No such file or directory)");
+  EXPECT_EQ(error({"-options_file", tmp.dir().string()}),
+            "-options_file " + tmp.dir().string() + ": is a directory, not an options file");
+  EXPECT_EQ(error({"-options_file"}), "-options_file needs a file name");
+  EXPECT_EQ(error({"-options_file", "-modes_nev", "3"}), "-options_file needs a file name");
+  const std::string e = write("e.opts", "-options_file\n");
+  EXPECT_EQ(error({"-options_file", e}), e + ":1: -options_file needs a file name");
+  // Valid: nested files, one file included twice (a diamond, no cycle), a commented-out include.
+  const std::string leaf = write("leaf.opts", "-modes_nev 2\n");
+  const std::string mid = write("mid.opts", "-options_file " + leaf + "\n# -options_file " + nope + "\n");
+  const std::string top = write("top.opts", "-options_file " + mid + "\n-options_file " + leaf + "\n");
+  EXPECT_EQ(error({"modes", "-options_file", top, "-options_file", leaf}), "");
+  EXPECT_EQ(error({"modes", "-modes_nev", "3"}), "");
 }

@@ -1,24 +1,145 @@
 #include "morse/core/session.hpp"
 
+#include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "morse/core/error.hpp"
 
 namespace morse {
 
+namespace {
+
+int g_world_rank = 0;  // rank in MPI_COMM_WORLD, for world_rank() outside PETSc's lifetime
+
+bool same_word(const std::string& a, const char* b) { return strcasecmp(a.c_str(), b) == 0; }
+
+// Whitespace-separated tokens, as PETSc splits an options line (tabs and ^M are blanks).
+std::vector<std::string> tokens(const std::string& line) {
+  std::vector<std::string> out;
+  std::istringstream is(line);
+  for (std::string t; is >> t;) out.push_back(t);
+  return out;
+}
+
+// Follows the -options_file chain depth first; `open` holds the files being read (their
+// canonical path and their name as given), so a file met again on it closes a cycle.
+class OptionsFiles {
+ public:
+  // `where` is "" (command line), "PETSC_OPTIONS: " or "file:line: ".
+  std::string visit(const std::string& file, const std::string& where, bool required) {
+    // ${VAR} substitutions and YAML files are PETSc's own business.
+    if (file.find("${") != std::string::npos) return {};
+    for (const char* ext : {".yaml", ".yml", ".json", ":yaml"})
+      if (file.size() >= std::strlen(ext) && file.compare(file.size() - std::strlen(ext), std::string::npos, ext) == 0)
+        return {};
+    const std::string what = cat(where, "-options_file ", file, ": ");
+    char* real = realpath(file.c_str(), nullptr);
+    if (!real) return required ? cat(what, "cannot open (", std::strerror(errno), ")") : std::string();
+    const std::string key = real;
+    std::free(real);
+    for (std::size_t i = 0; i < open_.size(); ++i)
+      if (open_[i].first == key) {
+        if (i + 1 == open_.size())
+          return cat("options file ", file, " includes itself (", where, "-options_file ", file, ")");
+        std::string chain;
+        for (std::size_t j = i; j < open_.size(); ++j) chain += open_[j].second + " -> ";
+        return cat("options files include each other: ", chain, file);
+      }
+    struct stat st {};
+    if (stat(key.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return cat(what, "is a directory, not an options file");
+    std::ifstream in(key);
+    if (!in) return required ? cat(what, "cannot open (", std::strerror(errno), ")") : std::string();
+    open_.emplace_back(key, file);
+    std::string line, err;
+    for (int n = 1; err.empty() && std::getline(in, line); ++n) {
+      line = line.substr(0, line.find('#'));
+      const auto t = tokens(line);
+      if (t.empty() || !same_word(t[0], "-options_file")) continue;
+      if (t.size() < 2 || t[1][0] == '-')
+        err = cat(file, ":", n, ": -options_file needs a file name");
+      else
+        err = visit(unquote(t[1]), cat(file, ":", n, ": "), true);
+    }
+    open_.pop_back();
+    return err;
+  }
+
+  // Every -options_file NAME of a list of arguments (the command line, PETSC_OPTIONS).
+  std::string visit_args(const std::vector<std::string>& args, const std::string& where) {
+    for (std::size_t i = 0; i < args.size(); ++i) {
+      if (!same_word(args[i], "-options_file")) continue;
+      if (i + 1 >= args.size() || args[i + 1][0] == '-') return cat(where, "-options_file needs a file name");
+      if (auto err = visit(unquote(args[i + 1]), where, true); !err.empty()) return err;
+      ++i;
+    }
+    return {};
+  }
+
+ private:
+  static std::string unquote(const std::string& s) {
+    if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front())
+      return s.substr(1, s.size() - 2);
+    return s;
+  }
+  std::vector<std::pair<std::string, std::string>> open_;
+};
+
+}  // namespace
+
+std::string options_file_error(int argc, char** argv) {
+  OptionsFiles files;
+  std::vector<std::string> args(argv + std::min(argc, 1), argv + std::max(argc, 0));
+  bool skip_rc = false;
+  for (const auto& a : args) skip_rc = skip_rc || same_word(a, "-skip_petscrc");
+  // PETSc reads PETSC_OPTIONS, then the rc files (if present), then the command line.
+  if (const char* env = std::getenv("PETSC_OPTIONS"))
+    if (auto err = files.visit_args(tokens(env), "PETSC_OPTIONS: "); !err.empty()) return err;
+  if (!skip_rc) {
+    std::vector<std::string> rc = {".petscrc", "petscrc"};
+    if (const char* home = std::getenv("HOME")) rc.insert(rc.begin(), std::string(home) + "/.petscrc");
+    for (const auto& f : rc)
+      if (auto err = files.visit(f, "", false); !err.empty()) return err;
+  }
+  return files.visit_args(args, "");
+}
+
 Session::Session(int* argc, char*** argv, const char* help) {
-  MORSE_CALL(SlepcInitialize(argc, argv, nullptr, help));
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) {
+    MPI_Init(argc, argv);
+    began_mpi_ = true;
+  }
+  MPI_Comm_rank(MPI_COMM_WORLD, &g_world_rank);
+  try {
+    // PETSc follows an options file that includes itself until the stack overflows, and dumps
+    // a page for a missing one: check them first, one message on every rank.
+    collective_check(MPI_COMM_WORLD, options_file_error(*argc, *argv));
+    MORSE_CALL(SlepcInitialize(argc, argv, nullptr, help));
+  } catch (...) {
+    if (began_mpi_) MPI_Finalize();
+    throw;
+  }
   // PETSc errors become morse::Error exceptions carrying PETSc's message (MORSE_CALL); the
   // default handler would also print a traceback on every rank.
   MORSE_CALL(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr));
 }
 
-Session::~Session() { (void)SlepcFinalize(); }
+Session::~Session() {
+  (void)SlepcFinalize();
+  if (began_mpi_) MPI_Finalize();
+}
 
 bool huge_pages_requested() {
   const char* t = std::getenv("GLIBC_TUNABLES");
@@ -48,6 +169,10 @@ void use_huge_pages(char** argv) {
 }
 
 int world_rank() {
+  PetscBool up = PETSC_FALSE, down = PETSC_FALSE;
+  PetscInitialized(&up);
+  PetscFinalized(&down);
+  if (!up || down) return g_world_rank;
   int r = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &r);
   return r;

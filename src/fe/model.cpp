@@ -49,14 +49,20 @@ DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>&
   const auto& m = lm.mesh;
   const std::int64_t n = m.num_nodes();
   std::vector<std::uint8_t> clamped(n, 0);
+  // Whether the deck fixes any DOF is a property of the whole mesh: a rank whose piece holds no
+  // fixed node (or no node at all: fewer elements than ranks) has an empty fixed_dofs.
+  const bool deck_fixes =
+      std::find(clamp_sets.begin(), clamp_sets.end(), mesh::kDeckBoundarySet) != clamp_sets.end() &&
+      any_rank(lm.comm, std::any_of(m.fixed_dofs.begin(), m.fixed_dofs.end(), [](std::uint8_t f) { return f & 7; }));
   std::string err;
   for (const auto& name : clamp_sets) {
     if (name == mesh::kDeckBoundarySet) {
-      if (m.fixed_dofs.empty()) {
+      if (!deck_fixes) {
         err = cat("-clamp ", name, ": the mesh ", m.source, " fixes no DOF with *BOUNDARY");
         break;
       }
-      for (std::int64_t k = 0; k < n; ++k) clamped[k] |= m.fixed_dofs[k] & 7;
+      for (std::int64_t k = 0; k < static_cast<std::int64_t>(m.fixed_dofs.size()); ++k)
+        clamped[k] |= m.fixed_dofs[k] & 7;
       continue;
     }
     err = mesh::check_node_set(lm, name, "node set");

@@ -6,16 +6,34 @@
 
 #include <slepcsys.h>
 
+#include <string>
+
 namespace morse {
 
 class Session {
  public:
-  /// Calls SlepcInitialize. help is the text printed by -help before the option list.
+  /// Initializes MPI (unless it is already), checks the options files (options_file_error(),
+  /// collective: every rank throws morse::Error, MPI finalized again), then calls
+  /// SlepcInitialize. help is the text printed by -help before the option list.
   Session(int* argc, char*** argv, const char* help = nullptr);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
+
+ private:
+  bool began_mpi_ = false;
 };
+
+/// The options files PETSc would read, checked before it reads them: every -options_file of argv
+/// and of the PETSC_OPTIONS variable, and every -options_file inside those files, recursively (a
+/// line "-options_file name"; a relative name is relative to the working directory, as PETSc
+/// opens it). Returns the first problem as one line, "" if none: a file that cannot be opened or
+/// is a directory ("-options_file nope.opts: cannot open (No such file or directory)", inside a
+/// file "a.opts:3: -options_file nope.opts: ..."), a -options_file without a name, or a file that
+/// includes itself, directly or through others ("options files include each other: a.opts ->
+/// b.opts -> a.opts"), which PETSc follows until the stack overflows. Names with ${...} and YAML
+/// files are left to PETSc. Not collective.
+std::string options_file_error(int argc, char** argv);
 
 /// Puts the process's heap on transparent huge pages, before anything else runs: if the kernel
 /// offers them on request (/sys/kernel/mm/transparent_hugepage/enabled is [madvise] or
@@ -30,7 +48,8 @@ void use_huge_pages(char** argv);
 /// Whether glibc was told to use huge pages (GLIBC_TUNABLES has glibc.malloc.hugetlb=1).
 bool huge_pages_requested();
 
-/// Rank of PETSC_COMM_WORLD.
+/// Rank of PETSC_COMM_WORLD; outside PETSc's lifetime (a Session that failed, or after it), the
+/// rank in MPI_COMM_WORLD recorded by the last Session (0 if none).
 int world_rank();
 /// Size of PETSC_COMM_WORLD.
 int world_size();
