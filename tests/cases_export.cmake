@@ -72,7 +72,7 @@ foreach(np 1 2)
   set(out ${MORSE_CASE_DIR}/export_ok_np${np})
   set(files "${out}.fem ${out}.op4 ${out}_dmig.bdf ${out}_grids.bdf ${out}_K.mtx ${out}_M.mtx ${out}_C.mtx ${out}_dofs.txt")
   add_test(NAME case_export_ok_np${np}
-           COMMAND ${MORSE_BASH} -c "rm -f '${out}'* && '${MORSE_MPIEXEC}' ${MORSE_CASE_MPI_FLAGS_STR} -n ${np} '$<TARGET_FILE:morse>' export -export_from '${MORSE_EXPORT_SE}' -out '${out}' && for f in ${files}; do test -s $f || { echo \"case: FAIL: $f missing\"; exit 1; }; done && if compgen -G '${out}*.part*' >/dev/null || compgen -G '${out}*.tmp' >/dev/null; then echo 'case: FAIL: temporary file left'; exit 1; fi && echo 'case: ok: every export written'")
+           COMMAND ${MORSE_BASH} -c "rm -f '${out}'* && '${MORSE_MPIEXEC}' ${MORSE_CASE_MPI_FLAGS_STR} -n ${np} '$<TARGET_FILE:morse>' export -export_from '${MORSE_EXPORT_SE}' -out '${out}' && for f in ${files}; do test -s $f || { echo \"case: FAIL: $f missing\"; exit 1; }; done && if compgen -G '${out}*.part*' >/dev/null || compgen -G '${out}*.tmp' >/dev/null || compgen -G '${out}*.tmp.*' >/dev/null; then echo 'case: FAIL: temporary file left'; exit 1; fi && echo 'case: ok: every export written'")
   set_tests_properties(case_export_ok_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 120
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_export FAIL_REGULAR_EXPRESSION "morse: error")
 endforeach()

@@ -48,3 +48,14 @@ foreach(np 1 2)
   set_tests_properties(case_contact_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box)
 endforeach()
+
+# Corrupt sweep checkpoints (datasets of the wrong shape, an index given twice or outside the
+# grid) are refused naming the file and the dataset, and left unchanged (skipped without h5py).
+foreach(np 1 2)
+  add_test(NAME case_sweep_checkpoint_np${np}
+           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_sweep_checkpoint.sh
+                   ${MORSE_CASE_DIR}/sweep_checkpoint_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
+                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
+  set_tests_properties(case_sweep_checkpoint_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
+endforeach()

@@ -11,6 +11,7 @@
 #include <initializer_list>
 
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/session.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/matrices.hpp"
@@ -104,6 +105,7 @@ TEST_F(MatricesTest, FilesRoundTripExactly) {
       auto B = io::read_matrix(PETSC_COMM_WORLD, path(name), "test");
       EXPECT_EQ(max_diff(A, B.get()), 0.0) << name;
       EXPECT_FALSE(fs::exists(path(name) + ".tmp"));
+      EXPECT_FALSE(fs::exists(files::temp_path(PETSC_COMM_WORLD, path(name))));
     }
     std::vector<std::int64_t> ptr, idx;
     std::vector<double> val;

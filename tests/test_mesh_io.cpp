@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/session.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/generator.hpp"
@@ -475,6 +476,7 @@ TEST_P(GeneratorTest, GmshRoundTrip) {
   TempFile f(morse::cat("roundtrip_", morse::mesh::element_name(s.type), ".msh"));
   morse::mesh::write_gmsh(m, f.path);
   EXPECT_FALSE(std::ifstream(f.path + ".tmp").good()) << "temporary file left behind";
+  EXPECT_FALSE(std::ifstream(morse::files::temp_path(f.path)).good()) << "temporary file left behind";
   const Mesh r = morse::mesh::read_gmsh(f.path);
   expect_same_mesh(m, r);
   EXPECT_EQ(r.source, f.path);

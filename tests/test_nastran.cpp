@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/session.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/generator.hpp"
@@ -488,6 +489,7 @@ TEST_F(NastranTest, RoundTripEveryTypeAndFormat) {
       const std::string path = (dir_ / cat(morse::mesh::element_name(t), "_", fname, ".bdf")).string();
       write_nastran(m, path, o);
       EXPECT_FALSE(fs::exists(path + ".tmp"));
+      EXPECT_FALSE(fs::exists(morse::files::temp_path(path)));
       ::testing::internal::CaptureStderr();
       const Mesh r = read_nastran(path, true);
       const std::string log = ::testing::internal::GetCapturedStderr();

@@ -10,6 +10,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/io/export.hpp"
@@ -25,6 +26,8 @@ void run_export(MPI_Comm comm) {
   MORSE_CHECK(eo.error.empty(), eo.error);
   MORSE_CHECK(!eo.from.empty(),
               "no superelement given: use -export_from FILE (a file of morse reduce or morse select)");
+  files::prepare_outputs(comm, io::export_files(eo),
+                         {{"-export_from", eo.from}, {"-export_coordinates", eo.coordinates}});
   check_options(comm, false);
 
   std::string err;

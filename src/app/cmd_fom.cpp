@@ -10,6 +10,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/fe/nonlinear.hpp"
@@ -33,6 +34,10 @@ void run_fom(MPI_Comm comm) {
   collective_check(comm, load_error);
   collective_check(comm, ho.error);
   MORSE_CHECK(fs.error.empty(), fs.error);
+  auto inputs = o.inputs();
+  inputs.push_back({"-load_history", ho.file()});
+  inputs.push_back({"-fom_initial", fs.initial});
+  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   Model md = build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   dyn::Loads loads(*md.mesh, md.dofs, load_list);

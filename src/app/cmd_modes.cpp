@@ -11,6 +11,7 @@
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
@@ -49,6 +50,7 @@ void run_modes(MPI_Comm comm) {
   options::add_prefix(kSolverPrefix, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(nev > 0, "-modes_nev must be positive (got ", nev, ")");
+  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
   Model md = build_model(comm, o);
   eigen::EigenSettings es;
   es.nev = nev;

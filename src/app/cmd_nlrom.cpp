@@ -12,6 +12,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
@@ -33,6 +34,9 @@ void run_nlrom(MPI_Comm comm) {
   check_options(comm, true);
   collective_check(comm, load_error);
   MORSE_CHECK(no.error.empty(), no.error);
+  auto inputs = o.inputs();
+  inputs.push_back({"-nlrom_snapshots", no.basis.snapshots});
+  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
   Model md =
       build_model(comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work

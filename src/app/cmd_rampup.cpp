@@ -8,6 +8,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/rampup/engine.hpp"
@@ -21,6 +22,7 @@ void run_rampup(MPI_Comm comm) {
   if (help_requested()) return;
   check_options(comm, true);
   o.check();
+  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
   const rampup::LoadCase lc = o.load_case();
   const rampup::IntegratorSettings is = o.integrator();
   const double t_end = rampup::end_time(lc, is);

@@ -10,6 +10,7 @@
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/eigen/eigen.hpp"
@@ -35,14 +36,19 @@ void run_reduce(MPI_Comm comm) {
   MORSE_CHECK(cs.damping >= 0 && cs.damping < 1, "-cb_damping must be in [0, 1) (got ", cs.damping, ")");
   MORSE_CHECK(!(r.xdmf_set && r.xdmf && !cs.keep_basis),
               "-cb_xdmf writes the mode shapes of -cb_write_basis: add -cb_write_basis");
+  MORSE_CHECK(r.write_format == "mtx" || r.write_format == "petsc", "-matrices_write_format ", r.write_format,
+              ": expected mtx or petsc");
+  std::vector<files::Named> outputs{{"-out", o.out}};
+  if (!r.write_matrices.empty())
+    for (const auto& f : io::model_matrix_files(r.write_matrices, r.write_format))
+      outputs.push_back({"-matrices_write", f});
+  files::prepare_outputs(comm, outputs, o.inputs());
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && cs.keep_basis),
               "-cb_write_basis writes nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");
   MORSE_CHECK(!(md.C && cs.damping > 0),
               "give either -matrices_C (projected on the superelement) or -cb_damping "
               "(modal damping of the fixed-interface modes), not both");
-  MORSE_CHECK(r.write_format == "mtx" || r.write_format == "petsc", "-matrices_write_format ", r.write_format,
-              ": expected mtx or petsc");
   MORSE_CHECK(r.write_matrices.empty() || md.mesh.has_value(), "-matrices_write writes the matrices of a mesh model");
   if (!r.write_matrices.empty()) {
     StageTimer t(comm, "WriteMatrices");

@@ -14,6 +14,7 @@
 #include "app/common.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
@@ -58,6 +59,9 @@ void run_select(MPI_Comm comm) {
   MORSE_CHECK(!r.xdmf_set,
               "-cb_xdmf is a reduce option (the mode shapes of -cb_write_basis): select writes no mode "
               "shapes");
+  auto inputs = o.inputs();
+  inputs.push_back({"-select_from", so.from});
+  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && !so.from.empty()),

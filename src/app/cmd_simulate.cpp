@@ -14,6 +14,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
@@ -87,6 +88,9 @@ void run_simulate(MPI_Comm comm) {
   collective_check(comm, so.contact.error);
   MORSE_CHECK(!so.rom.empty(), "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
+  std::vector<files::Named> outputs;
+  for (const auto& c : cases) outputs.push_back({c.name.empty() ? "-out" : cat("-out (case ", c.name, ")"), c.out});
+  files::prepare_outputs(comm, outputs, {{"-rom", so.rom}, {"-sim_snapshots", so.snapshots}});
   std::vector<std::string> sets(so.monitor);
   for (const auto& c : cases)
     for (const auto& l : c.loads) sets.push_back(l.set);

@@ -7,6 +7,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
@@ -40,6 +41,7 @@ void run_static(MPI_Comm comm) {
   collective_check(comm, load_error);
   MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");
   MORSE_CHECK(ss.error.empty(), ss.error);
+  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
 
   Model md =
       build_model(comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");

@@ -12,6 +12,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/sim/run.hpp"
@@ -29,6 +30,10 @@ void run_stress(MPI_Comm comm) {
   MORSE_CHECK(!so.rom.empty(), "morse stress: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(!so.sim.empty(), "morse stress: no simulation given: use -sim FILE.h5 (a morse simulate file)");
   collective_check(comm, so.error);
+  auto inputs = o.inputs();
+  inputs.push_back({"-rom", so.rom});
+  inputs.push_back({"-sim", so.sim});
+  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   const auto sm = nlrom::read_stored_model(
       comm, so.rom, so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});

@@ -369,4 +369,10 @@ std::vector<double> LoadHistory::total(double t) const {
   return f;
 }
 
+std::string LoadHistoryOptions::file() const {
+  std::string file, group;
+  split_spec(spec, &file, &group);
+  return file;
+}
+
 }  // namespace morse::dyn

@@ -7,16 +7,22 @@
 #include <string>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/eval/indicator.hpp"
 
 namespace morse::eval {
 
 void write_compare(const std::string& file, const eval::Indicator& ind, double tmax, double tsnap,
                    const std::string& fom, const std::string& tip) {
-  const std::string tmp = file + ".tmp";
-  std::filesystem::copy_file(file, tmp, std::filesystem::copy_options::overwrite_existing);
+  const std::string tmp = files::temp_path(file);
+  std::error_code ec;
+  std::filesystem::copy_file(file, tmp, std::filesystem::copy_options::overwrite_existing, ec);
+  MORSE_CHECK(!ec, "compare: cannot copy ", file, " to write /compare into it: ", ec.message());
   hid_t f = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
-  MORSE_CHECK(f >= 0, "compare: cannot open ", tmp, " for writing");
+  if (f < 0) {
+    std::remove(tmp.c_str());
+    throw Error(cat("compare: cannot open ", file, " for writing"));
+  }
   if (H5Lexists(f, "/compare", H5P_DEFAULT) > 0) H5Ldelete(f, "/compare", H5P_DEFAULT);
   hid_t g = H5Gcreate2(f, "/compare", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   bool ok = g >= 0;
@@ -56,7 +62,7 @@ void write_compare(const std::string& file, const eval::Indicator& ind, double t
     std::remove(tmp.c_str());
     throw Error(cat("compare: cannot write /compare into ", file));
   }
-  std::filesystem::rename(tmp, file);
+  files::commit(tmp, file);
 }
 
 }  // namespace morse::eval

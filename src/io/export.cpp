@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/handle.hpp"
 #include "morse/io/matrices.hpp"
 #include "morse/io/op4.hpp"
@@ -34,13 +35,13 @@ bool exactly_symmetric(const std::vector<double>& A, int n) {
   return true;
 }
 
-// Writes path through "<path>.tmp": body(FILE*) prints the content; the rename happens only if
-// every write succeeded.
+// Writes path through its temporary (files::temp_path): body(FILE*) prints the content; the
+// rename happens only if every write succeeded.
 template <class F>
 void write_atomic(const std::string& path, F body) {
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(path);
   FILE* f = std::fopen(tmp.c_str(), "w");
-  MORSE_CHECK(f, path, ": cannot write ", tmp, " (", std::strerror(errno), ")");
+  MORSE_CHECK(f, path, ": cannot write it (", std::strerror(errno), ")");
   try {
     body(f);
   } catch (...) {
@@ -54,12 +55,7 @@ void write_atomic(const std::string& path, F body) {
     std::remove(tmp.c_str());
     throw Error(cat(path, ": write error on ", tmp));
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw Error(cat(path, ": cannot rename ", tmp, ": ", ec.message()));
-  }
+  files::commit(tmp, path);
 }
 
 std::string comp_name(int c) {
@@ -254,7 +250,7 @@ void write_op4_matrices(const std::string& path, const Superelement& se, const N
   check_name(names.op4_K, "OP4 name");
   check_name(names.op4_M, "OP4 name");
   if (!se.C.empty()) check_name(names.op4_C, "OP4 name");
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(path);
   const int n = se.n;
   std::vector<std::pair<const std::vector<double>*, std::string>> mats = {{&se.K, names.op4_K}, {&se.M, names.op4_M}};
   if (!se.C.empty()) mats.emplace_back(&se.C, names.op4_C);
@@ -279,12 +275,7 @@ void write_op4_matrices(const std::string& path, const Superelement& se, const N
     std::remove(tmp.c_str());
     throw;
   }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw Error(cat(path, ": cannot rename ", tmp, ": ", ec.message()));
-  }
+  files::commit(tmp, path);
 }
 
 std::int64_t default_spoint_offset(const Superelement& se) {
@@ -513,9 +504,7 @@ ExportResult export_superelement(const Superelement& se, const ExportOptions& o)
     }
     if (o.op4 || o.mtx || o.dmig) write_dof_map_text(part(p + "_dofs.txt"), se, res.spoint_offset);
     for (const auto& [name, tmp] : names) {
-      std::error_code ec;
-      fs::rename(tmp, name, ec);
-      MORSE_CHECK(!ec, name, ": cannot rename ", tmp, ": ", ec.message());
+      files::commit(tmp, name);
       res.files.push_back(name);
     }
   } catch (...) {
@@ -525,6 +514,20 @@ ExportResult export_superelement(const Superelement& se, const ExportOptions& o)
     throw;
   }
   return res;
+}
+
+std::vector<files::Named> export_files(const ExportOptions& o) {
+  const std::string& p = o.prefix;
+  if (p.empty()) return {{"-out", ""}};
+  std::vector<std::string> names;
+  if (o.mbdyn) names.push_back(p + ".fem");
+  if (o.op4) names.push_back(p + ".op4");
+  if (o.dmig) names.insert(names.end(), {p + "_dmig.bdf", p + "_grids.bdf"});
+  if (o.mtx) names.insert(names.end(), {p + "_K.mtx", p + "_M.mtx", p + "_C.mtx"});
+  if (o.op4 || o.mtx || o.dmig) names.push_back(p + "_dofs.txt");
+  std::vector<files::Named> out;
+  for (auto& n : names) out.push_back({"-out", n});
+  return out;
 }
 
 }  // namespace morse::io

@@ -8,18 +8,19 @@
 #include <fstream>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/mesh/cells.hpp"
 
 namespace morse::io {
 
 H5Output::H5Output(MPI_Comm comm, const std::string& path) : comm_(comm), path_(path) {
   MPI_Comm_rank(comm, &rank_);
-  tmp_ = path + ".tmp";
+  tmp_ = files::temp_path(comm, path);
   std::string err;
   if (rank_ == 0) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    if (file_ < 0) err = cat("cannot create output file ", tmp_, " (check -out and the directory)");
+    if (file_ < 0) err = cat("cannot create output file ", path, " (check -out and its directory)");
   }
   collective_check(comm, err);
 }
@@ -30,7 +31,7 @@ H5Output::~H5Output() {
 }
 
 void H5Output::note_error(const std::string& what) {
-  if (error_.empty()) error_ = cat("HDF5 error writing ", what, " to ", tmp_);
+  if (error_.empty()) error_ = cat("HDF5 error writing ", what, " to ", path_);
 }
 
 hid_t H5Output::ensure_group(const std::string& name) {
@@ -202,8 +203,11 @@ void H5Output::commit() {
   if (rank_ == 0) {
     if (file_ >= 0 && H5Fclose(file_) < 0) note_error("(close)");
     file_ = -1;
-    if (error_.empty() && std::rename(tmp_.c_str(), path_.c_str()) != 0)
-      error_ = cat("cannot rename ", tmp_, " to ", path_);
+    if (error_.empty()) try {
+        files::commit(tmp_, path_);
+      } catch (const Error& e) {
+        error_ = e.what();
+      }
   }
   collective_check(comm_, error_);
   committed_ = true;
@@ -714,10 +718,10 @@ void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const 
                 const std::vector<XdmfField>& fields) {
   std::size_t topo_len = 0;
   for (std::int64_t e = 0; e < m.num_elements(); ++e) topo_len += 1 + mesh::nodes_per_element(m.elem_types[e]);
-  std::string tmp = xdmf_path + ".tmp";
+  const std::string tmp = files::temp_path(xdmf_path);
   {
     std::ofstream f(tmp);
-    MORSE_CHECK(f, "cannot write ", tmp);
+    MORSE_CHECK(f, "cannot write ", xdmf_path, " (check its directory)");
     f << "<?xml version=\"1.0\" ?>\n<Xdmf Version=\"3.0\">\n<Domain>\n";
     f << "<Grid Name=\"morse\" GridType=\"Uniform\">\n";
     f << "<Topology TopologyType=\"Mixed\" NumberOfElements=\"" << m.num_elements() << "\">\n"
@@ -745,9 +749,12 @@ void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const 
       }
     }
     f << "</Grid>\n</Domain>\n</Xdmf>\n";
-    MORSE_CHECK(f.good(), "error writing ", tmp);
+    if (!f.good()) {
+      std::remove(tmp.c_str());
+      throw Error(cat("error writing ", xdmf_path, " (its temporary ", tmp, ")"));
+    }
   }
-  MORSE_CHECK(std::rename(tmp.c_str(), xdmf_path.c_str()) == 0, "cannot rename ", tmp, " to ", xdmf_path);
+  files::commit(tmp, xdmf_path);
 }
 
 std::string read_string_attribute(const std::string& file, const std::string& object, const std::string& name) {

@@ -19,6 +19,7 @@
 #include <unordered_set>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/io/op4.hpp"
@@ -426,6 +427,8 @@ std::string read_dof_map_h5(const std::string& path, std::int64_t n_rows, DofMap
 
 }  // namespace
 
+std::string matrix_file(const std::string& spec) { return split_spec(spec).first; }
+
 MatrixFormat matrix_format(const std::string& spec) {
   auto file = split_spec(spec).first;
   auto ext = lower(fs::path(file).extension().string());
@@ -463,7 +466,7 @@ void write_matrix(Mat A, const std::string& path, bool symmetric) {
   const int rank = comm_rank(comm), size = comm_size(comm);
   const MatrixFormat fmt = matrix_format(path);
   MORSE_CHECK(fmt != MatrixFormat::Op4, path, ": morse writes MatrixMarket and PETSc binary, not OP4");
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(comm, path);
   std::string err;
   if (fmt == MatrixFormat::PetscBinary) {
     PetscViewer v = nullptr;
@@ -475,12 +478,13 @@ void write_matrix(Mat A, const std::string& path, bool symmetric) {
     PetscErrorCode ierr = MatView(A, v);
     PetscViewerDestroy(&v);
     if (ierr) err = cat(path, ": could not write the PETSc binary file");
+    if (ierr && rank == 0) std::remove(tmp.c_str());
     collective_check(comm, err);
-    if (rank == 0) {
-      std::error_code ec;
-      fs::rename(tmp, path, ec);
-      if (ec) err = cat(path, ": cannot rename ", tmp, ": ", ec.message());
-    }
+    if (rank == 0) try {
+        files::commit(tmp, path);
+      } catch (const Error& e) {
+        err = e.what();
+      }
     collective_check(comm, err);
     return;
   }
@@ -508,7 +512,7 @@ void write_matrix(Mat A, const std::string& path, bool symmetric) {
   if (rank == 0) {
     f = std::fopen(tmp.c_str(), "w");
     if (!f)
-      err = cat(path, ": cannot write ", tmp);
+      err = cat(path, ": cannot write it (check its directory)");
     else
       std::fprintf(f, "%%%%MatrixMarket matrix coordinate real %s\n%% written by morse\n%lld %lld %lld\n",
                    symmetric ? "symmetric" : "general", (long long)n, (long long)n, (long long)total);
@@ -536,10 +540,12 @@ void write_matrix(Mat A, const std::string& path, bool symmetric) {
   }
   if (rank == 0 && f) {
     if (std::fclose(f) != 0) err = cat(path, ": write error on ", tmp);
-    std::error_code ec;
-    if (err.empty()) fs::rename(tmp, path, ec);
-    if (ec) err = cat(path, ": cannot rename ", tmp, ": ", ec.message());
-    if (!err.empty()) fs::remove(tmp, ec);
+    if (err.empty()) try {
+        files::commit(tmp, path);
+      } catch (const Error& e) {
+        err = e.what();
+      }
+    if (!err.empty()) std::remove(tmp.c_str());
   }
   collective_check(comm, err);
 }
@@ -603,19 +609,22 @@ void write_dof_map(const std::string& path, const DofMapFile& map) {
   std::vector<std::vector<std::string>> names(map.node.size());
   for (const auto& [name, rows] : map.sets)
     for (auto r : rows) names.at(r).push_back(name);
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(path);
   {
     std::ofstream out(tmp);
-    MORSE_CHECK(out, path, ": cannot write ", tmp);
+    MORSE_CHECK(out, path, ": cannot write it (check its directory)");
     out << "# morse DOF map: one line per matrix row: node component [set ...]\n";
     for (std::size_t r = 0; r < map.node.size(); ++r) {
       out << map.node[r] << ' ' << map.component[r];
       for (const auto& s : names[r]) out << ' ' << s;
       out << '\n';
     }
-    MORSE_CHECK(out.good(), path, ": write error");
+    if (!out.good()) {
+      std::remove(tmp.c_str());
+      throw Error(cat(path, ": write error"));
+    }
   }
-  fs::rename(tmp, path);
+  files::commit(tmp, path);
 }
 
 DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {

@@ -248,16 +248,21 @@ fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in) {
   return md;
 }
 
-void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format) {
+std::vector<std::string> model_matrix_files(const std::string& prefix, const std::string& format) {
   const std::string ext = format == "mtx" ? ".mtx" : ".petsc";
-  write_matrix(md.K.get(), prefix + "_K" + ext, true);
-  write_matrix(md.M.get(), prefix + "_M" + ext, true);
+  return {prefix + "_K" + ext, prefix + "_M" + ext, prefix + "_dofmap.txt"};
+}
+
+void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format) {
+  const auto names = model_matrix_files(prefix, format);
+  write_matrix(md.K.get(), names[0], true);
+  write_matrix(md.M.get(), names[1], true);
   auto map = mesh_dof_map(*md.mesh, md.dofs);
   std::string err;
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   if (rank == 0) try {
-      write_dof_map(prefix + "_dofmap.txt", map);
+      write_dof_map(names[2], map);
     } catch (const std::exception& e) {
       err = e.what();
     }

@@ -9,6 +9,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/options.hpp"
+#include "morse/io/matrices.hpp"
 #include "morse/io/matrix_model.hpp"
 
 namespace morse::io {
@@ -156,6 +157,14 @@ void ModelInput::check(const char* needs_mesh) const {
   MORSE_CHECK(!mesh.path.empty(),
               !needs_mesh ? "no model given: use -mesh FILE (.msh, .inp, .bdf) or -matrices_K FILE -matrices_M FILE"
                           : "no mesh given: use -mesh FILE (.msh, .inp or .bdf)");
+}
+
+std::vector<files::Named> ModelInput::inputs() const {
+  return {{"-mesh", mesh.path},
+          {"-matrices_K", matrix_file(matrices.K)},
+          {"-matrices_M", matrix_file(matrices.M)},
+          {"-matrices_C", matrix_file(matrices.C)},
+          {"-matrices_dofmap", matrices.dofmap}};
 }
 
 }  // namespace morse::io

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 
 namespace morse::mesh {
 
@@ -993,9 +994,9 @@ void write_gmsh(const Mesh& m, const std::string& path) {
   }
 
   // Atomic write: temporary file, then rename.
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(path);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw Error(cat(tmp, ": cannot create file: ", std::strerror(errno)));
+  if (!f) throw Error(cat(path, ": cannot create file: ", std::strerror(errno)));
   const std::string& data = out.data();
   const bool wrote = std::fwrite(data.data(), 1, data.size(), f) == data.size();
   const int write_errno = errno;
@@ -1003,13 +1004,9 @@ void write_gmsh(const Mesh& m, const std::string& path) {
   if (!wrote || !closed) {
     const int err = !wrote ? write_errno : errno;
     std::remove(tmp.c_str());
-    throw Error(cat(tmp, ": error writing gmsh file: ", std::strerror(err)));
+    throw Error(cat(path, ": error writing gmsh file (its temporary ", tmp, "): ", std::strerror(err)));
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw Error(cat(path, ": cannot rename ", tmp, " to it: ", std::strerror(err)));
-  }
+  files::commit(tmp, path);
 }
 
 }  // namespace morse::mesh

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/options.hpp"
 #include "morse/mesh/cells.hpp"
 
@@ -1762,10 +1763,10 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
     aset = &it->second;
   }
 
-  const std::string tmp = path + ".tmp";
+  const std::string tmp = files::temp_path(path);
   {
     std::ofstream os(tmp, std::ios::binary);
-    if (!os) throw Error(cat("write_nastran: cannot open '", tmp, "' for writing"));
+    if (!os) throw Error(cat("write_nastran: cannot open '", path, "' for writing (check its directory)"));
     CardWriter w(o.format, &os);
     w.comment("Nastran bulk data written by morse");
     w.comment(cat("source: ", m.source));
@@ -1827,11 +1828,13 @@ void write_nastran(const Mesh& m, const std::string& path, const NastranWriteOpt
     }
     os << "ENDDATA\n";
     os.flush();
-    if (!os) throw Error(cat("write_nastran: error while writing '", tmp, "'"));
+    if (!os) {
+      os.close();
+      std::remove(tmp.c_str());
+      throw Error(cat("write_nastran: error while writing '", path, "' (its temporary '", tmp, "')"));
+    }
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw Error(cat("write_nastran: cannot rename '", tmp, "' to '", path, "' (", ec.message(), ")"));
+  files::commit(tmp, path);
 }
 
 }  // namespace morse::mesh

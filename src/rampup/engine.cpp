@@ -191,6 +191,13 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
   return PETSC_SUCCESS;
 }
 
+std::vector<files::Named> RampupOptions::inputs() const {
+  std::vector<files::Named> in;
+  for (const auto& so : stators) in.push_back({cat("-rampup_stator_", so.name, "_file"), so.file});
+  in.push_back({"-rampup_reference", reference});
+  return in;
+}
+
 void RampupOptions::check() const {
   MORSE_CHECK(error.empty(), error);
   MORSE_CHECK(rpm_max > 0, "-rampup_rpm_max must be > 0 (got ", rpm_max, ")");

@@ -306,6 +306,9 @@ std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bo
         err = cat(out,
                   " holds a sweep with other settings; give another -out, or -sweep_restart to "
                   "overwrite it");
+      else if (old.n_speeds != rec->n_speeds)
+        err = cat(out, ": /sweep@n_speeds is ", old.n_speeds, " but the options give ", rec->n_speeds,
+                  " speeds: the sweep checkpoint is corrupt; give another -out, or -sweep_restart to overwrite it");
       else {
         rec->results = old.results;
         for (const auto& R : old.results) done_idx.push_back(R.index);

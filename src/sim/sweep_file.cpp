@@ -3,7 +3,10 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "morse/core/error.hpp"
@@ -76,44 +79,77 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     *error = cat(path, ": no such file");
     return false;
   }
-  std::vector<hsize_t> d;
+  // Every dataset with its shape: a resumed file is validated whole before any value is used.
+  std::map<std::string, std::vector<hsize_t>> dims;
   std::vector<double> omega, tf, rms, mean, umax, tmax, fmax, tfmax, fnode, secs, spec;
   std::vector<std::int64_t> index, status, steps, act;
+  auto dbl = [&](const char* name, std::vector<double>* v) {
+    return io::read_doubles(path, cat("/sweep/", name), v, &dims[name], error);
+  };
+  auto ints = [&](const char* name, std::vector<std::int64_t>* v) {
+    return io::read_ints(path, cat("/sweep/", name), v, &dims[name], error);
+  };
   std::string errors;
-  bool ok = io::read_string(path, "/sweep/settings", &rec->settings, error) &&
-            io::read_doubles(path, "/sweep/frequency", &rec->frequencies, &d, error) &&
-            io::read_doubles(path, "/sweep/eigenfrequencies", &rec->eigenfrequencies_hz, &d, error) &&
-            io::read_ints(path, "/sweep/index", &index, &d, error) &&
-            io::read_doubles(path, "/sweep/omega", &omega, &d, error) &&
-            io::read_ints(path, "/sweep/status", &status, &d, error) &&
-            io::read_ints(path, "/sweep/steps", &steps, &d, error) &&
-            io::read_doubles(path, "/sweep/t_final", &tf, &d, error) &&
-            io::read_doubles(path, "/sweep/rms", &rms, &d, error) &&
-            io::read_doubles(path, "/sweep/mean", &mean, &d, error) &&
-            io::read_doubles(path, "/sweep/max_displacement", &umax, &d, error) &&
-            io::read_doubles(path, "/sweep/time_of_max", &tmax, &d, error) &&
-            io::read_doubles(path, "/sweep/max_contact_force", &fmax, &d, error) &&
-            io::read_doubles(path, "/sweep/time_of_max_contact_force", &tfmax, &d, error) &&
-            io::read_doubles(path, "/sweep/max_node_force", &fnode, &d, error) &&
-            io::read_ints(path, "/sweep/max_active", &act, &d, error) &&
-            io::read_doubles(path, "/sweep/seconds", &secs, &d, error) &&
-            io::read_doubles(path, "/sweep/spectrum", &spec, &d, error) &&
-            io::read_string(path, "/sweep/errors", &errors, error);
+  double n_speeds = -1, n_done = -1;
+  bool ok = io::read_string(path, "/sweep/settings", &rec->settings, error) && dbl("frequency", &rec->frequencies) &&
+            dbl("eigenfrequencies", &rec->eigenfrequencies_hz) && ints("index", &index) && dbl("omega", &omega) &&
+            ints("status", &status) && ints("steps", &steps) && dbl("t_final", &tf) && dbl("rms", &rms) &&
+            dbl("mean", &mean) && dbl("max_displacement", &umax) && dbl("time_of_max", &tmax) &&
+            dbl("max_contact_force", &fmax) && dbl("time_of_max_contact_force", &tfmax) &&
+            dbl("max_node_force", &fnode) && ints("max_active", &act) && dbl("seconds", &secs) &&
+            dbl("spectrum", &spec) && io::read_string(path, "/sweep/errors", &errors, error) &&
+            io::read_attribute(path, "/sweep", "n_speeds", &n_speeds, error) &&
+            io::read_attribute(path, "/sweep", "n_done", &n_done, error);
   if (!ok) {
     *error = cat(path, " is not a complete morse sweep file: ", *error);
     return false;
   }
-  const std::size_t n = index.size(), nf = rec->frequencies.size();
-  if (omega.size() != n || spec.size() != n * nf || secs.size() != n) {
-    *error = cat(path, ": inconsistent /sweep datasets");
+  auto corrupt = [&](const std::string& what) {
+    *error = cat(path, ": ", what, ": the sweep checkpoint is corrupt");
     return false;
+  };
+  const std::size_t n = index.size(), nf = rec->frequencies.size();
+  if (!(n_speeds >= 1 && n_speeds <= 1e15 && n_speeds == std::floor(n_speeds)))
+    return corrupt(cat("/sweep@n_speeds is ", n_speeds));
+  if (dims["index"].size() != 1 || static_cast<double>(n) > n_speeds)
+    return corrupt(cat("/sweep/index holds ", n, " finished speeds of a grid of ", n_speeds));
+  if (n_done != static_cast<double>(n))
+    return corrupt(cat("/sweep@n_done is ", n_done, " but /sweep/index holds ", n, " finished speeds"));
+  if (dims["frequency"].size() != 1 || nf == 0) return corrupt("/sweep/frequency is not a list of frequencies");
+  for (const auto& [name, d] : dims) {
+    if (name == "frequency" || name == "eigenfrequencies") continue;
+    const std::vector<hsize_t> want = name == "spectrum" ? std::vector<hsize_t>{n, nf} : std::vector<hsize_t>{n};
+    if (d != want) {
+      std::string shape;
+      for (auto x : d) shape += cat(shape.empty() ? "" : " x ", x);
+      return corrupt(cat("/sweep/", name, " has shape [", shape, "], expected [", n,
+                         name == "spectrum" ? cat(" x ", nf) : std::string(), "] for the ", n,
+                         " finished speeds of /sweep/index"));
+    }
   }
+  std::set<std::int64_t> seen;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (index[i] < 0 || static_cast<double>(index[i]) >= n_speeds)
+      return corrupt(cat("/sweep/index[", i, "] = ", index[i], " is outside the speed grid 0..", n_speeds - 1));
+    if (!seen.insert(index[i]).second) return corrupt(cat("/sweep/index holds speed ", index[i], " twice"));
+  }
+  // "<index>\t<message>" per failed speed; a line that does not start so continues the message
+  // before it (a message of several lines).
   std::map<long, std::string> msg;
   std::istringstream is(errors);
+  std::string* last = nullptr;
   for (std::string line; std::getline(is, line);) {
-    auto tab = line.find('\t');
-    if (tab != std::string::npos) msg[std::stol(line.substr(0, tab))] = line.substr(tab + 1);
+    const auto tab = line.find('\t');
+    char* end = nullptr;
+    const long k = tab == std::string::npos || tab == 0 ? 0 : std::strtol(line.c_str(), &end, 10);
+    if (end && end == line.c_str() + tab) {
+      last = &msg[k];
+      *last = line.substr(tab + 1);
+    } else if (last) {
+      *last += "\n" + line;
+    }
   }
+  rec->n_speeds = static_cast<long>(n_speeds);
   rec->results.clear();
   for (std::size_t i = 0; i < n; ++i) {
     SpeedResult r;

@@ -172,6 +172,8 @@ struct LoadHistoryOptions {
   /// non-finite scale or -load_history_outside without -load_history is recorded in `error`.
   /// Uses PetscOptionsBegin: returns a PETSc error code. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
+  /// The file of spec (FILE of FILE:/GROUP); empty without -load_history. Not collective.
+  std::string file() const;
 };
 
 /// Reads the table of o (read_load_table, rank 0, broadcast) and applies it to the model; null

@@ -3,8 +3,9 @@
 // DMIG bulk-data deck) and MatrixMarket (docs/export.md).
 //
 // Everything here is serial: call it on one rank (`morse export` runs it on rank 0). Every writer
-// writes "<path>.tmp" and renames it to <path> when complete, so a failed write leaves no partial
-// file. The coordinates of the superelement are ordered as in /rom (io/superelement.hpp).
+// writes its temporary "<path>.tmp.<pid>" (files::temp_path) and renames it to <path> when
+// complete, so a failed write leaves no partial file. The coordinates of the superelement are ordered as in /rom
+// (io/superelement.hpp).
 #pragma once
 
 #include <petscsys.h>
@@ -14,13 +15,14 @@
 #include <string>
 #include <vector>
 
+#include "morse/core/files.hpp"
 #include "morse/io/superelement.hpp"
 
 namespace morse::io {
 
 // ---------------------------------------------------------------------------------------------
-// Writers. Each writes "<path>.tmp" and renames it to <path>; throws morse::Error naming the file
-// on an I/O failure or on input it cannot represent.
+// Writers. Each writes its temporary (files::temp_path) and renames it to <path>; throws
+// morse::Error naming the file on an I/O failure or on input it cannot represent.
 
 /// MBDyn modal joint FEM file (MBDyn input manual, "Modal Element", "FEM File Format"; the
 /// parser is ReadModal in mbdyn/struct/modal.cc). Record groups written:
@@ -109,5 +111,9 @@ struct ExportResult {
 /// Checks everything each requested format needs first (coordinates, components, names, ids),
 /// then writes the files; if a write fails, the files of this call already written are removed.
 ExportResult export_superelement(const Superelement& se, const ExportOptions& o);
+/// Every file export_superelement may write with the options o (those of a C or of the grids
+/// included), named by the option that makes them (-out), for files::prepare_outputs; an empty
+/// prefix gives {-out, ""}. Not collective.
+std::vector<files::Named> export_files(const ExportOptions& o);
 
 }  // namespace morse::io

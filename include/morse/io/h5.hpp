@@ -1,7 +1,8 @@
 // morse/io/h5.hpp: the output file of a run, written by rank 0 with serial HDF5, atomically.
 //
-// The file is created as "<path>.tmp" and renamed to <path> by commit(); a run that fails
-// before commit() leaves no output file (the destructor removes the temporary). Distributed data
+// The file is created as the temporary files::temp_path(comm, path) ("<path>.tmp.<pid of rank 0>")
+// and renamed to <path> by commit(); a run that fails before commit() leaves no output file (the
+// destructor removes the temporary). Distributed data
 // is gathered to rank 0 before writing (gather_nodal), one mode at a time.
 #pragma once
 

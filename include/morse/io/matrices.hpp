@@ -43,6 +43,8 @@ enum class MatrixFormat { MatrixMarket, PetscBinary, Op4 };
 /// Format of a matrix file (or FILE.op4:NAME) from its extension. Throws morse::Error naming the
 /// file for an unknown extension.
 MatrixFormat matrix_format(const std::string& spec);
+/// The file of a matrix spec: FILE of FILE.op4:NAME, else the spec itself. Not collective.
+std::string matrix_file(const std::string& spec);
 
 /// Reads a square matrix into an MPIAIJ matrix whose rows are split in contiguous blocks
 /// (n_local rows here; PETSC_DECIDE: PETSc's default split). `what` names the matrix in messages

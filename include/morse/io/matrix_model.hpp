@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "morse/core/files.hpp"
 #include "morse/fe/model.hpp"
 
 namespace morse::io {
@@ -40,6 +41,8 @@ fe::Model matrix_model(MPI_Comm comm, const MatrixInput& in);
 /// <prefix>_K.<ext>, <prefix>_M.<ext> (write_matrix, symmetric; ext: mtx or petsc, as `format`)
 /// and <prefix>_dofmap.txt (rank 0). Throws collectively on a write failure. Collective.
 void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string& prefix, const std::string& format);
+/// The files write_model_matrices writes: <prefix>_K.<ext>, <prefix>_M.<ext>, <prefix>_dofmap.txt.
+std::vector<std::string> model_matrix_files(const std::string& prefix, const std::string& format);
 
 /// The model input of a command: a mesh (fe::MeshInput, built by fe::mesh_model) or assembled
 /// operators (MatrixInput, built by matrix_model), and the output file (-out).
@@ -63,6 +66,9 @@ struct ModelInput {
   /// both a mesh and matrices, on -material_* with matrices, and on no model at all. Not collective
   /// (every rank holds the same input).
   void check(const char* needs_mesh = nullptr) const;
+  /// The input files named by these options (-mesh, -matrices_K/_M/_C/_dofmap; the file of a
+  /// FILE.op4:NAME), for files::prepare_outputs. Not collective.
+  std::vector<files::Named> inputs() const;
 };
 
 }  // namespace morse::io

@@ -45,8 +45,8 @@ namespace morse::mesh {
 Mesh read_gmsh(const std::string& path);
 
 /// Writes mesh as an ASCII MSH 4.1 file (see the top of this header for the layout). The file is
-/// written to path + ".tmp" and renamed to path once complete, so a reader never sees a partial
-/// file. Coordinates are printed with %.17g and read back bit-identical. Not collective.
+/// written to its temporary files::temp_path(path) and renamed to path once complete, so a reader
+/// never sees a partial file. Coordinates are printed with %.17g and read back bit-identical. Not collective.
 ///
 /// Throws morse::Error if a node or element id is not positive (Gmsh tags must be >= 1), a set
 /// name contains a double quote or a line break, a set index is out of range, or the file cannot

@@ -154,7 +154,7 @@ struct NastranWriteOptions {
   PetscErrorCode set_from_options(MPI_Comm comm);
 };
 
-/// Writes m as Nastran bulk data to path (through path + ".tmp", renamed when complete). Serial.
+/// Writes m as Nastran bulk data to path (through its temporary files::temp_path(path), renamed when complete). Serial.
 /// Throws morse::Error if an element has no material (elem_material < 0: Nastran needs a
 /// PSOLID/MAT1 for every element), an id is not positive or does not fit its field (Small:
 /// 8 digits), o.aset is not a node set of m, or the file cannot be written.

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/core/files.hpp"
 #include "morse/rampup/rampup.hpp"
 
 namespace morse::rampup {
@@ -67,6 +68,9 @@ struct RampupOptions {
   /// Throws (the same on every rank) on the first bad value: `error`, then the speeds, times and
   /// factors out of range, naming the option. Not collective.
   void check() const;
+  /// The input files of these options: every -rampup_stator_<name>_file and -rampup_reference,
+  /// for files::prepare_outputs. Not collective.
+  std::vector<files::Named> inputs() const;
   /// The speed law of the options (-rampup_rpm_max, -rampup_ramp_time, -rampup_constant_speed).
   LoadCase load_case() const;
   /// The time scheme of the options (-rampup_dt, -rampup_t_final, -rampup_alpha,

@@ -310,8 +310,12 @@ struct SweepRecord {
 /// Writes the record atomically (temporary file renamed into place), results sorted by index.
 /// Serial: call on one rank. Throws naming the file if it cannot be written.
 void write_sweep(const std::string& path, SweepRecord rec);
-/// Reads a sweep file written by write_sweep. Returns false (and sets *error) if the file does
-/// not exist or is not a sweep file. Serial.
+/// Reads a sweep file written by write_sweep (rec->n_speeds from /sweep@n_speeds). Returns false
+/// (and sets *error, naming the file and the dataset) if the file does not exist, is not a sweep
+/// file, or is inconsistent: a dataset of the finished speeds whose shape is not [n] ([n][number
+/// of frequencies] for /sweep/spectrum) for the n speeds of /sweep/index, /sweep@n_done other than
+/// n, more finished speeds than the grid has, or an index outside the grid or given twice. Nothing
+/// of an inconsistent file is used. Serial.
 bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error);
 
 // ------------------------------------------------------------------------------------------

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Corrupt sweep checkpoints are refused, not resumed: a tiny sweep of 11 speeds is run, then copies
+# of its file are damaged with h5py (a per-speed dataset with 3 rows, every dataset with a
+# duplicated speed, an index given twice, an index outside the grid, a spectrum of another shape,
+# /sweep@n_done off) and the same sweep is run on each. Each run must fail naming the file and the
+# dataset, and leave the file byte for byte as it was. The intact file resumes with every speed
+# done. Skipped (77) without /usr/bin/python3 and h5py.
+# usage: case_sweep_checkpoint.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
+set -euo pipefail
+/usr/bin/python3 -c "import h5py, numpy" 2>/dev/null || { echo "case: skipped: no python3 with h5py"; exit 77; }
+. "$(dirname "$0")/case_common.sh" "$@"
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact -out "$d/cb0.h5"
+tip=$(/usr/bin/python3 -c "import h5py; print(h5py.File('$d/cb0.h5','r')['/nlrom/node_sets/x1'][0])")
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact \
+  -mesh_node_sets tipnode -mesh_node_set_tipnode "$tip" -out "$d/cb.h5"
+sweep=(sweep -rom "$d/cb.h5" -contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3
+       -sim_dt 4e-6 -sim_revolutions 2 -sweep_omega_min 1000 -sweep_omega_max 2000 -sweep_omega_step 100
+       -sweep_monitor tipnode -sweep_spectrum_fmax 3000 -sweep_spectrum_bins 10)
+run "${sweep[@]}" -out "$d/good.h5"
+
+# corrupt NAME PYTHON: $d/NAME.h5 is a copy of the good file, changed by the python code (f is the
+# open file, s its /sweep group).
+corrupt() {
+  cp "$d/good.h5" "$d/$1.h5"
+  /usr/bin/python3 - "$d/$1.h5" <<PY
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r+")
+s = f["/sweep"]
+def replace(name, data):
+    del s[name]
+    s[name] = data
+$2
+f.close()
+PY
+}
+per_speed="index omega status steps t_final rms mean max_displacement time_of_max max_contact_force
+  time_of_max_contact_force max_node_force max_active seconds spectrum"
+
+corrupt rms_3_rows 'replace("rms", s["rms"][:3])'
+corrupt index_12_of_11 "
+for k in '''$per_speed'''.split():
+    a = s[k][()]
+    replace(k, np.concatenate([a, a[:1]]))
+s.attrs['n_done'] = 12"
+corrupt index_twice 'a = s["index"][()]; a[5] = a[4]; replace("index", a)'
+corrupt index_outside 'a = s["index"][()]; a[10] = 42; replace("index", a)'
+corrupt spectrum_shape 'replace("spectrum", s["spectrum"][:, :5])'
+corrupt n_done 's.attrs["n_done"] = 5'
+
+# refused NAME PATTERN: the sweep on $d/NAME.h5 fails, printing PATTERN (after the file's name),
+# and leaves the file unchanged.
+refused() {
+  local f="$d/$1.h5" pattern=$2
+  cp "$f" "$d/before.h5"
+  set +e
+  out=$(run "${sweep[@]}" -out "$f" 2>&1)
+  rc=$?
+  set -e
+  echo "$out" | tail -2
+  test $rc -ne 0 || { echo "case: FAIL: $1: the corrupt checkpoint was resumed"; exit 1; }
+  echo "$out" | grep -q -F -- "$f: $pattern" || { echo "case: FAIL: $1: '$f: $pattern' not in: $out"; exit 1; }
+  echo "$out" | grep -q "already in" && { echo "case: FAIL: $1: resumed"; exit 1; }
+  cmp -s "$f" "$d/before.h5" || { echo "case: FAIL: $1: the file was changed"; exit 1; }
+  if compgen -G "$f.tmp*" > /dev/null; then echo "case: FAIL: $1: temporary left"; exit 1; fi
+}
+refused rms_3_rows '/sweep/rms has shape [3], expected [11] for the 11 finished speeds of /sweep/index'
+refused index_12_of_11 '/sweep/index holds 12 finished speeds of a grid of 11'
+refused index_twice '/sweep/index holds speed 4 twice'
+refused index_outside '/sweep/index[10] = 42 is outside the speed grid 0..10'
+refused spectrum_shape '/sweep/spectrum has shape [11 x 5], expected [11 x 11]'
+refused n_done '/sweep@n_done is 5 but /sweep/index holds 11 finished speeds'
+
+# The intact file resumes with every speed done.
+run "${sweep[@]}" -out "$d/good.h5" | grep -q "(11 already in $d/good.h5)"
+echo "case: ok: corrupt sweep checkpoints refused, files unchanged"
