@@ -493,6 +493,25 @@ TEST(Nlrom, StoredModelRoundTrips) {
     EXPECT_TRUE(io::read_doubles(file, "/nlrom/damping/omega", &w, &d, &err) && w == rm.damping_omega) << err;
     std::remove(file.c_str());
   }
+  // A NaN in a stored operator is refused when read, naming the file and the dataset (it used to
+  // surface as "the reduced mass matrix is not positive definite").
+  rm.K[5] = std::nan("");
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    io::write_provenance(out, "nlrom", "SI");
+    nlrom::write_stored_model(out, m.lm, m.dofs, basis, rm, info);
+    out.commit();
+  }
+  try {
+    nlrom::read_stored_model(PETSC_COMM_WORLD, file, {"x1"});
+    ADD_FAILURE() << "a NaN in /nlrom/K was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file + ": /nlrom/K holds a non-finite value (nan at entry 5)"),
+              std::string::npos)
+        << e.what();
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(file.c_str());
 }
 
 // The offline settings read their options and validate them with the boundary set.

@@ -2,9 +2,11 @@
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/detail/pack.hpp"
@@ -158,6 +160,26 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
                s.coords.size() != 3 * s.node_ids.size() || static_cast<std::size_t>(m.n_b) > r)) {
       err = cat(file, ": inconsistent /nlrom datasets (r = ", r, ")");
       ok = false;
+    }
+    // Every stored number finite: a NaN or inf in an operator would surface much later as an
+    // unrelated failure (a mass matrix "not positive definite", a time step "unstable").
+    if (ok) {
+      const std::pair<const char*, const std::vector<double>*> stored[] = {{"/nlrom/M", &m.M},
+                                                                           {"/nlrom/K", &m.K},
+                                                                           {"/nlrom/C", &m.C},
+                                                                           {"/nlrom/A", &m.g.A},
+                                                                           {"/nlrom/B", &m.g.B},
+                                                                           {"/nlrom/basis", &s.basis},
+                                                                           {"/mesh/coordinates", &s.coords}};
+      for (const auto& [name, v] : stored) {
+        const auto bad = std::find_if(v->begin(), v->end(), [](double x) { return !std::isfinite(x); });
+        if (bad != v->end()) {
+          err = cat(file, ": ", name, " holds a non-finite value (", *bad, " at entry ", bad - v->begin(),
+                    "): the reduced model is corrupt; rebuild it with morse nlrom");
+          ok = false;
+          break;
+        }
+      }
     }
     std::string units, uerr;
     if (ok && io::read_string(file, "/meta/units", &units, &uerr)) s.units = units;
