@@ -71,3 +71,16 @@ morse_add_ok_case(select_ok select_ok.h5
   select -mesh '${MORSE_CASE_BOX}' -clamp x0 -boundary x1 -cb_num_fixed_modes 10 -select_num_modes 4
   -select_method frequency,lpf,eim,veim,deim,omr,cmschi,ebr,imr -select_rom_method eim
   ${MORSE_CASE_MATERIAL_STR})
+
+# A component held only by its interface (no clamp: the box is free but for x0, its boundary):
+# every method runs, the full model's six rigid-body modes are matched at zero frequency
+# (tests/test_free_free.cpp checks the numbers), IMR uses the flexible system modes and refuses a
+# rigid one by name.
+morse_add_ok_case(select_free_interface select_free_interface.h5
+  select -mesh '${MORSE_CASE_BOX}' -boundary x0 -cb_num_fixed_modes 10 -select_num_modes 4
+  -select_method frequency,lpf,eim,veim,deim,omr,cmschi,ebr,imr ${MORSE_CASE_MATERIAL_STR})
+morse_add_error_case(select_imr_rigid_mode
+  "morse: error: -select_imr_modes 2: system mode 2 is a rigid-body mode \\(0 Hz; the model has 6\\): IMR needs flexible system modes"
+  select_imr_rigid_mode.h5 BOX
+  ARGS select -mesh ${MORSE_CASE_BOX} -boundary x0 -cb_num_fixed_modes 10 -select_method imr -select_imr_modes 2
+       ${MORSE_CASE_MATERIAL})

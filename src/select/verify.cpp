@@ -129,8 +129,15 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
         use = &sys;
       }
       const PetscInt n_sys = static_cast<PetscInt>(use->omega2.size());
+      // Rigid-body modes of a free system (omega = 0) have no resonance for a fixed-interface mode
+      // to feed (IMR's fictitious force at (1 + shift) omega is 0; its eq. 22 is 0/0): by default
+      // the flexible system modes are used, and naming a rigid one is an error.
       if (modes.empty())
-        for (PetscInt i = 0; i < n_sys; ++i) modes.push_back(i);
+        for (PetscInt i = use->zero_modes; i < n_sys; ++i) modes.push_back(i);
+      for (auto m : modes)
+        MORSE_CHECK(m < 0 || m >= use->zero_modes, "-select_imr_modes ", m + 1, ": system mode ", m + 1,
+                    " is a rigid-body mode (0 Hz; the model has ", use->zero_modes,
+                    "): IMR needs flexible system modes");
       for (auto m : modes)
         MORSE_CHECK(m >= 0 &&
                             m<n_sys, "-select_imr_modes ", m + 1, " is out of range (1..", n_sys, " system modes",
