@@ -224,6 +224,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
     eigen::EigenSettings es;
     es.prefix = s.prefix;
     es.what = "fixed-interface modes";
+    es.allow_singular = false;  // K_ii must be regular: its factor gives the constraint modes
     if (s.fmax_hz > 0)
       es.omega2_max = omega2_of_hz(s.fmax_hz);
     else

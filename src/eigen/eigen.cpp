@@ -81,6 +81,7 @@ double stiffness_scale(Mat K, Mat M) {
 }  // namespace detail
 
 Mat Eigenpairs::factor() const {
+  if (shift != 0.0) return nullptr;
   if (block_factor) return block_factor.get();
   if (!eps || slicing) return nullptr;
   ST st;
@@ -254,8 +255,11 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
     return which == "block" ? solve_eigen_block(K, M, st, sign_ref) : solve_eigen_krylovschur(K, M, st, sign_ref);
   };
   try {
-    return solve(s);
-  } catch (const detail::SingularAtZero&) {
+    auto out = solve(s);
+    out.shift = s.shift;
+    return out;
+  } catch (const detail::SingularAtZero& e) {
+    if (!s.allow_singular) throw Error(e.what());
     // K is singular: the model moves freely (a free-free part, or one held only at an interface
     // that the caller left free). As Lanczos codes do, solve again about a negative shift, where
     // K - sigma M is positive definite: the nev lowest are still the nev nearest the shift, the
@@ -275,7 +279,9 @@ Eigenpairs solve_eigen(Mat K, Mat M, const EigenSettings& s, Vec sign_ref) {
            s.what.c_str(), (int)below, hz(lo > 0 ? lo : hi), hz(lo), hz(hi),
            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), shifted.shift,
            hz(-shifted.shift));
-    return solve(shifted);
+    auto out = solve(shifted);
+    out.shift = shifted.shift;
+    return out;
   }
 }
 

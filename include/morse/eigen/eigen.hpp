@@ -43,6 +43,10 @@ struct EigenSettings {
   /// Sylvester check refactors it in place at its shifts: no second symbolic analysis and no
   /// second factor in memory; Eigenpairs::factor() is then null.
   bool keep_factor = true;
+  /// A singular K (at shift 0) is solved about an automatic negative shift (solve_eigen). False:
+  /// it is an error, for callers that need K itself to be regular (Craig–Bampton's K_ii, whose
+  /// factor the constraint modes reuse: a boundary that does not hold the rigid motions).
+  bool allow_singular = true;
 };
 
 struct Eigenpairs {
@@ -71,7 +75,10 @@ struct Eigenpairs {
   PetscInt zero_modes = 0;
   /// The block solver's own factorization (the Krylov–Schur solver's lives in its EPS).
   UMat block_factor;
-  /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode).
+  /// The shift the solve used (EigenSettings::shift, or the automatic one of a singular K).
+  double shift = 0.0;
+  /// The MUMPS Cholesky factor of K used by the solver, or null (slicing mode, or a solve about a
+  /// nonzero shift, whose factor is of K - shift*M).
   Mat factor() const;
 };
 
