@@ -26,6 +26,34 @@ morse_add_error_case(sweep_misspelled_contact
   "morse: error: unknown option\\(s\\): -contact_muu \\(did you mean -contact_mu\\?\\)"
   sweep_misspelled_contact.h5
   ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_revolutions 2 -contact_set x1 -contact_muu 0.1)
+# Values that cannot be run are refused at option time, naming the option: a speed grid beyond
+# the bound of a sweep (with the file size it would need) or not finite, non-finite initial states
+# and loads, a case given twice or escaping -out's directory, a bad -compare_tmax or training step.
+set(MORSE_NLR_SWEEP sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 4e-6 -sweep_monitor x1)
+morse_add_error_case(sweep_too_many_speeds
+  "morse: error: -sweep_omega_min 800, -sweep_omega_max 1e\\+15 and -sweep_omega_step 1e-06 give 1e\\+21 speeds; a sweep takes at most 1000000 \\(its file would need about .* GB"
+  sweep_too_many_speeds.h5
+  ARGS ${MORSE_NLR_SWEEP} -sweep_omega_min 800 -sweep_omega_max 1e15 -sweep_omega_step 1e-6)
+morse_add_error_case(sweep_omega_max_inf "morse: error: -sweep_omega_max must be finite \\(got inf\\)"
+  sweep_omega_max_inf.h5 ARGS ${MORSE_NLR_SWEEP} -sweep_omega_min 800 -sweep_omega_max inf -sweep_omega_step 100)
+set(MORSE_NLR_SIM simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
+morse_add_error_case(simulate_q0_nan "morse: error: -sim_q0 must be finite \\(value 2 is nan\\)"
+  simulate_q0_nan.h5 ARGS ${MORSE_NLR_SIM} -sim_q0 0,nan)
+morse_add_error_case(simulate_load_amplitude_inf "morse: error: -load_x1_amplitude must be finite \\(got inf\\)"
+  simulate_load_inf.h5 ARGS ${MORSE_NLR_SIM} -load_sets x1 -load_x1_dir y -load_x1_amplitude inf)
+morse_add_error_case(simulate_case_twice "morse: error: -sim_cases: case a is given twice"
+  simulate_case_twice.h5 ARGS ${MORSE_NLR_SIM} -sim_cases a,b,a)
+morse_add_error_case(simulate_case_escapes "morse: error: -sim_cases: case name '\\.\\./x' must not be empty nor contain"
+  simulate_case_escapes.h5 ARGS ${MORSE_NLR_SIM} -sim_cases a,../x)
+morse_add_error_case(compare_tmax_nan "morse: error: -compare_tmax must be a finite time >= 0 \\[s\\] \\(got nan\\)"
+  compare_tmax_nan.h5 ARGS compare ${MORSE_CASE_DIR}/no_fom.h5 ${MORSE_CASE_DIR}/no_sim.h5 -compare_tmax nan)
+morse_add_error_case(compare_tmax_negative "morse: error: -compare_tmax must be a finite time >= 0 \\[s\\] \\(got -1\\)"
+  compare_tmax_negative.h5 ARGS compare ${MORSE_CASE_DIR}/no_fom.h5 ${MORSE_CASE_DIR}/no_sim.h5 -compare_tmax -1)
+morse_add_error_case(nlrom_training_dt_negative
+  "morse: error: -nlrom_training_dt must be a finite positive time step \\[s\\] \\(got -1\\)"
+  nlrom_training_dt.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_basis cbmd -nlrom_num_fixed_modes 2 -nlrom_num_derivatives 2
+       -load_sets x1 -load_x1_dir y -load_x1_amplitude 1 -nlrom_training_tfinal 1e-3 -nlrom_training_dt -1)
 morse_add_error_case(mesh_node_set_missing_id "morse: error: .*-mesh_node_set_tipx.*987654321" node_set_bad.h5 BOX
   ARGS modes ${MORSE_NLR_BOX} -mesh_node_sets tipx -mesh_node_set_tipx 1,987654321)
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -485,6 +486,17 @@ TEST(Options, LoadsHistoryAndFomSettings) {
     EXPECT_EQ(loads[0].omega, 100.0);
     EXPECT_EQ(error, "load on set root: give its direction with -c1_load_root_dir x|y|z|vx,vy,vz");
     EXPECT_TRUE(options::registered("-c1_load_tip_phase"));
+  }
+  for (const auto& [opt, value, why] :
+       {std::tuple<const char*, const char*, const char*>{"-c2_load_tip_amplitude", "nan",
+                                                          "-c2_load_tip_amplitude must be finite (got nan)"},
+        {"-c2_load_tip_omega", "inf", "-c2_load_tip_omega must be finite and >= 0 (got inf)"},
+        {"-c2_load_tip_phase", "-inf", "-c2_load_tip_phase must be finite (got -inf)"}}) {
+    GivenOptions g{{"-c2_load_sets", "tip"}, {"-c2_load_tip_dir", "y"}, {"-c2_load_tip_amplitude", "1"}, {opt, value}};
+    std::vector<dyn::NodalLoad> loads;
+    std::string error;
+    ASSERT_EQ(dyn::get_loads(PETSC_COMM_WORLD, &loads, &error, "c2_"), PETSC_SUCCESS);
+    EXPECT_EQ(error, why);
   }
   {
     GivenOptions g{{"-load_history_outside", "hold"}};

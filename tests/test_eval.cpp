@@ -145,3 +145,18 @@ TEST(Compare, TmaxFromTheStoredLoadAndSettings) {
   EXPECT_EQ(s.w, (std::vector<double>{0.25, 0.25, 0.25, 0.25}));
   EXPECT_EQ(s.error, "-compare_weights takes four values w1,w2,w3,w4");
 }
+
+// A given -compare_tmax must be a finite time >= 0: -1 is not "from the load", nan is refused.
+TEST(Compare, TmaxGivenMustBeAFiniteTime) {
+  for (const char* bad : {"nan", "-1", "inf"}) {
+    test::GivenOptions g{{"-compare_tmax", bad}};
+    eval::CompareSettings s;
+    ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(s.error, cat("-compare_tmax must be a finite time >= 0 [s] (got ", s.tmax, ")")) << bad;
+  }
+  test::GivenOptions g{{"-compare_tmax", "0.25"}};
+  eval::CompareSettings s;
+  ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.tmax, 0.25);
+}

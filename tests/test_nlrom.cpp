@@ -533,3 +533,26 @@ TEST(Options, OfflineSettings) {
   ASSERT_EQ(u.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
   EXPECT_EQ(u.error, "-nlrom_basis svd: unknown (cb, cbmd or pod)");
 }
+
+// A given training step or length must be a finite positive time (-1 used to mean "the default").
+TEST(Options, OfflineTrainingTimesMustBeFinitePositive) {
+  for (const char* bad : {"-1", "0", "nan"}) {
+    test::GivenOptions g{{"-nlrom_training_dt", bad}};
+    nlrom::OfflineSettings s;
+    s.basis.boundary_set = "root";
+    ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    EXPECT_EQ(s.error,
+              cat("-nlrom_training_dt must be a finite positive time step [s] (got ", s.basis.training_dt, ")"))
+        << bad;
+  }
+  test::GivenOptions g{{"-nlrom_training_tfinal", "inf"}};
+  nlrom::OfflineSettings s;
+  s.basis.boundary_set = "root";
+  ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(s.error, "-nlrom_training_tfinal must be a finite positive time [s] (got inf)");
+  test::GivenOptions h{{"-nlrom_training_tfinal", "1e-3"}, {"-nlrom_training_dt", "1e-5"}};
+  nlrom::OfflineSettings t;
+  t.basis.boundary_set = "root";
+  ASSERT_EQ(t.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+  EXPECT_EQ(t.error, "");
+}

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/session.hpp"
@@ -20,6 +21,7 @@
 #include "morse/nlrom/nlrom.hpp"
 #include "morse/sim/run.hpp"
 #include "morse/sim/sim.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -982,4 +984,69 @@ TEST(SimRun, ContactOptionsReadAndCheckTheirValues) {
   EXPECT_EQ(c.error, "-casing_lobes must be >= 1 (got 0)");
   for (const char* o : {"-contact_set", "-contact_plane_normal", "-casing_clearance", "-casing_lobes"})
     MORSE_CALL(PetscOptionsClearValue(nullptr, o));
+}
+
+// The sweep settings refuse non-finite speeds and grids beyond kMaxSweepSpeeds, naming the options
+// and the file size they would need; a finite grid is read as given.
+TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
+  auto read = [](std::initializer_list<std::pair<const char*, const char*>> given) {
+    test::GivenOptions g(given);
+    sim::SweepOptions so;
+    MORSE_CALL(so.set_from_options(PETSC_COMM_WORLD));
+    return so;
+  };
+  auto so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "1e15"}, {"-sweep_omega_step", "1e-6"}});
+  EXPECT_NE(so.error.find("-sweep_omega_min 800, -sweep_omega_max 1e+15 and -sweep_omega_step 1e-06 give 1e+21 "
+                          "speeds; a sweep takes at most 1000000"),
+            std::string::npos)
+      << so.error;
+  EXPECT_NE(so.error.find(" GB, 4120 bytes per speed"), std::string::npos) << so.error;
+  test::expect_error_parts([&] { so.check(); }, {"1e+21 speeds"}, "check() raises the error");
+  so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "inf"}, {"-sweep_omega_step", "100"}});
+  EXPECT_EQ(so.error, "-sweep_omega_max must be finite (got inf)");
+  so = read({{"-sweep_omega_min", "nan"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}});
+  EXPECT_EQ(so.error, "-sweep_omega_min must be finite (got nan)");
+  so = read(
+      {{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}, {"-sim_dt", "inf"}});
+  EXPECT_EQ(so.error, "-sim_dt must be finite (got inf)");
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "900"},
+             {"-sweep_omega_step", "100"},
+             {"-casing_clearance", "inf"}});
+  EXPECT_EQ(so.error, "");
+  EXPECT_EQ(so.contact.error, "-casing_clearance must be finite (got inf)");
+  // The largest grid taken, and one more speed.
+  so = read({{"-sweep_omega_min", "1"}, {"-sweep_omega_max", "1000000"}, {"-sweep_omega_step", "1"}});
+  EXPECT_EQ(so.error, "");
+  EXPECT_EQ(so.n_speeds(), sim::kMaxSweepSpeeds);
+  so = read({{"-sweep_omega_min", "1"}, {"-sweep_omega_max", "1000001"}, {"-sweep_omega_step", "1"}});
+  EXPECT_NE(so.error.find("-sweep_omega_max 1000001 and -sweep_omega_step 1 give 1000001 speeds"), std::string::npos)
+      << so.error;
+}
+
+// simulate's options refuse non-finite initial states and steps, a case given twice and a case
+// name that would write outside -out's directory, naming the option.
+TEST(SimRun, SimOptionsRefuseNonFiniteValuesAndBadCases) {
+  auto read = [](std::initializer_list<std::pair<const char*, const char*>> given) {
+    test::GivenOptions g(given);
+    sim::SimOptions so;
+    MORSE_CALL(so.set_from_options(PETSC_COMM_WORLD));
+    return so;
+  };
+  EXPECT_EQ(read({{"-sim_q0", "0,nan,1"}}).error, "-sim_q0 must be finite (value 2 is nan)");
+  EXPECT_EQ(read({{"-sim_v0", "inf"}}).error, "-sim_v0 must be finite (value 1 is inf)");
+  EXPECT_EQ(read({{"-sim_v0_uniform", "0,0,-inf"}}).error, "-sim_v0_uniform must be finite (got -inf)");
+  EXPECT_EQ(read({{"-sim_dt", "nan"}}).error, "-sim_dt must be finite (got nan)");
+  EXPECT_EQ(read({{"-sim_cases", "a,b,a"}, {"-out", "run.h5"}}).error,
+            "-sim_cases: case a is given twice (each case writes its own file, run_a.h5)");
+  EXPECT_EQ(read({{"-sim_cases", "a,../../etc/x"}, {"-out", "run.h5"}}).error,
+            "-sim_cases: case name '../../etc/x' must not be empty nor contain '/' or '..' (case c writes run_c.h5)");
+  EXPECT_NE(read({{"-sim_cases", "sub/x"}}).error.find("case name 'sub/x'"), std::string::npos);
+  EXPECT_NE(read({{"-sim_cases", "x..y"}}).error.find("case name 'x..y'"), std::string::npos);
+  const auto ok = read({{"-sim_cases", "a,b"}, {"-sim_q0", "1,2"}, {"-sim_dt", "1e-6"}});
+  EXPECT_EQ(ok.error, "");
+  EXPECT_EQ(ok.s.q0, (std::vector<double>{1, 2}));
+  EXPECT_EQ(read({{"-sim_omega", "inf"}}).contact.error, "-sim_omega must be finite (got inf)");
+  EXPECT_EQ(read({{"-contact_plane_normal", "0,0,inf"}}).contact.error,
+            "-contact_plane_point and -contact_plane_normal must be finite");
 }

@@ -86,6 +86,7 @@ void run_simulate(MPI_Comm comm) {
   check_options(comm, true);
   collective_check(comm, load_error);
   collective_check(comm, so.contact.error);
+  collective_check(comm, so.error);
   MORSE_CHECK(!so.rom.empty(), "morse simulate: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
   std::vector<files::Named> outputs;

@@ -29,8 +29,11 @@ PetscErrorCode CompareSettings::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsString("-compare_tip", "Node set of the blade tip (criteria e3, e4); monitored in both runs",
                                "", tip.c_str(), buf, sizeof buf, &set));
   if (set) tip = buf;
+  PetscBool tmax_set = PETSC_FALSE;
   PetscCall(MorseOptionsReal("-compare_tmax", "Time of e1 [s] (default: first maximum of the first harmonic -load_*)",
-                             "", tmax, &tmax, nullptr));
+                             "", tmax, &tmax, &tmax_set));
+  if (tmax_set && !(std::isfinite(tmax) && tmax >= 0) && error.empty())
+    error = cat("-compare_tmax must be a finite time >= 0 [s] (got ", tmax, ")");
   PetscCall(MorseOptionsRealArray("-compare_weights", "Weights w1,w2,w3,w4 of eq. 43 (sum 1)", "", wv, &nw, &set));
   if (set) {
     if (nw == 4)

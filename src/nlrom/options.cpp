@@ -4,6 +4,7 @@
 
 #include <petscsys.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,7 @@ namespace morse::nlrom {
 
 PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   char buf[PETSC_MAX_PATH_LEN] = "";
-  PetscBool set = PETSC_FALSE;
+  PetscBool set = PETSC_FALSE, tfinal_set = PETSC_FALSE, dt_set = PETSC_FALSE;
   auto& b = basis;
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
   PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
@@ -32,11 +33,11 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
                                sizeof buf, &set));
   if (set) b.snapshots = buf;
   PetscCall(MorseOptionsReal("-nlrom_training_tfinal", "Length of the linear training run of cbmd [s]", "",
-                             b.training_tfinal, &b.training_tfinal, nullptr));
+                             b.training_tfinal, &b.training_tfinal, &tfinal_set));
   PetscCall(MorseOptionsReal("-nlrom_training_dt",
                              "Time step of the training run [s] (default: 1/200 of the "
                              "fastest load period)",
-                             "", b.training_dt, &b.training_dt, nullptr));
+                             "", b.training_dt, &b.training_dt, &dt_set));
   PetscCall(MorseOptionsReal("-nlrom_mgs_tol",
                              "Modified Gram-Schmidt: drop a vector whose M-norm falls below tol "
                              "times its norm before projection",
@@ -80,6 +81,11 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   else
     bad(false, cat("-nlrom_basis ", basis_name, ": unknown (cb, cbmd or pod)"));
   bad(forces == "step" || forces == "exact", cat("-nlrom_forces ", forces, ": unknown (step or exact)"));
+  // Given, a length or step must be a finite positive time (not given: the defaults of cmd nlrom).
+  bad(!tfinal_set || (std::isfinite(b.training_tfinal) && b.training_tfinal > 0),
+      cat("-nlrom_training_tfinal must be a finite positive time [s] (got ", b.training_tfinal, ")"));
+  bad(!dt_set || (std::isfinite(b.training_dt) && b.training_dt > 0),
+      cat("-nlrom_training_dt must be a finite positive time step [s] (got ", b.training_dt, ")"));
   bad(!b.boundary_set.empty(), "morse nlrom: no boundary set given: use -boundary SET");
   bad(damping_xi >= 0 && damping_xi < 1 && damping_modes >= 0,
       "-nlrom_damping_modal must be in [0, 1) and -nlrom_damping_modes >= 0");

@@ -52,6 +52,9 @@ PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
                                   o->plane.normal, &n, &set));
   if (set && n != 3) bad("-contact_plane_normal needs 3 values x,y,z");
   o->plane_given = o->plane_given || set;
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(o->plane.point[k]) || !std::isfinite(o->plane.normal[k]))
+      bad("-contact_plane_point and -contact_plane_normal must be finite");
   const double nn = std::sqrt(o->plane.normal[0] * o->plane.normal[0] + o->plane.normal[1] * o->plane.normal[1] +
                               o->plane.normal[2] * o->plane.normal[2]);
   if (!(nn > 0))
@@ -81,6 +84,14 @@ PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
                              o->revolutions, &o->revolutions, &set));
   if (set && !(o->revolutions > 0)) bad(cat("-sim_revolutions must be positive (got ", o->revolutions, ")"));
   PetscOptionsEnd();
+  for (const auto& [name, v] : {std::pair<const char*, double>{"-contact_mu", o->mu},
+                                {"-casing_clearance", c.clearance},
+                                {"-casing_bump_height", c.bump_height},
+                                {"-casing_width", c.width},
+                                {"-casing_alpha", c.alpha},
+                                {"-sim_omega", c.omega},
+                                {"-sim_revolutions", o->revolutions}})
+    if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
   if (!(c.clearance > 0)) bad(cat("-casing_clearance must be positive (got ", c.clearance, " m)"));
   if (!(c.bump_height >= 0)) bad(cat("-casing_bump_height must be >= 0 (got ", c.bump_height, " m)"));
   if (c.lobes < 1) bad(cat("-casing_lobes must be >= 1 (got ", c.lobes, ")"));
@@ -100,6 +111,8 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
                                &o->cases));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  const char* names[2] = {"-sim_q0", "-sim_v0"};
+  std::vector<double>* dest[2] = {&o->s.q0, &o->s.v0};
   PetscOptionsBegin(comm, nullptr, "morse simulate options", "");
   PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file", "", buf, buf, sizeof buf, &set));
   if (set) o->rom = buf;
@@ -140,10 +153,8 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
                                "", buf, buf, sizeof buf, &set));
   if (set) o->snapshots = buf;
   std::vector<PetscReal> v(4096);
-  const char* names[2] = {"-sim_q0", "-sim_v0"};
   const char* helps[2] = {"Initial reduced coordinates q(0), r values (default 0)",
                           "Initial reduced velocities dq/dt(0), r values (default 0)"};
-  std::vector<double>* dest[2] = {&o->s.q0, &o->s.v0};
   for (int i = 0; i < 2; ++i) {
     PetscInt n = static_cast<PetscInt>(v.size());
     PetscCall(MorseOptionsRealArray(names[i], helps[i], "", v.data(), &n, &set));
@@ -160,6 +171,29 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
     o->v0_uniform.assign(u3, u3 + 3);
   }
   PetscOptionsEnd();
+  auto bad = [&](const std::string& e) {
+    if (o->error.empty()) o->error = e;
+  };
+  // Every case writes <out stem>_<case><ext>: its name must keep the file beside -out, once.
+  std::set<std::string> seen;
+  for (const auto& c : o->cases) {
+    if (c.empty() || c.find('/') != std::string::npos || c.find("..") != std::string::npos)
+      bad(cat("-sim_cases: case name '", c, "' must not be empty nor contain '/' or '..' (case c writes ",
+              case_path(o->out, "c"), ")"));
+    else if (!seen.insert(c).second)
+      bad(cat("-sim_cases: case ", c, " is given twice (each case writes its own file, ", case_path(o->out, c), ")"));
+  }
+  for (int i = 0; i < 2; ++i)
+    for (std::size_t k = 0; k < dest[i]->size(); ++k)
+      if (!std::isfinite((*dest[i])[k]))
+        bad(cat(names[i], " must be finite (value ", k + 1, " is ", (*dest[i])[k], ")"));
+  for (double x : o->v0_uniform)
+    if (!std::isfinite(x)) bad(cat("-sim_v0_uniform must be finite (got ", x, ")"));
+  for (const auto& [name, v] : {std::pair<const char*, double>{"-sim_dt", o->s.dt},
+                                {"-sim_tfinal", o->s.t_final},
+                                {"-sim_newton_rtol", o->s.newton_rtol}})
+    if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (o->out.empty()) bad("-out is empty: give the name of the output file");
   PetscCall(o->contact.set_from_options(comm));
   o->s.linear = o->linear;
   return PETSC_SUCCESS;
@@ -235,6 +269,29 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
   PetscOptionsEnd();
+  auto bad = [&](const std::string& e) {
+    if (o->error.empty()) o->error = e;
+  };
+  for (const auto& [name, v] : {std::pair<const char*, double>{"-sweep_omega_min", o->omega_min},
+                                {"-sweep_omega_max", o->omega_max},
+                                {"-sweep_omega_step", o->omega_step},
+                                {"-sim_dt", o->dt},
+                                {"-sweep_spectrum_fmax", o->fmax}})
+    if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (o->error.empty() && o->omega_step > 0 && o->omega_max > o->omega_min) {
+    // The count in floating point first: it may not fit any integer.
+    const double n = std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) + 1;
+    if (n > static_cast<double>(kMaxSweepSpeeds)) {
+      const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1);
+      char b[512];
+      std::snprintf(b, sizeof b,
+                    "-sweep_omega_min %.10g, -sweep_omega_max %.10g and -sweep_omega_step %.10g give %.10g speeds; a "
+                    "sweep takes at most %ld (its file would need about %.3g GB, %.0f bytes per speed): use a larger "
+                    "-sweep_omega_step or a narrower range",
+                    o->omega_min, o->omega_max, o->omega_step, n, kMaxSweepSpeeds, n * per_speed * 1e-9, per_speed);
+      bad(b);
+    }
+  }
   return o->contact.set_from_options(comm);
 }
 
@@ -253,6 +310,7 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
 }
 
 void SweepOptions::check() const {
+  MORSE_CHECK(error.empty(), error);
   MORSE_CHECK(!rom.empty(), "morse sweep: no reduced model given: use -rom FILE.h5 (a morse nlrom file)");
   MORSE_CHECK(!contact.set.empty(), "morse sweep: give the contact nodes with -contact_set SET");
   MORSE_CHECK(contact.obstacle == sim::Obstacle::Casing && !contact.plane_given,

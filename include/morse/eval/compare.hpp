@@ -22,7 +22,8 @@ struct CompareSettings {
   std::string rom_model;                             ///< -compare_rom_model: the nlrom file ("" = the one /sim names)
   std::string error;                                 ///< a bad option value (not four weights), naming the option
   /// Reads -compare_tip, -compare_tmax, -compare_weights and -compare_rom_model; a weight list
-  /// that is not four values is recorded in `error` (w unchanged). Uses PetscOptionsBegin:
+  /// that is not four values (w unchanged) or a given -compare_tmax that is not a finite time >= 0
+  /// is recorded in `error`. Uses PetscOptionsBegin:
   /// returns a PETSc error code. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
 };

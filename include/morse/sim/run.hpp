@@ -34,7 +34,8 @@ struct ContactOptions {
   /// Reads -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point
   /// x,y,z, -contact_plane_normal x,y,z (normalized here), -casing_clearance, -casing_bump_height
   /// (default 2 x clearance), -casing_lobes, -casing_width, -casing_alpha, -sim_omega and
-  /// -sim_revolutions. A bad value is recorded in `error` (the first one). Collective.
+  /// -sim_revolutions. A bad value (a non-finite one among them) is recorded in `error` (the first
+  /// one). Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
   /// The contact settings of these options: the nodes of `set` in sm (contact_nodes, which throws
   /// alike on every rank for a node that is not a physical boundary node), the obstacle, plane,
@@ -52,11 +53,15 @@ struct SimOptions {
   ContactOptions contact;
   std::vector<double> v0_uniform;  ///< 3 values, or empty
   bool tfinal_set = false;
+  std::string error;  ///< a bad value, naming the option (raised by the command after -help)
 
   /// Reads -sim_monitor, -sim_cases, -rom, -out, -sim_dt, -sim_tfinal, -sim_scheme,
   /// -sim_newton_rtol, -sim_newton_max_it, -sim_kernel, -sim_linear, -sim_output_every,
   /// -sim_snapshots, -sim_q0, -sim_v0, -sim_v0_uniform and the contact options
-  /// (ContactOptions::set_from_options). A bad value is recorded in contact.error. Collective.
+  /// (ContactOptions::set_from_options). A non-finite value (-sim_q0, -sim_v0, -sim_v0_uniform,
+  /// -sim_dt, -sim_tfinal, -sim_newton_rtol), an empty -out, a case given twice or a case name
+  /// that is empty or holds '/' or '..' (it would write outside -out's directory) is recorded in
+  /// `error`; a bad contact value in contact.error. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
   /// Completes s for the stored model sm: the contact (-contact_set: central differences only),
   /// t_final from -sim_revolutions at -sim_omega, v0 fitted on the basis from -sim_v0_uniform
@@ -65,6 +70,11 @@ struct SimOptions {
   void resolve(const nlrom::StoredModel& sm, double* v0_residual);
 };
 
+/// The most speeds one sweep takes: its file holds about 8 (15 + spectrum bins) bytes per speed
+/// (14 values and the spectrum), 4 GB at the default 500 bins, and a checkpoint rewrites it whole
+/// after every speed.
+constexpr long kMaxSweepSpeeds = 1000000;
+
 /// The options of `morse sweep`.
 struct SweepOptions {
   std::string rom, out = "sweep.h5", monitor = "LE";
@@ -72,14 +82,17 @@ struct SweepOptions {
   PetscInt bins = 500, batch = 8;
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, batched = PETSC_FALSE;
   ContactOptions contact;
+  std::string error;  ///< a bad value, naming the option (raised by check())
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
   /// -sweep_batched, -sweep_restart and the contact options (ContactOptions::set_from_options).
-  /// Collective.
+  /// A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, or a grid of more than
+  /// kMaxSweepSpeeds speeds (the message gives the file size it would need) is recorded in
+  /// `error`. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
-  /// Throws (alike on every rank) on options a sweep refuses: no -rom or -contact_set, a plane
-  /// obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
+  /// Throws (alike on every rank) on options a sweep refuses: `error`, no -rom or -contact_set, a
+  /// plane obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
   void check() const;
   /// The sweep settings for the stored model sm: dt, linear, the casing contact of -contact_set,
   /// -sim_revolutions (default 200), the spectrum, batch and the radial row of -sweep_monitor.
