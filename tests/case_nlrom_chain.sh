@@ -62,6 +62,13 @@ run simulate -rom "$d/pod.h5" "${load[@]}" -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_mo
   -out "$d/sim_long.h5"
 run compare "$d/fom.h5" "$d/sim_long.h5" "${load[@]}" -compare_tip x1 -compare_tmax 1e-3 | tee "$d/compare.txt"
 grep -q "performance indicator I" "$d/compare.txt"
+# /sim@rom names the model by its absolute path: a simulate given a relative -rom, compared from
+# another working directory, still finds it (it failed when the relative path was stored).
+(cd "$d" && run simulate -rom pod.h5 "${load[@]}" -sim_dt 1e-7 -sim_tfinal 2e-3 -sim_monitor x1 \
+  -sim_output_every 100 -out sim_rel.h5)
+(cd / && run compare "$d/fom.h5" "$d/sim_rel.h5" "${load[@]}" -compare_tip x1 -compare_tmax 1e-3) \
+  > "$d/compare_rel.txt"
+grep -q "performance indicator I" "$d/compare_rel.txt"
 /usr/bin/python3 - "$d/sim_long.h5" <<'PY' || [ $? -eq 127 ]
 import sys, h5py
 f = h5py.File(sys.argv[1], "r")

@@ -13,6 +13,7 @@
 
 #include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/session.hpp"
 #include "morse/dyn/dyn.hpp"
@@ -1049,4 +1050,25 @@ TEST(SimRun, SimOptionsRefuseNonFiniteValuesAndBadCases) {
   EXPECT_EQ(read({{"-sim_omega", "inf"}}).contact.error, "-sim_omega must be finite (got inf)");
   EXPECT_EQ(read({{"-contact_plane_normal", "0,0,inf"}}).contact.error,
             "-contact_plane_point and -contact_plane_normal must be finite");
+}
+
+// A sweep checkpoint is resumed only with the same settings; the refusal names every key that
+// differs, and the reduced model given by another spelling of the same file (relative against
+// absolute) is the same setting.
+TEST(SimRun, SweepSettingsDifferenceNamesTheKeys) {
+  const std::string rel = "sweep_settings_rom.h5";
+  if (world_rank() == 0) std::fclose(std::fopen(rel.c_str(), "w"));
+  MPI_Barrier(PETSC_COMM_WORLD);
+  const std::string stored = "rom=" + rel + "\nr=15\ndt=1e-06\nmu=0.1\n";
+  EXPECT_EQ(sim::settings_difference(stored, "rom=" + files::absolute_path(rel) + "\nr=15\ndt=1e-06\nmu=0.1\n"), "");
+  EXPECT_EQ(sim::settings_difference(stored, "rom=./" + rel + "\nr=15\ndt=2e-06\nmu=0.1\nlobes=2\n"),
+            "dt: 1e-06 in the file, 2e-06 now; lobes: (none) in the file, 2 now");
+  EXPECT_EQ(sim::settings_difference(stored, "rom=other.h5\nr=15\ndt=1e-06\nmu=0.1\n"),
+            "rom: " + rel + " in the file, other.h5 now");
+  // A path stored by an older run, relative to the file that stores it, is found from elsewhere.
+  EXPECT_EQ(files::resolve_stored_path(rel, "/no/such/dir/sim.h5"), rel);  // exists from here
+  EXPECT_EQ(files::resolve_stored_path("x.h5", "/tmp/sim.h5"), "x.h5");    // found nowhere: as stored
+  EXPECT_EQ(files::absolute_path(""), "");
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) std::remove(rel.c_str());
 }

@@ -58,7 +58,7 @@ void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim
   if (!cr.node_ids.empty())
     print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", cr.node_ids.size(),
            cr.max_normal_force, cr.time_of_max_normal_force);
-  rec.rom = so.rom;
+  rec.rom = files::absolute_path(so.rom);  // valid from any directory (morse compare)
   rec.case_name = c.name;
   sim::write_sim(out, rec, so.s, stats);
   out.commit();

@@ -66,7 +66,7 @@ void run_stress(MPI_Comm comm) {
   }
   rec.n_nodes = md.mesh->n_global_nodes, rec.n_elements = md.mesh->n_global_elements;
   rec.time = st.time, rec.step = st.step, rec.measure = st.measure;
-  rec.rom = so.rom, rec.sim = so.sim;
+  rec.rom = files::absolute_path(so.rom), rec.sim = files::absolute_path(so.sim);
   if (!so.time_set) rec.monitor = so.monitor, rec.monitor_radial_displacement = st.radial;
   sim::write_stress(out, f, rec);
   out.commit();

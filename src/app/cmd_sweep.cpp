@@ -40,7 +40,7 @@ void run_sweep(MPI_Comm comm) {
   sim::SweepRecord rec;
   rec.settings = sim::settings_text(so, s, r);
   rec.units = sm.units;
-  rec.rom = so.rom;
+  rec.rom = files::absolute_path(so.rom);  // valid from any directory
   rec.n_speeds = n_speeds;
   rec.frequencies = s.frequencies();
   for (double w2 : eigen::dense_eigenvalues(static_cast<int>(r), sm.model.K, sm.model.M, nullptr))

@@ -70,6 +70,15 @@ bool same_file(const std::string& a, const std::string& b) {
   return canonical_of(a) == canonical_of(b);
 }
 
+std::string absolute_path(const std::string& p) { return p.empty() ? p : canonical_of(p).string(); }
+
+std::string resolve_stored_path(const std::string& stored, const std::string& file) {
+  std::error_code ec;
+  if (stored.empty() || fs::path(stored).is_absolute() || fs::exists(stored, ec)) return stored;
+  const fs::path beside = fs::path(file).parent_path() / stored;
+  return fs::exists(beside, ec) ? beside.lexically_normal().string() : stored;
+}
+
 void prepare_outputs(MPI_Comm comm, const std::vector<Named>& outputs, const std::vector<Named>& inputs) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
 #include "morse/io/h5.hpp"
@@ -102,7 +103,7 @@ Indicator compare_runs(const std::string& fom, const std::string& rom, const Com
   ind.e[2] = peak_to_peak_criterion(fh.sets[0].u, ur_f, ntip);
   ind.e[3] = displacement_criterion(fh.sets[0].u, ur_f);
   // e1: full fields at the snapshot nearest to t_max.
-  std::string model = s.rom_model.empty() ? sr.rom : s.rom_model;
+  std::string model = s.rom_model.empty() ? files::resolve_stored_path(sr.rom, rom) : s.rom_model;
   MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
   if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
     throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));

@@ -10,10 +10,12 @@
 #include <cstdio>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/files.hpp"
 #include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 
@@ -303,9 +305,9 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
                 "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
                 "spectrum_decimation=block_mean\n",
-                o.rom.c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
-                s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes, c.width,
-                c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
+                files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
+                s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
+                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
   return b;
 }
 
@@ -351,6 +353,33 @@ std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_
   return todo;
 }
 
+std::string settings_difference(const std::string& stored, const std::string& now) {
+  // key=value lines; the reduced model compared as the same file (a checkpoint written with a
+  // relative -rom resumes with the absolute path of the same file, and the reverse).
+  auto parse = [](const std::string& t) {
+    std::map<std::string, std::string> kv;
+    std::istringstream in(t);
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto eq = line.find('=');
+      if (eq != std::string::npos) kv[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return kv;
+  };
+  const auto a = parse(stored), b = parse(now);
+  std::set<std::string> keys;
+  for (const auto& [k, v] : a) keys.insert(k);
+  for (const auto& [k, v] : b) keys.insert(k);
+  std::string diff;
+  for (const auto& k : keys) {
+    const auto ia = a.find(k), ib = b.find(k);
+    const std::string va = ia == a.end() ? "(none)" : ia->second, vb = ib == b.end() ? "(none)" : ib->second;
+    if (va == vb || (k == "rom" && ia != a.end() && ib != b.end() && files::same_file(va, vb))) continue;
+    diff += cat(diff.empty() ? "" : "; ", k, ": ", va, " in the file, ", vb, " now");
+  }
+  return diff;
+}
+
 std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart, SweepRecord* rec) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
@@ -360,10 +389,10 @@ std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bo
     SweepRecord old;
     std::string why;
     if (read_sweep(out, &old, &why)) {
-      if (old.settings != rec->settings)
-        err = cat(out,
-                  " holds a sweep with other settings; give another -out, or -sweep_restart to "
-                  "overwrite it");
+      const std::string differ = settings_difference(old.settings, rec->settings);
+      if (!differ.empty())
+        err = cat(out, " holds a sweep with other settings (", differ,
+                  "); give another -out, or -sweep_restart to overwrite it");
       else if (old.n_speeds != rec->n_speeds)
         err = cat(out, ": /sweep@n_speeds is ", old.n_speeds, " but the options give ", rec->n_speeds,
                   " speeds: the sweep checkpoint is corrupt; give another -out, or -sweep_restart to overwrite it");

@@ -27,6 +27,16 @@ struct Named {
 /// absolute path all match. Not collective.
 bool same_file(const std::string& a, const std::string& b);
 
+/// The absolute, canonical form of a path (as same_file compares them): what an output stores to
+/// name an input, so that the record holds from any working directory. Empty stays empty. Not
+/// collective.
+std::string absolute_path(const std::string& p);
+
+/// A path stored in `file` (an input it names), as found from here: the path itself if it is
+/// absolute or exists from the working directory, else taken relative to `file`'s directory
+/// (files written before paths were stored absolute). Not collective.
+std::string resolve_stored_path(const std::string& stored, const std::string& file);
+
 /// The start-of-run check of a command's outputs, before any work. Refuses, naming the option and
 /// the paths: an empty output path; a directory, or anything but a regular file, where an output
 /// is to be written; an output whose directory does not exist or is not writable; an output that

@@ -111,6 +111,11 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
 /// of rec, takes its finished speeds into rec; then writes rec as the first checkpoint (which also
 /// proves that `out` is writable). Returns the indices of the finished speeds on every rank.
 /// Throws collectively if `out` holds another sweep or cannot be read or written. Collective.
+/// The settings that differ between a sweep file's stored settings text and the current one, as
+/// "key: stored in the file, current now; ..." (empty: the same sweep). The reduced model (rom)
+/// counts as the same when it is the same file (files::same_file). Not collective.
+std::string settings_difference(const std::string& stored, const std::string& now);
+
 std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bool restart, SweepRecord* rec);
 
 /// The options of `morse stress`.
