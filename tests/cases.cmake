@@ -178,6 +178,22 @@ morse_add_error_case(option_material_E_tiny
   option_material_E_tiny.h5 BOX
   ARGS modes -mesh ${MORSE_CASE_BOX} -clamp x0 -material_E 1e-300 -material_nu 0.3 -material_rho 7800)
 
+# Sizes are checked before anything is allocated (each ended in a bare std::bad_alloc): a Gmsh
+# header or node block that promises more entries than the rest of the file has bytes for, a
+# generated box whose mesh and file text exceed the memory available (759 GB here).
+morse_add_error_case(mesh_huge_nodes_header
+  "morse: error: .*huge_nodes_header\\.msh:5: the number of nodes is 1000000000000, but the [0-9]+ bytes left in the file hold at most [0-9]+ nodes"
+  mesh_huge_nodes_header.h5
+  ARGS modes -mesh ${MORSE_CASE_DATA}/huge_nodes_header.msh -clamp x0 ${MORSE_CASE_MATERIAL})
+morse_add_error_case(mesh_huge_node_block
+  "morse: error: .*huge_node_block\\.msh:6: the number of nodes in the block is 2000000000, but the [0-9]+ bytes left"
+  mesh_huge_node_block.h5
+  ARGS modes -mesh ${MORSE_CASE_DATA}/huge_node_block.msh -clamp x0 ${MORSE_CASE_MATERIAL})
+morse_add_error_case(mesh_box_too_large
+  "morse: error: a box of 1000x1000x260 tet10 cells \\(1560000000 elements\\) needs [0-9.]+ [GTP]B for the mesh and the text of its file; [0-9.e+]+ [GTP]B available"
+  mesh_box_too_large.msh
+  ARGS mesh box -box_type tet10 -box_nx 1000 -box_ny 1000 -box_nz 260)
+
 morse_add_error_case(bad_box_type
   "morse: error: .*-box_type pyr5: unknown element type"
   bad_box_type.msh
