@@ -73,13 +73,14 @@ int main(int argc, char** argv) {
         morse::app::run_command(PETSC_COMM_WORLD, words[0], {words.begin() + 1, words.end()});
       }
     } catch (const std::exception& e) {
-      status = handle_error(err_comm, e.what());
+      // morse::Error, and anything else (std::bad_alloc: "out of memory: ...") as one line.
+      status = handle_error(err_comm, morse::message_of(e).c_str());
     }
     MPI_Comm_free(&err_comm);
   } catch (const std::exception& e) {
     // The session failed (e.g. an options file that includes itself): every rank has the same
     // message, and MPI is down again.
-    if (morse::world_rank() == 0) std::fprintf(stderr, "morse: error: %s\n", e.what());
+    if (morse::world_rank() == 0) std::fprintf(stderr, "morse: error: %s\n", morse::message_of(e).c_str());
     return 1;
   }
   return status;

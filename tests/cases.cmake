@@ -150,6 +150,46 @@ morse_add_error_case(options_file_includes_missing
   options_file_includes_missing.h5
   ARGS modes -options_file ${MORSE_CASE_OPTS}/includes_missing.opts)
 
+# Option values: integers strictly (PETSc read "5abc" as an error of its own, wrapped a 20-digit
+# integer to -1), reals finite (nan reached MUMPS), material constants usable, each refused
+# naming the option and the text given, before any work.
+set(MORSE_CASE_TWO_HEX8 -mesh ${MORSE_CASE_DATA}/two_hex8.inp -clamp *BOUNDARY)
+morse_add_error_case(option_int_suffix "^morse: error: -modes_nev 5abc: expected an integer$"
+  option_int_suffix.h5 ARGS modes ${MORSE_CASE_TWO_HEX8} -modes_nev 5abc)
+morse_add_error_case(option_int_exponent "^morse: error: -modes_nev 1e3: expected an integer$"
+  option_int_exponent.h5 ARGS modes ${MORSE_CASE_TWO_HEX8} -modes_nev 1e3)
+morse_add_error_case(option_int_overflow
+  "^morse: error: -modes_nev 12345678901234567890: out of the integer range \\[-2147483648, 2147483647\\]$"
+  option_int_overflow.h5 ARGS modes ${MORSE_CASE_TWO_HEX8} -modes_nev 12345678901234567890)
+morse_add_error_case(option_real_nan "^morse: error: -modes_shift nan: expected a finite number$"
+  option_real_nan.h5 ARGS modes ${MORSE_CASE_TWO_HEX8} -modes_shift nan)
+morse_add_error_case(option_cb_fmax_negative "^morse: error: -cb_fmax -5 must be > 0 \\[Hz\\]$"
+  option_cb_fmax_negative.h5 ARGS reduce ${MORSE_CASE_TWO_HEX8} -boundary TIP -cb_fmax -5)
+morse_add_error_case(option_material_set_missing_E
+  "^morse: error: -material_sets BEAM: -material_BEAM_E is missing \\(an element set's material needs"
+  option_material_set_missing_E.h5
+  ARGS modes ${MORSE_CASE_TWO_HEX8} -material_sets BEAM -material_BEAM_nu 0.3)
+morse_add_error_case(option_material_E_tiny
+  "^morse: error: -material_E 1e-300 must be a positive number in \\[1e-150, 1e\\+150\\]$"
+  option_material_E_tiny.h5 BOX
+  ARGS modes -mesh ${MORSE_CASE_BOX} -clamp x0 -material_E 1e-300 -material_nu 0.3 -material_rho 7800)
+
+# Sizes are checked before anything is allocated (each ended in a bare std::bad_alloc): a Gmsh
+# header or node block that promises more entries than the rest of the file has bytes for, a
+# generated box whose mesh and file text exceed the memory available (759 GB here).
+morse_add_error_case(mesh_huge_nodes_header
+  "morse: error: .*huge_nodes_header\\.msh:5: the number of nodes is 1000000000000, but the [0-9]+ bytes left in the file hold at most [0-9]+ nodes"
+  mesh_huge_nodes_header.h5
+  ARGS modes -mesh ${MORSE_CASE_DATA}/huge_nodes_header.msh -clamp x0 ${MORSE_CASE_MATERIAL})
+morse_add_error_case(mesh_huge_node_block
+  "morse: error: .*huge_node_block\\.msh:6: the number of nodes in the block is 2000000000, but the [0-9]+ bytes left"
+  mesh_huge_node_block.h5
+  ARGS modes -mesh ${MORSE_CASE_DATA}/huge_node_block.msh -clamp x0 ${MORSE_CASE_MATERIAL})
+morse_add_error_case(mesh_box_too_large
+  "morse: error: a box of 1000x1000x260 tet10 cells \\(1560000000 elements\\) needs [0-9.]+ [GTP]B for the mesh and the text of its file; [0-9.e+]+ [GTP]B available"
+  mesh_box_too_large.msh
+  ARGS mesh box -box_type tet10 -box_nx 1000 -box_ny 1000 -box_nz 260)
+
 morse_add_error_case(bad_box_type
   "morse: error: .*-box_type pyr5: unknown element type"
   bad_box_type.msh

@@ -67,6 +67,14 @@ morse_add_export_error_case(export_all_nodes_without_basis
   "morse: error: .*export_se\\.h5: no dataset /cb/constraint_modes .*-cb_write_basis"
   ARGS -export_from ${MORSE_EXPORT_SE} -export_mbdyn_nodes all)
 
+# One OP4 file or DMIG deck holds K, M and C: their names must differ (Nastran ignores case).
+morse_add_export_error_case(export_op4_duplicate_names
+  "morse: error: -export_op4_names: the names of K, M, C \\(a, a, BAA\\) must differ: a is given twice"
+  ARGS -export_from ${MORSE_EXPORT_SE} -export_op4_names a,a)
+morse_add_export_error_case(export_dmig_duplicate_names
+  "morse: error: -export_dmig_names: the names of K, M, C \\(KX, MX, kx\\) must differ: kx is given twice"
+  ARGS -export_from ${MORSE_EXPORT_SE} -export_dmig_names KX,MX,kx)
+
 # Positive case: every format, every file, no temporary left.
 foreach(np 1 2)
   set(out ${MORSE_CASE_DIR}/export_ok_np${np})

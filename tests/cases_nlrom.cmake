@@ -57,6 +57,39 @@ morse_add_error_case(nlrom_training_dt_negative
 morse_add_error_case(mesh_node_set_missing_id "morse: error: .*-mesh_node_set_tipx.*987654321" node_set_bad.h5 BOX
   ARGS modes ${MORSE_NLR_BOX} -mesh_node_sets tipx -mesh_node_set_tipx 1,987654321)
 
+# Sizes checked before allocating (each ended in a bare std::bad_alloc): the cubic tensor of a
+# basis of r = 5363 vectors (PB), 10^12 simulate steps written every step (a small rom, fixture
+# case_setup_rom), 10^9 sweep spectrum bins at 1000 speeds (refused before the rom is read).
+add_test(NAME case_setup_box_large
+         COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n 1 $<TARGET_FILE:morse> mesh box -box_type hex8
+                 -box_nx 30 -box_ny 10 -box_nz 10 -out ${MORSE_CASE_DIR}/box_large.msh)
+set_tests_properties(case_setup_box_large PROPERTIES LABELS "case;np1" TIMEOUT 120
+  ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_SETUP morse_case_box_large FAIL_REGULAR_EXPRESSION "morse: error")
+add_test(NAME case_setup_rom
+         COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n 1 $<TARGET_FILE:morse> nlrom ${MORSE_NLR_BOX} -boundary x1
+                 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact -out ${MORSE_CASE_DIR}/case_rom.h5)
+set_tests_properties(case_setup_rom PROPERTIES LABELS "case;np1" TIMEOUT 120
+  ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box FIXTURES_SETUP morse_case_rom
+  FAIL_REGULAR_EXPRESSION "morse: error")
+morse_add_error_case(nlrom_tensor_too_large
+  "morse: error: nlrom r = 5363 needs [0-9.]+ PB for the cubic tensor.*; [0-9.e+]+ [GTP]B available"
+  nlrom_tensor_too_large.h5
+  ARGS nlrom -mesh ${MORSE_CASE_DIR}/box_large.msh -clamp x0 ${MORSE_CASE_MATERIAL} -boundary x1
+       -nlrom_num_fixed_modes 5000 -nlrom_forces exact)
+morse_add_error_case(simulate_output_too_large
+  "morse: error: simulate: writing 1000000000001 output rows \\(1000000000000 steps, -sim_output_every 1\\) needs [0-9.]+ [TP]B for the histories \\(r = 15\\);.*raise -sim_output_every"
+  simulate_output_too_large.h5
+  ARGS simulate -rom ${MORSE_CASE_DIR}/case_rom.h5 -sim_dt 1e-9 -sim_tfinal 1e3 -sim_output_every 1)
+morse_add_error_case(sweep_spectrum_too_large
+  "morse: error: morse sweep: 1000 speeds of 1000000001 spectrum frequencies \\(-sweep_spectrum_bins 1000000000\\) needs [0-9.]+ TB for the spectra"
+  sweep_spectrum_too_large.h5
+  ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 1e-7 -sweep_omega_min 1
+       -sweep_omega_max 1000 -sweep_omega_step 1 -sweep_spectrum_bins 1000000000)
+foreach(np 1 2)
+  set_tests_properties(case_nlrom_tensor_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_box_large)
+  set_tests_properties(case_simulate_output_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_rom)
+endforeach()
+
 # Chains: fom with snapshots -> nlrom (three bases, STEP and exact, POD filtering) -> simulate,
 # and the critical-step refusal (no output file).
 foreach(np 1 2)

@@ -62,6 +62,10 @@ morse_add_error_case(fom_history_bad_times
   fom_history_bad_times.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_bad_times.csv)
 morse_add_error_case(fom_history_nan "morse: error: -load_history .*load_history_nan\\.csv:2: value 4 is not finite"
   fom_history_nan.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_nan.csv)
+morse_add_error_case(fom_history_fractional_node
+  "morse: error: -load_history .*load_history_fractional_node\\.csv:4: node id 1401\\.5 is not an integer node id"
+  fom_history_fractional_node.h5 BOX
+  ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_fractional_node.csv)
 morse_add_error_case(fom_history_unknown_node
   "morse: error: .*load_history_unknown_node\\.csv: 1 node id\\(s\\) of the load table are not nodes of .*\\(777\\)"
   fom_history_unknown_node.h5 BOX ARGS ${MORSE_LH_FOM} -load_history ${MORSE_CASE_DATA}/load_history_unknown_node.csv)

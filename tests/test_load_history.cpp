@@ -245,6 +245,9 @@ TEST_F(LoadTableReader, BadInputNamesFileAndFault) {
   fails(write("nan.csv", "0,1,0,0,0\n1,1,0,nan,0\n"), {"nan.csv:2", "not finite"});
   fails(write("gap.csv", "0,1,0,0,0\n0,2,0,0,0\n1,2,0,0,0\n2,1,0,0,0\n2,2,0,0,0\n"), {"gap.csv:3", "lacks node 1"});
   fails(write("twice.csv", "0,1,0,0,0\n0,1,0,0,0\n"), {"twice.csv:2", "node 1 appears twice"});
+  // A node id is an integer: never truncated (1401.5 is not node 1401), never out of range.
+  fails(write("frac.csv", "0,1401.5,0,0,0\n"), {"frac.csv:1", "node id 1401.5 is not an integer node id"});
+  fails(write("huge.csv", "0,1e30,0,0,0\n"), {"huge.csv:1", "node id 1e30 is not an integer node id"});
   fails(write("new.csv", "0,1,0,0,0\n1,2,0,0,0\n"), {"new.csv:2", "node 2 is not in the first time block"});
   fails(write("empty.csv", "# nothing\n"), {"empty.csv", "no data row"});
   fails(write("text.h5", "not hdf5"), {"text.h5", "cannot open as HDF5"});
@@ -270,6 +273,12 @@ TEST_F(LoadTableReader, BadInputNamesFileAndFault) {
     out.write("/dup/time", ref.time);
     out.write("/dup/node_ids", std::vector<std::int64_t>{3, 3});
     out.write("/dup/forces", ref.forces, {3, 2, 3});
+    out.write("/frac/time", ref.time);
+    out.write("/frac/node_ids", std::vector<double>{3, 1401.5});  // floating point: HDF5 would truncate
+    out.write("/frac/forces", ref.forces, {3, 2, 3});
+    out.write("/real_ids/time", ref.time);
+    out.write("/real_ids/node_ids", std::vector<double>{7, 3});  // integral floats: accepted
+    out.write("/real_ids/forces", ref.forces, {3, 2, 3});
     out.write("/sim/contact/normal", std::vector<double>(6, 0.0), {3, 2});  // an old simulate file
     out.commit();
   }
@@ -288,6 +297,12 @@ TEST_F(LoadTableReader, BadInputNamesFileAndFault) {
   fails(h5 + ":/down", {"bad.h5:/down", "not strictly increasing", "time 2"});
   fails(h5 + ":/nan", {"bad.h5:/nan", "force y of node 7 at time 2", "not finite"});
   fails(h5 + ":/dup", {"bad.h5:/dup", "node 3 appears twice"});
+  fails(h5 + ":/frac", {"bad.h5", "/frac/node_ids holds 1401.5 (entry 1), not an integer"});
+  {
+    dyn::LoadTable t;
+    ASSERT_EQ(dyn::read_load_table(h5 + ":/real_ids", &t), "");
+    EXPECT_EQ(t.node_ids, ref.node_ids);
+  }
   fails(h5 + ":/sim/contact", {"bad.h5", "no mean_force", "older morse simulate"});
   fails(h5 + ":/no_forces/time", {"bad.h5", "neither a load table"});
 }

@@ -643,6 +643,41 @@ TEST(GmshErrors, DuplicatesAndNoSolids) {
   expect_error(read_error("flat.msh", flat), temp_path("flat.msh"), 13, "no supported 3D");
 }
 
+// A count cannot promise more entries than the rest of the file has bytes for (2 per number at
+// least): refused before anything is allocated (a node block of 2e9 entries took 16 GB), naming
+// the line of the count.
+TEST(GmshErrors, CountsBeyondTheFileSize) {
+  const std::string head = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n";
+  const std::string header = head + "1 1000000000000 1 1000000000000\n3 1 0 1\n1\n0 0 0\n$EndNodes\n";
+  std::string msg = read_error("header.msh", header);
+  expect_error(msg, temp_path("header.msh"), 5, "the number of nodes is 1000000000000, but the ");
+  EXPECT_NE(msg.find("bytes left in the file hold at most"), std::string::npos) << msg;
+  const std::string block = head + "1 2 1 2\n3 1 0 2000000000\n1\n2\n0 0 0\n1 0 0\n$EndNodes\n";
+  expect_error(read_error("block.msh", block), temp_path("block.msh"), 6, "nodes in the block is 2000000000");
+  const std::string v2 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n999999999\n1 0 0 0\n$EndNodes\n";
+  expect_error(read_error("v2.msh", v2), temp_path("v2.msh"), 5, "the number of nodes is 999999999");
+  const std::string elems = std::string(kMsh41).substr(0, std::string(kMsh41).find("$Elements")) +
+                            "$Elements\n1 123456789 1 2\n3 1 5 2\n1 10 20 50 40 70 80 110 100\n$EndElements\n";
+  expect_error(read_error("elems.msh", elems), temp_path("elems.msh"), line_of(elems, "1 123456789"),
+               "the number of elements is 123456789");
+}
+
+// A generated box whose mesh and file text cannot fit in the memory available is refused before
+// it is built, saying what it needs.
+TEST(Generator, RefusesABoxBeyondTheMemory) {
+  BoxSpec s;
+  s.type = ElementType::Tet10;
+  s.nx = 1000, s.ny = 1000, s.nz = 260;
+  try {
+    morse::mesh::generate_box(s);
+    FAIL() << "no exception";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("a box of 1000x1000x260 tet10 cells (1560000000 elements) needs ", 0), 0u)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("for the mesh and the text of its file; "), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 
 // Materials survive a write/read round trip ($MorseMaterials section), including elements

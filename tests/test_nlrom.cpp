@@ -132,6 +132,25 @@ INSTANTIATE_TEST_SUITE_P(AllTypes, NlromByType,
 
 // POD-filtered STEP (eq. 38–39) equals the exact tensors of Phi^T Phi_f Phi_f^T g_nl, checked on
 // sample points against the full model.
+// The memory of the reduced force, known before the basis is built: for r = 324 the cubic
+// coefficients B are 14.8 GB (the figure) and A 0.14 GB more, STEP adds its imposed
+// fields and their forces; a basis whose force cannot fit is refused naming r and what it needs.
+TEST(Nlrom, ForceMemoryCheckedBeforeTheBasis) {
+  const double rr = 324;
+  EXPECT_DOUBLE_EQ(nlrom::force_bytes(324, false), 8 * rr * (rr * (rr + 1) / 2 + rr * (rr + 1) * (rr + 2) / 6));
+  EXPECT_NEAR(nlrom::force_bytes(324, false) / 1e9, 14.97, 0.01);
+  EXPECT_DOUBLE_EQ(nlrom::force_bytes(324, true) - nlrom::force_bytes(324, false),
+                   16 * rr * static_cast<double>(nlrom::step_evaluations(324)));
+  EXPECT_NO_THROW(nlrom::check_force_memory(PETSC_COMM_WORLD, 10, true));
+  try {
+    nlrom::check_force_memory(PETSC_COMM_WORLD, 100000, false);
+    ADD_FAILURE() << "no error for r = 100000";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("nlrom r = 100000 needs ", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("for the cubic tensor"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Nlrom, FilteredStepMatchesFilteredForces) {
   auto m = box(ElementType::Hex8);
   fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());

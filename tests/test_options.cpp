@@ -2,6 +2,8 @@
 #include <petscsys.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -157,4 +159,89 @@ TEST(Options, EarlyCheckPassesInnerAndUnrelatedOptions) {
   ASSERT_EQ(read_options(&c, &mu), 0);
   opt::add_prefix("cb_", opt::Solver::Eigen);
   EXPECT_EQ(early_error(), "");
+}
+
+// The text of a numeric option: integers strictly (optional sign and digits, in PetscInt's
+// range: PETSc's own parsing wraps a 20-digit value to -1 and reads "default" as -2), reals whole
+// and finite unless the option accepts non-finite values, lists item by item.
+TEST(Options, ValueErrorNamesOptionAndText) {
+  using V = opt::Value;
+  for (const char* ok : {"5", "-3", "+7", "0", "2147483647"}) EXPECT_EQ(opt::value_error("-n", ok, V::Int), "") << ok;
+  EXPECT_EQ(opt::value_error("-modes_nev", "5abc", V::Int), "-modes_nev 5abc: expected an integer");
+  EXPECT_EQ(opt::value_error("-modes_nev", "1e3", V::Int), "-modes_nev 1e3: expected an integer");
+  EXPECT_EQ(opt::value_error("-n", "2.0", V::Int), "-n 2.0: expected an integer");
+  EXPECT_EQ(opt::value_error("-n", "default", V::Int), "-n default: expected an integer");
+  EXPECT_EQ(opt::value_error("-n", " 5", V::Int), "-n  5: expected an integer");
+  EXPECT_EQ(opt::value_error("-n", "-", V::Int), "-n -: expected an integer");
+  EXPECT_EQ(opt::value_error("-modes_nev", "12345678901234567890", V::Int),
+            "-modes_nev 12345678901234567890: out of the integer range [-2147483648, 2147483647]");
+  EXPECT_EQ(opt::value_error("-n", "2147483648", V::Int),
+            "-n 2147483648: out of the integer range [-2147483648, 2147483647]");
+  EXPECT_EQ(opt::value_error("-n", "", V::Int), "-n: give a value (an integer)");
+  EXPECT_EQ(opt::value_error("-n", nullptr, V::Real), "-n: give a value (a number)");
+  for (const char* ok : {"1", "-2.5e-3", "1e300", "0x10", ".5"})
+    EXPECT_EQ(opt::value_error("-x", ok, V::Real), "") << ok;
+  EXPECT_EQ(opt::value_error("-modes_shift", "nan", V::Real), "-modes_shift nan: expected a finite number");
+  EXPECT_EQ(opt::value_error("-x", "-inf", V::Real), "-x -inf: expected a finite number");
+  EXPECT_EQ(opt::value_error("-x", "1e400", V::Real), "-x 1e400: expected a finite number");
+  EXPECT_EQ(opt::value_error("-x", "abc", V::Real), "-x abc: expected a real number");
+  EXPECT_EQ(opt::value_error("-x", "1.5x", V::Real), "-x 1.5x: expected a real number");
+  EXPECT_EQ(opt::value_error("-x", "nan", V::RealNonFinite), "");
+  EXPECT_EQ(opt::value_error("-x", "inf", V::RealNonFinite), "");
+  EXPECT_EQ(opt::value_error("-x", "inf?", V::RealNonFinite), "-x inf?: expected a real number");
+  EXPECT_EQ(opt::value_error("-r", "1,2.5,-3e2", V::RealArray), "");
+  EXPECT_EQ(opt::value_error("-r", "1,nan", V::RealArray), "-r 1,nan: item 'nan': expected a finite number");
+  EXPECT_EQ(opt::value_error("-r", "1,,2", V::RealArray), "-r 1,,2: item '': expected a real number");
+  EXPECT_EQ(opt::value_error("-i", "1,3-5,-2", V::IntArray), "");
+  EXPECT_EQ(opt::value_error("-i", "1,2.5", V::IntArray), "-i 1,2.5: item '2.5': expected an integer");
+  EXPECT_EQ(opt::value_error("-i", "1-x", V::IntArray), "-i 1-x: item '1-x': expected an integer");
+  EXPECT_EQ(opt::magnitude_error("-material_E", 2.1e11), "");
+  EXPECT_EQ(opt::magnitude_error("-material_E", 1e-300),
+            "-material_E 1e-300 must be a positive number in [1e-150, 1e+150]");
+  EXPECT_NE(opt::magnitude_error("-material_rho", 0), "");
+  EXPECT_NE(opt::magnitude_error("-material_rho", -7800), "");
+  EXPECT_NE(opt::magnitude_error("-material_rho", std::numeric_limits<double>::quiet_NaN()), "");
+}
+
+namespace {
+
+// An option block with an integer, a real (under a prefix) and a real that accepts inf.
+PetscErrorCode read_numbers(PetscInt* n, double* x, double* y) {
+  PetscOptionsBegin(PETSC_COMM_WORLD, "t1_", "test numbers", "");
+  PetscCall(MorseOptionsInt("-n", "An integer", "", *n, n, nullptr));
+  PetscCall(MorseOptionsReal("-x", "A finite real", "", *x, x, nullptr));
+  PetscCall(MorseOptionsRealNonFinite("-y", "A real, inf allowed", "", *y, y, nullptr));
+  PetscOptionsEnd();
+  return PETSC_SUCCESS;
+}
+
+}  // namespace
+
+// The wrappers check the text given under the block's prefix before PETSc reads it, and throw a
+// morse::Error naming the option (every rank alike: every rank reads the same options).
+TEST(Options, WrappersRefuseBadNumbersBeforePetscReadsThem) {
+  PetscInt n = 1;
+  double x = 0, y = 0;
+  {
+    GivenOptions given({{"-t1_n", "42"}, {"-t1_x", "2.5"}, {"-t1_y", "inf"}});
+    ASSERT_EQ(read_numbers(&n, &x, &y), 0);
+    EXPECT_EQ(n, 42);
+    EXPECT_EQ(x, 2.5);
+    EXPECT_TRUE(std::isinf(y));
+  }
+  auto error = [&](const char* name, const char* value) {
+    GivenOptions given({{name, value}});
+    try {
+      read_numbers(&n, &x, &y);
+    } catch (const morse::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("-t1_n", "5abc"), "-t1_n 5abc: expected an integer");
+  EXPECT_EQ(error("-t1_n", "99999999999999999999"),
+            "-t1_n 99999999999999999999: out of the integer range [-2147483648, 2147483647]");
+  EXPECT_EQ(error("-t1_x", "nan"), "-t1_x nan: expected a finite number");
+  EXPECT_EQ(error("-t1_y", "nan"), "");
+  EXPECT_EQ(error("-n", "5abc"), "");  // not under the prefix: not read
 }

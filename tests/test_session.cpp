@@ -4,9 +4,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <new>
 #include <string>
 #include <vector>
 
+#include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
 #include "morse/core/session.hpp"
 #include "scratch.hpp"
 
@@ -112,4 +115,25 @@ TEST(Session, OptionsFileChecks) {
   const std::string top = write("top.opts", "-options_file " + mid + "\n-options_file " + leaf + "\n");
   EXPECT_EQ(error({"modes", "-options_file", top, "-options_file", leaf}), "");
   EXPECT_EQ(error({"modes", "-modes_nev", "3"}), "");
+}
+
+// Sizes checked before allocating: the memory available is known on Linux, a need above it is
+// refused naming what needs it and what is available, and a std::bad_alloc that escapes anyway
+// is reported as "out of memory", not as a bare "std::bad_alloc".
+TEST(Session, MemoryChecksAndOutOfMemoryMessage) {
+  const double avail = morse::available_bytes();
+  ASSERT_GT(avail, 0) << "no MemAvailable in /proc/meminfo";
+  EXPECT_EQ(morse::memory_error("a small thing", 1e3, "its bytes"), "");
+  const std::string err = morse::memory_error("nlrom r = 324", 1e18, "the cubic tensor");
+  EXPECT_EQ(err.rfind("nlrom r = 324 needs 1e+03 PB for the cubic tensor; ", 0), 0u) << err;
+  EXPECT_NE(err.find(" available"), std::string::npos) << err;
+  EXPECT_NO_THROW(morse::check_memory(PETSC_COMM_WORLD, "a small thing", 1e3, "its bytes"));
+  try {
+    morse::check_memory(PETSC_COMM_WORLD, "a huge thing", 1e18, "its bytes");
+    ADD_FAILURE() << "no error for 1 EB";
+  } catch (const morse::Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("a huge thing needs ", 0), 0u) << e.what();
+  }
+  EXPECT_EQ(morse::message_of(std::bad_alloc()).rfind("out of memory: an allocation failed (std::bad_alloc)", 0), 0u);
+  EXPECT_EQ(morse::message_of(morse::Error("plain")), "plain");
 }

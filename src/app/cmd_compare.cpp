@@ -48,7 +48,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
     if (rank == 0) try {
         tmax = eval::load_tmax(fom, rom, load_list, &stored);
       } catch (const std::exception& e) {
-        err = e.what();
+        err = message_of(e);
       }
     collective_check(comm, err);
     MPI_Bcast(&tmax, 1, MPI_DOUBLE, 0, comm);
@@ -63,7 +63,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   if (rank == 0) try {
       ind = eval::compare_runs(fom, rom, co, &tsnap);
     } catch (const std::exception& e) {
-      err = e.what();
+      err = message_of(e);
     }
   collective_check(comm, rank == 0 && !err.empty() ? err : std::string());
   check_options(comm, false);
@@ -77,7 +77,7 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   if (rank == 0) try {
       eval::write_compare(rom, ind, co.tmax, tsnap, fom, co.tip);
     } catch (const std::exception& e) {
-      werr = e.what();
+      werr = message_of(e);
     }
   collective_check(comm, werr);
   print0(comm, "\nmorse: wrote /compare into %s\n", rom.c_str());

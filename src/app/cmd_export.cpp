@@ -40,7 +40,7 @@ void run_export(MPI_Comm comm) {
         if (!eo.coordinates.empty()) io::set_boundary_coordinates(&se, eo.coordinates);
         res = io::export_superelement(se, eo);
       } catch (const std::exception& e) {
-        err = e.what();
+        err = message_of(e);
       }
     collective_check(comm, err);
   }

@@ -140,8 +140,8 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
       }
       print0(comm, "morse: wrote %s: %lld nodes, %lld elements (%s)\n", out, (long long)m.num_nodes(),
              (long long)m.num_elements(), m.source.c_str());
-    } catch (const Error& e) {
-      err = e.what();
+    } catch (const std::exception& e) {  // e.g. std::bad_alloc: every rank reports it
+      err = message_of(e);
     }
   collective_check(comm, err);
 }

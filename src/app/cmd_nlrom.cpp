@@ -49,6 +49,9 @@ void run_nlrom(MPI_Comm comm) {
       no.basis.training_dt = w > 0 ? 2 * M_PI / w / 200 : no.basis.training_tfinal / 1000;
     }
   }
+  // The reduced force of r coordinates is O(r^4) on every rank: refused before the basis if it
+  // cannot fit.
+  nlrom::check_force_memory(comm, static_cast<std::size_t>(nlrom::basis_size(md, no.basis)), no.forces != "exact");
   fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   auto basis = nlrom::build_basis(md, svk, no.basis);
   const PetscInt r = basis.r();

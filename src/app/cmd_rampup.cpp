@@ -62,7 +62,7 @@ void run_rampup(MPI_Comm comm) {
         Progress prog(PETSC_COMM_SELF, "rampup", 1.0);
         h = rampup::record(a, lc, is, &st, [&](double f) { prog.update(f); });
       } catch (const std::exception& ex) {
-        err = ex.what();
+        err = message_of(ex);
       }
     collective_check(comm, err);
   }
@@ -75,7 +75,7 @@ void run_rampup(MPI_Comm comm) {
     if (rank == 0) try {
         he = rampup::compare(h, rampup::read_history(o.reference));
       } catch (const std::exception& ex) {
-        err = cat("-rampup_reference ", o.reference, ": ", ex.what());
+        err = cat("-rampup_reference ", o.reference, ": ", message_of(ex));
       }
     collective_check(comm, err);
     print0(comm,

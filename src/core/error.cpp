@@ -1,5 +1,6 @@
 #include "morse/core/error.hpp"
 
+#include <new>
 #include <vector>
 
 namespace morse {
@@ -16,6 +17,14 @@ void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file, 
 }
 
 }  // namespace detail
+
+std::string message_of(const std::exception& e) {
+  if (dynamic_cast<const std::bad_alloc*>(&e))
+    return cat("out of memory: an allocation failed (", e.what(),
+               "); the run needs more memory than this machine has available (a smaller problem, fewer ranks per "
+               "node, or more nodes)");
+  return e.what();
+}
 
 void collective_check(MPI_Comm comm, const std::string& local_error) {
   int rank = 0, size = 1;

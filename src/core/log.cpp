@@ -2,9 +2,13 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <map>
+#include <string>
 
 #include "morse/core/error.hpp"
 
@@ -31,6 +35,73 @@ double peak_memory_mb() {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
   return static_cast<double>(ru.ru_maxrss) / 1024.0;
+}
+
+namespace {
+
+// A number of bytes with 3 significant digits in GB ("14.8 GB", "0.0012 GB"), TB or PB.
+std::string size_text(double bytes) {
+  const char* unit = bytes < 1e12 ? "GB" : bytes < 1e15 ? "TB" : "PB";
+  const double scale = bytes < 1e12 ? 1e9 : bytes < 1e15 ? 1e12 : 1e15;
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.3g %s", bytes / scale, unit);
+  return buf;
+}
+
+// A number from the first line of a file, or -1 (missing file, "max").
+double number_in(const char* path) {
+  std::ifstream f(path);
+  std::string word;
+  if (!(f >> word) || word.find_first_not_of("0123456789") != std::string::npos) return -1.0;
+  return std::strtod(word.c_str(), nullptr);
+}
+
+}  // namespace
+
+double available_bytes() {
+  double avail = -1.0;
+  {
+    std::ifstream f("/proc/meminfo");
+    std::string key, unit;
+    double kb = 0;
+    while (f >> key >> kb >> unit)
+      if (key == "MemAvailable:") {
+        avail = kb * 1024.0;
+        break;
+      }
+  }
+  // A container's limit (cgroup v2) is below what the machine has.
+  const double max = number_in("/sys/fs/cgroup/memory.max"), current = number_in("/sys/fs/cgroup/memory.current");
+  if (max > 0 && current >= 0) {
+    const double left = std::max(0.0, max - current);
+    avail = avail < 0 ? left : std::min(avail, left);
+  }
+  return avail;
+}
+
+std::string memory_error(const std::string& what, double bytes, const std::string& purpose) {
+  const double avail = available_bytes();
+  if (avail < 0 || bytes <= avail) return {};
+  return cat(what, " needs ", size_text(bytes), " for ", purpose, "; ", size_text(avail), " available");
+}
+
+void check_memory(MPI_Comm comm, const std::string& what, double bytes, const std::string& purpose) {
+  MPI_Comm node;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node);
+  double on_node = bytes;
+  int ranks = 1;
+  MPI_Allreduce(MPI_IN_PLACE, &on_node, 1, MPI_DOUBLE, MPI_SUM, node);
+  MPI_Comm_size(node, &ranks);
+  MPI_Comm_free(&node);
+  std::string err = memory_error(what, on_node, purpose);
+  if (!err.empty() && ranks > 1) {
+    const double avail = available_bytes();
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    err = cat(what, " needs ", size_text(on_node), " for ", purpose, " on a node of ", ranks, " ranks (",
+              size_text(bytes), " on rank ", rank, "); ", size_text(avail), " available");
+  }
+  collective_check(comm, err);
 }
 
 StageTimer::StageTimer(MPI_Comm comm, const std::string& name)

@@ -4,6 +4,10 @@
 #include <algorithm>
 #include <cassert>
 #include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -191,6 +195,94 @@ void check_unknown(MPI_Comm comm, bool early) {
   std::string err = bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)");
   if (err.empty() && !registry().conflicts.empty()) err = cat("internal error: ", registry().conflicts.front());
   collective_check(comm, err);
+}
+
+namespace {
+
+// Whether `t` is an integer in PetscInt's range; `why` says what is wrong otherwise.
+bool parse_int(const std::string& t, std::string* why) {
+  std::size_t i = t.empty() || (t[0] != '+' && t[0] != '-') ? 0 : 1;
+  if (i == t.size() || t.find_first_not_of("0123456789", i) != std::string::npos) {
+    *why = "expected an integer";
+    return false;
+  }
+  errno = 0;
+  const long long v = std::strtoll(t.c_str(), nullptr, 10);
+  if (errno == ERANGE || v > std::numeric_limits<PetscInt>::max() || v < std::numeric_limits<PetscInt>::min()) {
+    *why = cat("out of the integer range [", std::numeric_limits<PetscInt>::min(), ", ",
+               std::numeric_limits<PetscInt>::max(), "]");
+    return false;
+  }
+  return true;
+}
+
+bool parse_real(const std::string& t, bool finite, std::string* why) {
+  char* end = nullptr;
+  const double v = t.empty() || std::isspace(static_cast<unsigned char>(t[0])) ? 0 : std::strtod(t.c_str(), &end);
+  if (!end || *end != '\0') {
+    *why = "expected a real number";
+    return false;
+  }
+  if (finite && !std::isfinite(v)) {
+    *why = "expected a finite number";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string value_error(const std::string& name, const char* text, Value kind) {
+  if (!text || !*text)
+    return cat(name, ": give a value (", kind == Value::Int ? "an integer" : "a number",
+               kind == Value::IntArray || kind == Value::RealArray ? " list" : "", ")");
+  const std::string value = text;
+  std::string why;
+  bool ok = true;
+  switch (kind) {
+    case Value::Int:
+      ok = parse_int(value, &why);
+      break;
+    case Value::Real:
+    case Value::RealNonFinite:
+      ok = parse_real(value, kind == Value::Real, &why);
+      break;
+    case Value::IntArray:
+    case Value::RealArray:
+      for (std::size_t p = 0; ok && p <= value.size();) {
+        std::size_t q = value.find(',', p);
+        if (q == std::string::npos) q = value.size();
+        const std::string item = value.substr(p, q - p);
+        if (kind == Value::RealArray) {
+          ok = parse_real(item, true, &why);
+        } else {
+          // PETSc's ranges: a-b (the dash after the first character).
+          const std::size_t dash = item.find('-', 1);
+          ok = parse_int(item.substr(0, dash), &why) &&
+               (dash == std::string::npos || parse_int(item.substr(dash + 1), &why));
+        }
+        if (!ok) why = cat("item '", item, "': ", why);
+        p = q + 1;
+      }
+      break;
+  }
+  return ok ? std::string() : cat(name, " ", value, ": ", why);
+}
+
+std::string magnitude_error(const std::string& name, double value) {
+  if (value >= kMinMagnitude && value <= kMaxMagnitude) return {};
+  return cat(name, " ", value, " must be a positive number in [", kMinMagnitude, ", ", kMaxMagnitude, "]");
+}
+
+PetscErrorCode check_value(PetscOptions options, const char* prefix, const char* name, Value kind) {
+  const std::string full = "-" + std::string(prefix ? prefix : "") + bare(name ? name : "");
+  const char* value = nullptr;
+  PetscBool set = PETSC_FALSE;
+  PetscCall(PetscOptionsFindPair(options, prefix, ("-" + bare(name ? name : "")).c_str(), &value, &set));
+  if (!set) return PETSC_SUCCESS;
+  const std::string err = value_error(full, value, kind);
+  if (!err.empty()) throw Error(err);
+  return PETSC_SUCCESS;
 }
 
 PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help, std::vector<std::string>* list,

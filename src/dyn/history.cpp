@@ -148,7 +148,8 @@ std::string read_csv(const std::string& file, LoadTable* t) {
     header_ok = false;
     for (int j = 0; j < 5; ++j)
       if (!std::isfinite(v[j])) return cat(file, ":", line_no, ": value ", j + 1, " is not finite (", f[j], ")");
-    if (v[1] != std::floor(v[1])) return cat(file, ":", line_no, ": node id ", f[1], " is not an integer");
+    if (v[1] != std::floor(v[1]) || !(std::abs(v[1]) < 9.0e15))
+      return cat(file, ":", line_no, ": node id ", f[1], " is not an integer node id");
     const auto id = static_cast<std::int64_t>(v[1]);
     if (t->time.empty() || v[0] != t->time.back()) {
       if (!t->time.empty()) {

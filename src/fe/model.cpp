@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "core/detail/exchange.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/core/options.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/mesh.hpp"
 
@@ -267,6 +269,10 @@ std::string check_material(const mesh::Material& m) {
   if (!(m.E > 0) || !std::isfinite(m.E)) return cat("Young's modulus E = ", m.E, " must be > 0");
   if (!(m.nu > -1.0 && m.nu < 0.5)) return cat("Poisson's ratio nu = ", m.nu, " must be in (-1, 0.5)");
   if (!(m.rho > 0) || !std::isfinite(m.rho)) return cat("density rho = ", m.rho, " must be > 0");
+  // The solvers square and multiply them: beyond these, K or M lose their meaning in doubles.
+  for (auto [what, v] : {std::pair<const char*, double>{"Young's modulus E", m.E}, {"density rho", m.rho}})
+    if (v < options::kMinMagnitude || v > options::kMaxMagnitude)
+      return cat(what, " = ", v, " must be in [", options::kMinMagnitude, ", ", options::kMaxMagnitude, "]");
   return {};
 }
 

@@ -2,7 +2,9 @@
 #include <petscsys.h>
 
 #include <algorithm>
+#include <cctype>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "morse/core/error.hpp"
@@ -86,6 +88,20 @@ PetscErrorCode ExportOptions::set_from_options(MPI_Comm comm) {
     names.dmig_K = dmig_names[0];
     names.dmig_M = dmig_names[1];
     if (dmig_names.size() > 2) names.dmig_C = dmig_names[2];
+  }
+  // One file holds K, M and C: a reader finds matrices by name (Nastran ignores case).
+  auto upper = [](std::string n) {
+    for (char& c : n) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return n;
+  };
+  for (const auto& [option, k, m, c] :
+       {std::make_tuple("-export_op4_names", names.op4_K, names.op4_M, names.op4_C),
+        std::make_tuple("-export_dmig_names", names.dmig_K, names.dmig_M, names.dmig_C)}) {
+    const std::string n[3] = {k, m, c};
+    for (int i = 0; i < 3; ++i)
+      for (int j = i + 1; j < 3; ++j)
+        if (upper(n[i]) == upper(n[j]))
+          bad(cat(option, ": the names of K, M, C (", k, ", ", m, ", ", c, ") must differ: ", n[j], " is given twice"));
   }
   return PETSC_SUCCESS;
 }

@@ -3,6 +3,7 @@
 #include <petscsys.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -452,7 +453,25 @@ bool read_doubles(const std::string& file, const std::string& name, std::vector<
 
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,
                std::vector<hsize_t>* dims, std::string* error) {
-  return read_any(file, name, H5T_NATIVE_INT64, out, dims, error);
+  if (!read_any(file, name, H5T_NATIVE_INT64, out, dims, error)) return false;
+  // HDF5 converts a floating-point dataset by truncation (node 1401.5 would become 1401): such a
+  // dataset must hold integers.
+  hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t d = f >= 0 ? H5Dopen2(f, name.c_str(), H5P_DEFAULT) : -1;
+  hid_t t = d >= 0 ? H5Dget_type(d) : -1;
+  const bool real = t >= 0 && H5Tget_class(t) == H5T_FLOAT;
+  if (t >= 0) H5Tclose(t);
+  if (d >= 0) H5Dclose(d);
+  if (f >= 0) H5Fclose(f);
+  if (!real) return true;
+  std::vector<double> v;
+  if (!read_any(file, name, H5T_NATIVE_DOUBLE, &v, dims, error)) return false;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!(std::abs(v[i]) < 9.0e15) || v[i] != static_cast<double>((*out)[i])) {
+      *error = cat(file, ": ", name, " holds ", v[i], " (entry ", i, "), not an integer");
+      return false;
+    }
+  return true;
 }
 
 bool read_attribute(const std::string& file, const std::string& object, const std::string& name, double* out,

@@ -264,7 +264,7 @@ void write_model_matrices(MPI_Comm comm, const fe::Model& md, const std::string&
   if (rank == 0) try {
       write_dof_map(names[2], map);
     } catch (const std::exception& e) {
-      err = e.what();
+      err = message_of(e);
     }
   collective_check(comm, err);
 }

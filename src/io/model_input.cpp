@@ -72,12 +72,27 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
       PetscCall(PetscFree(sets[i]));
     }
   matrices.clamp = mesh.clamp;
+  // A material value given must be usable: E and rho positive, with squares that are normal
+  // doubles (E = 1e-300 ends in a LAPACK failure far away), nu in (-1, 0.5).
+  auto check_material = [&](const std::string& p, const morse::mesh::Material& m, const PetscBool given[3]) {
+    const double v[3] = {m.E, m.nu, m.rho};
+    const char* what[3] = {"E", "nu", "rho"};
+    for (int i = 0; i < 3 && error.empty(); ++i) {
+      if (!given[i]) continue;
+      if (i == 1)
+        error = v[i] > -1 && v[i] < 0.5 ? "" : cat(p, what[i], " ", v[i], " must be in (-1, 0.5)");
+      else
+        error = options::magnitude_error(p + what[i], v[i]);
+    }
+  };
+  PetscBool given[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
   PetscCall(MorseOptionsReal("-material_E", "Young's modulus for elements without material in the mesh", "", material.E,
-                             &material.E, nullptr));
+                             &material.E, &given[0]));
   PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio for elements without material in the mesh", "",
-                             material.nu, &material.nu, nullptr));
+                             material.nu, &material.nu, &given[1]));
   PetscCall(MorseOptionsReal("-material_rho", "Density for elements without material in the mesh", "", material.rho,
-                             &material.rho, nullptr));
+                             &material.rho, &given[2]));
+  check_material("-material_", material, given);
   n_sets = 16;
   PetscCall(MorseOptionsStringArray("-material_sets",
                                     "Element sets given their own material by -material_<set>_E, _nu, _rho "
@@ -90,9 +105,17 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
       m.E = m.nu = m.rho = -1;
       PetscCall(PetscFree(sets[i]));
       const std::string p = "-material_" + m.name + "_";
-      PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, nullptr));
-      PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, nullptr));
-      PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, nullptr));
+      PetscBool has[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+      PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus of the element set", "", m.E, &m.E, &has[0]));
+      PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson's ratio of the element set", "", m.nu, &m.nu, &has[1]));
+      PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density of the element set", "", m.rho, &m.rho, &has[2]));
+      // The set's material replaces the mesh's: all three values are needed.
+      const char* what[3] = {"E", "nu", "rho"};
+      for (int k = 0; k < 3 && error.empty(); ++k)
+        if (!has[k])
+          error = cat("-material_sets ", m.name, ": ", p, what[k], " is missing (an element set's material needs ", p,
+                      "E, ", p, "nu and ", p, "rho)");
+      check_material(p, m, has);
       mesh.set_materials.push_back(m);
     }
   n_sets = 16;

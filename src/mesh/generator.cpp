@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 
 namespace morse::mesh {
@@ -68,6 +69,22 @@ Mesh generate_box(const BoxSpec& spec) {
   const bool quadratic = is_quadratic(type);
   const int nvert = vertices_per_element(type);
   const int npe = nodes_per_element(type);
+  {
+    // What the mesh and the text of its file take, before anything is allocated: per node its
+    // id, coordinates, place in set "all" and ~80 characters; per element its type, id,
+    // material, offset, place in set "all" and 20 bytes per node (index and text); the mid-edge
+    // table of a quadratic mesh (its node vectors are reserved for 8 nodes per vertex).
+    const int per_cell = type == ElementType::Hex8 || type == ElementType::Hex20       ? 1
+                         : type == ElementType::Wedge6 || type == ElementType::Wedge15 ? 2
+                                                                                       : 6;
+    const double nodes = (quadratic ? 8.0 : 1.0) * static_cast<double>(nv);
+    const double elems = static_cast<double>(per_cell) * static_cast<double>(n[0] * n[1] * n[2]);
+    const double bytes = nodes * 120.0 + elems * (32.0 + 20.0 * npe) + (quadratic ? 7.0 * 80.0 * nv : 0.0);
+    const std::string err = memory_error(cat("a box of ", spec.nx, "x", spec.ny, "x", spec.nz, " ", element_name(type),
+                                             " cells (", static_cast<std::int64_t>(elems), " elements)"),
+                                         bytes, "the mesh and the text of its file");
+    MORSE_CHECK(err.empty(), err);
+  }
 
   Mesh m;
   m.source = cat("box ", element_name(type), " ", spec.nx, "x", spec.ny, "x", spec.nz, " size ", spec.lx, "x", spec.ly,

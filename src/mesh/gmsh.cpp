@@ -223,6 +223,18 @@ class Reader {
     if (n < 0) fail(cat("expected ", what, " (a count >= 0), found ", n));
     return n;
   }
+  /// Reads a count of entries (nodes, elements, ...) of at least `numbers` numbers each, which the
+  /// rest of the file must have room for (an ASCII number and its separator take 2 bytes at
+  /// least): a header cannot promise more than the file holds, nor make the reader allocate it.
+  /// Small counts are left to the parsing, which names the line where a truncated file ends.
+  std::int64_t read_entries(const char* what, int numbers, const char* entries) {
+    const std::int64_t n = read_count(what);
+    const std::int64_t left = end_ - p_, most = left / (2 * numbers);
+    if (n > most && n > (1 << 16))
+      fail(cat(what, " is ", n, ", but the ", left, " bytes left in the file hold at most ", most, " ", entries, " (",
+               2 * numbers, " bytes each at least): corrupt header or truncated file?"));
+    return n;
+  }
   double read_double(const char* what) {
     skip_ws();
     if (p_ >= end_ || *p_ == '$') premature(what);
@@ -354,7 +366,7 @@ void Reader::read_format() {
 }
 
 void Reader::read_physical_names() {
-  const std::int64_t n = read_count("the number of physical names");
+  const std::int64_t n = read_entries("the number of physical names", 3, "names");
   for (std::int64_t i = 0; i < n; ++i) {
     const std::int64_t dim = read_int("a physical group dimension");
     if (dim < 0 || dim > 3) fail(cat("invalid physical group dimension ", dim));
@@ -371,19 +383,19 @@ void Reader::read_entities() {
   if (have_elements_) fail("$Entities after $Elements is not supported");
   have_entities_ = true;
   std::int64_t counts[4];
-  for (auto& c : counts) c = read_count("an entity count");
+  for (auto& c : counts) c = read_entries("an entity count", 5, "entities");
   for (int dim = 0; dim < 4; ++dim) {
     for (std::int64_t i = 0; i < counts[dim]; ++i) {
       const std::int64_t tag = read_int("an entity tag");
       for (int k = 0; k < (dim == 0 ? 3 : 6); ++k) read_double("an entity bounding box");
-      const std::int64_t nphys = read_count("the number of physical tags");
+      const std::int64_t nphys = read_entries("the number of physical tags", 1, "tags");
       std::vector<std::int64_t>& phys = entity_phys_[Key{dim, tag}];
       for (std::int64_t k = 0; k < nphys; ++k) {
         phys.push_back(read_int("a physical tag"));
         declared_.insert(Key{dim, phys.back()});
       }
       if (dim > 0) {
-        const std::int64_t nb = read_count("the number of bounding entities");
+        const std::int64_t nb = read_entries("the number of bounding entities", 1, "tags");
         for (std::int64_t k = 0; k < nb; ++k) read_int("a bounding entity tag");
       }
     }
@@ -406,8 +418,8 @@ void Reader::add_node(std::int64_t tag, double x, double y, double z) {
 }
 
 void Reader::read_nodes4() {
-  const std::int64_t nblocks = read_count("the number of node blocks");
-  const std::int64_t nnodes = read_count("the number of nodes");
+  const std::int64_t nblocks = read_entries("the number of node blocks", 4, "blocks");
+  const std::int64_t nnodes = read_entries("the number of nodes", 4, "nodes");
   read_int("the minimum node tag");
   read_int("the maximum node tag");
   begin_nodes(nnodes);
@@ -417,7 +429,7 @@ void Reader::read_nodes4() {
     read_int("a node block entity tag");
     const std::int64_t parametric = read_int("the parametric flag");
     if (parametric != 0 && parametric != 1) fail(cat("invalid parametric flag ", parametric));
-    const std::int64_t n = read_count("the number of nodes in the block");
+    const std::int64_t n = read_entries("the number of nodes in the block", 4, "nodes");
     const std::int64_t first = mesh_.num_nodes();
     // Tags first, then coordinates: record the tags, insert once coordinates are known.
     std::vector<std::int64_t> tags(static_cast<std::size_t>(n));
@@ -442,7 +454,7 @@ void Reader::read_nodes4() {
 }
 
 void Reader::read_nodes2() {
-  const std::int64_t n = read_count("the number of nodes");
+  const std::int64_t n = read_entries("the number of nodes", 4, "nodes");
   begin_nodes(n);
   for (std::int64_t k = 0; k < n; ++k) {
     const std::int64_t tag = read_int("a node tag");
@@ -520,8 +532,8 @@ void Reader::read_elements4() {
   if (!have_nodes_) fail("$Elements before $Nodes");
   if (have_elements_) fail("second $Elements section");
   have_elements_ = true;
-  const std::int64_t nblocks = read_count("the number of element blocks");
-  const std::int64_t nelems = read_count("the number of elements");
+  const std::int64_t nblocks = read_entries("the number of element blocks", 4, "blocks");
+  const std::int64_t nelems = read_entries("the number of elements", 2, "elements");
   read_int("the minimum element tag");
   read_int("the maximum element tag");
   elem_map_.init(nelems);
@@ -534,7 +546,7 @@ void Reader::read_elements4() {
     const std::int64_t entity = read_int("an element block entity tag");
     const std::int64_t type_num = read_int("an element type");
     const GmshType& t = element_type(type_num, static_cast<int>(dim));
-    const std::int64_t n = read_count("the number of elements in the block");
+    const std::int64_t n = read_entries("the number of elements in the block", 1 + t.n_nodes, "elements");
     auto it = entity_phys_.find(Key{static_cast<int>(dim), entity});
     const std::vector<std::int64_t>& phys = it == entity_phys_.end() ? kNoPhys : it->second;
     if (t.dim < 3 && phys.empty()) {
@@ -561,14 +573,14 @@ void Reader::read_elements2() {
   if (!have_nodes_) fail("$Elements before $Nodes");
   if (have_elements_) fail("second $Elements section");
   have_elements_ = true;
-  const std::int64_t n = read_count("the number of elements");
+  const std::int64_t n = read_entries("the number of elements", 4, "elements");
   elem_map_.init(n);
   elem_hash_.reserve(static_cast<std::size_t>(std::min<std::int64_t>(n, 1 << 26)));
   for (std::int64_t k = 0; k < n; ++k) {
     const std::int64_t tag = read_int("an element tag");
     const std::int64_t elem_line = line_;
     const GmshType& t = element_type(read_int("an element type"), -1);
-    const std::int64_t ntags = read_count("the number of element tags");
+    const std::int64_t ntags = read_entries("the number of element tags", 1, "tags");
     std::int64_t phys = 0;
     for (std::int64_t j = 0; j < ntags; ++j) {
       const std::int64_t v = read_int("an element tag value");
@@ -594,7 +606,7 @@ void Reader::read_morse_materials() {
   const std::int64_t version = read_int("the $MorseMaterials version");
   if (version != 1) fail(cat("unsupported $MorseMaterials version ", version));
   if (!have_elements_) fail("$MorseMaterials before $Elements");
-  const std::int64_t nm = read_count("the number of materials");
+  const std::int64_t nm = read_entries("the number of materials", 4, "materials");
   for (std::int64_t i = 0; i < nm; ++i) {
     Material mat;
     mat.name = read_name();

@@ -1851,10 +1851,11 @@ PetscErrorCode NastranWriteOptions::set_from_options(MPI_Comm comm) {
   PetscCall(PetscStrncpy(aset_buf, aset.c_str(), sizeof aset_buf));
   PetscCall(PetscStrncpy(spc_buf, spc.c_str(), sizeof spc_buf));
   auto& mat = material;
+  PetscBool e_set = PETSC_FALSE, rho_set = PETSC_FALSE;
   PetscOptionsBegin(comm, nullptr, "morse mesh: Nastran output (-out FILE.bdf)", "");
-  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat.E, &mat.E, nullptr));
+  PetscCall(MorseOptionsReal("-material_E", "Young's modulus written to MAT1", "", mat.E, &mat.E, &e_set));
   PetscCall(MorseOptionsReal("-material_nu", "Poisson's ratio written to MAT1", "", mat.nu, &mat.nu, nullptr));
-  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat.rho, &mat.rho, nullptr));
+  PetscCall(MorseOptionsReal("-material_rho", "Density written to MAT1", "", mat.rho, &mat.rho, &rho_set));
   PetscCall(MorseOptionsString("-nastran_format", "Field format: large (16 characters), small (8) or free", "", fmt,
                                fmt, sizeof fmt, nullptr));
   PetscCall(MorseOptionsString("-nastran_aset", "Node set written as ASET1 (the Craig-Bampton boundary)", "", aset_buf,
@@ -1868,6 +1869,8 @@ PetscErrorCode NastranWriteOptions::set_from_options(MPI_Comm comm) {
     format = f == "large" ? Format::Large : f == "small" ? Format::Small : Format::Free;
   else if (error.empty())
     error = cat("-nastran_format ", f, ": expected large, small or free");
+  if (error.empty() && e_set) error = options::magnitude_error("-material_E", mat.E);
+  if (error.empty() && rho_set) error = options::magnitude_error("-material_rho", mat.rho);
   aset = aset_buf;
   spc = spc_buf;
   return PETSC_SUCCESS;

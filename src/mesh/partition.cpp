@@ -262,8 +262,8 @@ LocalMesh distribute(MPI_Comm comm, Mesh* serial) {
     std::vector<int> part;
     try {
       part = partition_elements(m, size);
-    } catch (const Error& e) {
-      err = e.what();
+    } catch (const std::exception& e) {  // METIS's status, or std::bad_alloc: every rank reports it
+      err = message_of(e);
     }
     collective_check(comm, err);
     std::vector<int> owner(m.num_nodes(), size);

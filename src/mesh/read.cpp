@@ -31,7 +31,7 @@ LocalMesh read_and_distribute(MPI_Comm comm, const std::string& path, bool skip_
     } catch (const Error& e) {
       err = e.what();
     } catch (const std::exception& e) {
-      err = cat("reading ", path, ": ", e.what());
+      err = cat("reading ", path, ": ", message_of(e));
     }
   }
   collective_check(comm, err);

@@ -293,6 +293,32 @@ std::vector<std::string> cb_labels(const cb::CBResult& c) {
 
 }  // namespace
 
+PetscInt basis_size(const fe::Model& md, const BasisSettings& s) {
+  MORSE_CHECK(!s.boundary_set.empty(), "nlrom: the boundary set (-boundary SET) is required");
+  MORSE_CHECK(s.n_fixed >= 0 && s.n_derivatives >= 0 && s.n_pod >= 0, "nlrom: basis sizes must be >= 0");
+  const PetscInt n_fixed = s.kind == BasisKind::POD ? 0 : s.n_fixed;
+  const PetscInt want_extra = s.kind == BasisKind::CBMD ? s.n_derivatives : s.kind == BasisKind::POD ? s.n_pod : 0;
+  cb::CBResult probe;
+  cb::set_boundary(md, s.boundary_set, &probe);
+  const PetscInt r = probe.n_b + n_fixed + want_extra;
+  MORSE_CHECK(r <= md.dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", n_fixed,
+              " fixed-interface modes + ", want_extra, " others) is larger than the model (", md.dofs.n_global,
+              " free DOFs)");
+  return r;
+}
+
+double force_bytes(std::size_t r, bool step) {
+  const double rr = static_cast<double>(r);
+  const double tensor = 8.0 * rr * (rr * (rr + 1) / 2 + rr * (rr + 1) * (rr + 2) / 6);
+  const double fields = step ? 16.0 * rr * static_cast<double>(step_evaluations(r)) : 0.0;
+  return tensor + fields;
+}
+
+void check_force_memory(MPI_Comm comm, std::size_t r, bool step) {
+  check_memory(comm, cat("nlrom r = ", r), force_bytes(r, step),
+               step ? "the cubic tensor and its STEP fields" : "the cubic tensor");
+}
+
 Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& s) {
   MORSE_CHECK(md.mesh, "nlrom: the nonlinear basis needs a mesh model");
   MORSE_CHECK(svk.stiffness() == md.K.get(), "nlrom: the SVK forces must be built on the model's K");
@@ -305,23 +331,12 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
   Mat K = svk.stiffness();
   Basis b;
   b.kind = s.kind;
-  MORSE_CHECK(!s.boundary_set.empty(), "nlrom: the boundary set (-boundary SET) is required");
-  MORSE_CHECK(s.n_fixed >= 0 && s.n_derivatives >= 0 && s.n_pod >= 0, "nlrom: basis sizes must be >= 0");
+  basis_size(md, s);  // the settings and the size, before any work: r must not exceed the free DOFs
   cb::CBSettings cs;
   cs.boundary_set = s.boundary_set;
   cs.n_fixed = s.kind == BasisKind::POD ? 0 : s.n_fixed;
   cs.keep_basis = true;
   cs.prefix = s.prefix;
-  const PetscInt want_extra = s.kind == BasisKind::CBMD ? s.n_derivatives : s.kind == BasisKind::POD ? s.n_pod : 0;
-  {
-    // Size check before any work: r must not exceed the free DOFs.
-    cb::CBResult probe;
-    cb::set_boundary(md, s.boundary_set, &probe);
-    const PetscInt r = probe.n_b + cs.n_fixed + want_extra;
-    MORSE_CHECK(r <= dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", cs.n_fixed,
-                " fixed-interface modes + ", want_extra, " others) is larger than the model (", dofs.n_global,
-                " free DOFs)");
-  }
   if (s.kind == BasisKind::POD) {
     MORSE_CHECK(!s.snapshots.empty(), "nlrom: -nlrom_basis pod needs -nlrom_snapshots FILE.h5 (a morse fom file)");
     MORSE_CHECK(s.n_pod > 0, "nlrom: -nlrom_basis pod needs -nlrom_num_pod N > 0");

@@ -21,6 +21,7 @@ std::vector<std::int64_t> resolve_nodes(const std::string& file, const std::vect
   for (const std::string& item : spec) {
     MORSE_CHECK(!item.empty(), who, ": empty entry in the node list");
     if (item.find_first_not_of("0123456789") == std::string::npos) {
+      MORSE_CHECK(item.size() <= 18, who, ": node id ", item, " is out of range");
       add(std::stoll(item));
       continue;
     }

@@ -108,9 +108,11 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
     if (!set && ro.z.size() > 1) fail(cat("rotor ", r, ": give its shaft diameter with ", p, "d_outer"));
     PetscCall(get_reals(PetscOptionsObject, p + "d_inner",
                         "Inner diameter [m] (hollow shaft): one value or one per element", &ro.d_inner, &set));
-    PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E, nullptr));
+    PetscCall(MorseOptionsReal((p + "E").c_str(), "Young's modulus [Pa]", "", ro.mat.E, &ro.mat.E, &set));
+    if (set) fail(options::magnitude_error(p + "E", ro.mat.E));
     PetscCall(MorseOptionsReal((p + "nu").c_str(), "Poisson ratio", "", ro.mat.nu, &ro.mat.nu, nullptr));
-    PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho, nullptr));
+    PetscCall(MorseOptionsReal((p + "rho").c_str(), "Density [kg/m^3]", "", ro.mat.rho, &ro.mat.rho, &set));
+    if (set) fail(options::magnitude_error(p + "rho", ro.mat.rho));
     PetscCall(MorseOptionsReal((p + "speed_ratio").c_str(), "Spin speed / driving speed (negative: counter-rotating)",
                                "", ro.speed_ratio, &ro.speed_ratio, nullptr));
     std::vector<double> ab;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -16,6 +17,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/files.hpp"
+#include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 
@@ -325,6 +327,20 @@ void SweepOptions::check() const {
   MORSE_CHECK(omega_step > 0 || omega_max == omega_min, "morse sweep: -sweep_omega_step must be positive");
   MORSE_CHECK(batch > 0, "-sweep_batch must be positive (got ", batch, ")");
   MORSE_CHECK(fmax > 0 && bins > 0, "-sweep_spectrum_fmax and -sweep_spectrum_bins must be positive");
+  MORSE_CHECK(bins < std::numeric_limits<int>::max(), "-sweep_spectrum_bins ", bins, " is too large");
+}
+
+void SweepOptions::check_memory(MPI_Comm comm) const {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const double speeds = static_cast<double>(n_speeds()), mine = rank == 0 ? speeds : std::ceil(speeds / size);
+  // The grid, a spectrum per speed held (+ its lane's and the checkpoint's copies), the task list.
+  const double bytes = 8.0 * static_cast<double>(bins + 1) * (mine + 3.0) + 64.0 * speeds;
+  morse::check_memory(comm,
+                      cat("morse sweep: ", static_cast<long long>(speeds), " speeds of ", bins + 1,
+                          " spectrum frequencies (-sweep_spectrum_bins ", bins, ")"),
+                      bytes, "the spectra");
 }
 
 SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
@@ -409,7 +425,7 @@ std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bo
     try {
       write_sweep(out, *rec);
     } catch (const std::exception& e) {
-      err = cat("morse sweep: cannot write -out ", out, ": ", e.what());
+      err = cat("morse sweep: cannot write -out ", out, ": ", message_of(e));
     }
   }
   collective_check(comm, err);
@@ -538,7 +554,7 @@ SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom, const nlr
     else
       plan.rows = sm.dof_rows(plan.ids, plan.comps);
   } catch (const std::exception& e) {
-    err = cat("-sim_snapshots ", fom, ": ", e.what());
+    err = cat("-sim_snapshots ", fom, ": ", message_of(e));
   }
   collective_check(comm, err);
   return plan;
@@ -548,6 +564,21 @@ Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& 
                const std::vector<std::string>& monitor, const std::string& contact_set, const SnapshotPlan& plan,
                SimRecord* out) {
   const std::size_t r = sm.r();
+  {
+    // The histories grow with the output rows: refuse a run whose record cannot fit before it
+    // starts (10^9 steps written every step ended in std::bad_alloc hours into the run). A row:
+    // time, energy, q, the monitored displacements, the contact quantities, the snapshots.
+    MORSE_CHECK(s.dt > 0 && std::isfinite(s.t_final / s.dt), "simulate: -sim_dt ", s.dt, " s must be > 0");
+    const double steps = std::ceil(s.t_final / s.dt - 1e-9), rows = std::floor(steps / every) + 1;
+    double per_row = 2.0 + static_cast<double>(r);
+    for (const auto& m : monitor) per_row += 3.0 * static_cast<double>(sm.sets.at(m).size());
+    per_row += 10.0 * static_cast<double>(s.contact.nodes.size());
+    const double bytes = 8.0 * (rows * per_row + 2.0 * static_cast<double>(plan.time.size() * plan.rows.size()));
+    const std::string err = memory_error(cat("simulate: writing ", static_cast<long long>(rows), " output rows (",
+                                             static_cast<long long>(steps), " steps, -sim_output_every ", every, ")"),
+                                         bytes, cat("the histories (r = ", r, ")"));
+    MORSE_CHECK(err.empty(), err, ": raise -sim_output_every or shorten -sim_tfinal");
+  }
   std::vector<ReducedLoad> loads;
   for (const auto& l : nodal) {
     ReducedLoad rl;
@@ -645,8 +676,8 @@ void run_cases(MPI_Comm comm, const std::vector<std::string>& names, const std::
     try {
       task(i);
     } catch (const std::exception& e) {
-      err += (err.empty() ? "" : "; ") +
-             (names[i].empty() ? std::string(e.what()) : cat("case ", names[i], ": ", e.what()));
+      err +=
+          (err.empty() ? "" : "; ") + (names[i].empty() ? message_of(e) : cat("case ", names[i], ": ", message_of(e)));
     }
   }
   // Every rank's failures, joined in rank order, on every rank.

@@ -278,7 +278,7 @@ class Batch {
         if (fail) ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
       } catch (const std::exception& e) {
         fail = true;
-        ln.res.error = e.what();
+        ln.res.error = message_of(e);
       }
       if (!fail) {
         for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];

@@ -10,6 +10,7 @@
 #include <petscsys.h>
 #include <mpi.h>
 
+#include <exception>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -37,6 +38,11 @@ std::string cat(const T&... pieces) {
 namespace detail {
 [[noreturn]] void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file, int line);
 }
+
+/// The message of an exception for the user: what() of a morse::Error or any std::exception, but
+/// "out of memory: ..." for a std::bad_alloc (whose what() is a bare "std::bad_alloc"). Not
+/// collective.
+std::string message_of(const std::exception& e);
 
 /// Collective verdict. Every rank of comm passes its own (possibly empty) error message; if any
 /// rank has a message, every rank throws Error with the message of the lowest such rank.

@@ -49,6 +49,17 @@ std::vector<StageRecord> reduced_stage_records(MPI_Comm comm);
 /// Peak resident set size of this process, in MB.
 double peak_memory_mb();
 
+/// Bytes of memory available on this machine now: Linux MemAvailable, capped by the limit of the
+/// process's cgroup (memory.max - memory.current) when it has one; -1 if unknown. Not collective.
+double available_bytes();
+/// "" if `bytes`, needed for `purpose`, fit in the memory available now (or it is unknown); else
+/// "<what> needs 14.8 GB for <purpose>; 2.3 GB available". For work of one rank. Not collective.
+std::string memory_error(const std::string& what, double bytes, const std::string& purpose);
+/// The same for `bytes` held by every rank of comm: the ranks that share a node add up. Throws
+/// (morse::Error, every rank alike) if a node lacks the memory, before anything is allocated.
+/// Collective.
+void check_memory(MPI_Comm comm, const std::string& what, double bytes, const std::string& purpose);
+
 /// Progress of a long loop, printed on rank 0 of comm: "  <stage>: 42% (ETA 12 s)". Prints at
 /// most every 2 s and only once the loop has run for 2 s. Not collective.
 class Progress {

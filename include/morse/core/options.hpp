@@ -97,25 +97,73 @@ PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help
 
 }  // namespace morse::options
 
+namespace morse::options {
+
+/// What the value of a numeric option must look like (check_value).
+enum class Value {
+  Int,            ///< an integer: optional sign and decimal digits, within PetscInt's range
+  Real,           ///< a finite real number (strtod's syntax, the whole text)
+  RealNonFinite,  ///< a real number, inf and nan allowed (an option that gives them a meaning)
+  IntArray,       ///< comma-separated Int items, or ranges a-b (PETSc's syntax)
+  RealArray,      ///< comma-separated Real items
+};
+
+/// Why `text`, the value given to option `name`, is not a `kind` value: "" if it is one.
+/// ("-modes_nev 5abc: expected an integer"; "-modes_shift nan: expected a finite number").
+std::string value_error(const std::string& name, const char* text, Value kind);
+
+/// The magnitudes a material constant (Young's modulus, density) may have: its square must still
+/// be a normal double, since the solvers square and multiply them (E = 1e-300 ends in a LAPACK
+/// failure far away from the option).
+inline constexpr double kMinMagnitude = 1e-150;
+inline constexpr double kMaxMagnitude = 1e150;
+/// "" if `value` is a positive number in [kMinMagnitude, kMaxMagnitude], else why not, naming
+/// option `name`: "-material_E 1e-300 must be a positive number in [1e-150, 1e150]".
+std::string magnitude_error(const std::string& name, double value);
+
+/// Checks the value given to option `name` (with its '-', without the block's prefix) in the
+/// options database of a PetscOptionsBegin block (prefix: the block's): throws morse::Error
+/// (value_error) if it is given and is not a `kind` value, so that PETSc's lenient parsing
+/// ("5abc" an error of its own, a 20-digit integer wrapped to -1, "nan", "default" = -2) never
+/// reaches the code. Every rank reads the same options: every rank throws. Returns 0.
+PetscErrorCode check_value(PetscOptions options, const char* prefix, const char* name, Value kind);
+
+}  // namespace morse::options
+
 // Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same
 // arguments; each registers the option (under the block's prefix) with its help text, then calls
 // PETSc's. Use them as PETSc's: PetscCall(MorseOptionsReal("-x", "help", "", x, &x, nullptr)).
+// The numeric ones first check the text given (check_value): integers strictly, reals finite
+// (MorseOptionsRealNonFinite for an option that accepts inf or nan).
 #define MORSE_OPTIONS_ADD_(opt, text) ::morse::options::add(PetscOptionsObject->prefix, (opt), (text))
-#define MorseOptionsReal(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsReal(opt, text, __VA_ARGS__))
-#define MorseOptionsInt(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsInt(opt, text, __VA_ARGS__))
-#define MorseOptionsBoundedInt(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoundedInt(opt, text, __VA_ARGS__))
-#define MorseOptionsRangeInt(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRangeInt(opt, text, __VA_ARGS__))
+#define MORSE_OPTIONS_CHECK_(opt, kind) \
+  ::morse::options::check_value(PetscOptionsObject->options, PetscOptionsObject->prefix, (opt), kind)
+#define MorseOptionsReal(opt, text, ...)                                                    \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::Real), \
+   PetscOptionsReal(opt, text, __VA_ARGS__))
+#define MorseOptionsRealNonFinite(opt, text, ...)                                                    \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::RealNonFinite), \
+   PetscOptionsReal(opt, text, __VA_ARGS__))
+#define MorseOptionsInt(opt, text, ...)                                                    \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::Int), \
+   PetscOptionsInt(opt, text, __VA_ARGS__))
+#define MorseOptionsBoundedInt(opt, text, ...)                                             \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::Int), \
+   PetscOptionsBoundedInt(opt, text, __VA_ARGS__))
+#define MorseOptionsRangeInt(opt, text, ...)                                               \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::Int), \
+   PetscOptionsRangeInt(opt, text, __VA_ARGS__))
 #define MorseOptionsBool(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBool(opt, text, __VA_ARGS__))
 #define MorseOptionsString(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsString(opt, text, __VA_ARGS__))
 #define MorseOptionsEnum(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEnum(opt, text, __VA_ARGS__))
 #define MorseOptionsEList(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsEList(opt, text, __VA_ARGS__))
 #define MorseOptionsName(opt, text, ...) (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsName(opt, text, __VA_ARGS__))
-#define MorseOptionsRealArray(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsRealArray(opt, text, __VA_ARGS__))
-#define MorseOptionsIntArray(opt, text, ...) \
-  (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsIntArray(opt, text, __VA_ARGS__))
+#define MorseOptionsRealArray(opt, text, ...)                                                    \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::RealArray), \
+   PetscOptionsRealArray(opt, text, __VA_ARGS__))
+#define MorseOptionsIntArray(opt, text, ...)                                                    \
+  (MORSE_OPTIONS_ADD_(opt, text), MORSE_OPTIONS_CHECK_(opt, ::morse::options::Value::IntArray), \
+   PetscOptionsIntArray(opt, text, __VA_ARGS__))
 #define MorseOptionsBoolArray(opt, text, ...) \
   (MORSE_OPTIONS_ADD_(opt, text), PetscOptionsBoolArray(opt, text, __VA_ARGS__))
 #define MorseOptionsStringArray(opt, text, ...) \

@@ -120,7 +120,8 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
                    const std::string& dataset);
 
 /// Serial reads of one dataset (any rank, no communication): the values and the shape. Return
-/// false and set *error (naming the file and dataset) if the file or dataset is missing.
+/// false and set *error (naming the file and dataset) if the file or dataset is missing, or, for
+/// read_ints, if a floating-point dataset holds a value that is not an integer.
 bool read_doubles(const std::string& file, const std::string& name, std::vector<double>* out,
                   std::vector<hsize_t>* dims, std::string* error);
 bool read_ints(const std::string& file, const std::string& name, std::vector<std::int64_t>* out,

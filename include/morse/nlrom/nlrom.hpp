@@ -126,6 +126,20 @@ std::vector<double> project_vector(Mat V, Vec x);
 /// training settings. Collective.
 Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& s);
 
+/// The number of vectors r the basis of s will have at most (boundary DOFs + fixed-interface
+/// modes + derivatives or POD vectors), known before it is built. Throws (collectively) for a
+/// missing or empty boundary set and for a basis larger than the model. Collective.
+PetscInt basis_size(const fe::Model& md, const BasisSettings& s);
+
+/// Bytes every rank holds while the reduced force of r coordinates is identified: the tensors A
+/// and B (r n_quadratic(r) + r n_cubic(r) doubles: 14.8 GB for r = 324) and, for STEP, its
+/// imposed fields and their reduced forces (2 r step_evaluations(r) doubles).
+double force_bytes(std::size_t r, bool step);
+/// Refuses (every rank alike) a basis of r vectors whose reduced force cannot fit in the memory
+/// available (the ranks of a node adding up), before the basis is built: "nlrom r = 324 needs
+/// 14.8 GB for the cubic tensor; 23 GB available". Collective.
+void check_force_memory(MPI_Comm comm, std::size_t r, bool step);
+
 /// The POD basis of a snapshot matrix X (n_free x n_s, MPIDENSE) by the method of snapshots:
 /// X^T X = U S^2 U^T (replicated, LAPACK), modes X U S^-1 for the n largest values, orthonormal
 /// in the Euclidean inner product. sigma receives every singular value (descending). Collective.

@@ -94,6 +94,10 @@ struct SweepOptions {
   /// Throws (alike on every rank) on options a sweep refuses: `error`, no -rom or -contact_set, a
   /// plane obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
   void check() const;
+  /// Refuses (alike on every rank) a sweep whose spectra cannot fit in the memory available: the
+  /// frequency grid of -sweep_spectrum_bins and one spectrum per speed (all of them on rank 0,
+  /// which writes the file), before anything is allocated. Collective.
+  void check_memory(MPI_Comm comm) const;
   /// The sweep settings for the stored model sm: dt, linear, the casing contact of -contact_set,
   /// -sim_revolutions (default 200), the spectrum, batch and the radial row of -sweep_monitor.
   SweepSettings settings(const nlrom::StoredModel& sm) const;
@@ -171,7 +175,9 @@ SnapshotPlan read_snapshot_plan(MPI_Comm comm, const std::string& fom, const nlr
 /// of every output interval, so that the history can drive another model) and the displacements
 /// of the monitored sets; the full fields at the snapshot steps of plan (the step nearest each
 /// snapshot time within [0, t_final]); the final state; the node ids of the monitored sets and of
-/// the contact set `contact_set` (s.contact has its nodes) and the loads. Serial.
+/// the contact set `contact_set` (s.contact has its nodes) and the loads. A record that cannot fit
+/// in the memory available is refused before the run starts (morse::Error naming
+/// -sim_output_every). Serial.
 Stats simulate(const nlrom::StoredModel& sm, const std::vector<dyn::NodalLoad>& loads, const Settings& s, long every,
                const std::vector<std::string>& monitor, const std::string& contact_set, const SnapshotPlan& plan,
                SimRecord* rec);
