@@ -241,7 +241,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
   {
     StageTimer t(comm, "ConstraintModes");
     UMat own_factor;
-    Mat F = want_modes ? eig.factor() : nullptr;
+    Mat F = want_modes && eig.shift == 0.0 ? eig.factor() : nullptr;  // K_ii's own factor only
     out.factor_reused = F != nullptr;
     if (!F) {
       auto t0 = std::chrono::steady_clock::now();

@@ -81,7 +81,6 @@ double stiffness_scale(Mat K, Mat M) {
 }  // namespace detail
 
 Mat Eigenpairs::factor() const {
-  if (shift != 0.0) return nullptr;
   if (block_factor) return block_factor.get();
   if (!eps || slicing) return nullptr;
   ST st;

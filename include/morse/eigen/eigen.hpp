@@ -77,8 +77,8 @@ struct Eigenpairs {
   UMat block_factor;
   /// The shift the solve used (EigenSettings::shift, or the automatic one of a singular K).
   double shift = 0.0;
-  /// The MUMPS Cholesky factor of K used by the solver, or null (slicing mode, or a solve about a
-  /// nonzero shift, whose factor is of K - shift*M).
+  /// The MUMPS Cholesky factor of K - shift*M used by the solver, or null (slicing mode). A caller
+  /// that needs K's own factor checks shift == 0 (after an automatic shift it is not).
   Mat factor() const;
 };
 
