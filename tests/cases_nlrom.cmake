@@ -34,18 +34,18 @@ morse_add_error_case(sweep_too_many_speeds
   "morse: error: -sweep_omega_min 800, -sweep_omega_max 1e\\+15 and -sweep_omega_step 1e-06 give 1e\\+21 speeds; a sweep takes at most 1000000 \\(its file would need about .* GB"
   sweep_too_many_speeds.h5
   ARGS ${MORSE_NLR_SWEEP} -sweep_omega_min 800 -sweep_omega_max 1e15 -sweep_omega_step 1e-6)
-morse_add_error_case(sweep_omega_max_inf "morse: error: -sweep_omega_max must be finite \\(got inf\\)"
+morse_add_error_case(sweep_omega_max_inf "morse: error: -sweep_omega_max inf: expected a finite number"
   sweep_omega_max_inf.h5 ARGS ${MORSE_NLR_SWEEP} -sweep_omega_min 800 -sweep_omega_max inf -sweep_omega_step 100)
 set(MORSE_NLR_SIM simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
-morse_add_error_case(simulate_q0_nan "morse: error: -sim_q0 must be finite \\(value 2 is nan\\)"
+morse_add_error_case(simulate_q0_nan "morse: error: -sim_q0 0,nan: item 'nan': expected a finite number"
   simulate_q0_nan.h5 ARGS ${MORSE_NLR_SIM} -sim_q0 0,nan)
-morse_add_error_case(simulate_load_amplitude_inf "morse: error: -load_x1_amplitude must be finite \\(got inf\\)"
+morse_add_error_case(simulate_load_amplitude_inf "morse: error: -load_x1_amplitude inf: expected a finite number"
   simulate_load_inf.h5 ARGS ${MORSE_NLR_SIM} -load_sets x1 -load_x1_dir y -load_x1_amplitude inf)
 morse_add_error_case(simulate_case_twice "morse: error: -sim_cases: case a is given twice"
   simulate_case_twice.h5 ARGS ${MORSE_NLR_SIM} -sim_cases a,b,a)
 morse_add_error_case(simulate_case_escapes "morse: error: -sim_cases: case name '\\.\\./x' must not be empty nor contain"
   simulate_case_escapes.h5 ARGS ${MORSE_NLR_SIM} -sim_cases a,../x)
-morse_add_error_case(compare_tmax_nan "morse: error: -compare_tmax must be a finite time >= 0 \\[s\\] \\(got nan\\)"
+morse_add_error_case(compare_tmax_nan "morse: error: -compare_tmax nan: expected a finite number"
   compare_tmax_nan.h5 ARGS compare ${MORSE_CASE_DIR}/no_fom.h5 ${MORSE_CASE_DIR}/no_sim.h5 -compare_tmax nan)
 morse_add_error_case(compare_tmax_negative "morse: error: -compare_tmax must be a finite time >= 0 \\[s\\] \\(got -1\\)"
   compare_tmax_negative.h5 ARGS compare ${MORSE_CASE_DIR}/no_fom.h5 ${MORSE_CASE_DIR}/no_sim.h5 -compare_tmax -1)

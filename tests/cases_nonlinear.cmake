@@ -19,6 +19,13 @@ morse_add_error_case(fom_bad_scheme "morse: error: .*-fom_scheme" fom_bad_scheme
   ARGS fom ${MORSE_NL_BOX} -fom_dt 1e-4 -fom_tfinal 1e-3 -fom_scheme euler)
 morse_add_error_case(fom_misspelled_option "morse: error: unknown option.*-fom_dtt" fom_typo.h5 BOX
   ARGS fom ${MORSE_NL_BOX} -fom_dtt 1e-4 -fom_tfinal 1e-3)
+# A misspelled inner-solver option is refused once the solvers are set up (after the first step),
+# not at the end of the run: this run of 10^6 steps would take far beyond the case's time-out.
+morse_add_error_case(fom_misspelled_solver_option
+  "morse: error: unknown option\\(s\\): -fom_krylov_ksp_monitr: not read by the fom's settings and solvers"
+  fom_typo_solver.h5 BOX
+  ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1 -fom_dt 1e-4 -fom_tfinal 100
+       -fom_krylov_ksp_monitr)
 # A misspelled set-list option is refused, and so are the per-set options it would have named; a
 # misspelled per-set option names the registered one.
 morse_add_error_case(fom_misspelled_load_sets

@@ -148,11 +148,22 @@ TEST(Compare, TmaxFromTheStoredLoadAndSettings) {
 
 // A given -compare_tmax must be a finite time >= 0: -1 is not "from the load", nan is refused.
 TEST(Compare, TmaxGivenMustBeAFiniteTime) {
-  for (const char* bad : {"nan", "-1", "inf"}) {
-    test::GivenOptions g{{"-compare_tmax", bad}};
+  {
+    test::GivenOptions g{{"-compare_tmax", "-1"}};
     eval::CompareSettings s;
     ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
-    EXPECT_EQ(s.error, cat("-compare_tmax must be a finite time >= 0 [s] (got ", s.tmax, ")")) << bad;
+    EXPECT_EQ(s.error, "-compare_tmax must be a finite time >= 0 [s] (got -1)");
+  }
+  // Non-finite values are refused when read, naming the option and the text.
+  for (const char* bad : {"nan", "inf"}) {
+    test::GivenOptions g{{"-compare_tmax", bad}};
+    eval::CompareSettings s;
+    try {
+      s.set_from_options(PETSC_COMM_WORLD);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), cat("-compare_tmax ", bad, ": expected a finite number"));
+    }
   }
   test::GivenOptions g{{"-compare_tmax", "0.25"}};
   eval::CompareSettings s;

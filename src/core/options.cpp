@@ -197,6 +197,26 @@ void check_unknown(MPI_Comm comm, bool early) {
   collective_check(comm, err);
 }
 
+void check_prefix_used(MPI_Comm comm, const std::string& prefix, const std::string& what) {
+  PetscInt n = 0;
+  char** left = nullptr;
+  char** values = nullptr;
+  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &left, &values));
+  std::vector<std::string> unused;
+  for (PetscInt i = 0; i < n; ++i)
+    if (std::string(left[i]).rfind(prefix, 0) == 0) unused.emplace_back(left[i]);
+  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
+  std::sort(unused.begin(), unused.end());
+  std::string bad;
+  for (const auto& name : unused) {
+    bad += " -" + name;
+    if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
+  }
+  collective_check(
+      comm, bad.empty() ? std::string()
+                        : cat("unknown option(s):", bad, ": not read by ", what, " once they are set up (see -help)"));
+}
+
 namespace {
 
 // Whether `t` is an integer in PetscInt's range; `why` says what is wrong otherwise.

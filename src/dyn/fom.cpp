@@ -355,6 +355,9 @@ FomStats integrate(const fe::Svk& svk, Mat M, const Loads& loads, const FomSetti
   bool have_factor = false;
   Progress progress(comm, "fom", static_cast<double>(n_steps));
   for (PetscInt n = 1; n <= n_steps; ++n) {
+    // Once the first step has set every solver up (the factor is made in it), an option under the
+    // fom's prefix that none of them read is a misspelling: refuse it now, not after the run.
+    if (n == 2) options::check_prefix_used(comm, s.prefix, "the fom's settings and solvers");
     const double t0 = (n - 1) * h, t1 = n * h;
     loads.evaluate(t1, F1.get());
     // Predictor: u1 = u0. Extrapolating with v0 (and the last acceleration) was measured to push

@@ -42,12 +42,8 @@ PetscErrorCode get_loads(MPI_Comm comm, std::vector<NodalLoad>* loads, std::stri
         *error = cat("load on set ", name, ": give its force per node with ", pre, p.substr(1), "amplitude");
       else if (auto why = parse_direction(buf, l.dir); !why.empty())
         *error = cat(pre, p.substr(1), "dir: ", why);
-      else if (!std::isfinite(l.amplitude))
-        *error = cat(pre, p.substr(1), "amplitude must be finite (got ", l.amplitude, ")");
-      else if (!std::isfinite(l.omega) || l.omega < 0)
-        *error = cat(pre, p.substr(1), "omega must be finite and >= 0 (got ", l.omega, ")");
-      else if (!std::isfinite(l.phase))
-        *error = cat(pre, p.substr(1), "phase must be finite (got ", l.phase, ")");
+      else if (l.omega < 0)  // non-finite values are refused by MorseOptionsReal
+        *error = cat(pre, p.substr(1), "omega must be >= 0 (got ", l.omega, ")");
     }
     loads->push_back(l);
   }

@@ -89,6 +89,13 @@ bool petsc_global(const std::string& name);
 /// Collective on comm (every rank throws morse::Error).
 void check_unknown(MPI_Comm comm, bool early);
 
+/// The unknown-option check of the options under one prefix, once the solvers that read them are
+/// set up (a long run's first step): every option given as -<prefix>... that nobody has read is
+/// refused, naming it and `what` ("the fom solvers"), with the registered option it probably
+/// meant when one is close. A misspelled inner-solver option (-fom_krylov_ksp_monitr) is so
+/// refused before the run goes on instead of at its end. Collective (every rank throws).
+void check_prefix_used(MPI_Comm comm, const std::string& prefix, const std::string& what);
+
 /// A comma-separated list option (e.g. -load_sets LE,tip; -sim_monitor LE) read under `prefix`
 /// (may be null) and registered with its help text; at most 64 items. `list` is left unchanged if
 /// the option is not given. Uses PetscOptionsBegin: returns a PETSc error code. Collective.
