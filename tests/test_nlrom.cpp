@@ -555,7 +555,18 @@ TEST(Options, OfflineSettings) {
 
 // A given training step or length must be a finite positive time (-1 used to mean "the default").
 TEST(Options, OfflineTrainingTimesMustBeFinitePositive) {
-  for (const char* bad : {"-1", "0", "nan"}) {
+  {
+    // Not a number: refused when read, naming the option and the text.
+    test::GivenOptions g{{"-nlrom_training_dt", "nan"}};
+    nlrom::OfflineSettings s;
+    try {
+      s.set_from_options(PETSC_COMM_WORLD);
+      ADD_FAILURE() << "nan accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), "-nlrom_training_dt nan: expected a finite number");
+    }
+  }
+  for (const char* bad : {"-1", "0"}) {
     test::GivenOptions g{{"-nlrom_training_dt", bad}};
     nlrom::OfflineSettings s;
     s.basis.boundary_set = "root";
@@ -564,11 +575,11 @@ TEST(Options, OfflineTrainingTimesMustBeFinitePositive) {
               cat("-nlrom_training_dt must be a finite positive time step [s] (got ", s.basis.training_dt, ")"))
         << bad;
   }
-  test::GivenOptions g{{"-nlrom_training_tfinal", "inf"}};
+  test::GivenOptions g{{"-nlrom_training_tfinal", "-2"}};
   nlrom::OfflineSettings s;
   s.basis.boundary_set = "root";
   ASSERT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
-  EXPECT_EQ(s.error, "-nlrom_training_tfinal must be a finite positive time [s] (got inf)");
+  EXPECT_EQ(s.error, "-nlrom_training_tfinal must be a finite positive time [s] (got -2)");
   test::GivenOptions h{{"-nlrom_training_tfinal", "1e-3"}, {"-nlrom_training_dt", "1e-5"}};
   nlrom::OfflineSettings t;
   t.basis.boundary_set = "root";
