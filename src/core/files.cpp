@@ -116,8 +116,8 @@ std::string OutputLock::add(const Named& o) {
       close(fd);
       return msg;
     }
-    struct stat held {
-    }, now{};
+    struct stat held;
+    struct stat now;
     if (fstat(fd, &held) == 0 && stat(lp.c_str(), &now) == 0 && held.st_dev == now.st_dev &&
         held.st_ino == now.st_ino) {
       const std::string me = cat(static_cast<long>(getpid()), " ", host_name(), "\n");

@@ -98,7 +98,7 @@ class OptionsFiles {
 };
 
 // Whether this process was started by an MPI launcher (mpirun/orted of Open MPI, PRRTE, hydra):
-// they all set one of these. A singleton (morse run without mpirun) has none.
+// they all set one of these. A singleton (morse run without mpirun) has none until MPI_Init.
 bool launched_by_mpirun() {
   for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
     if (std::getenv(v)) return true;
@@ -116,7 +116,6 @@ bool launched_by_mpirun() {
 // MPI's launcher forks from a progress thread; nor for a singleton, whose parent is a shell that
 // may go (nohup) while the run should go on.
 void start_launcher_watchdog() {
-  if (!launched_by_mpirun()) return;
   const pid_t parent = getppid();
   std::thread([parent] {
     for (;;) {
@@ -146,6 +145,8 @@ std::string options_file_error(int argc, char** argv) {
 }
 
 Session::Session(int* argc, char*** argv, const char* help) {
+  // Before MPI_Init: an Open MPI singleton sets the launcher's variables for itself there.
+  const bool launched = launched_by_mpirun();
   int initialized = 0;
   MPI_Initialized(&initialized);
   if (!initialized) {
@@ -153,7 +154,7 @@ Session::Session(int* argc, char*** argv, const char* help) {
     began_mpi_ = true;
   }
   MPI_Comm_rank(MPI_COMM_WORLD, &g_world_rank);
-  start_launcher_watchdog();
+  if (launched) start_launcher_watchdog();
   try {
     // PETSc follows an options file that includes itself until the stack overflows, and dumps
     // a page for a missing one: check them first, one message on every rank.
