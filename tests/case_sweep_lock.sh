@@ -5,7 +5,7 @@
 # launcher's process group is killed with kill -9 (Open MPI's ranks are in process groups of their
 # own, so they are not hit): within 1 s no rank of it may remain (each exits when its launcher
 # dies, core/session.cpp), the checkpoint file must not change in the next 1.5 s, and the lock must
-# be free. Skipped (77) without setsid, pgrep, stat, or /usr/bin/python3 with h5py.
+# be free. On one rank, a run without mpirun outlives the shell that started it. Skipped (77) without setsid, pgrep, stat, or /usr/bin/python3 with h5py.
 # usage: case_sweep_lock.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
 for tool in setsid pgrep stat; do
@@ -70,6 +70,18 @@ after=$(stat -c '%i %s %Y.%y' "$out")
 [ "$before" = "$after" ] || fail "$out was written after the run was killed: $before -> $after"
 if command -v flock > /dev/null; then
   flock -n "$out.lock" true || fail "the lock $out.lock is still held after the run was killed"
+fi
+
+# A run without mpirun (a singleton) is not tied to its parent: it outlives the shell that started
+# it (nohup), and holds its lock meanwhile.
+if [ "$np" -eq 1 ]; then
+  solo="$d/solo.h5"
+  setsid bash -c '"$@" > /dev/null 2>&1 & echo $! > "'"$d/solo.pid"'"; sleep 2; kill -9 $$' _ \
+    "$morse" "${sweep[@]:0:${#sweep[@]}-1}" "$solo" 2> /dev/null || true
+  solo_pid=$(cat "$d/solo.pid")
+  sleep 1
+  kill -0 "$solo_pid" 2> /dev/null || fail "a morse run without mpirun died with the shell that started it"
+  kill -9 "$solo_pid"
 fi
 trap - EXIT
 echo "case: ok: the second run was refused (pid $holder); the killed run's ranks stopped, $out unchanged"
