@@ -1,6 +1,7 @@
 // The output paths of a run (core/files.hpp): the start-of-run check against the inputs, the
 // temporaries named with the process id, and the removal of the temporaries of killed runs.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -80,7 +81,7 @@ TEST_F(Files, AMissingDirectoryIsNamedByTheUsersPath) {
   }
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {});
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {});
       },
       {"cannot write -out ", out, "the directory ", "does not exist"}, "missing directory");
 }
@@ -125,36 +126,38 @@ TEST_F(Files, PrepareOutputsRefusesBadOutputs) {
   const std::vector<files::Named> inputs{{"-mesh", mesh}, {"-rom", rom}, {"-sim", ""}};
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("./m.msh")}}, inputs);
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("./m.msh")}}, inputs);
       },
       {"-out ", path("./m.msh"), "is the input file -mesh ", mesh, "give another -out"}, "-out = -mesh");
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("romlink.h5")}}, inputs);
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("romlink.h5")}}, inputs);
       },
       {"-out ", path("romlink.h5"), "-rom ", rom}, "-out = a symlink to -rom");
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", ""}}, inputs);
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", ""}}, inputs);
       },
       {"-out is empty"}, "empty -out");
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", dir_.string()}}, inputs);
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", dir_.string()}}, inputs);
       },
       {"-out ", dir_.string(), " is a directory"}, "directory -out");
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("d/")}}, inputs);
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("d/")}}, inputs);
       },
       {"-out ", "is a directory"}, "-out ending in /");
   test::expect_error_parts(
       [&] {
-        files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("x.h5")}, {"-matrices_write", path("./x.h5")}}, {});
+        (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("x.h5")}, {"-matrices_write", path("./x.h5")}},
+                                     {});
       },
       {"-out ", "-matrices_write ", "are the same output file"}, "two outputs");
-  EXPECT_NO_THROW(files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("new.h5")}}, inputs));
-  EXPECT_NO_THROW(files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", rom}}, {{"-mesh", mesh}}));  // an existing output
+  EXPECT_NO_THROW((void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("new.h5")}}, inputs));
+  EXPECT_NO_THROW(
+      (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", rom}}, {{"-mesh", mesh}}));  // an existing output
 }
 
 // Only "<out>.tmp.<digits>" is a temporary of <out>; it is removed when its process is gone or is
@@ -172,7 +175,7 @@ TEST_F(Files, StaleTemporariesOfKilledRunsAreRemoved) {
                                       write(cat("other.h5.tmp.", dead), "another output"),
                                       write(cat("xsweep.h5.tmp.", dead), "another output"),
                                       write("sweep.h5", "the output itself")};
-  files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {});
+  (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {});
   MPI_Barrier(PETSC_COMM_WORLD);
   EXPECT_FALSE(fs::exists(stale));
   EXPECT_FALSE(fs::exists(own));
@@ -189,6 +192,102 @@ TEST_F(Files, StaleTemporariesOfKilledRunsAreRemoved) {
     EXPECT_TRUE(files::remove_stale_temps("sweep.h5").empty());
     fs::current_path(cwd);
   }
+  MPI_Barrier(PETSC_COMM_WORLD);
+}
+
+// The lock of an output is refused to a second holder (a second open file description conflicts
+// with flock even in one process), naming the output and the holder's pid, and granted again
+// after release, which removes the lock file. Serial: one output per rank.
+TEST_F(Files, OutputLockIsRefusedToASecondHolder) {
+  const std::string out = path(cat("locked", world_rank(), ".h5"));
+  const std::string lock_file = files::lock_path(out);
+  EXPECT_EQ(lock_file, out + ".lock");
+  files::OutputLock a;
+  EXPECT_EQ(a.add({"-out", out}), "");
+  EXPECT_EQ(a.paths(), std::vector<std::string>{out});
+  EXPECT_EQ(read_all(lock_file).rfind(cat(getpid(), " "), 0), 0u) << read_all(lock_file);
+  files::OutputLock b;
+  EXPECT_EQ(b.add({"-out", out}), cat(out, " is being written by another morse run (pid ", getpid(),
+                                      "); wait for it or choose another -out"));
+  EXPECT_TRUE(b.paths().empty());
+  a.release();
+  EXPECT_FALSE(fs::exists(lock_file));
+  EXPECT_EQ(b.add({"-out", out}), "");
+  files::OutputLock c(std::move(b));  // moved: c holds it, b nothing
+  EXPECT_TRUE(b.paths().empty());
+  EXPECT_NE(a.add({"-out", out}), "");
+  c.release();
+  EXPECT_FALSE(fs::exists(lock_file));
+  // A lock file left behind (its holder killed) does not block: only the lock does.
+  std::ofstream(lock_file) << dead_pid() << " elsewhere\n";
+  EXPECT_EQ(a.add({"-out", out}), "");
+  a.release();
+  MPI_Barrier(PETSC_COMM_WORLD);
+}
+
+// Another process holding the lock: refused while it lives (naming its pid), granted once it has
+// died without releasing (the kernel drops the lock; its lock file stays and does not block).
+TEST_F(Files, OutputLockOfADeadProcessIsFree) {
+  const std::string out = path(cat("child", world_rank(), ".h5"));
+  int to_parent[2], to_child[2];
+  ASSERT_EQ(pipe(to_parent), 0);
+  ASSERT_EQ(pipe(to_child), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // takes the lock, says so, waits for the parent, dies holding it
+    close(to_parent[0]);
+    close(to_child[1]);  // else the read below never sees the parent's close
+    alarm(30);           // never outlive a hung test
+    files::OutputLock l;
+    const char ok = l.add({"-out", out}).empty() ? 'y' : 'n';
+    if (::write(to_parent[1], &ok, 1) != 1) _exit(2);
+    char c = 0;
+    if (::read(to_child[0], &c, 1) < 0) _exit(3);
+    _exit(0);
+  }
+  close(to_parent[1]);
+  close(to_child[0]);
+  char ok = 0;
+  ASSERT_EQ(::read(to_parent[0], &ok, 1), 1);
+  EXPECT_EQ(ok, 'y');
+  files::OutputLock mine;
+  EXPECT_EQ(mine.add({"-out", out}),
+            cat(out, " is being written by another morse run (pid ", child, "); wait for it or choose another -out"));
+  close(to_child[1]);  // the child ends
+  close(to_parent[0]);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  EXPECT_TRUE(fs::exists(files::lock_path(out)));  // left by the dead holder
+  EXPECT_EQ(mine.add({"-out", out}), "");
+  MPI_Barrier(PETSC_COMM_WORLD);
+}
+
+// prepare_outputs returns the lock, held by rank 0 for the run: a second run on the same output
+// is refused on every rank alike, naming the output and rank 0's pid; once the lock is gone the
+// output may be written again, and its lock file is removed.
+TEST_F(Files, PrepareOutputsLocksTheOutputs) {
+  const std::string out = path("run_locked.h5");
+  {
+    const auto lock = files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {});
+    EXPECT_EQ(lock.paths(), world_rank() == 0 ? std::vector<std::string>{out} : std::vector<std::string>{});
+    test::expect_error_parts(
+        [&] {
+          (void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", path("other.h5")}, {"-out", out}}, {});
+        },
+        {out, " is being written by another morse run (pid ", cat(rank0_pid()),
+         "); wait for it or choose another -out"},
+        "second run");
+    // The refused run released the lock it had taken on the other output.
+    if (world_rank() == 0) {
+      EXPECT_FALSE(fs::exists(files::lock_path(path("other.h5"))));
+    }
+  }
+  MPI_Barrier(PETSC_COMM_WORLD);
+  if (world_rank() == 0) {
+    EXPECT_FALSE(fs::exists(files::lock_path(out)));
+  }
+  EXPECT_NO_THROW((void)files::prepare_outputs(PETSC_COMM_WORLD, {{"-out", out}}, {}));
   MPI_Barrier(PETSC_COMM_WORLD);
 }
 

@@ -32,7 +32,8 @@ void run_compare(MPI_Comm comm, const std::vector<std::string>& args) {
   MORSE_CHECK(args.size() == 2, "usage: morse compare FOM.h5 ROM.h5 (a morse fom file, a morse simulate file)");
   const std::string fom = args[0], rom = args[1];
   // ROM.h5 is rewritten with /compare (a copy renamed onto it): it must not be an input too.
-  files::prepare_outputs(comm, {{"ROM.h5", rom}}, {{"FOM.h5", fom}, {"-compare_rom_model", co.rom_model}});
+  const auto output_lock =
+      files::prepare_outputs(comm, {{"ROM.h5", rom}}, {{"FOM.h5", fom}, {"-compare_rom_model", co.rom_model}});
   double ws = 0;
   for (double x : co.w) ws += x;
   MORSE_CHECK(std::abs(ws - 1.0) < 1e-12 && *std::min_element(co.w.begin(), co.w.end()) >= 0,

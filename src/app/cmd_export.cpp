@@ -26,8 +26,8 @@ void run_export(MPI_Comm comm) {
   MORSE_CHECK(eo.error.empty(), eo.error);
   MORSE_CHECK(!eo.from.empty(),
               "no superelement given: use -export_from FILE (a file of morse reduce or morse select)");
-  files::prepare_outputs(comm, io::export_files(eo),
-                         {{"-export_from", eo.from}, {"-export_coordinates", eo.coordinates}});
+  const auto output_lock = files::prepare_outputs(comm, io::export_files(eo),
+                                                  {{"-export_from", eo.from}, {"-export_coordinates", eo.coordinates}});
   check_options(comm, false);
 
   std::string err;

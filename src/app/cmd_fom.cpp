@@ -37,7 +37,7 @@ void run_fom(MPI_Comm comm) {
   auto inputs = o.inputs();
   inputs.push_back({"-load_history", ho.file()});
   inputs.push_back({"-fom_initial", fs.initial});
-  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   Model md = build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   dyn::Loads loads(*md.mesh, md.dofs, load_list);

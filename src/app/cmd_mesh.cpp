@@ -118,7 +118,7 @@ void run_mesh(MPI_Comm comm, const std::vector<std::string>& args) {
   MORSE_CHECK(!nastran || (mat.E > 0 && mat.nu > -1 && mat.nu < 0.5 && mat.rho > 0), "-out ", out_s,
               ": a Nastran deck carries its material: give -material_E, -material_nu and -material_rho");
   MORSE_CHECK(nw.error.empty(), nw.error);
-  files::prepare_outputs(comm, {{"-out", out_s}}, {});
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", out_s}}, {});
   std::string err;
   if (rank_of(comm) == 0) try {
       auto m = what == "box"     ? mesh::generate_box(box)

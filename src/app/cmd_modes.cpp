@@ -50,7 +50,7 @@ void run_modes(MPI_Comm comm) {
   options::add_prefix(kSolverPrefix, options::Solver::Eigen);
   check_options(comm, true);
   MORSE_CHECK(nev > 0, "-modes_nev must be positive (got ", nev, ")");
-  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
   Model md = build_model(comm, o);
   eigen::EigenSettings es;
   es.nev = nev;

@@ -36,7 +36,7 @@ void run_nlrom(MPI_Comm comm) {
   MORSE_CHECK(no.error.empty(), no.error);
   auto inputs = o.inputs();
   inputs.push_back({"-nlrom_snapshots", no.basis.snapshots});
-  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
   Model md =
       build_model(comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work

@@ -22,7 +22,7 @@ void run_rampup(MPI_Comm comm) {
   if (help_requested()) return;
   check_options(comm, true);
   o.check();
-  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
   const rampup::LoadCase lc = o.load_case();
   const rampup::IntegratorSettings is = o.integrator();
   const double t_end = rampup::end_time(lc, is);

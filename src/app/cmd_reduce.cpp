@@ -42,7 +42,7 @@ void run_reduce(MPI_Comm comm) {
   if (!r.write_matrices.empty())
     for (const auto& f : io::model_matrix_files(r.write_matrices, r.write_format))
       outputs.push_back({"-matrices_write", f});
-  files::prepare_outputs(comm, outputs, o.inputs());
+  const auto output_lock = files::prepare_outputs(comm, outputs, o.inputs());
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && cs.keep_basis),
               "-cb_write_basis writes nodal mode shapes of a mesh: not available with -matrices_K/-matrices_M");

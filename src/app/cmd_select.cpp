@@ -61,7 +61,7 @@ void run_select(MPI_Comm comm) {
               "shapes");
   auto inputs = o.inputs();
   inputs.push_back({"-select_from", so.from});
-  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   Model md = build_model(comm, o);
   MORSE_CHECK(!(!md.mesh && !so.from.empty()),

@@ -91,7 +91,7 @@ void run_simulate(MPI_Comm comm) {
   MORSE_CHECK(so.every > 0, "-sim_output_every must be positive (got ", so.every, ")");
   std::vector<files::Named> outputs;
   for (const auto& c : cases) outputs.push_back({c.name.empty() ? "-out" : cat("-out (case ", c.name, ")"), c.out});
-  files::prepare_outputs(comm, outputs, {{"-rom", so.rom}, {"-sim_snapshots", so.snapshots}});
+  const auto output_lock = files::prepare_outputs(comm, outputs, {{"-rom", so.rom}, {"-sim_snapshots", so.snapshots}});
   std::vector<std::string> sets(so.monitor);
   for (const auto& c : cases)
     for (const auto& l : c.loads) sets.push_back(l.set);

@@ -41,7 +41,7 @@ void run_static(MPI_Comm comm) {
   collective_check(comm, load_error);
   MORSE_CHECK(!load_list.empty(), "morse static: no load; give -load_sets SET and -load_<SET>_dir/_amplitude");
   MORSE_CHECK(ss.error.empty(), ss.error);
-  files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
 
   Model md =
       build_model(comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");

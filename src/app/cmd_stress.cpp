@@ -33,7 +33,7 @@ void run_stress(MPI_Comm comm) {
   auto inputs = o.inputs();
   inputs.push_back({"-rom", so.rom});
   inputs.push_back({"-sim", so.sim});
-  files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
   const auto sm = nlrom::read_stored_model(
       comm, so.rom, so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});

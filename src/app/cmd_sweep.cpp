@@ -28,7 +28,7 @@ void run_sweep(MPI_Comm comm) {
   check_options(comm, true);
   collective_check(comm, so.contact.error);
   so.check();
-  files::prepare_outputs(comm, {{"-out", so.out}}, {{"-rom", so.rom}});
+  const auto output_lock = files::prepare_outputs(comm, {{"-out", so.out}}, {{"-rom", so.rom}});
   so.check_memory(comm);
   const auto sm = nlrom::read_stored_model(comm, so.rom, {so.contact.set, so.monitor});
   const std::size_t r = sm.r();

@@ -1,5 +1,6 @@
 #include "morse/core/session.hpp"
 
+#include <signal.h>
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -95,6 +97,34 @@ class OptionsFiles {
   std::vector<std::pair<std::string, std::string>> open_;
 };
 
+// Whether this process was started by an MPI launcher (mpirun/orted of Open MPI, PRRTE, hydra):
+// they all set one of these. A singleton (morse run without mpirun) has none until MPI_Init.
+bool launched_by_mpirun() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+// The ranks exit when their launcher dies. Open MPI puts each rank in its own process group, so
+// `kill -9` of mpirun's group (a killed job, a timeout) leaves the ranks running: a sweep wrote
+// checkpoints for another second, and a resume started at once wrote the same file. The parent of
+// a rank is the launcher (mpirun, or the orted/prted daemon on another node); when it dies the
+// rank is re-parented (to init or a subreaper) and getppid() changes. A detached thread polls it
+// every 200 ms and ends the process at once with _exit: no destructor, no atexit handler, no
+// commit, so no partial output (outputs are temporaries until renamed) and no further checkpoint.
+// Not PR_SET_PDEATHSIG: it fires when the parent *thread* that forked the rank ends, and Open
+// MPI's launcher forks from a progress thread; nor for a singleton, whose parent is a shell that
+// may go (nohup) while the run should go on.
+void start_launcher_watchdog() {
+  const pid_t parent = getppid();
+  std::thread([parent] {
+    for (;;) {
+      usleep(200 * 1000);
+      if (getppid() != parent) _exit(128 + SIGHUP);
+    }
+  }).detach();
+}
+
 }  // namespace
 
 std::string options_file_error(int argc, char** argv) {
@@ -115,6 +145,8 @@ std::string options_file_error(int argc, char** argv) {
 }
 
 Session::Session(int* argc, char*** argv, const char* help) {
+  // Before MPI_Init: an Open MPI singleton sets the launcher's variables for itself there.
+  const bool launched = launched_by_mpirun();
   int initialized = 0;
   MPI_Initialized(&initialized);
   if (!initialized) {
@@ -122,6 +154,7 @@ Session::Session(int* argc, char*** argv, const char* help) {
     began_mpi_ = true;
   }
   MPI_Comm_rank(MPI_COMM_WORLD, &g_world_rank);
+  if (launched) start_launcher_watchdog();
   try {
     // PETSc follows an options file that includes itself until the stack overflows, and dumps
     // a page for a missing one: check them first, one message on every rank.

@@ -6,11 +6,16 @@
 // failed or killed run never leaves a partial <out> and two runs cannot write the same temporary.
 // A run killed while writing leaves its temporary behind: prepare_outputs removes it at the start
 // of the next run of the same output.
+//
+// Two runs on the same output would overwrite each other's work (a sweep resumed while the killed
+// run's ranks still write checkpoints): rank 0 holds an exclusive lock on every output for the
+// whole run (OutputLock, taken by prepare_outputs), and a second run is refused at its start.
 #pragma once
 
 #include <mpi.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace morse::files {
@@ -37,13 +42,60 @@ std::string absolute_path(const std::string& p);
 /// (files written before paths were stored absolute). Not collective.
 std::string resolve_stored_path(const std::string& stored, const std::string& file);
 
+/// The locks on the outputs of a run, held by rank 0 (empty on the other ranks) from
+/// prepare_outputs until it is destroyed: keep it alive for the whole command.
+///
+/// The lock of output <out> is flock(LOCK_EX) on the lock file "<out>.lock" beside it, which holds
+/// the holder's "pid host". Not on <out> itself: <out> may not exist yet (an empty <out> would be a
+/// partial output) and every commit renames a new file onto it, so a lock on the old inode would
+/// not cover the next run. flock rather than fcntl(F_SETLK): its lock belongs to the open file
+/// description, so closing some other descriptor of the file (HDF5, a test) does not drop it, and a
+/// second open() in the same process conflicts (testable). The kernel drops it when the process
+/// dies (kill -9 included), so a lock file left by a killed run does not block: only the lock does.
+/// A normal release removes the lock file while still holding the lock; a run that took the lock
+/// on a file that was removed meanwhile (its inode is no longer the path's) retries on the new one.
+/// On a network file system flock is as reliable as the server's locks (NFS: Linux maps flock to
+/// byte-range locks). Not collective.
+class OutputLock {
+ public:
+  OutputLock() = default;
+  ~OutputLock() { release(); }
+  OutputLock(OutputLock&& o) noexcept : held_(std::move(o.held_)) { o.held_.clear(); }
+  OutputLock& operator=(OutputLock&& o) noexcept;
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+  /// Locks output o.path. Returns "" if granted, else why not: "<out> is being written by another
+  /// morse run (pid N); wait for it or choose another -out" (the holder's pid as it wrote it, and
+  /// its host if not this one), or a lock file that cannot be created.
+  std::string add(const Named& o);
+  /// The outputs locked.
+  std::vector<std::string> paths() const;
+  /// Unlocks every output and removes their lock files.
+  void release() noexcept;
+
+ private:
+  struct Held {
+    std::string path;  ///< the lock file
+    int fd;
+  };
+  std::vector<Held> held_;
+};
+
+/// The lock file of output path: "<path>.lock".
+std::string lock_path(const std::string& path);
+
 /// The start-of-run check of a command's outputs, before any work. Refuses, naming the option and
 /// the paths: an empty output path; a directory, or anything but a regular file, where an output
 /// is to be written; an output whose directory does not exist or is not writable; an output that
-/// is one of the inputs (same_file), or two outputs that are the same file. Then removes the stale
-/// temporaries of every output (remove_stale_temps). Rank 0 checks; every rank throws the same
-/// morse::Error. Collective.
-void prepare_outputs(MPI_Comm comm, const std::vector<Named>& outputs, const std::vector<Named>& inputs);
+/// is one of the inputs (same_file), or two outputs that are the same file. Then locks every output
+/// (OutputLock: an output that another run is writing is refused, naming its pid) and removes the
+/// stale temporaries of every output (remove_stale_temps). Rank 0 checks and holds the locks; every
+/// rank throws the same morse::Error. Keep the result until the command ends:
+///   const auto lock = files::prepare_outputs(comm, {{"-out", out}}, inputs);
+/// Collective.
+[[nodiscard]] OutputLock prepare_outputs(MPI_Comm comm, const std::vector<Named>& outputs,
+                                         const std::vector<Named>& inputs);
 
 /// The temporary that `path` is written to: "<path>.tmp.<pid>" with this process's id (a writer
 /// that runs on one rank). Not collective.
