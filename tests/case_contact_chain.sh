@@ -108,6 +108,17 @@ expect_error 'lies outside the simulation' "$d/bad_t.h5" stress "${model[@]}" -r
 expect_error '-stress_measure plastic: unknown' "$d/bad_m.h5" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
   -stress_measure plastic
 expect_error 'no simulation given' "$d/bad_sim2.h5" stress "${model[@]}" -rom "$d/cb.h5"
+# A mesh that is not the model's is refused, naming both files: another node count (a longer box),
+# and the same node ids at other places (the box twice as long, same divisions).
+"$mpiexec" "${flags[@]}" -n 1 "$morse" mesh box -box_type hex8 -box_lx 4 -box_ly 1 -box_lz 1 -box_nx 5 -box_ny 1 \
+  -box_nz 1 -out "$d/other_box.msh" > /dev/null
+"$mpiexec" "${flags[@]}" -n 1 "$morse" mesh box -box_type hex8 -box_lx 8 -box_ly 1 -box_lz 1 -box_nx 4 -box_ny 1 \
+  -box_nz 1 -out "$d/long_box.msh" > /dev/null
+expect_error "the mesh $d/other_box.msh has 24 nodes but the reduced model $d/cb.h5 was built on a mesh of 20" \
+  "$d/bad_mesh.h5" stress -mesh "$d/other_box.msh" -clamp x0 "${material[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
+  -stress_monitor tipnode
+expect_error "of the mesh $d/long_box.msh is at .* in the reduced model $d/cb.h5" "$d/bad_mesh2.h5" \
+  stress -mesh "$d/long_box.msh" -clamp x0 "${material[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" -stress_monitor tipnode
 expect_error 'has 4 nodes; one is expected' "$d/bad_mon.h5" stress "${model[@]}" -rom "$d/cb.h5" -sim "$d/sim2.h5" \
   -stress_monitor x1
 "$mpiexec" "${flags[@]}" -n 1 "$morse" "${sweep[@]}" -out "$d/full.h5"

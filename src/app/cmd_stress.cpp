@@ -39,6 +39,7 @@ void run_stress(MPI_Comm comm) {
       comm, so.rom, so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});
   const auto st = sim::stress_state(comm, so, sm);
   Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element");
+  sim::check_stress_mesh(*md.mesh, sm.node_ids, sm.coords, o.mesh.path, so.rom);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   const auto u = sm.field(st.q.data());
   sim::StressField f;

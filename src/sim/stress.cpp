@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <tuple>
 #include <unordered_map>
 
@@ -73,6 +74,45 @@ struct NodalPart {
 };
 
 }  // namespace
+
+void check_stress_mesh(const mesh::LocalMesh& lm, const std::vector<std::int64_t>& node_ids,
+                       const std::vector<double>& coords, const std::string& mesh_file, const std::string& rom_file) {
+  const auto n = static_cast<std::int64_t>(node_ids.size());
+  collective_check(
+      lm.comm, lm.n_global_nodes == n
+                   ? std::string()
+                   : cat("the mesh ", mesh_file, " has ", lm.n_global_nodes, " nodes but the reduced model ", rom_file,
+                         " was built on a mesh of ", n, ": give the mesh given to morse nlrom"));
+  // The model's size: the diagonal of its nodes' bounding box.
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (std::size_t k = 0; k < node_ids.size(); ++k)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], coords[3 * k + d]), hi[d] = std::max(hi[d], coords[3 * k + d]);
+  const double size = n ? std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) : 0.0, tol = 1e-6 * size;
+  std::unordered_map<std::int64_t, std::size_t> row;
+  for (std::size_t k = 0; k < node_ids.size(); ++k) row[node_ids[k]] = k;
+  int rank = 0;
+  MPI_Comm_rank(lm.comm, &rank);
+  std::string err;
+  for (std::int64_t k = 0; k < lm.mesh.num_nodes() && err.empty(); ++k) {
+    if (lm.node_owner[k] != rank) continue;
+    const std::int64_t id = lm.mesh.node_ids[k];
+    const auto it = row.find(id);
+    if (it == row.end()) {
+      err = cat("node ", id, " of the mesh ", mesh_file, " is not a node of the reduced model ", rom_file,
+                ": give the mesh given to morse nlrom");
+      break;
+    }
+    const double* x = &lm.mesh.coords[3 * k];
+    const double* y = &coords[3 * it->second];
+    const double dist = std::hypot(x[0] - y[0], x[1] - y[1], x[2] - y[2]);
+    if (!(dist <= tol))
+      err = cat("node ", id, " of the mesh ", mesh_file, " is at (", x[0], ", ", x[1], ", ", x[2], ") but at (", y[0],
+                ", ", y[1], ", ", y[2], ") in the reduced model ", rom_file, " (", dist,
+                " apart, more than 1e-6 of the model's size ", size,
+                "): give the mesh given to morse nlrom, in the same units");
+  }
+  collective_check(lm.comm, err);
+}
 
 StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fallback,
                            const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, StressMeasure m) {

@@ -407,6 +407,13 @@ struct StressField {
 StressField recover_stress(const mesh::LocalMesh& lm, const mesh::Material& fallback,
                            const std::vector<std::int64_t>& node_ids, const std::vector<double>& u, StressMeasure m);
 
+/// Whether the distributed mesh `lm` (read from mesh_file) is the one the reduced model (node
+/// ids and reference coordinates, read from rom_file) was built on: the same number of nodes,
+/// every mesh node among the model's, at the same position to 1e-6 of the model's size. Throws
+/// (collectively) naming both files and the first node that differs. Collective.
+void check_stress_mesh(const mesh::LocalMesh& lm, const std::vector<std::int64_t>& node_ids,
+                       const std::vector<double>& coords, const std::string& mesh_file, const std::string& rom_file);
+
 /// What `morse stress` writes besides the field (/stress, docs/hdf5-schema.md).
 struct StressRecord {
   std::int64_t n_nodes = 0, n_elements = 0;  ///< of the global mesh
