@@ -115,6 +115,14 @@ TEST(Session, OptionsFileChecks) {
   const std::string top = write("top.opts", "-options_file " + mid + "\n-options_file " + leaf + "\n");
   EXPECT_EQ(error({"modes", "-options_file", top, "-options_file", leaf}), "");
   EXPECT_EQ(error({"modes", "-modes_nev", "3"}), "");
+  // More options than PETSc's database holds ("Out of memory" in PETSc): refused naming the file.
+  std::string many;
+  for (int i = 0; i < 100000; ++i) many += morse::cat("-opt", i, " ", -i, "\n");
+  const std::string big = write("big.opts", many);
+  EXPECT_EQ(
+      error({"modes", "-modes_nev", "3", "-options_file", big}),
+      morse::cat("100002 options given (100000 in ", big, "): PETSc's options database holds at most 512, and morse's ",
+                 "solvers add their defaults; give at most ", morse::kMaxGivenOptions));
 }
 
 // Sizes checked before allocating: the memory available is known on Linux, a need above it is

@@ -6,10 +6,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -67,6 +69,7 @@ class OptionsFiles {
     for (int n = 1; err.empty() && std::getline(in, line); ++n) {
       line = line.substr(0, line.find('#'));
       const auto t = tokens(line);
+      count(t, file);
       if (t.empty() || !same_word(t[0], "-options_file")) continue;
       if (t.size() < 2 || t[1][0] == '-')
         err = cat(file, ":", n, ": -options_file needs a file name");
@@ -79,6 +82,7 @@ class OptionsFiles {
 
   // Every -options_file NAME of a list of arguments (the command line, PETSC_OPTIONS).
   std::string visit_args(const std::vector<std::string>& args, const std::string& where) {
+    count(args, where.empty() ? "the command line" : where.substr(0, where.size() - 2));
     for (std::size_t i = 0; i < args.size(); ++i) {
       if (!same_word(args[i], "-options_file")) continue;
       if (i + 1 >= args.size() || args[i + 1][0] == '-') return cat(where, "-options_file needs a file name");
@@ -88,7 +92,26 @@ class OptionsFiles {
     return {};
   }
 
+ public:
+  /// Options given in all (tokens "-name"; a negative number is a value), and the source that
+  /// gives the most.
+  long options() const { return total_; }
+  const std::string& largest() const { return largest_; }
+  long largest_count() const { return largest_n_; }
+
  private:
+  void count(const std::vector<std::string>& t, const std::string& source) {
+    long n = 0;
+    for (const auto& w : t)
+      if (w.size() > 1 && w[0] == '-' && std::isalpha(static_cast<unsigned char>(w[1]))) ++n;
+    total_ += n;
+    per_source_[source] += n;
+    if (per_source_[source] > largest_n_) largest_n_ = per_source_[source], largest_ = source;
+  }
+  long total_ = 0, largest_n_ = 0;
+  std::string largest_;
+  std::map<std::string, long> per_source_;
+
   static std::string unquote(const std::string& s) {
     if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front())
       return s.substr(1, s.size() - 2);
@@ -141,7 +164,14 @@ std::string options_file_error(int argc, char** argv) {
     for (const auto& f : rc)
       if (auto err = files.visit(f, "", false); !err.empty()) return err;
   }
-  return files.visit_args(args, "");
+  if (auto err = files.visit_args(args, ""); !err.empty()) return err;
+  // PETSc's options database holds at most 512 options (MAXOPTIONS) and fails with "Out of
+  // memory" beyond; the solvers add their defaults to it, so the options given keep a margin.
+  if (files.options() > kMaxGivenOptions)
+    return cat(files.options(), " options given (", files.largest_count(), " in ", files.largest(),
+               "): PETSc's options database holds at most 512, and morse's solvers add their defaults; give at most ",
+               kMaxGivenOptions);
+  return {};
 }
 
 Session::Session(int* argc, char*** argv, const char* help) {

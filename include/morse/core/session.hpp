@@ -31,9 +31,15 @@ class Session {
 /// is a directory ("-options_file nope.opts: cannot open (No such file or directory)", inside a
 /// file "a.opts:3: -options_file nope.opts: ..."), a -options_file without a name, or a file that
 /// includes itself, directly or through others ("options files include each other: a.opts ->
-/// b.opts -> a.opts"), which PETSc follows until the stack overflows. Names with ${...} and YAML
+/// b.opts -> a.opts"), which PETSc follows until the stack overflows, or more options than
+/// kMaxGivenOptions. Names with ${...} and YAML
 /// files are left to PETSc. Not collective.
 std::string options_file_error(int argc, char** argv);
+
+/// Options that may be given in all (command line, PETSC_OPTIONS, rc and options files): PETSc's
+/// database holds 512, and the solvers add their defaults. options_file_error refuses more,
+/// naming the source that gives the most.
+constexpr long kMaxGivenOptions = 400;
 
 /// Puts the process's heap on transparent huge pages, before anything else runs: if the kernel
 /// offers them on request (/sys/kernel/mm/transparent_hugepage/enabled is [madvise] or
