@@ -26,6 +26,11 @@ morse_add_error_case(fom_misspelled_solver_option
   fom_typo_solver.h5 BOX
   ARGS fom ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1 -fom_dt 1e-4 -fom_tfinal 100
        -fom_krylov_ksp_monitr)
+morse_add_error_case(static_misspelled_solver_option
+  "morse: error: unknown option\\(s\\): -static_snes_monitr: not read by the static solver"
+  static_typo_solver.h5 BOX
+  ARGS static ${MORSE_NL_BOX} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1 -static_steps 1000
+       -static_snes_monitr)
 # A misspelled set-list option is refused, and so are the per-set options it would have named; a
 # misspelled per-set option names the registered one.
 morse_add_error_case(fom_misspelled_load_sets

@@ -181,6 +181,9 @@ StaticResult solve_static(const fe::Svk& svk, const Loads& loads, const StaticSe
     inc.converged = reason > 0 && std::isfinite(inc.residual);
     inc.reason = SNESConvergedReasons[reason];
     res.history.push_back(inc);
+    // After the first increment the SNES, its KSP, PC and factor have read their options: one
+    // under the static prefix that none of them read is a misspelling, refused before the rest.
+    if (res.history.size() == 1) options::check_prefix_used(comm, s.prefix, "the static solver");
     if (inc.converged) {
       if (s.linear)
         print0(comm, "  static: load factor %-12.6g linear solve\n", next);
