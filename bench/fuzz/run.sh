@@ -60,16 +60,18 @@ morse="$root/build/morse"
 if [ -x "$morse" ]; then
   g="$b/seedgen"
   rm -rf "$g" && mkdir -p "$g"
+  # Node 5 is a corner of face x1 of this box (the sweep's monitor must be a set of one node).
   m=(-mesh "$g/box.msh" -clamp x0 -material_E 2.1e11 -material_nu 0.3 -material_rho 7800)
   (
     cd "$g"
     "$morse" mesh box -box_type hex8 -box_lx 4 -box_ly 1 -box_lz 1 -box_nx 4 -box_ny 1 -box_nz 1 -out box.msh
     "$morse" reduce "${m[@]}" -boundary x1 -cb_num_fixed_modes 2 -out rom.h5
     "$morse" export -export_from rom.h5 -export_format op4,mtx -out rom || true
-    "$morse" nlrom "${m[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 2 -nlrom_forces exact -out nlrom.h5
+    "$morse" nlrom "${m[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 2 -nlrom_forces exact \
+      -mesh_node_sets tipnode -mesh_node_set_tipnode 5 -out nlrom.h5
     "$morse" sweep -rom nlrom.h5 -contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3 \
       -sim_dt 4e-6 -sim_revolutions 1 -sweep_omega_min 1000 -sweep_omega_max 1200 -sweep_omega_step 100 \
-      -sweep_spectrum_fmax 3000 -sweep_spectrum_bins 4 -out sweep.h5
+      -sweep_spectrum_fmax 3000 -sweep_spectrum_bins 4 -sweep_monitor tipnode -out sweep.h5
   ) >"$g/log" 2>&1 || echo "fuzz: some HDF5 seeds could not be generated (see $g/log)"
   seed h5_rom "$g/rom.h5"
   seed h5_nlrom "$g/nlrom.h5"
