@@ -590,8 +590,13 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
     hid_t d = open(name);
     if (d < 0) return;
     hid_t sp = H5Dget_space(d);
-    out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
-    if (H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0)
+    const hssize_t n = H5Sget_simple_extent_npoints(sp);
+    if (n < 0)
+      err = cat(file, ": ", name, " has an unreadable shape");
+    else if (std::string e = declared_size_error(f, d, {static_cast<hsize_t>(n)}, sizeof(std::int64_t)); !e.empty())
+      err = cat(file, ": ", name, e);
+    if (err.empty()) out->resize(static_cast<std::size_t>(n));
+    if (err.empty() && H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0)
       err = cat(file, ": cannot read ", name);
     H5Sclose(sp);
     H5Dclose(d);
