@@ -11,6 +11,7 @@
 // MBDyn file is checked against the closed form of the box and against the full model's mass
 // matrix (rigid vectors on every DOF), which does not go through the superelement.
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -823,6 +824,31 @@ TEST_F(ExportTest, BadFilesAreRefusedNamingFileAndDataset) {
   });
   test::expect_error_parts([&] { io::read_superelement(nomesh); }, {nomesh, "boundary node 7", "/mesh/node_ids"},
                            "node not in mesh");
+}
+
+// A corrupt file whose dataset declares more values than the file holds (found by
+// bench/fuzz/fuzz_h5_rom: the reader sized its buffer from the declared shape and asked for
+// petabytes) is refused, naming the dataset, before anything is allocated. Built here as a chunked
+// dataset of 10^12 doubles none of which is written.
+TEST_F(ExportTest, DatasetLargerThanTheFileIsRefusedBeforeAllocating) {
+  const std::string f = path("declared.h5");
+  hid_t file = H5Fcreate(f.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  const hsize_t dims[2] = {1000000, 1000000}, chunk[2] = {64, 64};
+  hid_t space = H5Screate_simple(2, dims, nullptr);
+  hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 2, chunk);
+  hid_t d = H5Dcreate2(file, "/rom/K", H5T_NATIVE_DOUBLE, space, lcpl, dcpl, H5P_DEFAULT);
+  ASSERT_GE(d, 0);
+  H5Dclose(d);
+  H5Pclose(dcpl);
+  H5Sclose(space);
+  H5Pclose(lcpl);
+  H5Fclose(file);
+  test::expect_error_parts([&] { io::read_superelement(f); }, {f, "/rom/K", "declares 1000000000000 values", "bytes"},
+                           "declared size");
 }
 
 TEST_F(ExportTest, OptionsAreChecked) {

@@ -7,9 +7,11 @@
 #include <cstdio>
 #include <ctime>
 #include <fstream>
+#include <limits>
 
 #include "morse/core/error.hpp"
 #include "morse/core/files.hpp"
+#include "morse/core/log.hpp"
 #include "morse/mesh/cells.hpp"
 
 namespace morse::io {
@@ -380,6 +382,32 @@ void read_nodal_field(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, cons
 }
 
 namespace {
+// "" if a dataset of shape dims (elements of `elem` bytes in memory) may be read; else why not,
+// before anything is allocated: a product of the extents that overflows, or (a corrupt or
+// hostile file) more bytes than the file holds for a dataset stored without filters (no
+// compression, so its data are in the file), or more than the memory available (elem 0: no
+// memory check, for a read of one row).
+std::string declared_size_error(hid_t f, hid_t d, const std::vector<hsize_t>& dims, std::size_t elem) {
+  double n = 1;
+  hsize_t exact = 1;
+  for (auto v : dims) {
+    n *= static_cast<double>(v);
+    if (v != 0 && exact > std::numeric_limits<hsize_t>::max() / v) return cat(" declares ", n, " values: too many");
+    exact *= v;
+  }
+  hid_t dcpl = H5Dget_create_plist(d);
+  const int filters = dcpl >= 0 ? H5Pget_nfilters(dcpl) : -1;
+  if (dcpl >= 0) H5Pclose(dcpl);
+  hid_t ft = H5Dget_type(d);
+  const double stored = ft >= 0 ? n * static_cast<double>(H5Tget_size(ft)) : 0;
+  if (ft >= 0) H5Tclose(ft);
+  hsize_t fsize = 0;
+  if (filters == 0 && H5Fget_filesize(f, &fsize) >= 0 && stored > static_cast<double>(fsize))
+    return cat(" declares ", exact, " values (", stored, " bytes), more than the file's ", fsize, " bytes");
+  std::string m = memory_error(cat("dataset of ", exact, " values"), n * static_cast<double>(elem), "reading it");
+  return m.empty() ? m : cat(": ", m);
+}
+
 // Reads a whole dataset, or only row `row` (>= 0) of a 2-D one (dims then holds {1, columns}).
 template <class T>
 bool read_any(const std::string& file, const std::string& name, hid_t type, std::vector<T>* out,
@@ -401,10 +429,18 @@ bool read_any(const std::string& file, const std::string& name, hid_t type, std:
   if (!ok) *error = cat(file, ": no dataset ", name);
   if (ok) {
     hid_t sp = H5Dget_space(d);
-    dims->resize(H5Sget_simple_extent_ndims(sp));
-    H5Sget_simple_extent_dims(sp, dims->data(), nullptr);
+    const int ndims = H5Sget_simple_extent_ndims(sp);
+    dims->assign(ndims > 0 ? ndims : 0, 0);
+    if (ndims < 0 || H5Sget_simple_extent_dims(sp, dims->data(), nullptr) < 0) {
+      *error = cat(file, ": ", name, " has an unreadable shape");
+      ok = false;
+    } else if (std::string e = declared_size_error(f, d, *dims, row >= 0 ? 0 : sizeof(T)); !e.empty()) {
+      *error = cat(file, ": ", name, e);
+      ok = false;
+    }
     hid_t msp = H5S_ALL;
-    if (row >= 0) {
+    if (!ok) {
+    } else if (row >= 0) {
       if (dims->size() != 2 || static_cast<hsize_t>(row) >= (*dims)[0]) {
         *error = cat(file, ": ", name, " has no row ", row);
         ok = false;
@@ -554,8 +590,13 @@ UMat read_dof_rows(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const s
     hid_t d = open(name);
     if (d < 0) return;
     hid_t sp = H5Dget_space(d);
-    out->resize(static_cast<std::size_t>(H5Sget_simple_extent_npoints(sp)));
-    if (H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0)
+    const hssize_t n = H5Sget_simple_extent_npoints(sp);
+    if (n < 0)
+      err = cat(file, ": ", name, " has an unreadable shape");
+    else if (std::string e = declared_size_error(f, d, {static_cast<hsize_t>(n)}, sizeof(std::int64_t)); !e.empty())
+      err = cat(file, ": ", name, e);
+    if (err.empty()) out->resize(static_cast<std::size_t>(n));
+    if (err.empty() && H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out->data()) < 0)
       err = cat(file, ": cannot read ", name);
     H5Sclose(sp);
     H5Dclose(d);

@@ -58,11 +58,13 @@ Superelement read_superelement(const std::string& file) {
   if (!read_doubles(file, "/rom/K", &se.K, &dk, &err)) {
     if (err.find("cannot open") != std::string::npos)
       throw Error(cat(err, " (a superelement file of morse reduce or select is expected)"));
+    if (err.find(": no dataset ") == std::string::npos) throw Error(err);  // e.g. a corrupt shape
     throw Error(cat(file, ": no /rom/K: not a superelement file (/rom is written by morse reduce and morse select)"));
   }
   MORSE_CHECK(dk.size() == 2 && dk[0] == dk[1] && dk[0] > 0, file, ": /rom/K must be square, got ", shape_text(dk));
   se.n = static_cast<int>(dk[0]);
-  MORSE_CHECK(read_doubles(file, "/rom/M", &se.M, &dm, &err), file, ": no /rom/M");
+  MORSE_CHECK(read_doubles(file, "/rom/M", &se.M, &dm, &err),
+              err.find(": no dataset ") == std::string::npos ? err : cat(file, ": no /rom/M"));
   MORSE_CHECK(dm == dk, file, ": /rom/M is ", shape_text(dm), " but /rom/K is ", shape_text(dk));
   if (has_object(file, "/rom/C")) {
     MORSE_CHECK(read_doubles(file, "/rom/C", &se.C, &dc, &err), err);
