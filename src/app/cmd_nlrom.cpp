@@ -58,6 +58,17 @@ void run_nlrom(MPI_Comm comm) {
   print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",
          no.basis_name.c_str(), (int)r, (int)basis.n_b, (int)basis.n_fixed, (int)basis.n_extra,
          no.basis.kind == nlrom::BasisKind::POD ? "POD vectors" : "modal derivatives", basis.seconds);
+  PetscInt n_static = 0;
+  if (no.massless) {  // the same subspace, the boundary's mass moved to the internal columns
+    const auto rm0 = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), 0.0, 0);
+    basis.V = nlrom::transform_basis(
+        basis.V.get(), nlrom::massless_transform(rm0.M, rm0.K, r, basis.n_b, no.massless_fmax, &n_static));
+    nlrom::relabel_massless(&basis, n_static);
+    print0(comm,
+           "morse nlrom: massless boundary: %d boundary coordinates and %d internal modes above %g Hz "
+           "quasi-static, %d dynamic modes\n",
+           (int)basis.n_b, (int)(n_static - basis.n_b), no.massless_fmax, (int)(r - n_static));
+  }
 
   auto t2a = std::chrono::steady_clock::now();
   UMat filter;
@@ -76,7 +87,16 @@ void run_nlrom(MPI_Comm comm) {
   }
   const double t2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2a).count();
   auto t3a = std::chrono::steady_clock::now();
-  auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.damping_xi, no.damping_modes);
+  auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.massless ? 0.0 : no.damping_xi,
+                                 no.damping_modes);
+  rm.n_b = basis.n_b;
+  if (no.massless) {
+    nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes);
+    double free_dt = 0;
+    const double held_dt = nlrom::massless_critical_step(rm, &free_dt);
+    print0(comm, "morse nlrom: critical step of central differences %.4g s (boundary held; free: %.4g s)\n", held_dt,
+           free_dt);
+  }
   const double t3 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t3a).count();
   check_options(comm, false);
   print0(comm, "morse nlrom: offline times t1 (basis) %.2f s, t2 (forces) %.2f s, t3 (projection) %.2f s\n",

@@ -68,6 +68,17 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
                              "", damping_xi, &damping_xi, nullptr));
   PetscCall(MorseOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "", damping_modes,
                             &damping_modes, nullptr));
+  const char* masses[] = {"carrying", "massless", "BoundaryMass", "", nullptr};
+  PetscEnum bm = massless ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
+  PetscCall(MorseOptionsEnum("-nlrom_boundary_mass",
+                             "carrying (the boundary keeps its mass, seed 003) or massless (its mass moved to the "
+                             "internal coordinates: a static boundary, the critical step of the internal modes)",
+                             "", masses, bm, &bm, nullptr));
+  massless = bm == static_cast<PetscEnum>(1);
+  PetscCall(MorseOptionsReal("-nlrom_massless_fmax",
+                             "Massless boundary: internal modes (boundary held) above this frequency [Hz] are made "
+                             "quasi-static as well (0: none)",
+                             "", massless_fmax, &massless_fmax, nullptr));
   PetscOptionsEnd();
   auto bad = [&](bool ok, const std::string& why) {
     if (!ok && error.empty()) error = why;
@@ -90,6 +101,9 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   bad(damping_xi >= 0 && damping_xi < 1 && damping_modes >= 0,
       "-nlrom_damping_modal must be in [0, 1) and -nlrom_damping_modes >= 0");
   bad(n_filter >= 0, "-nlrom_filter_pod must be >= 0");
+  bad(std::isfinite(massless_fmax) && massless_fmax >= 0,
+      cat("-nlrom_massless_fmax must be a finite frequency >= 0 [Hz] (got ", massless_fmax, ")"));
+  bad(massless || massless_fmax == 0, "-nlrom_massless_fmax applies to -nlrom_boundary_mass massless");
   bad(!(n_filter > 0 && b.snapshots.empty()), "-nlrom_filter_pod needs -nlrom_snapshots FILE.h5");
   return PETSC_SUCCESS;
 }

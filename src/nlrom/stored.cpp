@@ -183,6 +183,31 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     }
     std::string units, uerr;
     if (ok && io::read_string(file, "/meta/units", &units, &uerr)) s.units = units;
+    if (ok) {  // a file written before the choice existed has no attribute: mass-carrying
+      const auto bm = io::read_string_attribute(file, "/nlrom", "boundary_mass");
+      m.massless = bm == "massless";
+      m.n_static = m.n_b;
+      double ns = 0;
+      std::string aerr;
+      if (m.massless && io::read_attribute(file, "/nlrom", "n_static_coordinates", &ns, &aerr)) {
+        if (!(ns >= static_cast<double>(m.n_b) && ns < static_cast<double>(r))) {
+          err = cat(file, ": /nlrom@n_static_coordinates ", ns, " is not in [n_b = ", m.n_b, ", r = ", r, ")");
+          ok = false;
+        }
+        m.n_static = static_cast<PetscInt>(ns);
+      }
+      if (!bm.empty() && bm != "massless" && bm != "carrying") {
+        err = cat(file, ": /nlrom@boundary_mass is '", bm, "' (carrying or massless)");
+        ok = false;
+      }
+      for (std::size_t i = 0; ok && m.massless && i < r; ++i)
+        for (std::size_t j = 0; j < static_cast<std::size_t>(m.n_static); ++j)
+          if (m.M[i * r + j] != 0.0 || m.M[j * r + i] != 0.0) {
+            err = cat(file, ": /nlrom@boundary_mass is massless but /nlrom/M has mass on static coordinate ", j);
+            ok = false;
+            break;
+          }
+    }
     if (ok) {
       std::map<std::int64_t, std::size_t> row;
       for (std::size_t k = 0; k < s.node_ids.size(); ++k) row[s.node_ids[k]] = k;
@@ -208,6 +233,8 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     if (err.empty()) {
       pk.put(m.r);
       pk.put(m.n_b);
+      pk.put<int>(m.massless ? 1 : 0);
+      pk.put(m.n_static);
       pk.put_vec(m.M), pk.put_vec(m.K), pk.put_vec(m.C), pk.put_vec(m.g.A), pk.put_vec(m.g.B);
       pk.put_vec(m.damping_omega), pk.put_vec(s.basis), pk.put_vec(s.node_ids);
       pk.put_vec(s.coords), pk.put_vec(s.boundary_nodes);
@@ -231,6 +258,8 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     auto& m = s.model;
     m.r = up.get<PetscInt>();
     m.n_b = up.get<PetscInt>();
+    m.massless = up.get<int>() != 0;
+    m.n_static = up.get<PetscInt>();
     m.M = up.get_vec<double>(), m.K = up.get_vec<double>(), m.C = up.get_vec<double>();
     m.g.A = up.get_vec<double>(), m.g.B = up.get_vec<double>();
     m.g.r = static_cast<std::size_t>(m.r);
@@ -296,6 +325,8 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   if (!basis.pod_singular_values.empty()) out.write("/nlrom/pod/singular_values", basis.pod_singular_values);
   if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);
   out.attribute("/nlrom", "basis", info.basis);
+  out.attribute("/nlrom", "boundary_mass", rm.massless ? std::string("massless") : std::string("carrying"));
+  if (rm.massless) out.attribute_int("/nlrom", "n_static_coordinates", rm.n_static);
   out.attribute("/nlrom", "forces", info.forces);
   out.attribute("/nlrom", "boundary_set", info.boundary_set);
   out.attribute_int("/nlrom", "r", r);

@@ -11,6 +11,7 @@
 #include "morse/eigen/eigen.hpp"
 #include "morse/sim/sim.hpp"
 #include "sim/contact.hpp"
+#include "sim/massless.hpp"
 
 namespace morse::sim {
 
@@ -98,6 +99,7 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
 double StepState::energy() const { return sim::energy(*model, q, v); }
 
 double critical_step(const nlrom::ReducedModel& m) {
+  if (m.massless) return nlrom::massless_critical_step(m);
   const auto w = eigen::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
 }
@@ -430,7 +432,13 @@ double CubicKernel::bytes() const {
 
 Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
                 const std::function<void(const StepState&)>& callback) {
-  if (s.scheme == Scheme::Trapezoidal) return integrate_trapezoidal(m, loads, s, callback);
+  if (s.scheme == Scheme::Trapezoidal) {
+    MORSE_CHECK(!m.massless,
+                "simulate: the implicit scheme (-sim_scheme trapezoidal) does not take a massless-boundary "
+                "model; use -sim_scheme central (its step is set by the internal modes)");
+    return integrate_trapezoidal(m, loads, s, callback);
+  }
+  if (m.massless) return detail::integrate_massless(m, loads, s, callback);
   const std::size_t r = static_cast<std::size_t>(m.r);
   const double h = s.dt;
   MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");

@@ -78,10 +78,7 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
       theta0_[k] = std::atan2(x[1], x[0]);
     }
   }
-  Pc_.assign(r * 3 * n_, 0.0);
-  for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t k = 0; k < n_; ++k)
-      for (int d = 0; d < 3; ++d) Pc_[i * 3 * n_ + 3 * k + d] = P[i * r + c.nodes[k].dof + d];
+  set_compliance(P);
   lam_.assign(n_, 0.0);
   fric_.assign(3 * n_, 0.0);
   gap_.assign(n_, 0.0);
@@ -91,6 +88,13 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
   piv_.assign(n_ + 1, 0);
   W_.reserve(n_ * n_);
   rhs_.reserve(n_);
+}
+
+void ContactSolver::set_compliance(const std::vector<double>& P) {
+  Pc_.assign(r_ * 3 * n_, 0.0);
+  for (std::size_t i = 0; i < r_; ++i)
+    for (std::size_t k = 0; k < n_; ++k)
+      for (int d = 0; d < 3; ++d) Pc_[i * 3 * n_ + 3 * k + d] = P[i * r_ + c_.nodes[k].dof + d];
 }
 
 double ContactSolver::gap_of(std::size_t k, const double* q, double t) const {

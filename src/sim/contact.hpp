@@ -44,6 +44,8 @@ class ContactSolver {
  public:
   /// P = (M~/h^2 + C~/2h)^-1 (r x r, row-major), the operator of eq. 42.
   ContactSolver(const ContactSettings& c, const std::vector<double>& P, std::size_t r, double t_final);
+  /// Replaces P (the same r x r layout), e.g. an updated tangent compliance.
+  void set_compliance(const std::vector<double>& P);
   /// Corrects the predictor qp of time t in place (qm = q_{n-1}, for the sliding velocity, h the
   /// step) and records the forces and gaps of the new state.
   void correct(double* qp, const double* qm, double h, double t);

@@ -161,12 +161,16 @@ struct OfflineSettings {
   double step_displacement = 0.01;  ///< -step_displacement (StepSettings::displacement)
   double damping_xi = 0.0;          ///< -nlrom_damping_modal (project_model's xi)
   PetscInt damping_modes = 0;       ///< -nlrom_damping_modes (project_model's k)
-  std::string error;                ///< a bad option value, naming the option (raised by the caller, after -help)
+  /// -nlrom_boundary_mass carrying|massless: the boundary keeps its mass (seed 003), or is
+  /// massless (make_massless; the damping then acts on the dynamic coordinates only).
+  bool massless = false;
+  double massless_fmax = 0.0;  ///< -nlrom_massless_fmax: internal modes above it are quasi-static (0: none)
+  std::string error;           ///< a bad option value, naming the option (raised by the caller, after -help)
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
   /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
-  /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal and -nlrom_damping_modes
-  /// (docs/user-guide.md), then validates them with basis.boundary_set (call it after setting
+  /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal, -nlrom_damping_modes and
+  /// -nlrom_boundary_mass (docs/user-guide.md), then validates them with basis.boundary_set (call it after setting
   /// that): the first bad value (unknown basis or force method, no boundary set, damping ratio
   /// outside [0, 1), a filter without snapshots, ...) is recorded in `error`. Uses
   /// PetscOptionsBegin: returns a PETSc error code. Collective.
@@ -181,7 +185,61 @@ struct ReducedModel {
   std::vector<double> M, K, C;        ///< r x r row-major, identical on every rank
   CubicForce g;                       ///< reduced nonlinear force
   std::vector<double> damping_omega;  ///< reduced natural angular frequencies carrying xi
+  /// Massless boundary (make_massless): the rows and columns of the first n_static coordinates of
+  /// M and C are zero (the n_b boundary coordinates, then the internal modes made quasi-static);
+  /// they are in static equilibrium at every instant (sim::integrate).
+  bool massless = false;
+  PetscInt n_static = 0;
 };
+
+// ------------------------------------------------------------------------------------------
+// Massless boundary (Monjaraz-Tec, Gross & Krack 2022; docs/theory.md §11): the mass that the
+// boundary coordinates carry is moved to the internal ones, so that a contact node has none and
+// the critical step of central differences is set by the internal modes alone. The Craig-Bampton
+// variant used here: with q = [u_b; eta] (the internal columns vanish on the boundary, eq. 9),
+//
+//   eta' = eta + M_ii^-1 M_ib u_b,
+//   T = v^T M v / 2 = eta'^T M_ii eta' / 2 + u_b^T (M_bb - M_bi M_ii^-1 M_ib) u_b / 2,
+//
+// and the last term, the mass of the boundary that the internal columns cannot carry (the
+// boundary's Schur complement), is dropped. The basis becomes V' = V S with
+// S = [I 0; -M_ii^-1 M_ib I] (the constraint columns Psi - Phi M_ii^-1 M_ib stay the identity on the
+// boundary), the subspace is the same, and K' = S^T K~ S and the nonlinear force are exact on it.
+// With the boundary held fixed the model is (K_ii, M_ii): for a CB basis the fixed-interface
+// spectrum itself.
+
+/// The change of basis T (r x r, row-major, q_old = T q_new) of a reduced model (M, K) with n_b
+/// boundary coordinates first: the boundary's mass moved to the internal coordinates (S above),
+/// and the internal coordinates turned into the modes x_k of (K_ii, M_ii) (the model with its
+/// boundary held; M_ii-normalized). The modes above fmax_hz (0: none) are made quasi-static too
+/// (their inertia dropped, as the boundary's: what limits the step of a basis with modal
+/// derivatives, whose fields pinned at single boundary nodes reach MHz): they come first after the
+/// boundary, in ascending order, then the dynamic modes in ascending order. *n_static receives
+/// n_b + the number of quasi-static modes. Throws if M_ii is not positive definite.
+std::vector<double> massless_transform(const std::vector<double>& M, const std::vector<double>& K, PetscInt r,
+                                       PetscInt n_b, double fmax_hz, PetscInt* n_static);
+
+/// The labels of a basis after massless_transform: the boundary's kept, then "quasi-static mode k"
+/// and "dynamic mode k" (held-boundary modes, ascending). Called on every rank alike.
+void relabel_massless(Basis* basis, PetscInt n_static);
+
+/// The basis V S (MPIDENSE, V's layout), for S of massless_transform. Collective.
+UMat transform_basis(Mat V, const std::vector<double>& S);
+
+/// Makes the model projected on the basis V T (massless_transform) massless: the rows and columns
+/// of M and C of its first n_static coordinates set to zero (the dropped mass), and modal damping
+/// xi on the first k modes of the model with its static coordinates free (condensed statically:
+/// K_dd - K_ds K_ss^-1 K_sd with M_dd), on the dynamic coordinates only:
+/// C_dd = sum 2 xi w_k (M_dd x_k)(M_dd x_k)^T. Sets rm->massless, rm->n_static and
+/// rm->damping_omega. Throws if K_ss is not positive definite (a boundary node without stiffness)
+/// or k exceeds the dynamic coordinates.
+void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k);
+
+/// The critical step of central differences on a massless model: 2 / omega_max of (K_dd, M_dd),
+/// the dynamic part with the static coordinates held (contact can only stiffen the dynamics up to
+/// this bound; free, they are softer). *free_boundary (if not null) receives the step of the model
+/// with its static coordinates condensed (no contact).
+double massless_critical_step(const ReducedModel& m, double* free_boundary = nullptr);
 
 /// A `morse nlrom` file as the online stage uses it: the reduced model, the basis on every node
 /// of the mesh and the node sets, identical on every rank.

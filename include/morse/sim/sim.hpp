@@ -130,7 +130,9 @@ struct Stats {
   std::string kernel = "linear";                  ///< folded | potential | implicit | linear (no nonlinear force)
   double kernel_flops = 0.0, kernel_bytes = 0.0;  ///< per step (CubicKernel::flops(), bytes())
   long steps = 0;
-  long newton_iterations = 0;  ///< Trapezoidal
+  long newton_iterations = 0;    ///< Trapezoidal
+  long boundary_iterations = 0;  ///< massless boundary: equilibrium iterations (one per step if linear)
+  long tangent_updates = 0;      ///< massless boundary: tangent compliances computed
   double seconds = 0.0;
   double critical_dt = 0.0;
 };
@@ -143,7 +145,8 @@ void initial_state(const Settings& s, std::size_t r, std::vector<double>* q, std
 double energy(const nlrom::ReducedModel& m, const double* q, const double* v);
 
 /// Critical step of central differences for the linearized reduced model: 2 / omega_max
-/// (undamped bound), omega_max^2 the largest eigenvalue of (K~, M~).
+/// (undamped bound), omega_max^2 the largest eigenvalue of (K~, M~); for a massless boundary
+/// (m.massless), that of the internal part with the boundary held (nlrom::massless_critical_step).
 double critical_step(const nlrom::ReducedModel& m);
 
 /// The nonlinear term of one step: G(q) = P3 g~(q) with P3 = 2h^2 (2M + hC)^-1 (KernelLayout).

@@ -1,0 +1,291 @@
+// Central differences on massless-boundary models (see sim/massless.hpp).
+#include "sim/massless.hpp"
+
+#include <petscsys.h>
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "morse/core/error.hpp"
+
+namespace morse::sim::detail {
+
+namespace {
+
+// Inverse of a dense n x n matrix (row-major) by LU; `what` names it in the error.
+std::vector<double> inverse(std::vector<double> A, std::size_t n, const char* what) {
+  PetscBLASInt nn = static_cast<PetscBLASInt>(n), info = 0, lwork = static_cast<PetscBLASInt>(n * 64);
+  std::vector<PetscBLASInt> piv(n);
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  LAPACKgetrf_(&nn, &nn, A.data(), &nn, piv.data(), &info);
+  MORSE_CHECK(info == 0, what, " (LAPACK getrf info ", info, ")");
+  LAPACKgetri_(&nn, A.data(), &nn, piv.data(), work.data(), &lwork, &info);
+  MORSE_CHECK(info == 0, what, " (LAPACK getri info ", info, ")");
+  return A;
+}
+
+}  // namespace
+
+void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
+                             std::vector<double>* P3) {
+  const std::size_t r = static_cast<std::size_t>(m.r), nb = static_cast<std::size_t>(m.n_static), ni = r - nb;
+  std::vector<double> Di(ni * ni);
+  for (std::size_t i = 0; i < ni; ++i)
+    for (std::size_t j = 0; j < ni; ++j)
+      Di[i * ni + j] = 2.0 * m.M[(nb + i) * r + nb + j] + h * m.C[(nb + i) * r + nb + j];
+  Di = inverse(Di, ni, "simulate: the internal mass of the massless model is singular");
+  P1->assign(r * r, 0.0), P2->assign(r * r, 0.0), P3->assign(r * r, 0.0);
+  for (std::size_t b = 0; b < nb; ++b) (*P1)[b * r + b] = 2.0, (*P2)[b * r + b] = -1.0;  // u_b extrapolated
+  for (std::size_t i = 0; i < ni; ++i) {
+    const double* di = &Di[i * ni];
+    for (std::size_t c = 0; c < r; ++c) {  // P1 = Di (4M - 2h^2 K) over every column, P2 = Di (hC - 2M)
+      double a = 0.0, b = 0.0;
+      for (std::size_t k = 0; k < ni; ++k) {
+        const std::size_t row = (nb + k) * r + c;
+        a += di[k] * (4.0 * m.M[row] - 2.0 * h * h * m.K[row]);
+        b += di[k] * (h * m.C[row] - 2.0 * m.M[row]);
+      }
+      (*P1)[(nb + i) * r + c] = a;
+      (*P2)[(nb + i) * r + c] = b;
+    }
+    for (std::size_t k = 0; k < ni; ++k) (*P3)[(nb + i) * r + nb + k] = 2.0 * h * h * di[k];
+  }
+}
+
+MasslessBoundary::MasslessBoundary(const nlrom::ReducedModel& m, const ContactSettings* contact, double t_final,
+                                   bool nonlinear)
+    : r_(static_cast<std::size_t>(m.r)), nb_(static_cast<std::size_t>(m.n_static)), nonlinear_(nonlinear) {
+  MORSE_CHECK(m.massless && nb_ > 0 && nb_ < r_, "simulate: not a massless-boundary model");
+  const std::size_t ni = r_ - nb_;
+  Kbb_.assign(nb_ * nb_, 0.0);
+  for (std::size_t a = 0; a < nb_; ++a)
+    for (std::size_t b = 0; b < nb_; ++b) Kbb_[a * nb_ + b] = m.K[a * r_ + b];
+  D_ = inverse(Kbb_, nb_,
+               "simulate: the stiffness K_ss of the static coordinates of the massless model is singular: a boundary "
+               "node has no stiffness (an isolated node)");
+  Kbi_.assign(nb_ * ni, 0.0);
+  for (std::size_t a = 0; a < nb_; ++a)
+    for (std::size_t i = 0; i < ni; ++i) Kbi_[a * ni + i] = m.K[a * r_ + nb_ + i];
+  if (nonlinear_) {
+    std::vector<double> I(r_ * r_, 0.0);
+    for (std::size_t i = 0; i < r_; ++i) I[i * r_ + i] = 1.0;
+    g_ = std::make_unique<CubicKernel>(m.g, I, KernelLayout::Auto);
+    g_val_.assign(r_, 0.0);
+    tangent_ = std::make_unique<TangentKernel>(m.g);
+    J_.assign(r_ * r_, 0.0);
+  }
+  if (contact && !contact->nodes.empty()) {
+    for (const auto& node : contact->nodes)
+      MORSE_CHECK(node.dof + 3 <= static_cast<std::size_t>(m.n_b), "simulate: contact node DOF ", node.dof,
+                  " is not a boundary coordinate of the massless model (", m.n_b,
+                  " boundary coordinates): contact nodes must belong to the boundary set");
+    P_.assign(r_ * r_, 0.0);  // the compliance on the boundary rows
+    for (std::size_t a = 0; a < nb_; ++a)
+      for (std::size_t b = 0; b < nb_; ++b) P_[a * r_ + b] = D_[a * nb_ + b];
+    contact_.emplace(*contact, P_, r_, t_final);
+  }
+  rhs_.assign(nb_, 0.0), base_.assign(nb_, 0.0), last_.assign(nb_, 0.0);
+}
+
+void MasslessBoundary::update_tangent(const double* q) {
+  tangent_->apply(q, g_val_.data(), J_.data());
+  std::vector<double> Kt(Kbb_);
+  for (std::size_t a = 0; a < nb_; ++a)
+    for (std::size_t b = 0; b < nb_; ++b) Kt[a * nb_ + b] += 0.5 * (J_[a * r_ + b] + J_[b * r_ + a]);
+  try {
+    D_ = inverse(Kt, nb_, "tangent");
+  } catch (const Error&) {
+    return;  // a singular tangent (a limit point): keep the previous compliance
+  }
+  ++tangent_updates_;
+  if (contact_) {
+    for (std::size_t a = 0; a < nb_; ++a)
+      for (std::size_t b = 0; b < nb_; ++b) P_[a * r_ + b] = D_[a * nb_ + b];
+    contact_->set_compliance(P_);
+  }
+}
+
+void MasslessBoundary::solve(double* q, const double* qm, double h, double t, const double* fb) {
+  const std::size_t ni = r_ - nb_;
+  const double* eta = q + nb_;
+  for (std::size_t a = 0; a < nb_; ++a) {  // f_b - K_bi eta, fixed during the iteration
+    double x = fb ? fb[a] : 0.0;
+    const double* k = &Kbi_[a * ni];
+    for (std::size_t i = 0; i < ni; ++i) x -= k[i] * eta[i];
+    base_[a] = x;
+  }
+  constexpr int kMaxIt = 100;
+  double change = 0.0, prev_change = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < kMaxIt; ++it) {
+    ++iterations_;
+    if (nonlinear_) g_->apply(q, g_val_.data());  // at the current iterate
+    // R = K_bb u + g_b - (f_b - K_bi eta); u_free = u - D R.
+    for (std::size_t a = 0; a < nb_; ++a) {
+      double x = (nonlinear_ ? g_val_[a] : 0.0) - base_[a];
+      const double* k = &Kbb_[a * nb_];
+      for (std::size_t b = 0; b < nb_; ++b) x += k[b] * q[b];
+      rhs_[a] = x;
+      last_[a] = q[a];
+    }
+    for (std::size_t a = 0; a < nb_; ++a) {
+      double u = 0.0;
+      const double* d = &D_[a * nb_];
+      for (std::size_t b = 0; b < nb_; ++b) u += d[b] * rhs_[b];
+      q[a] = last_[a] - u;
+    }
+    if (contact_) contact_->correct(q, qm, h, t);
+    if (!nonlinear_) return;
+    double size = 0.0;
+    change = 0.0;
+    for (std::size_t a = 0; a < nb_; ++a)
+      size = std::max(size, std::abs(q[a])), change = std::max(change, std::abs(q[a] - last_[a]));
+    // Converged: a change of 1e-10, or a change that stopped falling at the round-off of the
+    // forces (the cancellation in f_b - K_bi eta - g_b leaves 1e-11 to 1e-8 of noise, measured).
+    if (change <= 1e-10 * size || size == 0.0) return;
+    if (it >= 2 && change >= 0.5 * prev_change && change <= 1e-7 * size) return;
+    if (it >= 1 && change > 0.1 * prev_change) update_tangent(q);  // slow: the tangent here
+    prev_change = change;
+  }
+  throw Error(cat("simulate: the static equilibrium of the massless boundary did not converge in ", kMaxIt,
+                  " iterations at t = ", t, " (last change ", change,
+                  " of the static coordinates, with the tangent): the boundary has reached a limit point"));
+}
+
+Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                         const std::function<void(const StepState&)>& callback) {
+  const std::size_t r = static_cast<std::size_t>(m.r), nb = static_cast<std::size_t>(m.n_static), ni = r - nb;
+  const double h = s.dt;
+  MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
+  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
+              ")");
+  Stats st;
+  double free_dt = 0.0;
+  st.critical_dt = nlrom::massless_critical_step(m, &free_dt);
+  MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h,
+              " s is above the critical step of central differences on the massless model, ", st.critical_dt,
+              " s (2 / omega_max of its internal part with the boundary held); use -sim_dt <= ", st.critical_dt);
+  for (const auto& l : loads)
+    MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
+  const bool nonlinear = !s.linear;
+  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+  std::vector<double> P1, P2, P3;
+  massless_step_operators(m, h, &P1, &P2, &P3);
+  std::vector<std::vector<double>> lp;  // P3 p_l (internal rows)
+  for (const auto& l : loads) {
+    std::vector<double> y(r, 0.0);
+    for (std::size_t i = nb; i < r; ++i)
+      for (std::size_t j = nb; j < r; ++j) y[i] += P3[i * r + j] * l.p[j];
+    lp.push_back(std::move(y));
+  }
+  std::optional<CubicKernel> kernel;
+  if (nonlinear) {
+    kernel.emplace(m.g, P3, s.kernel);
+    st.kernel = kernel->potential() ? "potential" : "folded";
+    st.kernel_flops = kernel->flops();
+    st.kernel_bytes = kernel->bytes();
+  }
+  MasslessBoundary boundary(m, &s.contact, s.t_final, nonlinear);
+  std::vector<double> fb(nb, 0.0);
+  auto boundary_load = [&](double t) {
+    std::fill(fb.begin(), fb.end(), 0.0);
+    for (const auto& l : loads)
+      for (std::size_t a = 0; a < nb; ++a) fb[a] += l.factor(t) * l.p[a];
+  };
+
+  std::vector<double> qm(r), q, qp(r), v, g(r);
+  initial_state(s, r, &q, &v);
+  // The boundary of the initial state is the equilibrium of eta_0 (a given u_b is replaced).
+  for (std::size_t a = 0; a < nb; ++a) qm[a] = q[a] - h * v[a];
+  boundary_load(0.0);
+  boundary.solve(q.data(), qm.data(), h, 0.0, fb.data());
+  {  // eta_{-1} = eta_0 - h v_0 + h^2/2 a_0, a_0 = M_ii^-1 (f_i - C_ii v_i - K_i: q - g_i(q_0))
+    std::vector<double> rhs(ni, 0.0), gq(r, 0.0);
+    if (nonlinear) m.g.evaluate(q.data(), gq.data());
+    for (std::size_t i = 0; i < ni; ++i) {
+      double x = -gq[nb + i];
+      for (const auto& l : loads) x += l.factor(0.0) * l.p[nb + i];
+      for (std::size_t j = 0; j < r; ++j) x -= m.K[(nb + i) * r + j] * q[j] + m.C[(nb + i) * r + j] * v[j];
+      rhs[i] = x;
+    }
+    std::vector<double> Mii(ni * ni);
+    for (std::size_t i = 0; i < ni; ++i)
+      for (std::size_t j = 0; j < ni; ++j) Mii[i * ni + j] = m.M[(nb + i) * r + nb + j];
+    const auto Minv = inverse(Mii, ni, "simulate: the internal mass of the massless model is singular");
+    for (std::size_t i = 0; i < ni; ++i) {
+      double a = 0.0;
+      for (std::size_t j = 0; j < ni; ++j) a += Minv[i * ni + j] * rhs[j];
+      qm[nb + i] = q[nb + i] - h * v[nb + i] + 0.5 * h * h * a;
+    }
+  }
+  const long n_steps = step_count(s.t_final, h);
+  const std::size_t nc = boundary.has_contact() ? s.contact.nodes.size() : 0;
+  std::vector<double> c_lam(nc, 0.0), c_fric(3 * nc, 0.0), c_gap(nc, 0.0);
+  int c_active = 0;
+  if (nc) {
+    std::copy(boundary.normal(), boundary.normal() + nc, c_lam.begin());
+    std::copy(boundary.friction(), boundary.friction() + 3 * nc, c_fric.begin());
+    std::copy(boundary.gap(), boundary.gap() + nc, c_gap.begin());
+    c_active = boundary.active();
+  }
+  StepState ss;
+  ss.model = &m;
+  ss.q = q.data();
+  ss.v = v.data();
+  ss.active = c_active;
+  if (nc) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
+  callback(ss);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long n = 0; n <= n_steps; ++n) {
+    const double t = static_cast<double>(n) * h;
+    for (std::size_t i = 0; i < r; ++i) {
+      double x = 0.0;
+      const double* p1 = &P1[i * r];
+      const double* p2 = &P2[i * r];
+      for (std::size_t j = 0; j < r; ++j) x += p1[j] * q[j] + p2[j] * qm[j];
+      qp[i] = x;
+    }
+    for (std::size_t l = 0; l < loads.size(); ++l) {
+      const double c = loads[l].factor(t);
+      for (std::size_t i = nb; i < r; ++i) qp[i] += c * lp[l][i];
+    }
+    if (nonlinear) {
+      kernel->apply(q.data(), g.data());
+      for (std::size_t i = nb; i < r; ++i) qp[i] -= g[i];
+    }
+    boundary_load(t + h);
+    boundary.solve(qp.data(), qm.data(), h, t + h, fb.data());
+    bool finite = true;
+    for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
+    if (!finite)
+      throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
+                      ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
+    if (n > 0) {  // state n with its central velocity
+      for (std::size_t i = 0; i < r; ++i) v[i] = (qp[i] - qm[i]) / (2.0 * h);
+      ss.q = q.data();
+      ss.v = v.data();
+      ss.step = n;
+      ss.t = t;
+      ss.active = c_active;
+      callback(ss);
+    }
+    if (nc) {  // the forces of state n + 1
+      std::copy(boundary.normal(), boundary.normal() + nc, c_lam.begin());
+      std::copy(boundary.friction(), boundary.friction() + 3 * nc, c_fric.begin());
+      std::copy(boundary.gap(), boundary.gap() + nc, c_gap.begin());
+      c_active = boundary.active();
+    }
+    std::swap(qm, q);
+    std::swap(q, qp);
+  }
+  st.steps = n_steps;
+  st.boundary_iterations = boundary.iterations();
+  st.tangent_updates = boundary.tangent_updates();
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+}  // namespace morse::sim::detail
