@@ -56,9 +56,21 @@ void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector
   }
 }
 
+std::shared_ptr<CubicKernel> MasslessBoundary::raw_kernel(const nlrom::ReducedModel& m) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  std::vector<double> I(r * r, 0.0);
+  for (std::size_t i = 0; i < r; ++i) I[i * r + i] = 1.0;
+  return std::make_shared<CubicKernel>(m.g, I, KernelLayout::Auto);
+}
+
 MasslessBoundary::MasslessBoundary(const nlrom::ReducedModel& m, const ContactSettings* contact, double t_final,
-                                   bool nonlinear)
-    : r_(static_cast<std::size_t>(m.r)), nb_(static_cast<std::size_t>(m.n_static)), nonlinear_(nonlinear) {
+                                   bool nonlinear, std::shared_ptr<CubicKernel> g,
+                                   std::shared_ptr<TangentKernel> tangent)
+    : r_(static_cast<std::size_t>(m.r)),
+      nb_(static_cast<std::size_t>(m.n_static)),
+      nonlinear_(nonlinear),
+      g_(std::move(g)),
+      tangent_(std::move(tangent)) {
   MORSE_CHECK(m.massless && nb_ > 0 && nb_ < r_, "simulate: not a massless-boundary model");
   const std::size_t ni = r_ - nb_;
   Kbb_.assign(nb_ * nb_, 0.0);
@@ -71,11 +83,9 @@ MasslessBoundary::MasslessBoundary(const nlrom::ReducedModel& m, const ContactSe
   for (std::size_t a = 0; a < nb_; ++a)
     for (std::size_t i = 0; i < ni; ++i) Kbi_[a * ni + i] = m.K[a * r_ + nb_ + i];
   if (nonlinear_) {
-    std::vector<double> I(r_ * r_, 0.0);
-    for (std::size_t i = 0; i < r_; ++i) I[i * r_ + i] = 1.0;
-    g_ = std::make_unique<CubicKernel>(m.g, I, KernelLayout::Auto);
+    if (!g_) g_ = raw_kernel(m);
+    if (!tangent_) tangent_ = std::make_shared<TangentKernel>(m.g);
     g_val_.assign(r_, 0.0);
-    tangent_ = std::make_unique<TangentKernel>(m.g);
     J_.assign(r_ * r_, 0.0);
   }
   if (contact && !contact->nodes.empty()) {

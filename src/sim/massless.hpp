@@ -40,8 +40,13 @@ void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector
 /// makes the iteration converge in two or three steps), to 1e-12 relative change or round-off.
 class MasslessBoundary {
  public:
-  /// contact: null or without nodes for none (kept by reference, as ContactSolver does).
-  MasslessBoundary(const nlrom::ReducedModel& m, const ContactSettings* contact, double t_final, bool nonlinear);
+  /// contact: null or without nodes for none (kept by reference, as ContactSolver does). g (the
+  /// raw force, P3 = I) and tangent: kernels of m.g to share between the lanes of a sweep (built
+  /// here if null; they hold only scratch state, so lanes advanced one after the other may share).
+  MasslessBoundary(const nlrom::ReducedModel& m, const ContactSettings* contact, double t_final, bool nonlinear,
+                   std::shared_ptr<CubicKernel> g = nullptr, std::shared_ptr<TangentKernel> tangent = nullptr);
+  /// The raw force kernel of m (P3 = I), for sharing.
+  static std::shared_ptr<CubicKernel> raw_kernel(const nlrom::ReducedModel& m);
   /// Sets q[0..n_b) (in: the first guess) to the equilibrium at time t with q[n_b..r). fb: the
   /// external boundary forces at t (n_b values). qm: the state one step earlier (sliding direction
   /// of friction), h the step. Throws naming t if the nonlinear iteration does not converge.
@@ -61,8 +66,8 @@ class MasslessBoundary {
   std::vector<double> Kbb_;         // nb x nb
   std::vector<double> D_;           // nb x nb: the compliance, K_bb^-1 or the tangent's inverse
   std::vector<double> Kbi_;         // nb x (r - nb)
-  std::unique_ptr<CubicKernel> g_;  // the raw g~ (P3 = I)
-  std::unique_ptr<TangentKernel> tangent_;
+  std::shared_ptr<CubicKernel> g_;  // the raw g~ (P3 = I)
+  std::shared_ptr<TangentKernel> tangent_;
   std::vector<double> J_, P_;
   long tangent_updates_ = 0;
   void update_tangent(const double* q);

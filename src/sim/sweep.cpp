@@ -20,6 +20,7 @@
 #include "morse/core/log.hpp"
 #include "morse/sim/sim.hpp"
 #include "sim/contact.hpp"
+#include "sim/massless.hpp"
 
 // The batched kernels are built for AVX2 without FMA as well as for the baseline (GCC function
 // multiversioning, dispatched on the CPU's features). No FMA: a lane's arithmetic is then the same
@@ -174,7 +175,11 @@ struct Lane {
   bool busy = false;
   SpeedResult res;
   std::unique_ptr<ContactSettings> cs;
-  std::unique_ptr<detail::ContactSolver> contact;
+  std::unique_ptr<detail::ContactSolver> contact;      // mass-carrying model
+  std::unique_ptr<detail::MasslessBoundary> boundary;  // massless model (with its contact, if any)
+  bool has_contact() const { return contact || (boundary && boundary->has_contact()); }
+  const double* normal() const { return contact ? contact->normal() : boundary->normal(); }
+  int active() const { return contact ? contact->active() : boundary->active(); }
   long n = 0, n_steps = 0, half = 0, sample_every = 1, in_block = 0;
   double sum = 0.0, sum2 = 0.0, block = 0.0;
   long count = 0;
@@ -185,10 +190,18 @@ struct Lane {
 // The lanes of one rank.
 class Batch {
  public:
-  Batch(const nlrom::ReducedModel& m, const SweepSettings& s) : s_(s), r_(static_cast<std::size_t>(m.r)) {
+  Batch(const nlrom::ReducedModel& m, const SweepSettings& s) : s_(s), m_(m), r_(static_cast<std::size_t>(m.r)) {
     const std::size_t want = static_cast<std::size_t>(std::max(1, s.batch));
     L_ = (want + kGroup - 1) / kGroup * kGroup;
-    detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
+    if (m.massless) {
+      detail::massless_step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
+      if (!s.base.linear) {  // shared by the lanes' boundary solves
+        raw_ = detail::MasslessBoundary::raw_kernel(m);
+        tangent_ = std::make_shared<TangentKernel>(m.g);
+      }
+    } else {
+      detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
+    }
     const std::size_t rp = (r_ + 3) / 4 * 4;
     if (!s.base.linear && !s.batched) {
       lane_kernel_ = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Auto);
@@ -232,8 +245,11 @@ class Batch {
       ln.cs = std::make_unique<ContactSettings>(s_.base.contact);
       ln.cs->obstacle = Obstacle::Casing;
       ln.cs->casing.omega = task.omega;
-      ln.contact = std::make_unique<detail::ContactSolver>(*ln.cs, P3_, r_, ln.res.t_final);
+      if (!m_.massless) ln.contact = std::make_unique<detail::ContactSolver>(*ln.cs, P3_, r_, ln.res.t_final);
     }
+    if (m_.massless)
+      ln.boundary =
+          std::make_unique<detail::MasslessBoundary>(m_, ln.cs.get(), ln.res.t_final, !s_.base.linear, raw_, tangent_);
     // At rest: q_0 = q_{-1} = 0.
     for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
   }
@@ -274,6 +290,7 @@ class Batch {
       bool fail = false;
       try {
         if (ln.contact) ln.contact->correct(col_.data(), colm_.data(), h, t);
+        if (ln.boundary) ln.boundary->solve(col_.data(), colm_.data(), h, t, nullptr);
         for (std::size_t j = 0; j < r_ && !fail; ++j) fail = !std::isfinite(col_[j]);
         if (fail) ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
       } catch (const std::exception& e) {
@@ -311,13 +328,13 @@ class Batch {
           ln.samples.push_back(ln.block / static_cast<double>(ln.sample_every)), ln.block = 0.0, ln.in_block = 0;
       }
     }
-    if (ln.contact) {
+    if (ln.has_contact()) {
       double total = 0.0;
       const std::size_t nc = ln.cs->nodes.size();
-      const double* lam = ln.contact->normal();
+      const double* lam = ln.normal();
       for (std::size_t k = 0; k < nc; ++k) total += lam[k], R.max_node_force = std::max(R.max_node_force, lam[k]);
       if (total > R.max_force) R.max_force = total, R.time_of_max_force = t;
-      R.max_active = std::max(R.max_active, ln.contact->active());
+      R.max_active = std::max(R.max_active, ln.active());
     }
   }
   void finish(Lane& ln, bool fail) {
@@ -334,6 +351,9 @@ class Batch {
   }
 
   const SweepSettings& s_;
+  const nlrom::ReducedModel& m_;
+  std::shared_ptr<CubicKernel> raw_;  // massless: the lanes' boundary kernels
+  std::shared_ptr<TangentKernel> tangent_;
   std::size_t r_, L_, n_ = 0;
   std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, col_, colm_, freqs_;
   std::vector<std::size_t> groups_;
