@@ -51,7 +51,8 @@ void run_nlrom(MPI_Comm comm) {
   }
   // The reduced force of r coordinates is O(r^4) on every rank: refused before the basis if it
   // cannot fit.
-  nlrom::check_force_memory(comm, static_cast<std::size_t>(nlrom::basis_size(md, no.basis)), no.forces != "exact");
+  if (no.forces != "none")
+    nlrom::check_force_memory(comm, static_cast<std::size_t>(nlrom::basis_size(md, no.basis)), no.forces != "exact");
   fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
   auto basis = nlrom::build_basis(md, svk, no.basis);
   const PetscInt r = basis.r();
@@ -59,22 +60,24 @@ void run_nlrom(MPI_Comm comm) {
          no.basis_name.c_str(), (int)r, (int)basis.n_b, (int)basis.n_fixed, (int)basis.n_extra,
          no.basis.kind == nlrom::BasisKind::POD ? "POD vectors" : "modal derivatives", basis.seconds);
   PetscInt n_static = 0;
-  if (no.massless) {  // the same subspace, the boundary's mass moved to the internal columns
+  if (no.massless) {  // MacNeal on the reduced model: the same subspace, the residual modes' mass dropped
     const auto rm0 = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), 0.0, 0);
     basis.V = nlrom::transform_basis(
         basis.V.get(), nlrom::massless_transform(rm0.M, rm0.K, r, basis.n_b, no.massless_fmax, &n_static));
     nlrom::relabel_massless(&basis, n_static);
     print0(comm,
-           "morse nlrom: massless boundary: %d boundary coordinates and %d internal modes above %g Hz "
-           "quasi-static, %d dynamic modes\n",
-           (int)basis.n_b, (int)(n_static - basis.n_b), no.massless_fmax, (int)(r - n_static));
+           "morse nlrom: massless boundary (MacNeal): %d dynamic modes, %d boundary coordinates and %d more "
+           "residual combinations quasi-static\n",
+           (int)(r - n_static), (int)basis.n_b, (int)(n_static - basis.n_b));
   }
 
   auto t2a = std::chrono::steady_clock::now();
   UMat filter;
   if (no.n_filter > 0) filter = nlrom::force_filter(md, svk, no.basis.snapshots, no.n_filter);
   nlrom::CubicForce g;
-  if (no.forces == "exact") {
+  if (no.forces == "none") {
+    print0(comm, "morse nlrom: no nonlinear force (-nlrom_forces none): a linear reduced model\n");
+  } else if (no.forces == "exact") {
     StageTimer t(comm, "ExactTensors");
     MORSE_CHECK(no.n_filter == 0, "-nlrom_filter_pod applies to STEP (-nlrom_forces step)");
     g = nlrom::exact_forces(svk, basis.V.get());
@@ -94,8 +97,8 @@ void run_nlrom(MPI_Comm comm) {
     nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes);
     double free_dt = 0;
     const double held_dt = nlrom::massless_critical_step(rm, &free_dt);
-    print0(comm, "morse nlrom: critical step of central differences %.4g s (boundary held; free: %.4g s)\n", held_dt,
-           free_dt);
+    print0(comm, "morse nlrom: critical step of central differences %.4g s (static coordinates held; free: %.4g s)\n",
+           held_dt, free_dt);
   }
   const double t3 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t3a).count();
   check_options(comm, false);

@@ -34,7 +34,7 @@ struct Case {
 // it).
 void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim::SnapshotPlan& plan, const Case& c) {
   const std::size_t r = sm.r();
-  const double hc = sim::critical_step(sm.model);
+  const double hc = sim::critical_step(sm.model, &so.s.contact);
   const char* label = c.name.empty() ? "" : " case ";
   const bool implicit = so.s.scheme == sim::Scheme::Trapezoidal;
   print0(PETSC_COMM_SELF, "morse simulate%s%s: r = %d, critical step %.4e s%s, dt = %.4e s, %s, %s\n", label,

@@ -33,7 +33,9 @@ void run_sweep(MPI_Comm comm) {
   const auto sm = nlrom::read_stored_model(comm, so.rom, {so.contact.set, so.monitor});
   const std::size_t r = sm.r();
   const sim::SweepSettings s = so.settings(sm);
-  const double hc = sim::critical_step(sm.model);
+  sim::ContactSettings casing = s.base.contact;  // every speed's obstacle is the casing
+  casing.obstacle = sim::Obstacle::Casing;
+  const double hc = sim::critical_step(sm.model, &casing);
   MORSE_CHECK(so.dt > 0, "morse sweep: give the time step with -sim_dt (the critical step is ", hc, " s)");
   MORSE_CHECK(so.dt <= hc, "morse sweep: -sim_dt ", so.dt, " s is above the critical step of central differences, ", hc,
               " s (2 / omega_max of the reduced model); use -sim_dt <= ", hc);

@@ -1,5 +1,5 @@
-// Massless boundary: the Craig-Bampton variant of the mass redistribution of Monjaraz-Tec, Gross
-// & Krack (2022) (see morse/nlrom/nlrom.hpp and docs/theory.md §11).
+// Massless boundary: MacNeal's residual-flexibility form of a reduced model, as Monjaraz-Tec, Gross &
+// Krack (2022) use it (see morse/nlrom/nlrom.hpp and docs/theory.md §11).
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/nlrom/nlrom.hpp"
 
@@ -73,36 +74,124 @@ std::vector<double> condensed_stiffness(const ReducedModel& m, std::size_t ns) {
 std::vector<double> massless_transform(const std::vector<double>& M, const std::vector<double>& K, PetscInt r_,
                                        PetscInt n_b, double fmax_hz, PetscInt* n_static) {
   const std::size_t r = static_cast<std::size_t>(r_), nb = static_cast<std::size_t>(n_b);
-  MORSE_CHECK(n_b > 0 && n_b <= r_ && M.size() == r * r && K.size() == r * r, "massless boundary: a model of ", r,
-              " coordinates with ", n_b, " boundary coordinates has no boundary to make massless");
-  const std::size_t ni = r - nb;
-  MORSE_CHECK(ni > 0, "massless boundary: the basis has no internal coordinate to carry the mass (r = n_b = ", r,
-              "): add fixed-interface modes");
+  MORSE_CHECK(n_b > 0 && n_b < r_ && M.size() == r * r && K.size() == r * r, "massless boundary: a model of ", r,
+              " coordinates with ", n_b, " boundary coordinates has no boundary to make massless, or nothing else");
   MORSE_CHECK(fmax_hz >= 0 && std::isfinite(fmax_hz), "-nlrom_massless_fmax must be a finite frequency >= 0 (got ",
               fmax_hz, ")");
-  const auto Mii = block(M, r, nb, ni, nb, ni);
-  // X = M_ii^-1 M_ib (ni x nb): eta = eta' - X u_b.
-  const auto X = spd_solve(Mii, ni, block(M, r, nb, ni, 0, nb), nb,
-                           "massless boundary: the internal mass M_ii is not positive definite");
-  // The held-boundary modes of (K_ii, M_ii): the blocks are unchanged by the change of eta.
-  std::vector<double> Y;
-  const auto w = eigen::dense_eigenvalues(static_cast<int>(ni), block(K, r, nb, ni, nb, ni), Mii, &Y);
-  const double wc = fmax_hz > 0 ? std::pow(2.0 * M_PI * fmax_hz, 2) : std::numeric_limits<double>::infinity();
-  std::vector<std::size_t> order;  // quasi-static modes (w > wc) first, then the dynamic ones, each ascending
-  for (std::size_t k = 0; k < ni; ++k)
-    if (w[k] > wc) order.push_back(k);
-  const std::size_t n_high = order.size();
-  MORSE_CHECK(n_high < ni, "-nlrom_massless_fmax ", fmax_hz, " Hz is below every internal mode (the lowest is ",
-              std::sqrt(std::max(w[0], 0.0)) / (2.0 * M_PI), " Hz): no dynamic coordinate would be left");
-  for (std::size_t k = 0; k < ni; ++k)
-    if (!(w[k] > wc)) order.push_back(k);
-  *n_static = static_cast<PetscInt>(nb + n_high);
-  // T = S blockdiag(I, Y P): [I 0; -X Y P].
+  // The modes of the reduced model with its boundary free, M-normalized, ascending.
+  std::vector<double> X;
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(r), K, M, &X);
+  std::size_t nd = r - nb;
+  if (fmax_hz > 0) {
+    const double wc = std::pow(2.0 * M_PI * fmax_hz, 2);
+    nd = 0;
+    while (nd < r - nb && w[nd] <= wc) ++nd;
+    MORSE_CHECK(nd > 0, "-nlrom_massless_fmax ", fmax_hz, " Hz is below the lowest mode of the model (",
+                std::sqrt(w[0]) / (2.0 * M_PI), " Hz): no dynamic mode would be left");
+  }
+  // The residual flexibility at the boundary must be regular: a boundary coordinate that no residual
+  // mode moves (for example a face whose nodes move together in every high mode) has none. Then
+  // the highest dynamic modes join the residual set, one at a time, until it is (each try costs
+  // r n_b^2).
+  const std::size_t nd_asked = nd;
+  std::vector<double> G, Gbb, PsiT;
+  for (;; --nd) {
+    MORSE_CHECK(nd > 0,
+                "massless boundary: the residual flexibility of the boundary is singular even with every "
+                "mode residual: a boundary coordinate without stiffness of its own");
+    // G = sum over residual modes x_k x_k[b]^T / w_k (r x nb), the residual flexibility (MacNeal).
+    G.assign(r * nb, 0.0);
+    for (std::size_t k = nd; k < r; ++k)
+      for (std::size_t i = 0; i < r; ++i) {
+        const double xi = X[i * r + k] / w[k];
+        if (xi == 0.0) continue;
+        for (std::size_t b = 0; b < nb; ++b) G[i * nb + b] += xi * X[b * r + k];
+      }
+    Gbb = block(G, nb, 0, nb, 0, nb);
+    for (std::size_t a = 0; a < nb; ++a)
+      for (std::size_t b = a + 1; b < nb; ++b)
+        Gbb[a * nb + b] = Gbb[b * nb + a] = 0.5 * (Gbb[a * nb + b] + Gbb[b * nb + a]);
+    // Regular: a Cholesky factor whose smallest pivot is above 1e-10 of the largest (squared).
+    std::vector<double> L(Gbb);
+    PetscBLASInt nn = static_cast<PetscBLASInt>(nb), info = 0;
+    const char uplo = 'L';
+    LAPACKpotrf_(&uplo, &nn, L.data(), &nn, &info);
+    double lo = 1e300, hi = 0.0;
+    for (std::size_t a = 0; info == 0 && a < nb; ++a) {
+      const double d = L[a * nb + a] * L[a * nb + a];
+      lo = std::min(lo, d), hi = std::max(hi, d);
+    }
+    if (info == 0 && lo > 1e-10 * hi) break;
+  }
+  if (nd < nd_asked)  // the same on every rank
+    print0(PETSC_COMM_WORLD,
+           "morse: massless boundary: %zu dynamic modes instead of %zu: the residual flexibility of the boundary "
+           "needs the %zu highest modes\n",
+           nd, nd_asked, r - nd);
+  const std::size_t nr = r - nd;  // residual modes: their flexibility at the boundary, their mass dropped
+  // Psi = G G_bb^-1 (r x nb): the identity on the boundary.
+  std::vector<double> Gt(nb * r);  // G^T, nb x r
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t b = 0; b < nb; ++b) Gt[b * r + i] = G[i * nb + b];
+  PsiT = spd_solve(Gbb, nb, Gt, r, "massless boundary: the residual flexibility of the boundary is singular");
+  // Z: the residual modes' combinations that vanish on the boundary (nr - nb of them), kept as
+  // quasi-static coordinates: the null space of X_R[b, :] by the eigenvectors of X_R[b,:]^T X_R[b,:]
+  // with the smallest eigenvalues, then K-orthogonal and M-normalized within.
+  std::vector<double> Z;  // r x nz, row-major
+  const std::size_t nz = nr - nb;
+  if (nz > 0) {
+    std::vector<double> P(nr * nr, 0.0), I(nr * nr, 0.0), Y;
+    for (std::size_t a = 0; a < nr; ++a) {
+      I[a * nr + a] = 1.0;
+      for (std::size_t c = 0; c < nr; ++c) {
+        double x = 0.0;
+        for (std::size_t b = 0; b < nb; ++b) x += X[b * r + nd + a] * X[b * r + nd + c];
+        P[a * nr + c] = x;
+      }
+    }
+    eigen::dense_eigenvalues(static_cast<int>(nr), P, I, &Y);  // ascending: the first nz span the null space
+    std::vector<double> Z0(r * nz, 0.0);
+    for (std::size_t i = nb; i < r; ++i)  // zero on the boundary by construction; set it exactly
+      for (std::size_t c = 0; c < nz; ++c) {
+        double x = 0.0;
+        for (std::size_t a = 0; a < nr; ++a) x += X[i * r + nd + a] * Y[a * nr + c];
+        Z0[i * nz + c] = x;
+      }
+    // Within span(Z0): X_R's modes are K- and M-orthogonal, so Z0^T K Z0 and Z0^T M Z0 are
+    // diag(w_R) and I restricted; diagonalize them together for modal quasi-static coordinates.
+    std::vector<double> Kz(nz * nz, 0.0), Mz(nz * nz, 0.0), W;
+    for (std::size_t a = 0; a < nz; ++a)
+      for (std::size_t c = 0; c < nz; ++c) {
+        double k = 0.0, m = 0.0;
+        for (std::size_t t = 0; t < nr; ++t) {
+          k += Y[t * nr + a] * w[nd + t] * Y[t * nr + c];
+          m += Y[t * nr + a] * Y[t * nr + c];
+        }
+        Kz[a * nz + c] = k, Mz[a * nz + c] = m;
+      }
+    eigen::dense_eigenvalues(static_cast<int>(nz), Kz, Mz, &W);
+    Z.assign(r * nz, 0.0);
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t c = 0; c < nz; ++c) {
+        double x = 0.0;
+        for (std::size_t a = 0; a < nz; ++a) x += Z0[i * nz + a] * W[a * nz + c];
+        Z[i * nz + c] = x;
+      }
+  }
+  *n_static = static_cast<PetscInt>(nb + nz);
+  // T = [Psi | Z | X_D - Psi X_D[b, :]].
   std::vector<double> T(r * r, 0.0);
-  for (std::size_t b = 0; b < nb; ++b) T[b * r + b] = 1.0;
-  for (std::size_t i = 0; i < ni; ++i) {
-    for (std::size_t b = 0; b < nb; ++b) T[(nb + i) * r + b] = -X[i * nb + b];
-    for (std::size_t c = 0; c < ni; ++c) T[(nb + i) * r + nb + c] = Y[i * ni + order[c]];
+  for (std::size_t i = 0; i < r; ++i) {
+    for (std::size_t b = 0; b < nb; ++b) T[i * r + b] = i < nb ? (i == b ? 1.0 : 0.0) : PsiT[b * r + i];
+    for (std::size_t c = 0; c < nz; ++c) T[i * r + nb + c] = Z[i * nz + c];
+    for (std::size_t k = 0; k < nd; ++k) {
+      double x = 0.0;
+      if (i >= nb) {
+        x = X[i * r + k];
+        for (std::size_t b = 0; b < nb; ++b) x -= PsiT[b * r + i] * X[b * r + k];
+      }
+      T[i * r + nb + nz + k] = x;
+    }
   }
   return T;
 }
@@ -157,9 +246,9 @@ void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k) {
   MORSE_CHECK(k >= 0 && static_cast<std::size_t>(k) <= nd, "massless boundary: ", k,
               " damped modes asked from a model of ", nd, " dynamic coordinates");
   const auto Keff = condensed_stiffness(*rm, ns);  // also proves K_ss positive definite
+  // MacNeal: the residual mass is dropped, so the mass is that of the M-normalized dynamic modes.
   for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = 0; j < r; ++j)
-      if (i < ns || j < ns) rm->M[i * r + j] = 0.0;
+    for (std::size_t j = 0; j < r; ++j) rm->M[i * r + j] = i >= ns && i == j ? 1.0 : 0.0;
   std::fill(rm->C.begin(), rm->C.end(), 0.0);
   rm->damping_omega.clear();
   if (xi > 0 && k > 0) {
@@ -189,6 +278,64 @@ double massless_critical_step(const ReducedModel& m, double* free_boundary) {
     *free_boundary = 2.0 / std::sqrt(std::max(w.back(), 1e-300));
   }
   return 2.0 / std::sqrt(std::max(held.back(), 1e-300));
+}
+
+double massless_critical_step(const ReducedModel& m, const std::vector<double>& held, std::size_t nh) {
+  const std::size_t r = static_cast<std::size_t>(m.r), ns = static_cast<std::size_t>(m.n_static), nd = r - ns;
+  MORSE_CHECK(held.size() == ns * nh && nh <= ns, "massless_critical_step: held directions are not ", ns, " x ", nh);
+  if (nh == 0) {
+    double free_dt = 0;
+    massless_critical_step(m, &free_dt);
+    return free_dt;
+  }
+  // C: an orthonormal basis of the complement of span(held) in the static coordinates, the
+  // eigenvectors of I - H (H^T H)^-1 H^T with eigenvalue 1.
+  std::vector<double> HtH(nh * nh, 0.0), Ht(nh * ns);
+  for (std::size_t a = 0; a < nh; ++a) {
+    for (std::size_t i = 0; i < ns; ++i) Ht[a * ns + i] = held[i * nh + a];
+    for (std::size_t b = 0; b < nh; ++b)
+      for (std::size_t i = 0; i < ns; ++i) HtH[a * nh + b] += held[i * nh + a] * held[i * nh + b];
+  }
+  const auto X = spd_solve(HtH, nh, Ht, ns, "massless_critical_step: the held directions are dependent");
+  std::vector<double> P(ns * ns, 0.0), I(ns * ns, 0.0), Y;
+  for (std::size_t i = 0; i < ns; ++i) {
+    I[i * ns + i] = 1.0;
+    for (std::size_t j = 0; j < ns; ++j) {
+      double x = i == j ? 1.0 : 0.0;
+      for (std::size_t a = 0; a < nh; ++a) x -= held[i * nh + a] * X[a * ns + j];
+      P[i * ns + j] = x;
+    }
+  }
+  for (std::size_t i = 0; i < ns; ++i)
+    for (std::size_t j = i + 1; j < ns; ++j) P[i * ns + j] = P[j * ns + i] = 0.5 * (P[i * ns + j] + P[j * ns + i]);
+  eigen::dense_eigenvalues(static_cast<int>(ns), P, I, &Y);  // ascending: the last ns - nh have eigenvalue 1
+  const std::size_t nf = ns - nh;
+  // The model on [C a; eta]: K' = [C^T K_ss C, C^T K_sd; K_ds C, K_dd], M' = diag(0, I).
+  ReducedModel red;
+  red.r = static_cast<PetscInt>(nf + nd);
+  red.n_static = static_cast<PetscInt>(nf);
+  const std::size_t rr = nf + nd;
+  red.K.assign(rr * rr, 0.0), red.M.assign(rr * rr, 0.0);
+  auto col = [&](std::size_t c, std::size_t i) { return c < nf ? Y[i * ns + nh + c] : 0.0; };  // static part
+  for (std::size_t a = 0; a < rr; ++a)
+    for (std::size_t b = 0; b < rr; ++b) {
+      double x = 0.0;
+      if (a < nf && b < nf) {
+        for (std::size_t i = 0; i < ns; ++i)
+          for (std::size_t j = 0; j < ns; ++j) x += col(a, i) * m.K[i * r + j] * col(b, j);
+      } else if (a < nf) {
+        for (std::size_t i = 0; i < ns; ++i) x += col(a, i) * m.K[i * r + ns + (b - nf)];
+      } else if (b < nf) {
+        for (std::size_t j = 0; j < ns; ++j) x += m.K[(ns + (a - nf)) * r + j] * col(b, j);
+      } else {
+        x = m.K[(ns + (a - nf)) * r + ns + (b - nf)];
+        red.M[a * rr + b] = m.M[(ns + (a - nf)) * r + ns + (b - nf)];
+      }
+      red.K[a * rr + b] = x;
+    }
+  double free_dt = 0;
+  massless_critical_step(red, &free_dt);
+  return free_dt;
 }
 
 }  // namespace morse::nlrom

@@ -53,8 +53,9 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsInt("-nlrom_derivative_seed", "Seed of -nlrom_derivative_selection random", "", seed, &seed,
                             nullptr));
   b.derivative_seed = static_cast<unsigned>(seed);
-  PetscCall(MorseOptionsString("-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection)", "",
-                               forces.c_str(), buf, sizeof buf, &set));
+  PetscCall(MorseOptionsString(
+      "-nlrom_forces", "step (STEP, eq. 29-37) | exact (element-wise projection) | none (a linear model: no tensors)",
+      "", forces.c_str(), buf, sizeof buf, &set));
   if (set) forces = buf;
   PetscCall(MorseOptionsReal("-step_displacement", "STEP: target displacement of the imposed fields [m]", "",
                              step_displacement, &step_displacement, nullptr));
@@ -71,13 +72,13 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   const char* masses[] = {"carrying", "massless", "BoundaryMass", "", nullptr};
   PetscEnum bm = massless ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
   PetscCall(MorseOptionsEnum("-nlrom_boundary_mass",
-                             "carrying (the boundary keeps its mass, seed 003) or massless (its mass moved to the "
-                             "internal coordinates: a static boundary, the critical step of the internal modes)",
+                             "carrying (the boundary keeps its mass, seed 003) or massless (MacNeal: residual "
+                             "flexibility without mass; a static boundary, the critical step of the dynamic modes)",
                              "", masses, bm, &bm, nullptr));
   massless = bm == static_cast<PetscEnum>(1);
   PetscCall(MorseOptionsReal("-nlrom_massless_fmax",
-                             "Massless boundary: internal modes (boundary held) above this frequency [Hz] are made "
-                             "quasi-static as well (0: none)",
+                             "Massless boundary: the modes of the reduced model (boundary free) above this frequency "
+                             "[Hz] are residual, quasi-static (0: all but the n_b highest)",
                              "", massless_fmax, &massless_fmax, nullptr));
   PetscOptionsEnd();
   auto bad = [&](bool ok, const std::string& why) {
@@ -91,7 +92,9 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
     b.kind = BasisKind::POD;
   else
     bad(false, cat("-nlrom_basis ", basis_name, ": unknown (cb, cbmd or pod)"));
-  bad(forces == "step" || forces == "exact", cat("-nlrom_forces ", forces, ": unknown (step or exact)"));
+  bad(forces == "step" || forces == "exact" || forces == "none",
+      cat("-nlrom_forces ", forces, ": unknown (step, exact or none)"));
+  bad(!(forces == "none" && n_filter > 0), "-nlrom_filter_pod applies to STEP (-nlrom_forces step), not to none");
   // Given, a length or step must be a finite positive time (not given: the defaults of cmd nlrom).
   bad(!tfinal_set || (std::isfinite(b.training_tfinal) && b.training_tfinal > 0),
       cat("-nlrom_training_tfinal must be a finite positive time [s] (got ", b.training_tfinal, ")"));

@@ -145,19 +145,23 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
       m.r = static_cast<PetscInt>(d[0]);
     else if (err.empty())
       err = cat(file, ": /nlrom/M is not square");
+    // A linear model (-nlrom_forces none) stores no tensors: g.r = 0, and a nonlinear run is refused.
+    const bool linear_model = ok && io::read_string_attribute(file, "/nlrom", "forces") == "none";
     ok = ok && io::read_doubles(file, "/nlrom/K", &m.K, &d, &err) &&
-         io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) && io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) &&
-         io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err) &&
+         io::read_doubles(file, "/nlrom/C", &m.C, &d, &err) &&
+         (linear_model || (io::read_doubles(file, "/nlrom/A", &m.g.A, &d, &err) &&
+                           io::read_doubles(file, "/nlrom/B", &m.g.B, &d, &err))) &&
          io::read_doubles(file, "/nlrom/basis", &s.basis, &d, &err) &&
          io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err) &&
          io::read_doubles(file, "/mesh/coordinates", &s.coords, &d, &err) &&
          io::read_ints(file, "/nlrom/boundary_nodes", &s.boundary_nodes, &d, &err);
     const std::size_t r = static_cast<std::size_t>(m.r);
     m.n_b = static_cast<PetscInt>(3 * s.boundary_nodes.size());
-    m.g.r = r;
-    if (ok && (m.K.size() != r * r || m.C.size() != r * r || m.g.A.size() != n_quadratic(r) * r ||
-               m.g.B.size() != n_cubic(r) * r || s.basis.size() != r * s.node_ids.size() * 3 ||
-               s.coords.size() != 3 * s.node_ids.size() || static_cast<std::size_t>(m.n_b) > r)) {
+    m.g.r = linear_model ? 0 : r;
+    if (ok && (m.K.size() != r * r || m.C.size() != r * r ||
+               (!linear_model && (m.g.A.size() != n_quadratic(r) * r || m.g.B.size() != n_cubic(r) * r)) ||
+               s.basis.size() != r * s.node_ids.size() * 3 || s.coords.size() != 3 * s.node_ids.size() ||
+               static_cast<std::size_t>(m.n_b) > r)) {
       err = cat(file, ": inconsistent /nlrom datasets (r = ", r, ")");
       ok = false;
     }
@@ -262,7 +266,7 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     m.n_static = up.get<PetscInt>();
     m.M = up.get_vec<double>(), m.K = up.get_vec<double>(), m.C = up.get_vec<double>();
     m.g.A = up.get_vec<double>(), m.g.B = up.get_vec<double>();
-    m.g.r = static_cast<std::size_t>(m.r);
+    m.g.r = m.g.A.empty() && m.g.B.empty() ? 0 : static_cast<std::size_t>(m.r);
     m.damping_omega = up.get_vec<double>();
     s.basis = up.get_vec<double>();
     s.node_ids = up.get_vec<std::int64_t>();
@@ -290,12 +294,14 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   out.write("/nlrom/M", rm.M, {R, R});
   out.write("/nlrom/K", rm.K, {R, R});
   out.write("/nlrom/C", rm.C, {R, R});
-  out.write("/nlrom/A", rm.g.A, {static_cast<hsize_t>(n_quadratic(r)), R});
-  out.write("/nlrom/B", rm.g.B, {static_cast<hsize_t>(n_cubic(r)), R});
-  out.attribute("/nlrom/A", "description",
-                "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
-  out.attribute("/nlrom/B", "description",
-                "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
+  if (info.forces != "none") {  // a linear model (-nlrom_forces none) has no tensors
+    out.write("/nlrom/A", rm.g.A, {static_cast<hsize_t>(n_quadratic(r)), R});
+    out.write("/nlrom/B", rm.g.B, {static_cast<hsize_t>(n_cubic(r)), R});
+    out.attribute("/nlrom/A", "description",
+                  "quadratic coefficients A~^m_ij (eq. 28): row = (i <= j) lexicographic, column m");
+    out.attribute("/nlrom/B", "description",
+                  "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
+  }
   std::vector<double> nodal;
   for (PetscInt j = 0; j < r; ++j) {
     Vec c;

@@ -98,6 +98,25 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v) {
 
 double StepState::energy() const { return sim::energy(*model, q, v); }
 
+double critical_step(const nlrom::ReducedModel& m, const ContactSettings* c) {
+  if (!m.massless) return critical_step(m);
+  const std::size_t ns = static_cast<std::size_t>(m.n_static), nc = c ? c->nodes.size() : 0;
+  if (nc == 0) {
+    double free_dt = 0;
+    nlrom::massless_critical_step(m, &free_dt);
+    return free_dt;
+  }
+  const auto normal = contact_normals(*c);
+  std::vector<double> H(ns * nc, 0.0);
+  for (std::size_t k = 0; k < nc; ++k) {
+    MORSE_CHECK(c->nodes[k].dof + 3 <= static_cast<std::size_t>(m.n_b), "simulate: contact node DOF ", c->nodes[k].dof,
+                " is not a boundary coordinate of the massless model (", m.n_b,
+                " boundary coordinates): contact nodes must belong to the boundary set");
+    for (int d = 0; d < 3; ++d) H[(c->nodes[k].dof + d) * nc + k] = normal[3 * k + d];
+  }
+  return nlrom::massless_critical_step(m, H, nc);
+}
+
 double critical_step(const nlrom::ReducedModel& m) {
   if (m.massless) return nlrom::massless_critical_step(m);
   const auto w = eigen::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
@@ -460,7 +479,8 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     lp.push_back(std::move(y));
   }
   const bool nonlinear = !s.linear;
-  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r,
+              " (a linear model, -nlrom_forces none): run it with -sim_linear");
   std::optional<CubicKernel> kernel;  // folded only when used
   if (nonlinear) {
     kernel.emplace(m.g, P3, s.kernel);

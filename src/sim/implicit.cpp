@@ -232,7 +232,8 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
     MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   const bool nonlinear = !s.linear;
   MORSE_CHECK(s.contact.nodes.empty(), "simulate: contact needs the explicit scheme (-sim_scheme central)");
-  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r,
+              " (a linear model, -nlrom_forces none): run it with -sim_linear");
   Stats st;
   st.critical_dt = critical_step(m);
   st.kernel = nonlinear ? "implicit" : "linear";

@@ -173,15 +173,15 @@ Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<Reduced
   MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
               ")");
   Stats st;
-  double free_dt = 0.0;
-  st.critical_dt = nlrom::massless_critical_step(m, &free_dt);
+  st.critical_dt = critical_step(m, &s.contact);
   MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h,
               " s is above the critical step of central differences on the massless model, ", st.critical_dt,
-              " s (2 / omega_max of its internal part with the boundary held); use -sim_dt <= ", st.critical_dt);
+              " s (2 / omega_max of its dynamic modes with the contact normals held); use -sim_dt <= ", st.critical_dt);
   for (const auto& l : loads)
     MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   const bool nonlinear = !s.linear;
-  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r);
+  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r,
+              " (a linear model, -nlrom_forces none): run it with -sim_linear");
   std::vector<double> P1, P2, P3;
   massless_step_operators(m, h, &P1, &P2, &P3);
   std::vector<std::vector<double>> lp;  // P3 p_l (internal rows)

@@ -390,8 +390,11 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   MORSE_CHECK(s.monitor.size() == r, "sweep: the monitor has ", s.monitor.size(), " entries, not r = ", r);
   MORSE_CHECK(s.base.dt > 0 && std::isfinite(s.base.dt), "sweep: the time step must be positive (got ", s.base.dt, ")");
   MORSE_CHECK(s.revolutions > 0, "sweep: the number of revolutions must be positive (got ", s.revolutions, ")");
-  MORSE_CHECK(s.base.linear || m.g.r == r, "sweep: the reduced model has no nonlinear force of size ", r);
-  const double hc = critical_step(m);
+  MORSE_CHECK(s.base.linear || m.g.r == r, "sweep: the reduced model has no nonlinear force of size ", r,
+              " (a linear model, -nlrom_forces none): run it with -sim_linear");
+  ContactSettings casing = s.base.contact;  // every lane's obstacle is the casing
+  casing.obstacle = Obstacle::Casing;
+  const double hc = critical_step(m, &casing);
   MORSE_CHECK(s.base.dt <= hc, "sweep: -sim_dt ", s.base.dt, " s is above the critical step of central differences, ",
               hc, " s; use -sim_dt <= ", hc);
   for (const auto& t : todo)

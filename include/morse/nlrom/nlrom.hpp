@@ -156,7 +156,7 @@ UMat force_filter(const fe::Model& md, const fe::Svk& svk, const std::string& fi
 struct OfflineSettings {
   BasisSettings basis;              ///< boundary_set: -boundary, set by the caller (not read here)
   std::string basis_name = "cb";    ///< -nlrom_basis cb|cbmd|pod (sets basis.kind)
-  std::string forces = "step";      ///< -nlrom_forces step|exact
+  std::string forces = "step";      ///< -nlrom_forces step|exact|none (none: linear, no tensors stored)
   PetscInt n_filter = 0;            ///< -nlrom_filter_pod: POD filter vectors of g_nl (0: none)
   double step_displacement = 0.01;  ///< -step_displacement (StepSettings::displacement)
   double damping_xi = 0.0;          ///< -nlrom_damping_modal (project_model's xi)
@@ -164,7 +164,7 @@ struct OfflineSettings {
   /// -nlrom_boundary_mass carrying|massless: the boundary keeps its mass (seed 003), or is
   /// massless (make_massless; the damping then acts on the dynamic coordinates only).
   bool massless = false;
-  double massless_fmax = 0.0;  ///< -nlrom_massless_fmax: internal modes above it are quasi-static (0: none)
+  double massless_fmax = 0.0;  ///< -nlrom_massless_fmax: modes above it are residual (quasi-static); 0: n_b of them
   std::string error;           ///< a bad option value, naming the option (raised by the caller, after -help)
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
@@ -193,29 +193,27 @@ struct ReducedModel {
 };
 
 // ------------------------------------------------------------------------------------------
-// Massless boundary (Monjaraz-Tec, Gross & Krack 2022; docs/theory.md §11): the mass that the
-// boundary coordinates carry is moved to the internal ones, so that a contact node has none and
-// the critical step of central differences is set by the internal modes alone. The Craig-Bampton
-// variant used here: with q = [u_b; eta] (the internal columns vanish on the boundary, eq. 9),
+// Massless boundary (Monjaraz-Tec, Gross & Krack 2022; docs/theory.md §11): the mass of the boundary
+// coordinates is removed, so that a contact node has none and the critical step of central
+// differences is set by the dynamic modes. MacNeal's method applied to the reduced model (K~, M~)
+// of a basis with physical boundary coordinates (eq. 9): with x_k, w_k its modes with the boundary
+// free (M-normalized), the n_d lowest are the dynamic coordinates eta and the others are residual;
+// their static flexibility at the boundary, G = sum_res x_k x_k[b]^T / w_k, gives the attachment
+// columns Psi = G G_bb^-1 (the identity on the boundary), and
 //
-//   eta' = eta + M_ii^-1 M_ib u_b,
-//   T = v^T M v / 2 = eta'^T M_ii eta' / 2 + u_b^T (M_bb - M_bi M_ii^-1 M_ib) u_b / 2,
+//   q~ = Psi u_b + Z z + (X_D - Psi X_D[b, :]) eta,
 //
-// and the last term, the mass of the boundary that the internal columns cannot carry (the
-// boundary's Schur complement), is dropped. The basis becomes V' = V S with
-// S = [I 0; -M_ii^-1 M_ib I] (the constraint columns Psi - Phi M_ii^-1 M_ib stay the identity on the
-// boundary), the subspace is the same, and K' = S^T K~ S and the nonlinear force are exact on it.
-// With the boundary held fixed the model is (K_ii, M_ii): for a CB basis the fixed-interface
-// spectrum itself.
+// with Z the residual combinations that vanish on the boundary (none if n_d = r - n_b). The new
+// coordinates [u_b; z; eta] span the same subspace (r of them), K and the nonlinear force are exact on
+// it, and the kinetic energy keeps eta's alone (eta^T eta / 2): the mass of the residual part (the
+// boundary's and z's) is dropped. With the boundary free and no force on it, the model's modes are
+// exactly the n_d lowest of (K~, M~). u_b and z are in static equilibrium at every instant.
 
 /// The change of basis T (r x r, row-major, q_old = T q_new) of a reduced model (M, K) with n_b
-/// boundary coordinates first: the boundary's mass moved to the internal coordinates (S above),
-/// and the internal coordinates turned into the modes x_k of (K_ii, M_ii) (the model with its
-/// boundary held; M_ii-normalized). The modes above fmax_hz (0: none) are made quasi-static too
-/// (their inertia dropped, as the boundary's: what limits the step of a basis with modal
-/// derivatives, whose fields pinned at single boundary nodes reach MHz): they come first after the
-/// boundary, in ascending order, then the dynamic modes in ascending order. *n_static receives
-/// n_b + the number of quasi-static modes. Throws if M_ii is not positive definite.
+/// boundary coordinates first, as above: the dynamic modes are those up to fmax_hz (0: all but the
+/// n_b highest, the fewest residual modes MacNeal's flexibility needs), at most r - n_b. *n_static
+/// receives n_b + the number of z coordinates. Throws if the residual flexibility at the boundary
+/// is singular (a boundary coordinate that no residual mode moves), naming -nlrom_massless_fmax.
 std::vector<double> massless_transform(const std::vector<double>& M, const std::vector<double>& K, PetscInt r,
                                        PetscInt n_b, double fmax_hz, PetscInt* n_static);
 
@@ -226,8 +224,9 @@ void relabel_massless(Basis* basis, PetscInt n_static);
 /// The basis V S (MPIDENSE, V's layout), for S of massless_transform. Collective.
 UMat transform_basis(Mat V, const std::vector<double>& S);
 
-/// Makes the model projected on the basis V T (massless_transform) massless: the rows and columns
-/// of M and C of its first n_static coordinates set to zero (the dropped mass), and modal damping
+/// Makes the model projected on the basis V T (massless_transform) massless: M = diag(0, I) (the
+/// residual mass dropped; the dynamic coordinates are M-normalized modes), C zero on the first
+/// n_static coordinates, and modal damping
 /// xi on the first k modes of the model with its static coordinates free (condensed statically:
 /// K_dd - K_ds K_ss^-1 K_sd with M_dd), on the dynamic coordinates only:
 /// C_dd = sum 2 xi w_k (M_dd x_k)(M_dd x_k)^T. Sets rm->massless, rm->n_static and
@@ -240,6 +239,10 @@ void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k);
 /// this bound; free, they are softer). *free_boundary (if not null) receives the step of the model
 /// with its static coordinates condensed (no contact).
 double massless_critical_step(const ReducedModel& m, double* free_boundary = nullptr);
+/// The same with only the directions `held` of the static coordinates held (n_static x n_h,
+/// row-major, e.g. the normals of the contact nodes: a contact that slides holds nothing else)
+/// and the rest of them condensed: between the free and the all-held steps.
+double massless_critical_step(const ReducedModel& m, const std::vector<double>& held, std::size_t n_held);
 
 /// A `morse nlrom` file as the online stage uses it: the reduced model, the basis on every node
 /// of the mesh and the node sets, identical on every rank.

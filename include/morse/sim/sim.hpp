@@ -148,6 +148,11 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v);
 /// (undamped bound), omega_max^2 the largest eigenvalue of (K~, M~); for a massless boundary
 /// (m.massless), that of the internal part with the boundary held (nlrom::massless_critical_step).
 double critical_step(const nlrom::ReducedModel& m);
+/// The critical step of a run with contact c (null or no nodes: none). Mass-carrying models:
+/// critical_step(m). Massless: the dynamic modes with the normal directions of the contact nodes
+/// held (a sliding contact holds no other; nlrom::massless_critical_step), or with every static
+/// coordinate free without contact.
+double critical_step(const nlrom::ReducedModel& m, const ContactSettings* c);
 
 /// The nonlinear term of one step: G(q) = P3 g~(q) with P3 = 2h^2 (2M + hC)^-1 (KernelLayout).
 class CubicKernel {
