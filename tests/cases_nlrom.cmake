@@ -132,3 +132,63 @@ foreach(np 1 2)
   set_tests_properties(case_sweep_lock_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 120
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
 endforeach()
+
+# Massless-boundary models (issue 27): the fixture builds one (exact tensors, a one-node set for the
+# sweep monitor: node 5 is a corner of face x1); bad options and runs are refused with the option,
+# value or node named and nothing written, and a massless sweep writes its file.
+add_test(NAME case_setup_rom_massless
+         COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n 1 $<TARGET_FILE:morse> nlrom ${MORSE_NLR_BOX} -boundary x1
+                 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact -nlrom_boundary_mass massless
+                 -mesh_node_sets tipnode -mesh_node_set_tipnode 5 -out ${MORSE_CASE_DIR}/case_rom_massless.h5)
+set_tests_properties(case_setup_rom_massless PROPERTIES LABELS "case;np1" TIMEOUT 120
+  ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box FIXTURES_SETUP morse_case_rom_massless
+  FAIL_REGULAR_EXPRESSION "morse: error")
+add_test(NAME case_setup_rom_linear
+         COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n 1 $<TARGET_FILE:morse> nlrom ${MORSE_NLR_BOX} -boundary x1
+                 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces none -nlrom_boundary_mass massless
+                 -out ${MORSE_CASE_DIR}/case_rom_linear.h5)
+set_tests_properties(case_setup_rom_linear PROPERTIES LABELS "case;np1" TIMEOUT 120
+  ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box FIXTURES_SETUP morse_case_rom_linear
+  FAIL_REGULAR_EXPRESSION "morse: error")
+set(MORSE_ML_ROM ${MORSE_CASE_DIR}/case_rom_massless.h5)
+morse_add_error_case(nlrom_massless_fmax_negative
+  "morse: error: -nlrom_massless_fmax must be a finite frequency >= 0 \\[Hz\\] \\(got -5\\)" ml_fmax.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass massless
+       -nlrom_massless_fmax -5)
+morse_add_error_case(nlrom_massless_fmax_without_massless
+  "morse: error: -nlrom_massless_fmax applies to -nlrom_boundary_mass massless" ml_fmax2.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_massless_fmax 100)
+morse_add_error_case(nlrom_massless_bad_mass
+  "morse: error: .*-nlrom_boundary_mass" ml_mass.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass light)
+morse_add_error_case(simulate_massless_dt_above_critical
+  "morse: error: simulate: -sim_dt 1 s is above the critical step of central differences on the massless model, [0-9.e-]+ s"
+  ml_dt.h5
+  ARGS simulate -rom ${MORSE_ML_ROM} -sim_dt 1 -sim_tfinal 10 -contact_set x1 -casing_clearance 2e-4)
+morse_add_error_case(simulate_massless_trapezoidal
+  "morse: error: simulate: the implicit scheme \\(-sim_scheme trapezoidal\\) does not take a massless-boundary model"
+  ml_trap.h5
+  ARGS simulate -rom ${MORSE_ML_ROM} -sim_dt 1e-5 -sim_tfinal 1e-4 -sim_scheme trapezoidal)
+morse_add_error_case(simulate_massless_contact_not_boundary
+  "morse: error: .*case_rom_massless\\.h5: node 1 of set y0 is not a physical boundary node of the reduced model"
+  ml_contact.h5
+  ARGS simulate -rom ${MORSE_ML_ROM} -sim_dt 1e-6 -sim_tfinal 1e-4 -contact_set y0 -casing_clearance 2e-4)
+morse_add_error_case(simulate_linear_model_run_nonlinear
+  "morse: error: simulate: the reduced model has no nonlinear force of size 15 \\(a linear model, -nlrom_forces none\\): run it with -sim_linear"
+  ml_linear.h5
+  ARGS simulate -rom ${MORSE_CASE_DIR}/case_rom_linear.h5 -sim_dt 1e-6 -sim_tfinal 1e-4)
+foreach(np 1 2)
+  foreach(c simulate_massless_dt_above_critical simulate_massless_trapezoidal simulate_massless_contact_not_boundary)
+    set_tests_properties(case_${c}_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_rom_massless)
+  endforeach()
+  set_tests_properties(case_simulate_linear_model_run_nonlinear_np${np} PROPERTIES
+    FIXTURES_REQUIRED morse_case_rom_linear)
+  add_test(NAME case_sweep_massless_np${np}
+           COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n ${np} $<TARGET_FILE:morse> sweep -rom ${MORSE_ML_ROM}
+                   -contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3 -sim_dt 4e-6
+                   -sim_revolutions 1 -sweep_omega_min 1000 -sweep_omega_max 1200 -sweep_omega_step 100
+                   -sweep_monitor tipnode -sweep_restart -out ${MORSE_CASE_DIR}/sweep_massless_np${np}.h5)
+  set_tests_properties(case_sweep_massless_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 120
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_rom_massless
+    FAIL_REGULAR_EXPRESSION "morse: error" PASS_REGULAR_EXPRESSION "3 speeds")
+endforeach()

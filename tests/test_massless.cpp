@@ -19,6 +19,7 @@
 #include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -162,4 +163,17 @@ TEST(Massless, FreeBoundaryFrequenciesConvergeToTheFullModel) {
     last = err;
   }
   EXPECT_GT(first / last, 10.0);
+}
+
+// A boundary coordinate without stiffness (an isolated node: its static equilibrium is
+// singular) is refused by make_massless with that reason.
+TEST(Massless, BoundaryWithoutStiffnessIsRefused) {
+  nlrom::ReducedModel rm;
+  rm.r = 4, rm.n_b = 3;
+  rm.K.assign(16, 0.0), rm.M.assign(16, 0.0), rm.C.assign(16, 0.0);
+  for (int i = 0; i < 4; ++i) rm.M[i * 4 + i] = 1.0;
+  rm.K[0] = 2.0, rm.K[5] = 2.0, rm.K[15] = 5.0;  // coordinate 2 (a boundary DOF) has no stiffness
+  test::expect_error_parts([&] { nlrom::make_massless(&rm, 3, 0.0, 0); },
+                           {"massless boundary", "not positive definite", "no stiffness of its own"},
+                           "a boundary coordinate without stiffness");
 }

@@ -15,7 +15,6 @@
 #include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
-#include "morse/eigen/eigen.hpp"
 #include "morse/sim/run.hpp"
 #include "morse/sim/sim.hpp"
 
@@ -46,7 +45,7 @@ void run_sweep(MPI_Comm comm) {
   rec.rom = files::absolute_path(so.rom);  // valid from any directory
   rec.n_speeds = n_speeds;
   rec.frequencies = s.frequencies();
-  for (double w2 : eigen::dense_eigenvalues(static_cast<int>(r), sm.model.K, sm.model.M, nullptr))
+  for (double w2 : nlrom::free_eigenvalues(sm.model))  // a massless M is singular: its condensed model
     rec.eigenfrequencies_hz.push_back(hz(w2));
   const int rank = rank_of(comm);
   const std::vector<std::int64_t> done_idx = sim::resume_sweep(comm, so.out, so.restart, &rec);

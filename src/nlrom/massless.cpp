@@ -338,4 +338,11 @@ double massless_critical_step(const ReducedModel& m, const std::vector<double>& 
   return free_dt;
 }
 
+std::vector<double> free_eigenvalues(const ReducedModel& m) {
+  if (!m.massless) return eigen::dense_eigenvalues(static_cast<int>(m.r), m.K, m.M, nullptr);
+  const std::size_t r = static_cast<std::size_t>(m.r), ns = static_cast<std::size_t>(m.n_static), nd = r - ns;
+  return eigen::dense_eigenvalues(static_cast<int>(nd), condensed_stiffness(m, ns), block(m.M, r, ns, nd, ns, nd),
+                                  nullptr);
+}
+
 }  // namespace morse::nlrom

@@ -36,8 +36,9 @@ void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector
 /// (ContactSolver, exact for the linearized gaps), so a fixed point is the equilibrium with contact.
 /// Linear (or g = 0): D = K_bb^-1 and one iteration is exact. Nonlinear: D starts as K_bb^-1 and is
 /// replaced by the tangent (K_bb + dg_b/du_b)^-1 at the current iterate whenever an iteration
-/// contracts the change by less than 5 (and kept for the next steps: the tangent of a nearby state
-/// makes the iteration converge in two or three steps), to 1e-12 relative change or round-off.
+/// contracts the change by less than 10 (and kept for the next steps: the tangent of a nearby state
+/// makes the iteration converge in two or three steps), to 1e-10 relative change, or where the
+/// change stops falling below 1e-7 (round-off); at most 100 iterations.
 class MasslessBoundary {
  public:
   /// contact: null or without nodes for none (kept by reference, as ContactSolver does). g (the

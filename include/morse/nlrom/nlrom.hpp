@@ -239,6 +239,9 @@ void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k);
 /// this bound; free, they are softer). *free_boundary (if not null) receives the step of the model
 /// with its static coordinates condensed (no contact).
 double massless_critical_step(const ReducedModel& m, double* free_boundary = nullptr);
+/// The eigenvalues omega^2 of a reduced model with its boundary free, ascending: of (K, M), or
+/// for a massless model of its dynamic block with the static coordinates condensed (M is singular).
+std::vector<double> free_eigenvalues(const ReducedModel& m);
 /// The same with only the directions `held` of the static coordinates held (n_static x n_h,
 /// row-major, e.g. the normals of the contact nodes: a contact that slides holds nothing else)
 /// and the rest of them condensed: between the free and the all-held steps.
