@@ -22,6 +22,6 @@ expect_error() {
   rc=$?
   set -e
   test $rc -ne 0
-  echo "$out" | grep -q -- "$pattern" || { echo "missing '$pattern' in: $out"; exit 1; }
+  grep -q -- "$pattern" <<<"$out" || { echo "missing '$pattern' in: $out"; exit 1; }
   test ! -e "$file"
 }

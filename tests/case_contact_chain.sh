@@ -142,7 +142,7 @@ PY
   done_before=$(/usr/bin/python3 -c "import h5py; print(h5py.File('$d/resumed.h5','r')['/sweep'].attrs['n_done'])")
   echo "sweep killed with $done_before of 13 speeds in the file"
   out=$(run "${sweep[@]}" -out "$d/resumed.h5" 2>&1)
-  echo "$out" | grep -q "($done_before already in" || { echo "no resume in: $out"; exit 1; }
+  grep -q "($done_before already in" <<<"$out" || { echo "no resume in: $out"; exit 1; }
   cmp_file="$d/resumed.h5"
 else
   cmp_file="$d/full.h5"
@@ -172,7 +172,7 @@ set +e
 out=$(run "${sweep[@]}" -sim_revolutions 10 -out "$d/full.h5" 2>&1)
 rc=$?
 set -e
-test $rc -ne 0 && echo "$out" | grep -q "other settings"
+test $rc -ne 0 && grep -q "other settings" <<<"$out"
 expect_error 'not a physical boundary node' "$d/bad_sim.h5" simulate -rom "$d/cb.h5" -contact_set x0 -sim_dt 4e-6 \
   -sim_tfinal 1e-3
 expect_error '-sim_revolutions needs a rotation speed' "$d/bad_rev.h5" simulate -rom "$d/cb.h5" -contact_set x1 \

@@ -117,7 +117,7 @@ if [ -e "$d/old_fom_fast.h5" ]; then
   rc=$?
   set -e
   test $rc -ne 0
-  echo "$out" | grep -q -- 'give -compare_tmax T or the harmonic load (-load_\*).*neither file stores' \
+  grep -q -- 'give -compare_tmax T or the harmonic load (-load_\*).*neither file stores' <<<"$out" \
     || { echo "missing the no-load message in: $out"; exit 1; }
 fi
 # Three load cases spread over the ranks (one file each), with full-field snapshots at the fom's

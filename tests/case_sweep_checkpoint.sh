@@ -58,8 +58,8 @@ refused() {
   set -e
   echo "$out" | tail -2
   test $rc -ne 0 || { echo "case: FAIL: $1: the corrupt checkpoint was resumed"; exit 1; }
-  echo "$out" | grep -q -F -- "$f: $pattern" || { echo "case: FAIL: $1: '$f: $pattern' not in: $out"; exit 1; }
-  echo "$out" | grep -q "already in" && { echo "case: FAIL: $1: resumed"; exit 1; }
+  grep -q -F -- "$f: $pattern" <<<"$out" || { echo "case: FAIL: $1: '$f: $pattern' not in: $out"; exit 1; }
+  grep -q "already in" <<<"$out" && { echo "case: FAIL: $1: resumed"; exit 1; }
   cmp -s "$f" "$d/before.h5" || { echo "case: FAIL: $1: the file was changed"; exit 1; }
   if compgen -G "$f.tmp*" > /dev/null; then echo "case: FAIL: $1: temporary left"; exit 1; fi
 }
@@ -71,5 +71,6 @@ refused spectrum_shape '/sweep/spectrum has shape [11 x 5], expected [11 x 11]'
 refused n_done '/sweep@n_done is 5 but /sweep/index holds 11 finished speeds'
 
 # The intact file resumes with every speed done.
-run "${sweep[@]}" -out "$d/good.h5" | grep -q "(11 already in $d/good.h5)"
+out=$(run "${sweep[@]}" -out "$d/good.h5")
+grep -q "(11 already in $d/good.h5)" <<<"$out"
 echo "case: ok: corrupt sweep checkpoints refused, files unchanged"

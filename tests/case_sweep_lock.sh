@@ -44,7 +44,7 @@ set -e
 echo "$msg" | tail -2
 [ $rc -ne 0 ] || fail "the second run on $out was not refused"
 pattern="morse: error: $out is being written by another morse run \(pid [0-9]+\); wait for it or choose another -out"
-echo "$msg" | grep -q -E -- "$pattern" || fail "'$pattern' not in: $msg"
+grep -q -E -- "$pattern" <<<"$msg" || fail "'$pattern' not in: $msg"
 holder=$(echo "$msg" | sed -n 's/.*another morse run (pid \([0-9]*\)).*/\1/p' | head -1)
 case " $ranks " in *" $holder "*) ;; *) fail "pid $holder is not a process of the first run ($ranks)" ;; esac
 kill -0 "$first" 2>/dev/null || { cat "$d/first.log"; fail "the first run ended before it was killed"; }

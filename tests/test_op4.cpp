@@ -824,6 +824,10 @@ TEST_F(Op4Test, BinaryErrors) {
   expect_error(p_type, "KAA", {p_type + ": byte 4: ", "complex matrices are not supported"});
   const std::string p_form = put("form.op4", patch_int(bytes, 12, 8));  // header word 3
   expect_error(p_form, "KAA", {p_form + ": byte 4: ", "form 8 (identity)"});
+  // Found by bench/fuzz (op4, 10 minutes): a 64-bit header whose row count is INT64_MIN, whose
+  // negation (the row count of a symmetric matrix) overflowed. Refused with the count named.
+  const std::string p_min = put("int64_min_rows.op4", std::string("\x30\x00\x00\x00\x00\x00\x00\x00\x00\x00\x34\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x80\x00\x00\x00\x00\x0a\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x48\x70\x61\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x30\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x60\xb0\x00", 72));
+  expect_error(p_min, "", {p_min + ": byte ", "row count -9223372036854775808"});
 }
 
 TEST_F(Op4Test, WriterErrors) {

@@ -507,6 +507,8 @@ class BinarySource : public Source {
     *h = Op4Header();
     h->ncols = word();
     *nrow_raw = word();
+    if (*nrow_raw == std::numeric_limits<std::int64_t>::min())  // its negation overflows (found by fuzzing)
+      fail(cat("row count ", *nrow_raw, " in the matrix header"));
     h->nrows = *nrow_raw < 0 ? -*nrow_raw : *nrow_raw;
     h->form = static_cast<int>(std::clamp<std::int64_t>(word(), -1000000, 1000000));
     h->type = static_cast<int>(std::clamp<std::int64_t>(word(), -1000000, 1000000));
