@@ -28,6 +28,17 @@ std::vector<double> inverse(std::vector<double> A, std::size_t n, const char* wh
   return A;
 }
 
+// max_i sum_j |A_ij| of an n x n row-major matrix.
+double max_row_sum(const std::vector<double>& A, std::size_t n) {
+  double m = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    double s = 0.0;
+    for (std::size_t j = 0; j < n; ++j) s += std::abs(A[i * n + j]);
+    m = std::max(m, s);
+  }
+  return m;
+}
+
 }  // namespace
 
 void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
@@ -79,6 +90,7 @@ MasslessBoundary::MasslessBoundary(const nlrom::ReducedModel& m, const ContactSe
   D_ = inverse(Kbb_, nb_,
                "simulate: the stiffness K_ss of the static coordinates of the massless model is singular: a boundary "
                "node has no stiffness (an isolated node)");
+  norm_D_ = max_row_sum(D_, nb_);
   Kbi_.assign(nb_ * ni, 0.0);
   for (std::size_t a = 0; a < nb_; ++a)
     for (std::size_t i = 0; i < ni; ++i) Kbi_[a * ni + i] = m.K[a * r_ + nb_ + i];
@@ -112,6 +124,7 @@ void MasslessBoundary::update_tangent(const double* q) {
     return;  // a singular tangent (a limit point): keep the previous compliance
   }
   ++tangent_updates_;
+  norm_D_ = max_row_sum(D_, nb_);
   if (contact_) {
     for (std::size_t a = 0; a < nb_; ++a)
       for (std::size_t b = 0; b < nb_; ++b) P_[a * r_ + b] = D_[a * nb_ + b];
@@ -134,12 +147,15 @@ void MasslessBoundary::solve(double* q, const double* qm, double h, double t, co
     ++iterations_;
     if (nonlinear_) g_->apply(q, g_val_.data());  // at the current iterate
     // R = K_bb u + g_b - (f_b - K_bi eta); u_free = u - D R.
+    double force = 0.0;  // the size of the forces in R, for the round-off level of the iterate
     for (std::size_t a = 0; a < nb_; ++a) {
-      double x = (nonlinear_ ? g_val_[a] : 0.0) - base_[a];
+      const double ga = nonlinear_ ? g_val_[a] : 0.0;
+      double ku = 0.0;
       const double* k = &Kbb_[a * nb_];
-      for (std::size_t b = 0; b < nb_; ++b) x += k[b] * q[b];
-      rhs_[a] = x;
+      for (std::size_t b = 0; b < nb_; ++b) ku += k[b] * q[b];
+      rhs_[a] = ku + ga - base_[a];
       last_[a] = q[a];
+      force = std::max({force, std::abs(ku), std::abs(ga), std::abs(base_[a])});
     }
     for (std::size_t a = 0; a < nb_; ++a) {
       double u = 0.0;
@@ -153,11 +169,14 @@ void MasslessBoundary::solve(double* q, const double* qm, double h, double t, co
     change = 0.0;
     for (std::size_t a = 0; a < nb_; ++a)
       size = std::max(size, std::abs(q[a])), change = std::max(change, std::abs(q[a] - last_[a]));
-    // Converged: a change of 1e-10, or a change that stopped falling at the round-off of the
-    // forces (the cancellation in f_b - K_bi eta - g_b leaves 1e-11 to 1e-8 of noise, measured).
-    if (change <= 1e-10 * size || size == 0.0) return;
-    if (it >= 2 && change >= 0.5 * prev_change && change <= 1e-7 * size) return;
-    if (it >= 1 && change > 0.1 * prev_change) update_tangent(q);  // slow: the tangent here
+    // Converged: a change of 1e-10, or one at the round-off level of the update D R, whose terms
+    // (K_bb u, g_b, f_b - K_bi eta) cancel: 64 eps ||D|| max|term| (measured on rotor 37 with
+    // modal derivatives: a floor of 1e-7 to 4e-7 of the boundary displacement), or a change that
+    // stopped falling below 1e-6.
+    const double noise = 64.0 * std::numeric_limits<double>::epsilon() * norm_D_ * force;
+    if (change <= std::max(1e-10 * size, noise) || size == 0.0) return;
+    if (it >= 2 && change >= 0.5 * prev_change && change <= 1e-6 * size) return;
+    if (it >= 1 && change > 0.1 * prev_change && change > 10.0 * noise) update_tangent(q);  // slow: the tangent here
     prev_change = change;
   }
   throw Error(cat("simulate: the static equilibrium of the massless boundary did not converge in ", kMaxIt,

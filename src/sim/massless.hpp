@@ -37,8 +37,9 @@ void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector
 /// Linear (or g = 0): D = K_bb^-1 and one iteration is exact. Nonlinear: D starts as K_bb^-1 and is
 /// replaced by the tangent (K_bb + dg_b/du_b)^-1 at the current iterate whenever an iteration
 /// contracts the change by less than 10 (and kept for the next steps: the tangent of a nearby state
-/// makes the iteration converge in two or three steps), to 1e-10 relative change, or where the
-/// change stops falling below 1e-7 (round-off); at most 100 iterations.
+/// makes the iteration converge in two or three steps), to 1e-10 relative change or the round-off
+/// level of the update (64 eps ||D|| times the largest force term), or where the change stops
+/// falling below 1e-6 of the displacement; at most 100 iterations.
 class MasslessBoundary {
  public:
   /// contact: null or without nodes for none (kept by reference, as ContactSolver does). g (the
@@ -66,6 +67,7 @@ class MasslessBoundary {
   bool nonlinear_;
   std::vector<double> Kbb_;         // nb x nb
   std::vector<double> D_;           // nb x nb: the compliance, K_bb^-1 or the tangent's inverse
+  double norm_D_ = 0.0;             // its infinity norm (the round-off level of an update)
   std::vector<double> Kbi_;         // nb x (r - nb)
   std::shared_ptr<CubicKernel> g_;  // the raw g~ (P3 = I)
   std::shared_ptr<TangentKernel> tangent_;
