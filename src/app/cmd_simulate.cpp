@@ -52,6 +52,11 @@ void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim
     print0(PETSC_COMM_SELF, "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
            stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6, sps * stats.kernel_flops * 1e-9,
            sps * stats.kernel_bytes * 1e-9);
+  if (sm.model.massless && !so.s.linear)
+    print0(PETSC_COMM_SELF, "  massless boundary: %ld equilibrium iterations (%.2f per step), %ld tangents\n",
+           stats.boundary_iterations,
+           stats.steps ? static_cast<double>(stats.boundary_iterations) / static_cast<double>(stats.steps) : 0.0,
+           stats.tangent_updates);
   io::H5Output out(PETSC_COMM_SELF, c.out);
   io::write_provenance(out, "simulate", sm.units);
   const auto& cr = rec.contact;
