@@ -17,18 +17,6 @@ namespace morse::sim {
 
 namespace {
 
-// Inverse of a dense r x r matrix (row-major) by LU.
-std::vector<double> inverse(std::vector<double> A, std::size_t r) {
-  PetscBLASInt n = static_cast<PetscBLASInt>(r), info = 0, lwork = static_cast<PetscBLASInt>(r * 64);
-  std::vector<PetscBLASInt> piv(r);
-  std::vector<double> work(lwork);
-  LAPACKgetrf_(&n, &n, A.data(), &n, piv.data(), &info);
-  MORSE_CHECK(info == 0, "simulate: singular reduced matrix (LAPACK getrf info ", info, ")");
-  LAPACKgetri_(&n, A.data(), &n, piv.data(), work.data(), &lwork, &info);
-  MORSE_CHECK(info == 0, "simulate: LAPACK getri failed (info ", info, ")");
-  return A;  // the inverse of the transpose of a row-major matrix, transposed: the inverse
-}
-
 std::vector<double> matmul(const std::vector<double>& A, const std::vector<double>& B, std::size_t r) {
   std::vector<double> C(r * r, 0.0);
   for (std::size_t i = 0; i < r; ++i)
@@ -43,12 +31,23 @@ std::vector<double> matmul(const std::vector<double>& A, const std::vector<doubl
 
 namespace detail {
 
+std::vector<double> inverse(std::vector<double> A, std::size_t n, const char* what) {
+  PetscBLASInt nn = static_cast<PetscBLASInt>(n), info = 0, lwork = static_cast<PetscBLASInt>(n * 64);
+  std::vector<PetscBLASInt> piv(n);
+  std::vector<double> work(static_cast<std::size_t>(lwork));
+  LAPACKgetrf_(&nn, &nn, A.data(), &nn, piv.data(), &info);
+  MORSE_CHECK(info == 0, what, " (LAPACK getrf info ", info, ")");
+  LAPACKgetri_(&nn, A.data(), &nn, piv.data(), work.data(), &lwork, &info);
+  MORSE_CHECK(info == 0, what, " (LAPACK getri info ", info, ")");
+  return A;  // the inverse of the transpose of a row-major matrix, transposed: the inverse
+}
+
 void step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
                     std::vector<double>* P3) {
   const std::size_t r = static_cast<std::size_t>(m.r);
   std::vector<double> D(r * r);
   for (std::size_t i = 0; i < r * r; ++i) D[i] = 2.0 * m.M[i] + h * m.C[i];
-  D = inverse(D, r);
+  D = inverse(D, r, "simulate: singular reduced matrix");
   std::vector<double> T1(r * r), T2(r * r);
   for (std::size_t i = 0; i < r * r; ++i) {
     T1[i] = 4.0 * m.M[i] - 2.0 * h * h * m.K[i];
@@ -70,7 +69,7 @@ void previous_state(const nlrom::ReducedModel& m, double h, bool nonlinear, cons
     for (std::size_t j = 0; j < r; ++j) x -= m.K[i * r + j] * q[j] + m.C[i * r + j] * v[j];
     rhs[i] = x;
   }
-  auto Minv = inverse(m.M, r);
+  auto Minv = inverse(m.M, r, "simulate: singular reduced matrix");
   qm->assign(r, 0.0);
   for (std::size_t i = 0; i < r; ++i) {
     double a = 0.0;

@@ -28,6 +28,10 @@ void sym_panel_product(std::size_t n_panels, const double* S, const double* x, d
 /// z = the r (r + 1) / 2 monomials q_i q_j, i <= j, lexicographic.
 void quadratic_monomials(std::size_t r, const double* q, double* z);
 
+/// The inverse of a dense n x n matrix (row-major) by LU; throws `what` with LAPACK's info if it is
+/// singular.
+std::vector<double> inverse(std::vector<double> A, std::size_t n, const char* what);
+
 /// Steps of length h that reach t_final (the last one may end just past it), as every integrator
 /// of src/sim counts them.
 inline long step_count(double t_final, double h) { return static_cast<long>(std::ceil(t_final / h - 1e-9)); }

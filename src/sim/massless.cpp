@@ -16,18 +16,6 @@ namespace morse::sim::detail {
 
 namespace {
 
-// Inverse of a dense n x n matrix (row-major) by LU; `what` names it in the error.
-std::vector<double> inverse(std::vector<double> A, std::size_t n, const char* what) {
-  PetscBLASInt nn = static_cast<PetscBLASInt>(n), info = 0, lwork = static_cast<PetscBLASInt>(n * 64);
-  std::vector<PetscBLASInt> piv(n);
-  std::vector<double> work(static_cast<std::size_t>(lwork));
-  LAPACKgetrf_(&nn, &nn, A.data(), &nn, piv.data(), &info);
-  MORSE_CHECK(info == 0, what, " (LAPACK getrf info ", info, ")");
-  LAPACKgetri_(&nn, A.data(), &nn, piv.data(), work.data(), &lwork, &info);
-  MORSE_CHECK(info == 0, what, " (LAPACK getri info ", info, ")");
-  return A;
-}
-
 // max_i sum_j |A_ij| of an n x n row-major matrix.
 double max_row_sum(const std::vector<double>& A, std::size_t n) {
   double m = 0.0;
