@@ -488,38 +488,68 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     st.kernel_bytes = kernel->bytes();
   }
 
-  std::vector<double> qm(r), q, qp(r), v, g(r), tmp(r);
+  std::vector<double> qm(r), q, v;
   initial_state(s, r, &q, &v);
-
   {
     std::vector<double> f0(r, 0.0);
     for (const auto& l : loads)
       for (std::size_t i = 0; i < r; ++i) f0[i] += l.factor(0.0) * l.p[i];
     detail::previous_state(m, h, nonlinear, f0, q, v, &qm);
   }
-  const long n_steps = detail::step_count(s.t_final, h);
-  // Contact: P = (M/h^2 + C/2h)^-1 = P3. The forces of state n are reported with state n, one
-  // step after they are computed, so they are kept one step.
+  // Contact: P = (M/h^2 + C/2h)^-1 = P3.
   std::optional<detail::ContactSolver> contact;
-  std::vector<double> c_lam, c_fric, c_gap;
-  int c_active = 0;
+  detail::Corrector corr;
   if (!s.contact.nodes.empty()) {
     contact.emplace(s.contact, P3, r, s.t_final);
     const std::size_t nc = s.contact.nodes.size();
-    c_lam.assign(nc, 0.0), c_fric.assign(3 * nc, 0.0), c_gap.assign(nc, 0.0);
-    for (std::size_t k = 0; k < nc; ++k) c_gap[k] = contact->gap_of(k, q.data(), 0.0);
+    corr.nodes = nc;
+    corr.correct = [&](double* qp, const double* qmm, double t) { contact->correct(qp, qmm, h, t); };
+    corr.normal = [&] { return contact->normal(); };
+    corr.friction = [&] { return contact->friction(); };
+    corr.gap = [&] { return contact->gap(); };
+    corr.active = [&] { return contact->active(); };
+    corr.gap0.assign(nc, 0.0);
+    for (std::size_t k = 0; k < nc; ++k) corr.gap0[k] = contact->gap_of(k, q.data(), 0.0);
+  }
+  detail::central_loop(m, loads, s, P1, P2, lp, kernel ? &*kernel : nullptr, corr, std::move(q), std::move(qm),
+                       std::move(v), callback, &st);
+  return st;
+}
+
+namespace detail {
+
+void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                  const std::vector<double>& P1, const std::vector<double>& P2,
+                  const std::vector<std::vector<double>>& lp, const CubicKernel* kernel, const Corrector& corr,
+                  std::vector<double> q, std::vector<double> qm, std::vector<double> v,
+                  const std::function<void(const StepState&)>& callback, Stats* st) {
+  const std::size_t r = static_cast<std::size_t>(m.r), nc = corr.nodes;
+  const double h = s.dt;
+  std::vector<double> qp(r), g(r);
+  const long n_steps = step_count(s.t_final, h);
+  // The forces of state n are reported with state n, one step after they are computed, so they
+  // are kept one step; those of the initial state are the corrector's gap0 (and its forces, if any).
+  std::vector<double> c_lam(nc, 0.0), c_fric(3 * nc, 0.0), c_gap(nc, 0.0);
+  if (corr.gap0.size() == nc) c_gap = corr.gap0;
+  int c_active = 0;
+  if (nc && corr.initial_forces) {
+    std::copy(corr.normal(), corr.normal() + nc, c_lam.begin());
+    std::copy(corr.friction(), corr.friction() + 3 * nc, c_fric.begin());
+    std::copy(corr.gap(), corr.gap() + nc, c_gap.begin());
+    c_active = corr.active();
   }
   StepState ss;
   ss.model = &m;
   ss.q = q.data();
   ss.v = v.data();
-  if (contact) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
+  ss.active = c_active;
+  if (nc) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
   callback(ss);
   const auto t0 = std::chrono::steady_clock::now();
   // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
   // runs one step late (the last state's velocity uses one extra step).
   for (long n = 0; n <= n_steps; ++n) {
-    const double t = n * h;
+    const double t = static_cast<double>(n) * h;
     for (std::size_t i = 0; i < r; ++i) {
       double x = 0.0;
       const double* p1 = &P1[i * r];
@@ -531,11 +561,11 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       const double c = loads[l].factor(t);
       for (std::size_t i = 0; i < r; ++i) qp[i] += c * lp[l][i];
     }
-    if (nonlinear) {
+    if (kernel) {
       kernel->apply(q.data(), g.data());
       for (std::size_t i = 0; i < r; ++i) qp[i] -= g[i];
     }
-    if (contact) contact->correct(qp.data(), qm.data(), h, t + h);
+    if (corr.correct) corr.correct(qp.data(), qm.data(), t + h);
     bool finite = true;
     for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
     if (!finite)
@@ -550,20 +580,19 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
       ss.active = c_active;
       callback(ss);
     }
-    if (contact) {  // the forces that produced q_{n+1} belong to state n + 1
-      const std::size_t nc = s.contact.nodes.size();
-      std::copy(contact->normal(), contact->normal() + nc, c_lam.begin());
-      std::copy(contact->friction(), contact->friction() + 3 * nc, c_fric.begin());
-      std::copy(contact->gap(), contact->gap() + nc, c_gap.begin());
-      c_active = contact->active();
+    if (nc) {  // the forces that produced q_{n+1} belong to state n + 1
+      std::copy(corr.normal(), corr.normal() + nc, c_lam.begin());
+      std::copy(corr.friction(), corr.friction() + 3 * nc, c_fric.begin());
+      std::copy(corr.gap(), corr.gap() + nc, c_gap.begin());
+      c_active = corr.active();
     }
     std::swap(qm, q);
     std::swap(q, qp);
-    ++st.steps;
   }
-  st.steps = n_steps;
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return st;
+  st->steps = n_steps;
+  st->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+}  // namespace detail
 
 }  // namespace morse::sim

@@ -7,6 +7,7 @@
 #include <petscblaslapack.h>
 
 #include <cmath>
+#include <functional>
 #include <vector>
 
 #include "morse/sim/sim.hpp"
@@ -27,6 +28,27 @@ void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, 
 void sym_panel_product(std::size_t n_panels, const double* S, const double* x, double* y);
 /// z = the r (r + 1) / 2 monomials q_i q_j, i <= j, lexicographic.
 void quadratic_monomials(std::size_t r, const double* q, double* z);
+
+/// What follows the explicit update of each step of central_loop: the contact correction of a
+/// mass-carrying model, or the static equilibrium of a massless boundary (with its contact).
+struct Corrector {
+  std::size_t nodes = 0;                                                // contact nodes (0: none)
+  std::function<void(double* qp, const double* qm, double t)> correct;  // of the state at t; null: none
+  std::function<const double*()> normal, friction, gap;                 // what the last correction left
+  std::function<int()> active;
+  std::vector<double> gap0;     // the initial state's gaps (if not initial_forces)
+  bool initial_forces = false;  // the initial state's forces and gaps are the corrector's current ones
+};
+
+/// The time loop of central differences, shared by the mass-carrying and the massless models: from
+/// the state q_0 (velocity v, q_{-1} = qm), q_{n+1} = P1 q_n + P2 q_{n-1} + sum_l c_l(t_n) lp_l -
+/// kernel(q_n), then corr.correct(q_{n+1}, q_{n-1}, t_{n+1}); NaN stops the run naming the time.
+/// callback(state n) runs once v_n is known. Sets st->steps and st->seconds.
+void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                  const std::vector<double>& P1, const std::vector<double>& P2,
+                  const std::vector<std::vector<double>>& lp, const CubicKernel* kernel, const Corrector& corr,
+                  std::vector<double> q, std::vector<double> qm, std::vector<double> v,
+                  const std::function<void(const StepState&)>& callback, Stats* st);
 
 /// The inverse of a dense n x n matrix (row-major) by LU; throws `what` with LAPACK's info if it is
 /// singular.

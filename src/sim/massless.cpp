@@ -213,7 +213,7 @@ Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<Reduced
       for (std::size_t a = 0; a < nb; ++a) fb[a] += l.factor(t) * l.p[a];
   };
 
-  std::vector<double> qm(r), q, qp(r), v, g(r);
+  std::vector<double> qm(r), q, v;
   initial_state(s, r, &q, &v);
   // The boundary of the initial state is the equilibrium of eta_0 (a given u_b is replaced).
   for (std::size_t a = 0; a < nb; ++a) qm[a] = q[a] - h * v[a];
@@ -238,70 +238,23 @@ Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<Reduced
       qm[nb + i] = q[nb + i] - h * v[nb + i] + 0.5 * h * h * a;
     }
   }
-  const long n_steps = step_count(s.t_final, h);
-  const std::size_t nc = boundary.has_contact() ? s.contact.nodes.size() : 0;
-  std::vector<double> c_lam(nc, 0.0), c_fric(3 * nc, 0.0), c_gap(nc, 0.0);
-  int c_active = 0;
-  if (nc) {
-    std::copy(boundary.normal(), boundary.normal() + nc, c_lam.begin());
-    std::copy(boundary.friction(), boundary.friction() + 3 * nc, c_fric.begin());
-    std::copy(boundary.gap(), boundary.gap() + nc, c_gap.begin());
-    c_active = boundary.active();
+  Corrector corr;
+  corr.correct = [&](double* qp, const double* qmm, double t) {
+    boundary_load(t);
+    boundary.solve(qp, qmm, h, t, fb.data());
+  };
+  if (boundary.has_contact()) {
+    corr.nodes = s.contact.nodes.size();
+    corr.normal = [&] { return boundary.normal(); };
+    corr.friction = [&] { return boundary.friction(); };
+    corr.gap = [&] { return boundary.gap(); };
+    corr.active = [&] { return boundary.active(); };
+    corr.initial_forces = true;  // the initial equilibrium's
   }
-  StepState ss;
-  ss.model = &m;
-  ss.q = q.data();
-  ss.v = v.data();
-  ss.active = c_active;
-  if (nc) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
-  callback(ss);
-  const auto t0 = std::chrono::steady_clock::now();
-  for (long n = 0; n <= n_steps; ++n) {
-    const double t = static_cast<double>(n) * h;
-    for (std::size_t i = 0; i < r; ++i) {
-      double x = 0.0;
-      const double* p1 = &P1[i * r];
-      const double* p2 = &P2[i * r];
-      for (std::size_t j = 0; j < r; ++j) x += p1[j] * q[j] + p2[j] * qm[j];
-      qp[i] = x;
-    }
-    for (std::size_t l = 0; l < loads.size(); ++l) {
-      const double c = loads[l].factor(t);
-      for (std::size_t i = nb; i < r; ++i) qp[i] += c * lp[l][i];
-    }
-    if (nonlinear) {
-      kernel->apply(q.data(), g.data());
-      for (std::size_t i = nb; i < r; ++i) qp[i] -= g[i];
-    }
-    boundary_load(t + h);
-    boundary.solve(qp.data(), qm.data(), h, t + h, fb.data());
-    bool finite = true;
-    for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
-    if (!finite)
-      throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
-                      ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
-    if (n > 0) {  // state n with its central velocity
-      for (std::size_t i = 0; i < r; ++i) v[i] = (qp[i] - qm[i]) / (2.0 * h);
-      ss.q = q.data();
-      ss.v = v.data();
-      ss.step = n;
-      ss.t = t;
-      ss.active = c_active;
-      callback(ss);
-    }
-    if (nc) {  // the forces of state n + 1
-      std::copy(boundary.normal(), boundary.normal() + nc, c_lam.begin());
-      std::copy(boundary.friction(), boundary.friction() + 3 * nc, c_fric.begin());
-      std::copy(boundary.gap(), boundary.gap() + nc, c_gap.begin());
-      c_active = boundary.active();
-    }
-    std::swap(qm, q);
-    std::swap(q, qp);
-  }
-  st.steps = n_steps;
+  central_loop(m, loads, s, P1, P2, lp, kernel ? &*kernel : nullptr, corr, std::move(q), std::move(qm), std::move(v),
+               callback, &st);
   st.boundary_iterations = boundary.iterations();
   st.tangent_updates = boundary.tangent_updates();
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return st;
 }
 
