@@ -45,42 +45,6 @@ nlrom::ReducedModel massless_cb(const test::Model& m, PetscInt n_fixed, double f
   return rm;
 }
 
-// Eigenvalues of the free-boundary model: (K_dd - K_ds K_ss^-1 K_sd, M_dd), via the dense solver
-// on the whole pencil with the static block given a vanishing mass would be singular, so condense.
-std::vector<double> free_boundary_eigenvalues(const nlrom::ReducedModel& rm) {
-  const std::size_t r = static_cast<std::size_t>(rm.r), ns = static_cast<std::size_t>(rm.n_static), nd = r - ns;
-  // K_ss^-1 K_sd by Gaussian elimination (small, SPD).
-  std::vector<double> A(ns * ns), B(ns * nd);
-  for (std::size_t i = 0; i < ns; ++i) {
-    for (std::size_t j = 0; j < ns; ++j) A[i * ns + j] = rm.K[i * r + j];
-    for (std::size_t j = 0; j < nd; ++j) B[i * nd + j] = rm.K[i * r + ns + j];
-  }
-  for (std::size_t k = 0; k < ns; ++k)
-    for (std::size_t i = k + 1; i < ns; ++i) {
-      const double f = A[i * ns + k] / A[k * ns + k];
-      for (std::size_t j = k; j < ns; ++j) A[i * ns + j] -= f * A[k * ns + j];
-      for (std::size_t j = 0; j < nd; ++j) B[i * nd + j] -= f * B[k * nd + j];
-    }
-  for (std::size_t k = ns; k-- > 0;) {
-    for (std::size_t j = 0; j < nd; ++j) {
-      double x = B[k * nd + j];
-      for (std::size_t l = k + 1; l < ns; ++l) x -= A[k * ns + l] * B[l * nd + j];
-      B[k * nd + j] = x / A[k * ns + k];
-    }
-  }
-  std::vector<double> Kc(nd * nd), Md(nd * nd);
-  for (std::size_t i = 0; i < nd; ++i)
-    for (std::size_t j = 0; j < nd; ++j) {
-      double s = 0;
-      for (std::size_t k = 0; k < ns; ++k) s += rm.K[k * r + ns + i] * B[k * nd + j];
-      Kc[i * nd + j] = rm.K[(ns + i) * r + ns + j] - s;
-      Md[i * nd + j] = rm.M[(ns + i) * r + ns + j];
-    }
-  for (std::size_t i = 0; i < nd; ++i)
-    for (std::size_t j = i + 1; j < nd; ++j) Kc[i * nd + j] = Kc[j * nd + i] = 0.5 * (Kc[i * nd + j] + Kc[j * nd + i]);
-  return eigen::dense_eigenvalues(static_cast<int>(nd), Kc, Md);
-}
-
 }  // namespace
 
 // Boundary free: the modes of the massless model are the lowest of the CB model (r - n_b of them by
@@ -109,7 +73,7 @@ TEST(Massless, FreeBoundaryModesAreTheReducedModelsLowest) {
         dm = std::max(dm, std::abs(rm.M[i * r + j] - (i >= ns && i == j ? 1.0 : 0.0)));
         damping = std::max(damping, std::abs(rm.C[i * r + j]));
       }
-    const auto w = free_boundary_eigenvalues(rm);
+    const auto w = nlrom::free_eigenvalues(rm);
     double dw = 0;
     for (std::size_t k = 0; k < nd; ++k) dw = std::max(dw, std::abs(w[k] / wcb[k] - 1.0));
     double free_dt = 0;
@@ -144,7 +108,7 @@ TEST(Massless, FreeBoundaryFrequenciesConvergeToTheFullModel) {
   double first = 0, last = 0, prev = 1e300;
   for (PetscInt nf : {6, 12, 24, 48}) {
     const auto rm = massless_cb(m, nf);
-    const auto w = free_boundary_eigenvalues(rm);
+    const auto w = nlrom::free_eigenvalues(rm);
     cb::CBResult c = test::cb_basis(m, "x1", nf);
     const auto wc = eigen::dense_eigenvalues(static_cast<int>(c.n()), c.K, c.M);
     double err = 0, same = 0;

@@ -273,21 +273,14 @@ double massless_critical_step(const ReducedModel& m, double* free_boundary) {
   const std::size_t r = static_cast<std::size_t>(m.r), ns = static_cast<std::size_t>(m.n_static), nd = r - ns;
   const auto Mdd = block(m.M, r, ns, nd, ns, nd);
   const auto held = eigen::dense_eigenvalues(static_cast<int>(nd), block(m.K, r, ns, nd, ns, nd), Mdd, nullptr);
-  if (free_boundary) {
-    const auto w = eigen::dense_eigenvalues(static_cast<int>(nd), condensed_stiffness(m, ns), Mdd, nullptr);
-    *free_boundary = 2.0 / std::sqrt(std::max(w.back(), 1e-300));
-  }
+  if (free_boundary) *free_boundary = 2.0 / std::sqrt(std::max(free_eigenvalues(m).back(), 1e-300));
   return 2.0 / std::sqrt(std::max(held.back(), 1e-300));
 }
 
 double massless_critical_step(const ReducedModel& m, const std::vector<double>& held, std::size_t nh) {
   const std::size_t r = static_cast<std::size_t>(m.r), ns = static_cast<std::size_t>(m.n_static), nd = r - ns;
   MORSE_CHECK(held.size() == ns * nh && nh <= ns, "massless_critical_step: held directions are not ", ns, " x ", nh);
-  if (nh == 0) {
-    double free_dt = 0;
-    massless_critical_step(m, &free_dt);
-    return free_dt;
-  }
+  if (nh == 0) return 2.0 / std::sqrt(std::max(free_eigenvalues(m).back(), 1e-300));
   // C: an orthonormal basis of the complement of span(held) in the static coordinates, the
   // eigenvectors of I - H (H^T H)^-1 H^T with eigenvalue 1.
   std::vector<double> HtH(nh * nh, 0.0), Ht(nh * ns);
@@ -314,6 +307,7 @@ double massless_critical_step(const ReducedModel& m, const std::vector<double>& 
   ReducedModel red;
   red.r = static_cast<PetscInt>(nf + nd);
   red.n_static = static_cast<PetscInt>(nf);
+  red.massless = true;
   const std::size_t rr = nf + nd;
   red.K.assign(rr * rr, 0.0), red.M.assign(rr * rr, 0.0);
   auto col = [&](std::size_t c, std::size_t i) { return c < nf ? Y[i * ns + nh + c] : 0.0; };  // static part
@@ -333,9 +327,7 @@ double massless_critical_step(const ReducedModel& m, const std::vector<double>& 
       }
       red.K[a * rr + b] = x;
     }
-  double free_dt = 0;
-  massless_critical_step(red, &free_dt);
-  return free_dt;
+  return 2.0 / std::sqrt(std::max(free_eigenvalues(red).back(), 1e-300));
 }
 
 std::vector<double> free_eigenvalues(const ReducedModel& m) {

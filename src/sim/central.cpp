@@ -100,19 +100,12 @@ double StepState::energy() const { return sim::energy(*model, q, v); }
 double critical_step(const nlrom::ReducedModel& m, const ContactSettings* c) {
   if (!m.massless) return critical_step(m);
   const std::size_t ns = static_cast<std::size_t>(m.n_static), nc = c ? c->nodes.size() : 0;
-  if (nc == 0) {
-    double free_dt = 0;
-    nlrom::massless_critical_step(m, &free_dt);
-    return free_dt;
-  }
+  if (nc == 0) return 2.0 / std::sqrt(std::max(nlrom::free_eigenvalues(m).back(), 1e-300));
+  detail::check_contact_on_boundary(m, *c);
   const auto normal = contact_normals(*c);
   std::vector<double> H(ns * nc, 0.0);
-  for (std::size_t k = 0; k < nc; ++k) {
-    MORSE_CHECK(c->nodes[k].dof + 3 <= static_cast<std::size_t>(m.n_b), "simulate: contact node DOF ", c->nodes[k].dof,
-                " is not a boundary coordinate of the massless model (", m.n_b,
-                " boundary coordinates): contact nodes must belong to the boundary set");
+  for (std::size_t k = 0; k < nc; ++k)
     for (int d = 0; d < 3; ++d) H[(c->nodes[k].dof + d) * nc + k] = normal[3 * k + d];
-  }
   return nlrom::massless_critical_step(m, H, nc);
 }
 
@@ -456,20 +449,28 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
                 "model; use -sim_scheme central (its step is set by the internal modes)");
     return integrate_trapezoidal(m, loads, s, callback);
   }
-  if (m.massless) return detail::integrate_massless(m, loads, s, callback);
   const std::size_t r = static_cast<std::size_t>(m.r);
   const double h = s.dt;
   MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
   MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
               ")");
   Stats st;
-  st.critical_dt = critical_step(m);
-  MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h, " s is above the critical step of central differences, ",
-              st.critical_dt, " s (2 / omega_max of the reduced model); use -sim_dt <= ", st.critical_dt);
+  st.critical_dt = critical_step(m, &s.contact);
+  if (m.massless)
+    MORSE_CHECK(
+        h <= st.critical_dt, "simulate: -sim_dt ", h,
+        " s is above the critical step of central differences on the massless model, ", st.critical_dt,
+        " s (2 / omega_max of its dynamic modes with the contact normals held); use -sim_dt <= ", st.critical_dt);
+  else
+    MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h, " s is above the critical step of central differences, ",
+                st.critical_dt, " s (2 / omega_max of the reduced model); use -sim_dt <= ", st.critical_dt);
   for (const auto& l : loads)
     MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
   std::vector<double> P1, P2, P3;
-  detail::step_operators(m, h, &P1, &P2, &P3);
+  if (m.massless)
+    detail::massless_step_operators(m, h, &P1, &P2, &P3);
+  else
+    detail::step_operators(m, h, &P1, &P2, &P3);
   std::vector<std::vector<double>> lp;  // P3 p_l
   for (const auto& l : loads) {
     std::vector<double> y(r, 0.0);
@@ -486,6 +487,10 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     st.kernel = kernel->potential() ? "potential" : "folded";
     st.kernel_flops = kernel->flops();
     st.kernel_bytes = kernel->bytes();
+  }
+  if (m.massless) {
+    detail::integrate_massless(m, loads, s, P1, P2, lp, kernel ? &*kernel : nullptr, callback, &st);
+    return st;
   }
 
   std::vector<double> qm(r), q, v;

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include "morse/core/error.hpp"
 
@@ -55,6 +54,13 @@ void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector
   }
 }
 
+void check_contact_on_boundary(const nlrom::ReducedModel& m, const ContactSettings& c) {
+  for (const auto& node : c.nodes)
+    MORSE_CHECK(node.dof + 3 <= static_cast<std::size_t>(m.n_b), "simulate: contact node DOF ", node.dof,
+                " is not a boundary coordinate of the massless model (", m.n_b,
+                " boundary coordinates): contact nodes must belong to the boundary set");
+}
+
 std::shared_ptr<CubicKernel> MasslessBoundary::raw_kernel(const nlrom::ReducedModel& m) {
   const std::size_t r = static_cast<std::size_t>(m.r);
   std::vector<double> I(r * r, 0.0);
@@ -89,10 +95,7 @@ MasslessBoundary::MasslessBoundary(const nlrom::ReducedModel& m, const ContactSe
     J_.assign(r_ * r_, 0.0);
   }
   if (contact && !contact->nodes.empty()) {
-    for (const auto& node : contact->nodes)
-      MORSE_CHECK(node.dof + 3 <= static_cast<std::size_t>(m.n_b), "simulate: contact node DOF ", node.dof,
-                  " is not a boundary coordinate of the massless model (", m.n_b,
-                  " boundary coordinates): contact nodes must belong to the boundary set");
+    check_contact_on_boundary(m, *contact);
     P_.assign(r_ * r_, 0.0);  // the compliance on the boundary rows
     for (std::size_t a = 0; a < nb_; ++a)
       for (std::size_t b = 0; b < nb_; ++b) P_[a * r_ + b] = D_[a * nb_ + b];
@@ -172,39 +175,13 @@ void MasslessBoundary::solve(double* q, const double* qm, double h, double t, co
                   " of the static coordinates, with the tangent): the boundary has reached a limit point"));
 }
 
-Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
-                         const std::function<void(const StepState&)>& callback) {
+void integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                        const std::vector<double>& P1, const std::vector<double>& P2,
+                        const std::vector<std::vector<double>>& lp, const CubicKernel* kernel,
+                        const std::function<void(const StepState&)>& callback, Stats* st) {
   const std::size_t r = static_cast<std::size_t>(m.r), nb = static_cast<std::size_t>(m.n_static), ni = r - nb;
   const double h = s.dt;
-  MORSE_CHECK(h > 0 && std::isfinite(h), "simulate: the time step -sim_dt must be positive (got ", h, ")");
-  MORSE_CHECK(s.t_final > 0 && std::isfinite(s.t_final), "simulate: -sim_tfinal must be positive (got ", s.t_final,
-              ")");
-  Stats st;
-  st.critical_dt = critical_step(m, &s.contact);
-  MORSE_CHECK(h <= st.critical_dt, "simulate: -sim_dt ", h,
-              " s is above the critical step of central differences on the massless model, ", st.critical_dt,
-              " s (2 / omega_max of its dynamic modes with the contact normals held); use -sim_dt <= ", st.critical_dt);
-  for (const auto& l : loads)
-    MORSE_CHECK(l.p.size() == r, "simulate: a reduced load has ", l.p.size(), " entries, not ", r);
-  const bool nonlinear = !s.linear;
-  MORSE_CHECK(s.linear || m.g.r == r, "simulate: the reduced model has no nonlinear force of size ", r,
-              " (a linear model, -nlrom_forces none): run it with -sim_linear");
-  std::vector<double> P1, P2, P3;
-  massless_step_operators(m, h, &P1, &P2, &P3);
-  std::vector<std::vector<double>> lp;  // P3 p_l (internal rows)
-  for (const auto& l : loads) {
-    std::vector<double> y(r, 0.0);
-    for (std::size_t i = nb; i < r; ++i)
-      for (std::size_t j = nb; j < r; ++j) y[i] += P3[i * r + j] * l.p[j];
-    lp.push_back(std::move(y));
-  }
-  std::optional<CubicKernel> kernel;
-  if (nonlinear) {
-    kernel.emplace(m.g, P3, s.kernel);
-    st.kernel = kernel->potential() ? "potential" : "folded";
-    st.kernel_flops = kernel->flops();
-    st.kernel_bytes = kernel->bytes();
-  }
+  const bool nonlinear = kernel != nullptr;
   MasslessBoundary boundary(m, &s.contact, s.t_final, nonlinear);
   std::vector<double> fb(nb, 0.0);
   auto boundary_load = [&](double t) {
@@ -251,11 +228,9 @@ Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<Reduced
     corr.active = [&] { return boundary.active(); };
     corr.initial_forces = true;  // the initial equilibrium's
   }
-  central_loop(m, loads, s, P1, P2, lp, kernel ? &*kernel : nullptr, corr, std::move(q), std::move(qm), std::move(v),
-               callback, &st);
-  st.boundary_iterations = boundary.iterations();
-  st.tangent_updates = boundary.tangent_updates();
-  return st;
+  central_loop(m, loads, s, P1, P2, lp, kernel, corr, std::move(q), std::move(qm), std::move(v), callback, st);
+  st->boundary_iterations = boundary.iterations();
+  st->tangent_updates = boundary.tangent_updates();
 }
 
 }  // namespace morse::sim::detail

@@ -25,6 +25,9 @@
 
 namespace morse::sim::detail {
 
+/// Refuses a contact node whose DOFs are not among the model's n_b boundary coordinates.
+void check_contact_on_boundary(const nlrom::ReducedModel& m, const ContactSettings& c);
+
 /// P1, P2, P3 (r x r, row-major) of the internal step above; boundary rows: the linear
 /// extrapolation 2 u_b,n - u_b,n-1 (the first guess of the equilibrium), P3 = 0.
 void massless_step_operators(const nlrom::ReducedModel& m, double h, std::vector<double>* P1, std::vector<double>* P2,
@@ -79,8 +82,12 @@ class MasslessBoundary {
   long iterations_ = 0;
 };
 
-/// The Central branch of integrate() for a massless model (m.massless).
-Stats integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
-                         const std::function<void(const StepState&)>& callback);
+/// The Central branch of integrate() for a massless model (m.massless), from what integrate()
+/// checked and built: the operators of massless_step_operators, the folded loads lp = P3 p_l and
+/// the folded cubic kernel (null: linear). Sets st's steps, time and boundary counters.
+void integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
+                        const std::vector<double>& P1, const std::vector<double>& P2,
+                        const std::vector<std::vector<double>>& lp, const CubicKernel* kernel,
+                        const std::function<void(const StepState&)>& callback, Stats* st);
 
 }  // namespace morse::sim::detail
