@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -177,41 +178,38 @@ bool suspicious(const std::string& name) {
   return !closest(b).empty();
 }
 
-void check_unknown(MPI_Comm comm, bool early) {
+namespace {
+// The options nobody has read that `keep` selects, sorted, as " -a (did you mean -b?) -c": the
+// list of an unknown-option message ("" if none).
+std::string unused_options(const std::function<bool(const char*)>& keep) {
   PetscInt n = 0;
   char** left = nullptr;
   char** values = nullptr;
   MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &left, &values));
-  std::vector<std::string> unknown;
+  std::vector<std::string> names;
   for (PetscInt i = 0; i < n; ++i)
-    if (!petsc_global(left[i]) && (!early || suspicious(left[i]))) unknown.emplace_back(left[i]);
+    if (keep(left[i])) names.emplace_back(left[i]);
   MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
-  std::sort(unknown.begin(), unknown.end());
+  std::sort(names.begin(), names.end());
   std::string bad;
-  for (const auto& name : unknown) {
+  for (const auto& name : names) {
     bad += " -" + name;
     if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
   }
+  return bad;
+}
+}  // namespace
+
+void check_unknown(MPI_Comm comm, bool early) {
+  const std::string bad =
+      unused_options([&](const char* name) { return !petsc_global(name) && (!early || suspicious(name)); });
   std::string err = bad.empty() ? "" : cat("unknown option(s):", bad, " (see -help)");
   if (err.empty() && !registry().conflicts.empty()) err = cat("internal error: ", registry().conflicts.front());
   collective_check(comm, err);
 }
 
 void check_prefix_used(MPI_Comm comm, const std::string& prefix, const std::string& what) {
-  PetscInt n = 0;
-  char** left = nullptr;
-  char** values = nullptr;
-  MORSE_CALL(PetscOptionsLeftGet(nullptr, &n, &left, &values));
-  std::vector<std::string> unused;
-  for (PetscInt i = 0; i < n; ++i)
-    if (std::string(left[i]).rfind(prefix, 0) == 0) unused.emplace_back(left[i]);
-  MORSE_CALL(PetscOptionsLeftRestore(nullptr, &n, &left, &values));
-  std::sort(unused.begin(), unused.end());
-  std::string bad;
-  for (const auto& name : unused) {
-    bad += " -" + name;
-    if (auto c = closest(name); !c.empty()) bad += " (did you mean " + c + "?)";
-  }
+  const std::string bad = unused_options([&](const char* name) { return std::string(name).rfind(prefix, 0) == 0; });
   collective_check(
       comm, bad.empty() ? std::string()
                         : cat("unknown option(s):", bad, ": not read by ", what, " once they are set up (see -help)"));
