@@ -1013,6 +1013,10 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
     MORSE_CALL(so.set_from_options(PETSC_COMM_WORLD));
     return so;
   };
+  // read(given) must throw an error naming the option and its text.
+  auto refused = [&](std::initializer_list<std::pair<const char*, const char*>> given, const std::string& msg) {
+    test::expect_error_parts([&] { read(given); }, {msg}, msg);
+  };
   auto so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "1e15"}, {"-sweep_omega_step", "1e-6"}});
   EXPECT_NE(so.error.find("-sweep_omega_min 800, -sweep_omega_max 1e+15 and -sweep_omega_step 1e-06 give 1e+21 "
                           "speeds; a sweep takes at most 1000000"),
@@ -1021,32 +1025,17 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   EXPECT_NE(so.error.find(" GB, 4120 bytes per speed"), std::string::npos) << so.error;
   test::expect_error_parts([&] { so.check(); }, {"1e+21 speeds"}, "check() raises the error");
   // Non-finite values are refused when read, naming the option and the text (the option wrappers).
-  test::expect_error_parts(
-      [&] {
-        read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "inf"}, {"-sweep_omega_step", "100"}});
-      },
-      {"-sweep_omega_max inf: expected a finite number"}, "-sweep_omega_max inf: expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sweep_omega_min", "nan"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}});
-      },
-      {"-sweep_omega_min nan: expected a finite number"}, "-sweep_omega_min nan: expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sweep_omega_min", "800"},
-              {"-sweep_omega_max", "900"},
-              {"-sweep_omega_step", "100"},
-              {"-sim_dt", "inf"}});
-      },
-      {"-sim_dt inf: expected a finite number"}, "-sim_dt inf");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sweep_omega_min", "800"},
-              {"-sweep_omega_max", "900"},
-              {"-sweep_omega_step", "100"},
-              {"-casing_clearance", "inf"}});
-      },
-      {"-casing_clearance inf: expected a finite number"}, "-casing_clearance inf: expected a finite number");
+  refused({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "inf"}, {"-sweep_omega_step", "100"}},
+          "-sweep_omega_max inf: expected a finite number");
+  refused({{"-sweep_omega_min", "nan"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}},
+          "-sweep_omega_min nan: expected a finite number");
+  refused({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}, {"-sim_dt", "inf"}},
+          "-sim_dt inf: expected a finite number");
+  refused({{"-sweep_omega_min", "800"},
+           {"-sweep_omega_max", "900"},
+           {"-sweep_omega_step", "100"},
+           {"-casing_clearance", "inf"}},
+          "-casing_clearance inf: expected a finite number");
   // The largest grid taken, and one more speed.
   so = read({{"-sweep_omega_min", "1"}, {"-sweep_omega_max", "1000000"}, {"-sweep_omega_step", "1"}});
   EXPECT_EQ(so.error, "");
@@ -1065,29 +1054,15 @@ TEST(SimRun, SimOptionsRefuseNonFiniteValuesAndBadCases) {
     MORSE_CALL(so.set_from_options(PETSC_COMM_WORLD));
     return so;
   };
+  // read(given) must throw an error naming the option and its text.
+  auto refused = [&](std::initializer_list<std::pair<const char*, const char*>> given, const std::string& msg) {
+    test::expect_error_parts([&] { read(given); }, {msg}, msg);
+  };
   // Non-finite values are refused when read, naming the option and the text (the option wrappers).
-  test::expect_error_parts(
-      [&] {
-        read({{"-sim_q0", "0,nan,1"}});
-      },
-      {"-sim_q0 0,nan,1: item 'nan': expected a finite number"},
-      "-sim_q0 0,nan,1: item 'nan': expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sim_v0", "inf"}});
-      },
-      {"-sim_v0 inf: item 'inf': expected a finite number"}, "-sim_v0 inf: item 'inf': expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sim_v0_uniform", "0,0,-inf"}});
-      },
-      {"-sim_v0_uniform 0,0,-inf: item '-inf': expected a finite number"},
-      "-sim_v0_uniform 0,0,-inf: item '-inf': expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-sim_dt", "nan"}});
-      },
-      {"-sim_dt nan: expected a finite number"}, "-sim_dt nan: expected a finite number");
+  refused({{"-sim_q0", "0,nan,1"}}, "-sim_q0 0,nan,1: item 'nan': expected a finite number");
+  refused({{"-sim_v0", "inf"}}, "-sim_v0 inf: item 'inf': expected a finite number");
+  refused({{"-sim_v0_uniform", "0,0,-inf"}}, "-sim_v0_uniform 0,0,-inf: item '-inf': expected a finite number");
+  refused({{"-sim_dt", "nan"}}, "-sim_dt nan: expected a finite number");
   EXPECT_EQ(read({{"-sim_cases", "a,b,a"}, {"-out", "run.h5"}}).error,
             "-sim_cases: case a is given twice (each case writes its own file, run_a.h5)");
   EXPECT_EQ(read({{"-sim_cases", "a,../../etc/x"}, {"-out", "run.h5"}}).error,
@@ -1097,17 +1072,9 @@ TEST(SimRun, SimOptionsRefuseNonFiniteValuesAndBadCases) {
   const auto ok = read({{"-sim_cases", "a,b"}, {"-sim_q0", "1,2"}, {"-sim_dt", "1e-6"}});
   EXPECT_EQ(ok.error, "");
   EXPECT_EQ(ok.s.q0, (std::vector<double>{1, 2}));
-  test::expect_error_parts(
-      [&] {
-        read({{"-sim_omega", "inf"}});
-      },
-      {"-sim_omega inf: expected a finite number"}, "-sim_omega inf: expected a finite number");
-  test::expect_error_parts(
-      [&] {
-        read({{"-contact_plane_normal", "0,0,inf"}});
-      },
-      {"-contact_plane_normal 0,0,inf: item 'inf': expected a finite number"},
-      "-contact_plane_normal 0,0,inf: item 'inf': expected a finite number");
+  refused({{"-sim_omega", "inf"}}, "-sim_omega inf: expected a finite number");
+  refused({{"-contact_plane_normal", "0,0,inf"}},
+          "-contact_plane_normal 0,0,inf: item 'inf': expected a finite number");
 }
 
 // A sweep checkpoint is resumed only with the same settings; the refusal names every key that
