@@ -141,3 +141,14 @@ TEST(Massless, BoundaryWithoutStiffnessIsRefused) {
                            {"massless boundary", "not positive definite", "no stiffness of its own"},
                            "a boundary coordinate without stiffness");
 }
+
+// A dynamic-mode cut below the lowest mode leaves no dynamic coordinate: refused naming the option
+// and the lowest mode's frequency.
+TEST(Massless, CutBelowEveryModeIsRefused) {
+  const auto m = beam(10);
+  auto c = test::cb_basis(m, "x1", 6);
+  PetscInt n_static = 0;
+  test::expect_error_parts([&] { nlrom::massless_transform(c.M, c.K, c.n(), c.n_b, 1e-3, &n_static); },
+                           {"-nlrom_massless_fmax 0.001 Hz is below the lowest mode of the model"},
+                           "a cut below every mode");
+}
