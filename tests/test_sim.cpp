@@ -652,7 +652,9 @@ void check_sweep(bool massless) {
         same &= a.status == 0 && b.status == 0 && a.steps == b.steps && a.rms == b.rms && a.mean == b.mean &&
                 a.max_displacement == b.max_displacement && a.time_of_max == b.time_of_max &&
                 a.max_force == b.max_force && a.max_node_force == b.max_node_force && a.max_active == b.max_active &&
-                a.spectrum == b.spectrum;
+                a.spectrum == b.spectrum && a.energy_half == b.energy_half && a.energy_end == b.energy_end &&
+                a.work_end.normal == b.work_end.normal && a.work_end.friction == b.work_end.friction &&
+                a.work_end.damping == b.work_end.damping && a.work_half.friction == b.work_half.friction;
       }
     MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
     EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (batched " << batched << ")";
@@ -666,10 +668,14 @@ void check_sweep(bool massless) {
     si.contact.casing.omega = tasks[i].omega;
     si.t_final = s.revolutions * 2 * M_PI / tasks[i].omega;
     const long n_steps = static_cast<long>(std::ceil(si.t_final / si.dt - 1e-9)), half = (n_steps + 1) / 2;
-    double sum2 = 0, umax = 0, fmax = 0;
+    double sum2 = 0, umax = 0, fmax = 0, e_half = 0, e_end = 0;
+    sim::EnergyWork w_half, w_end;
     long cnt = 0, steps = 0;
     int act = 0;
     sim::integrate(rm, {}, si, [&](const sim::StepState& x) {
+      // The sweep's balance rows: E_{n+1/2} and the works of steps 0..n for n = half - 1, n_steps - 1.
+      if (x.step == half - 1) e_half = x.balance_energy(), w_half = *x.work;
+      if (x.step == n_steps - 1) e_end = x.balance_energy(), w_end = *x.work;
       if (x.step == 0) return;
       steps = x.step;
       if (x.step > n_steps) return;
@@ -689,6 +695,15 @@ void check_sweep(bool massless) {
     EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);
     EXPECT_NEAR(R.max_force, fmax, 1e-7 * fmax + 1e-12);
     EXPECT_EQ(R.max_active, act);
+    const double es = std::max({std::abs(e_end), std::abs(w_end.normal), std::abs(w_end.friction), w_end.damping});
+    EXPECT_NEAR(R.energy_half, e_half, 1e-9 * es);
+    EXPECT_NEAR(R.energy_end, e_end, 1e-9 * es);
+    EXPECT_NEAR(R.work_half.friction, w_half.friction, 1e-9 * es);
+    for (auto [a, b] : {std::pair{R.work_end.normal, w_end.normal},
+                        {R.work_end.friction, w_end.friction},
+                        {R.work_end.damping, w_end.damping},
+                        {R.work_end.external, w_end.external}})
+      EXPECT_NEAR(a, b, 1e-9 * es) << "omega " << tasks[i].omega;
     touched += R.max_active > 0;
     print0(PETSC_COMM_WORLD,
            "  sweep: omega %.0f rad/s, %ld steps, rms %.3e m, max |u_r| %.3e m, max force %.3e N, %d nodes\n", R.omega,
@@ -700,6 +715,104 @@ void check_sweep(bool massless) {
 
 TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(false); }
 TEST(Sim, MasslessSweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(true); }
+
+// The energy balance of central differences (sim::EnergyWork): the discrete energy E_{n+1/2}
+// changes by the works of the load, the normal contact forces and friction, less the damping
+// dissipation. The clamped box with a harmonic load on its free face, modal damping on every
+// mode, rubbing the two-lobe casing with friction (mass-carrying and massless boundary): linear
+// runs close the balance to round-off at every revolution; nonlinear runs without contact to
+// O(h^2) (the midpoint rule on the potential), checked by halving the step.
+namespace {
+struct BalanceRun {
+  double residual = 0, scale = 0;  // max |E - E_0 - net| over the rows; max |term|
+  sim::EnergyWork w;
+  long rows = 0;
+};
+BalanceRun balance_run(const nlrom::ReducedModel& rm, const std::vector<double>& X, std::size_t nb, bool contact,
+                       bool linear, double h, double mu, double amplitude) {
+  const std::size_t r = static_cast<std::size_t>(rm.r);
+  sim::Settings s;
+  s.dt = h;
+  s.linear = linear;
+  s.t_final = 3 * 2 * M_PI / 1500.0;  // three revolutions at 1,500 rad/s
+  if (contact) {
+    s.contact.obstacle = sim::Obstacle::Casing;
+    s.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, 1500.0};
+    s.contact.mu = mu;
+    for (std::size_t k = 0; k < nb; ++k) {
+      sim::ContactNode node;
+      node.dof = 3 * k;
+      for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
+      s.contact.nodes.push_back(node);
+    }
+  }
+  sim::ReducedLoad load;  // 2 kN per node along y at 2,500 rad/s on the face
+  load.p.assign(r, 0.0);
+  for (std::size_t k = 0; k < nb; ++k) load.p[3 * k + 1] = 1.0;
+  load.amplitude = amplitude, load.omega = 2500.0;
+  BalanceRun R;
+  double e0 = 0;
+  const long every = std::max(1L, static_cast<long>(s.t_final / h / 20));
+  sim::integrate(rm, {load}, s, [&](const sim::StepState& x) {
+    if (x.step % every != 0) return;
+    const double e = x.balance_energy();
+    if (x.step == 0) e0 = e;
+    const auto& w = *x.work;
+    R.residual = std::max(R.residual, std::abs(e - e0 - w.net()));
+    for (double t : {e - e0, w.external, w.normal, w.friction, w.damping}) R.scale = std::max(R.scale, std::abs(t));
+    R.w = w;
+    ++R.rows;
+  });
+  return R;
+}
+}  // namespace
+
+TEST(Sim, EnergyBalanceClosesExactlyWhenLinearAndAtSecondOrderWhenNot) {
+  auto m = box(ElementType::Hex8, 4);
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  auto c = test::cb_basis(m, "x1", 3);
+  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  const auto X = boundary_positions(m, c);
+  for (bool massless : {false, true}) {
+    UMat V;
+    PetscInt n_static = 0;
+    if (massless) {
+      const auto rm0 = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
+      V = nlrom::transform_basis(
+          c.T.get(), nlrom::massless_transform(rm0.M, rm0.K, static_cast<PetscInt>(r), c.n_b, 0.0, &n_static));
+    }
+    Mat basis = massless ? V.get() : c.T.get();
+    auto rm = nlrom::project_model(PETSC_COMM_WORLD, basis, m.ops.K.get(), m.ops.M.get(), massless ? 0.0 : 0.02,
+                                   static_cast<PetscInt>(r));
+    rm.n_b = c.n_b;
+    if (massless) nlrom::make_massless(&rm, n_static, 0.02, static_cast<PetscInt>(r) - n_static);
+    rm.g = nlrom::exact_forces(svk, basis);
+    const double h = 0.5 * sim::critical_step(rm);
+    const char* name = massless ? "massless" : "mass-carrying";
+    // Linear, with contact and friction: every term at work, the balance exact.
+    const auto L = balance_run(rm, X, nb, true, true, h, 0.15, 2e3);
+    print0(PETSC_COMM_WORLD,
+           "  %s, linear, contact: %ld rows, works: load %.4e, normal %.4e, friction %.4e, damping %.4e J; "
+           "residual %.2e of %.2e J\n",
+           name, L.rows, L.w.external, L.w.normal, L.w.friction, L.w.damping, L.residual, L.scale);
+    EXPECT_LT(L.residual, 1e-10 * L.scale) << name;
+    EXPECT_GT(std::abs(L.w.normal), 1e-3 * L.scale) << name << ": the casing should be touched";
+    EXPECT_GT(std::abs(L.w.friction), 1e-4 * L.scale) << name << ": friction should work";
+    EXPECT_GT(L.w.damping, 1e-3 * L.scale) << name;
+    // Without friction, its work is zero and the balance still closes.
+    const auto F = balance_run(rm, X, nb, true, true, h, 0.0, 2e3);
+    EXPECT_EQ(F.w.friction, 0.0) << name;
+    EXPECT_LT(F.residual, 1e-10 * F.scale) << name;
+    // Nonlinear, without contact, at amplitudes where g~ matters: the residual falls as h^2.
+    const auto N1 = balance_run(rm, X, nb, false, false, h, 0.0, 1e5);
+    const auto N2 = balance_run(rm, X, nb, false, false, h / 2, 0.0, 1e5);
+    const double rate = std::log2(N1.residual / N2.residual);
+    print0(PETSC_COMM_WORLD, "  %s, nonlinear: residual %.3e -> %.3e J of %.3e J (rate %.2f)\n", name, N1.residual,
+           N2.residual, N1.scale, rate);
+    EXPECT_GT(rate, 1.7) << name;
+    EXPECT_LT(N1.residual, 1e-2 * N1.scale) << name;
+  }
+}
 
 // A free elastic bar (nu = 0, so the 1-D wave solution holds) moving at v0 onto a rigid wall,
 // with a basis spanning the whole space: the closed form gives a contact lasting 2L/c, after
@@ -892,6 +1005,9 @@ TEST(SimFile, RoundTrips) {
   c.normals = seq(nn * 3, 1.0), c.mean_force = seq(nt * nn * 3, 7.0), c.mean_force_time = seq(nt, 0.05);
   c.gap = seq(nt * nn, 1e-5), c.active = {0, 1, 2, 1}, c.radial_displacement = seq(nt * nn, 1e-6);
   c.max_normal_force = 12.5, c.time_of_max_normal_force = 0.2;
+  rec.balance.time = {0.0, 0.1, 0.2}, rec.balance.energy = seq(3, 2.0), rec.balance.external = seq(3, 0.1);
+  rec.balance.normal = seq(3, -0.2), rec.balance.friction = seq(3, 0.3), rec.balance.damping = seq(3, 0.05);
+  rec.balance.period = 0.1;
   rec.rom = "rom.h5", rec.case_name = "b";
   rec.load.loads.resize(1);
   rec.load.loads[0].set = "tip", rec.load.loads[0].dir[2] = 1, rec.load.loads[0].amplitude = 3,
@@ -925,6 +1041,13 @@ TEST(SimFile, RoundTrips) {
   EXPECT_EQ(back.snapshot_v, rec.snapshot_v);
   EXPECT_EQ(back.snapshot_node_ids, rec.snapshot_node_ids);
   EXPECT_EQ(back.snapshot_components, rec.snapshot_components);
+  EXPECT_EQ(back.balance.time, rec.balance.time);
+  EXPECT_EQ(back.balance.energy, rec.balance.energy);
+  EXPECT_EQ(back.balance.external, rec.balance.external);
+  EXPECT_EQ(back.balance.normal, rec.balance.normal);
+  EXPECT_EQ(back.balance.friction, rec.balance.friction);
+  EXPECT_EQ(back.balance.damping, rec.balance.damping);
+  EXPECT_EQ(back.balance.period, rec.balance.period);
   const auto& b = back.contact;
   EXPECT_EQ(b.node_ids, c.node_ids);
   EXPECT_EQ(b.normal, c.normal);

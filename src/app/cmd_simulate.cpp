@@ -63,6 +63,14 @@ void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim
   if (!cr.node_ids.empty())
     print0(PETSC_COMM_SELF, "  contact: %zu nodes, max normal force %.4g N at t = %.6g s\n", cr.node_ids.size(),
            cr.max_normal_force, cr.time_of_max_normal_force);
+  if (const auto& b = rec.balance; b.time.size() > 1) {
+    const std::size_t e = b.time.size() - 1;
+    print0(PETSC_COMM_SELF,
+           "  energy balance to t = %.6g s: energy %+.4g J = load %+.4g + normal contact %+.4g + friction %+.4g - "
+           "damping %.4g J (residual %.2g J)\n",
+           b.time[e], b.energy[e] - b.energy[0], b.external[e], b.normal[e], b.friction[e], b.damping[e],
+           b.energy[e] - b.energy[0] - (b.external[e] + b.normal[e] + b.friction[e] - b.damping[e]));
+  }
   rec.rom = files::absolute_path(so.rom);  // valid from any directory (morse compare)
   rec.case_name = c.name;
   sim::write_sim(out, rec, so.s, stats);

@@ -515,6 +515,7 @@ Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& lo
     corr.active = [&] { return contact->active(); };
     corr.gap0.assign(nc, 0.0);
     for (std::size_t k = 0; k < nc; ++k) corr.gap0[k] = contact->gap_of(k, q.data(), 0.0);
+    corr.contact = &s.contact;
   }
   detail::central_loop(m, loads, s, P1, P2, lp, kernel ? &*kernel : nullptr, corr, std::move(q), std::move(qm),
                        std::move(v), callback, &st);
@@ -543,11 +544,16 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
     std::copy(corr.gap(), corr.gap() + nc, c_gap.begin());
     c_active = corr.active();
   }
+  EnergyLedger ledger(m, corr.contact, h);
   StepState ss;
   ss.model = &m;
   ss.q = q.data();
   ss.v = v.data();
   ss.active = c_active;
+  ss.work = &ledger.work();
+  ss.energy_qa = qm.data(), ss.energy_qb = q.data();  // E_{-1/2}
+  ss.dt = h;
+  ss.nonlinear = kernel != nullptr;
   if (nc) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
   callback(ss);
   const auto t0 = std::chrono::steady_clock::now();
@@ -576,6 +582,12 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
     if (!finite)
       throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
                       ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
+    if (nc && corr.forces_of_state)  // the equilibrium forces of state n act in step n
+      ledger.add(qm.data(), qp.data(), loads, t, c_lam.data(), c_fric.data());
+    else if (nc)
+      ledger.add(qm.data(), qp.data(), loads, t, corr.normal(), corr.friction());
+    else
+      ledger.add(qm.data(), qp.data(), loads, t, nullptr, nullptr);
     if (n > 0) {  // state n with its central velocity
       for (std::size_t i = 0; i < r; ++i) v[i] = (qp[i] - qm[i]) / (2.0 * h);
       ss.q = q.data();
@@ -583,6 +595,7 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
       ss.step = n;
       ss.t = t;
       ss.active = c_active;
+      ss.energy_qa = q.data(), ss.energy_qb = qp.data();  // E_{n+1/2}
       callback(ss);
     }
     if (nc) {  // the forces that produced q_{n+1} belong to state n + 1

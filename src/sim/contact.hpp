@@ -29,6 +29,28 @@ void sym_panel_product(std::size_t n_panels, const double* S, const double* x, d
 /// z = the r (r + 1) / 2 monomials q_i q_j, i <= j, lexicographic.
 void quadratic_monomials(std::size_t r, const double* q, double* z);
 
+/// The works of EnergyWork, step by step: add(q_{n-1}, q_{n+1}, ...) adds step n's. The damping
+/// term uses C = W diag(c) W^T (its nonzero eigenpairs: modal damping on k modes costs k r per
+/// step, not r^2).
+class EnergyLedger {
+ public:
+  /// contact: null or without nodes for none (its node DOFs and normals are copied).
+  EnergyLedger(const nlrom::ReducedModel& m, const ContactSettings* contact, double h);
+  /// Step n: the loads at t_n (factor(t) p_l), the contact forces acting in it (lam: normal
+  /// multipliers, fric: 3 per node; null: none).
+  void add(const double* q_prev, const double* q_next, const std::vector<ReducedLoad>& loads, double t,
+           const double* lam, const double* fric);
+  const EnergyWork& work() const { return w_; }
+
+ private:
+  std::size_t r_;
+  double h_;
+  std::vector<double> cw_, cv_;  // damping: eigenvalues cv_ (nonzero) and vectors cw_ [k][r]
+  std::vector<std::size_t> dofs_;
+  std::vector<double> normals_, d_;
+  EnergyWork w_;
+};
+
 /// What follows the explicit update of each step of central_loop: the contact correction of a
 /// mass-carrying model, or the static equilibrium of a massless boundary (with its contact).
 struct Corrector {
@@ -38,6 +60,10 @@ struct Corrector {
   std::function<int()> active;
   std::vector<double> gap0;     // the initial state's gaps (if not initial_forces)
   bool initial_forces = false;  // the initial state's forces and gaps are the corrector's current ones
+  // The forces the corrector leaves act in the step that follows (massless: the equilibrium of
+  // state n + 1 belongs to step n + 1), not in the step that made them (mass-carrying).
+  bool forces_of_state = false;
+  const ContactSettings* contact = nullptr;  // for the energy balance (nodes and normals)
 };
 
 /// The time loop of central differences, shared by the mass-carrying and the massless models: from

@@ -227,6 +227,8 @@ void integrate_massless(const nlrom::ReducedModel& m, const std::vector<ReducedL
     corr.gap = [&] { return boundary.gap(); };
     corr.active = [&] { return boundary.active(); };
     corr.initial_forces = true;  // the initial equilibrium's
+    corr.forces_of_state = true;
+    corr.contact = &s.contact;
   }
   central_loop(m, loads, s, P1, P2, lp, kernel, corr, std::move(q), std::move(qm), std::move(v), callback, st);
   st->boundary_iterations = boundary.iterations();

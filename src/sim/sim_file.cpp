@@ -23,6 +23,27 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
   out.write("/sim/final/q", rec.final_q);
   out.write("/sim/final/v", rec.final_v);
   out.attribute("/sim/final", "time", rec.final_time);
+  if (!rec.balance.time.empty()) {
+    const auto& b = rec.balance;
+    const std::string g = "/sim/energy_balance";
+    out.write(g + "/time", b.time);
+    out.write(g + "/energy", b.energy);
+    out.write(g + "/external", b.external);
+    out.write(g + "/normal", b.normal);
+    out.write(g + "/friction", b.friction);
+    out.write(g + "/damping", b.damping);
+    out.attribute(g, "period", b.period);
+    out.attribute(g, "description",
+                  "energy balance of central differences (theory 10.6): energy(i) - energy(0) = external + normal + "
+                  "friction - damping at row i (cumulative works from t = 0) [J], rows at t = 0, every period "
+                  "(a revolution of the casing, or t_final / 100) and at the end; exact to round-off for a linear "
+                  "model, O(dt^2) for a nonlinear one");
+    out.attribute(g + "/energy", "description",
+                  "E_{n+1/2} = v^T M v / 2 + q_n^T K q_{n+1} / 2 + V(q_{n+1/2}), v = (q_{n+1} - q_n) / dt [J]");
+    out.attribute(g + "/normal", "description", "work of the normal contact forces on the model [J]");
+    out.attribute(g + "/friction", "description", "work of the friction forces on the model [J]");
+    out.attribute(g + "/damping", "description", "energy dissipated by the viscous damping (>= 0) [J]");
+  }
   for (const auto& m : rec.sets) {
     out.write("/sim/sets/" + m.name + "/node_ids", m.node_ids);
     out.write("/sim/sets/" + m.name + "/u", m.u, {nt, m.node_ids.size(), 3});
@@ -109,6 +130,20 @@ SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets
   const std::size_t nt = rec.time.size(), r = rec.final_q.size();
   MORSE_CHECK(rec.energy.size() == nt && rec.q.size() == nt * r && rec.final_v.size() == r, file,
               ": /sim/energy, /sim/q or /sim/final do not match ", nt, " times of ", r, " coordinates");
+  if (io::has_object(file, "/sim/energy_balance")) {
+    auto& b = rec.balance;
+    doubles("/sim/energy_balance/time", &b.time);
+    doubles("/sim/energy_balance/energy", &b.energy);
+    doubles("/sim/energy_balance/external", &b.external);
+    doubles("/sim/energy_balance/normal", &b.normal);
+    doubles("/sim/energy_balance/friction", &b.friction);
+    doubles("/sim/energy_balance/damping", &b.damping);
+    MORSE_CHECK(io::read_attribute(file, "/sim/energy_balance", "period", &b.period, &err), err);
+    const std::size_t nb = b.time.size();
+    MORSE_CHECK(b.energy.size() == nb && b.external.size() == nb && b.normal.size() == nb && b.friction.size() == nb &&
+                    b.damping.size() == nb,
+                file, ": the datasets of /sim/energy_balance do not all have ", nb, " rows");
+  }
   for (const auto& name : sets) {
     SimRecord::Set set;
     set.name = name;

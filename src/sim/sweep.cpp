@@ -180,6 +180,8 @@ struct Lane {
   bool has_contact() const { return contact || (boundary && boundary->has_contact()); }
   const double* normal() const { return contact ? contact->normal() : boundary->normal(); }
   int active() const { return contact ? contact->active() : boundary->active(); }
+  std::unique_ptr<detail::EnergyLedger> ledger;
+  std::vector<double> lam_prev, fric_prev;  // massless: the forces of state n (its equilibrium's)
   long n = 0, n_steps = 0, half = 0, sample_every = 1, in_block = 0;
   double sum = 0.0, sum2 = 0.0, block = 0.0;
   long count = 0;
@@ -250,6 +252,8 @@ class Batch {
     if (m_.massless)
       ln.boundary =
           std::make_unique<detail::MasslessBoundary>(m_, ln.cs.get(), ln.res.t_final, !s_.base.linear, raw_, tangent_);
+    ln.ledger = std::make_unique<detail::EnergyLedger>(m_, ln.cs.get(), h);
+    if (ln.cs) ln.lam_prev.assign(ln.cs->nodes.size(), 0.0), ln.fric_prev.assign(3 * ln.cs->nodes.size(), 0.0);
     // At rest: q_0 = q_{-1} = 0.
     for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
   }
@@ -299,6 +303,7 @@ class Batch {
       }
       if (!fail) {
         for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];
+        balance(ln, slot, n1);
         record(ln, n1, t);
       }
       ln.n = n1;
@@ -314,6 +319,28 @@ class Batch {
   }
 
  private:
+  // The works of step n = n1 - 1 (EnergyWork), and the energy E_{n+1/2} at the window's start
+  // and at the end.
+  void balance(Lane& ln, std::size_t slot, long n1) {
+    const double h = s_.base.dt;
+    const double *lam = nullptr, *fric = nullptr;
+    if (ln.contact) {
+      lam = ln.contact->normal(), fric = ln.contact->friction();
+    } else if (ln.has_contact()) {
+      lam = ln.lam_prev.data(), fric = ln.fric_prev.data();
+    }
+    ln.ledger->add(colm_.data(), col_.data(), no_loads_, static_cast<double>(n1 - 1) * h, lam, fric);
+    if (ln.boundary && ln.has_contact()) {
+      std::copy(ln.boundary->normal(), ln.boundary->normal() + ln.lam_prev.size(), ln.lam_prev.begin());
+      std::copy(ln.boundary->friction(), ln.boundary->friction() + ln.fric_prev.size(), ln.fric_prev.begin());
+    }
+    if (n1 != ln.half && n1 != ln.n_steps) return;
+    std::vector<double> qn(r_);
+    for (std::size_t j = 0; j < r_; ++j) qn[j] = Q_[j * L_ + slot];
+    const double e = discrete_energy(m_, qn.data(), col_.data(), h, !s_.base.linear);
+    if (n1 == ln.half) ln.res.energy_half = e, ln.res.work_half = ln.ledger->work();
+    if (n1 == ln.n_steps) ln.res.energy_end = e, ln.res.work_end = ln.ledger->work();
+  }
   void record(Lane& ln, long n1, double t) {
     double u = 0.0;
     for (std::size_t j = 0; j < r_; ++j) u += s_.monitor[j] * col_[j];
@@ -356,6 +383,7 @@ class Batch {
   std::shared_ptr<TangentKernel> tangent_;
   std::size_t r_, L_, n_ = 0;
   std::vector<double> P1_, P2_, P3_, W_, Q_, Qm_, Qp_, Y_, Z_, col_, colm_, freqs_;
+  const std::vector<ReducedLoad> no_loads_;
   std::vector<std::size_t> groups_;
   std::vector<Lane> lanes_;
   std::unique_ptr<CubicKernel> lane_kernel_;  // !batched
@@ -367,6 +395,9 @@ void pack(morse::detail::Packer* pk, const SpeedResult& R) {
   pk->put(R.t_final), pk->put(R.rms), pk->put(R.mean), pk->put(R.max_displacement), pk->put(R.time_of_max);
   pk->put(R.max_force), pk->put(R.time_of_max_force), pk->put(R.max_node_force), pk->put(R.max_active);
   pk->put(R.seconds), pk->put_vec(R.spectrum);
+  pk->put(R.energy_half), pk->put(R.energy_end);
+  for (const auto* w : {&R.work_half, &R.work_end})
+    pk->put(w->external), pk->put(w->normal), pk->put(w->friction), pk->put(w->damping);
 }
 
 SpeedResult unpack(morse::detail::Unpacker* up) {
@@ -376,6 +407,11 @@ SpeedResult unpack(morse::detail::Unpacker* up) {
   R.max_displacement = up->get<double>(), R.time_of_max = up->get<double>(), R.max_force = up->get<double>();
   R.time_of_max_force = up->get<double>(), R.max_node_force = up->get<double>(), R.max_active = up->get<int>();
   R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>();
+  R.energy_half = up->get<double>(), R.energy_end = up->get<double>();
+  for (auto* w : {&R.work_half, &R.work_end}) {
+    w->external = up->get<double>(), w->normal = up->get<double>();
+    w->friction = up->get<double>(), w->damping = up->get<double>();
+  }
   return R;
 }
 

@@ -66,6 +66,16 @@ void write_sweep(const std::string& path, SweepRecord rec) {
   }
   out.write("/sweep/spectrum", spec, {static_cast<hsize_t>(rs.size()), static_cast<hsize_t>(rec.frequencies.size())});
   out.attribute("/sweep/spectrum", "description", "[speed][frequency] amplitude of the monitored displacement [m]");
+  std::vector<double> eb;
+  for (const auto& r : rs)
+    for (double x : {r.energy_half, r.work_half.external, r.work_half.normal, r.work_half.friction, r.work_half.damping,
+                     r.energy_end, r.work_end.external, r.work_end.normal, r.work_end.friction, r.work_end.damping})
+      eb.push_back(x);
+  out.write("/sweep/energy_balance", eb, {static_cast<hsize_t>(rs.size()), 10});
+  out.attribute("/sweep/energy_balance", "description",
+                "[speed][10] energy balance from rest (theory 10.6), at t_final / 2 then at t_final: discrete energy, "
+                "work of the loads, of the normal contact forces, of friction, damping dissipation [J]; energy = "
+                "load + normal + friction - damping (exact for a linear model)");
   std::string errors;
   for (const auto& r : rs)
     if (r.status != 0) errors += cat(r.index, "\t", r.error, "\n");
@@ -81,7 +91,7 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   }
   // Every dataset with its shape: a resumed file is validated whole before any value is used.
   std::map<std::string, std::vector<hsize_t>> dims;
-  std::vector<double> omega, tf, rms, mean, umax, tmax, fmax, tfmax, fnode, secs, spec;
+  std::vector<double> omega, tf, rms, mean, umax, tmax, fmax, tfmax, fnode, secs, spec, eb;
   std::vector<std::int64_t> index, status, steps, act;
   auto dbl = [&](const char* name, std::vector<double>* v) {
     return io::read_doubles(path, cat("/sweep/", name), v, &dims[name], error);
@@ -97,7 +107,8 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
             dbl("mean", &mean) && dbl("max_displacement", &umax) && dbl("time_of_max", &tmax) &&
             dbl("max_contact_force", &fmax) && dbl("time_of_max_contact_force", &tfmax) &&
             dbl("max_node_force", &fnode) && ints("max_active", &act) && dbl("seconds", &secs) &&
-            dbl("spectrum", &spec) && io::read_string(path, "/sweep/errors", &errors, error) &&
+            dbl("spectrum", &spec) && dbl("energy_balance", &eb) &&
+            io::read_string(path, "/sweep/errors", &errors, error) &&
             io::read_attribute(path, "/sweep", "n_speeds", &n_speeds, error) &&
             io::read_attribute(path, "/sweep", "n_done", &n_done, error);
   if (!ok) {
@@ -118,13 +129,13 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   if (dims["frequency"].size() != 1 || nf == 0) return corrupt("/sweep/frequency is not a list of frequencies");
   for (const auto& [name, d] : dims) {
     if (name == "frequency" || name == "eigenfrequencies") continue;
-    const std::vector<hsize_t> want = name == "spectrum" ? std::vector<hsize_t>{n, nf} : std::vector<hsize_t>{n};
+    const hsize_t cols = name == "spectrum" ? nf : name == "energy_balance" ? 10 : 0;
+    const std::vector<hsize_t> want = cols ? std::vector<hsize_t>{n, cols} : std::vector<hsize_t>{n};
     if (d != want) {
       std::string shape;
       for (auto x : d) shape += cat(shape.empty() ? "" : " x ", x);
       return corrupt(cat("/sweep/", name, " has shape [", shape, "], expected [", n,
-                         name == "spectrum" ? cat(" x ", nf) : std::string(), "] for the ", n,
-                         " finished speeds of /sweep/index"));
+                         cols ? cat(" x ", cols) : std::string(), "] for the ", n, " finished speeds of /sweep/index"));
     }
   }
   std::set<std::int64_t> seen;
@@ -159,6 +170,9 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     r.max_active = static_cast<int>(act[i]), r.seconds = secs[i];
     r.spectrum.assign(spec.begin() + static_cast<std::ptrdiff_t>(i * nf),
                       spec.begin() + static_cast<std::ptrdiff_t>((i + 1) * nf));
+    const double* e = &eb[10 * i];
+    r.energy_half = e[0], r.work_half = {e[1], e[2], e[3], e[4]};
+    r.energy_end = e[5], r.work_end = {e[6], e[7], e[8], e[9]};
     if (r.status != 0) r.error = msg[r.index];
     rec->results.push_back(std::move(r));
   }

@@ -108,6 +108,29 @@ struct Settings {
   std::vector<double> q0, v0;  ///< initial state (empty: zero)
 };
 
+/// The energy balance of central differences (theory §10.6): step n of the scheme, multiplied by
+/// the increment (q_{n+1} - q_{n-1}) / 2, is exactly
+///   E_{n+1/2} - E_{n-1/2} = [f(t_n) + f_c] . (q_{n+1} - q_{n-1}) / 2 - (q_{n+1} - q_{n-1})^T C (q_{n+1} - q_{n-1}) /
+///   4h
+/// for the discrete energy E_{n+1/2} = v^T M v / 2 + q_n^T K q_{n+1} / 2 (+ V(q_{n+1/2}), the
+/// potential of g~ at the midpoint, in nonlinear runs), v = (q_{n+1} - q_n) / h. The works below
+/// are these terms summed from the first step, with f_c split into the normal contact force and
+/// friction. Linear: the balance closes to round-off; nonlinear: to O(h^2) (the midpoint rule on
+/// V), for a g~ that is the gradient of a potential (exact tensors; STEP to its identification
+/// error). With a massless boundary (M = diag(0, I)) the same identity holds, with the contact
+/// forces of the equilibrium of state n in step n.
+struct EnergyWork {
+  double external = 0.0;  ///< work of the external loads [J]
+  double normal = 0.0;    ///< work of the normal contact forces on the blade (negative: absorbed)
+  double friction = 0.0;  ///< work of the friction forces on the blade (positive: energy fed in)
+  double damping = 0.0;   ///< energy dissipated by the viscous damping (>= 0)
+  double net() const { return external + normal + friction - damping; }
+};
+/// E = v^T M v / 2 + q_a^T K q_b / 2 (+ V((q_a + q_b) / 2) if nonlinear), v = (q_b - q_a) / h:
+/// E_{n+1/2} of EnergyWork for q_a = q_n, q_b = q_{n+1}. V(q) = q.[g(q) + g(-q)] / 6 + q.[g(q) -
+/// g(-q)] / 8 (Euler's theorem on the cubic and quartic parts of the potential).
+double discrete_energy(const nlrom::ReducedModel& m, const double* q_a, const double* q_b, double h, bool nonlinear);
+
 struct StepState {
   long step = 0;  ///< 0 = initial state
   double t = 0.0;
@@ -124,6 +147,13 @@ struct StepState {
   /// Seed 003 eq. 46: v^T M v / 2 + q^T K q / 2, computed on demand (2 r^2 multiply-adds, a few
   /// per cent of a step at r = 20, so the time loop does not pay for it when nobody asks).
   double energy() const;
+  /// The energy balance (central differences): the works of the steps 0 .. n (state 0: none) and
+  /// the discrete energy they change, E_{n+1/2} (state 0: E_{-1/2}), computed on demand.
+  const EnergyWork* work = nullptr;
+  const double *energy_qa = nullptr, *energy_qb = nullptr;
+  double dt = 0.0;
+  bool nonlinear = false;
+  double balance_energy() const;
 };
 
 struct Stats {
@@ -255,6 +285,10 @@ struct SpeedResult {
   int max_active = 0;                                ///< most nodes in contact at once
   double seconds = 0.0;          ///< wall time on its rank (shared with the other lanes of its batch)
   std::vector<double> spectrum;  ///< amplitude at SweepSettings::frequencies(), same window, mean removed
+  /// The energy balance (EnergyWork) from rest: the discrete energy and the works at the first
+  /// state of the analysed window (t_final / 2) and at the end.
+  double energy_half = 0.0, energy_end = 0.0;
+  EnergyWork work_half, work_end;
 };
 
 struct SweepSettings {
@@ -362,6 +396,13 @@ struct SimRecord {
     std::vector<double> radial_displacement;  ///< [time][node] e_r . u
     double max_normal_force = 0.0, time_of_max_normal_force = 0.0;
   } contact;
+  /// The energy balance (EnergyWork; central differences only): rows at t = 0, at the end of
+  /// every revolution of the casing (every t_final / 100 without one) and at the end.
+  struct Balance {
+    std::vector<double> time, energy;                         ///< energy: E_{n+1/2} of the row's state n
+    std::vector<double> external, normal, friction, damping;  ///< cumulative from t = 0
+    double period = 0.0;                                      ///< the interval of the rows [s]
+  } balance;
   std::string rom;            ///< the nlrom file of the model
   std::string case_name;      ///< -sim_cases: the case, "" for a single run
   dyn::LoadDescription load;  ///< the run's nodal loads (/sim/load)
