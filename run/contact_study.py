@@ -3,7 +3,7 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,pod,sweep,stress] [--ranks N] [--revs 10] [--sweep-revs 5]
+        [--stages roms,single,pod,sweep,stress,diagnosis] [--ranks N] [--revs 10] [--sweep-revs 5]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
         [--pod-revs 5] [--pod-train-revs 1] [--pod-fom-dt 1e-6] [--pod-snap-every 5] [--pod-num 20]
         [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
@@ -30,6 +30,11 @@ stopped and resumed, and the stages can run at different times.
   sweep   `morse sweep` of r54, linear over --sweep-linear and nonlinear over --sweep-nonlinear
           (lo:hi:step rad/s), --sweep-revs revolutions each, on --ranks ranks (the same basis for
           both maps, so that they differ by g~ alone; r79 would cost 3.6 times more per step).
+  diagnosis  why the linear maps were not physical (docs/contact.md): linear sweeps of r54 over
+          --diag-range with --diag-revs revolutions each, with friction, without, and with friction
+          turning the other way (-sweep_rotation negative), each with its energy balance; single runs
+          at 830 rad/s (5 revolutions) with friction, without, and with every mode damped. Figure:
+          run/plot_contact_diagnosis.py. About 9 minutes on 2 cores.
   stress  the 1B/eo8 interaction of each sweep (the critical speed nearest 2 pi f_1B / 8 from above,
           within 60 %): a single run at that speed, then `morse stress` at the time of the largest
           radial displacement at LE (Fig. 25).
@@ -130,6 +135,39 @@ def simulate(st, rom, omega, revs, dt, linear, name, every):
             "-sim_dt", dt, "-sim_output_every", every, "-out", out] + CASING + (["-sim_linear"] if linear else [])
     ok = st.run(1, args, "simulate %s" % name, out, "sim_" + name)
     return out if ok else None
+
+
+def diagnosis_stage(st, args, mesh):
+    """Why the linear maps were not physical (docs/contact.md): linear sweeps of r54 over
+    --diag-revs revolutions with friction (both senses of rotation) and without, the energy
+    balance of each speed (/sweep/energy_balance), and single runs at 830 rad/s with the study's
+    damping (10 modes) and with every mode damped."""
+    print("diagnosis: linear r54, %g revolutions per speed" % args.diag_revs, flush=True)
+    lo, hi, step = parse_range(args.diag_range)
+    base = ["-rom", st.file("rom_r54.h5"), "-sweep_omega_min", lo, "-sweep_omega_max", hi, "-sweep_omega_step",
+            step, "-sim_revolutions", args.diag_revs, "-sim_dt", DT, "-sweep_batch", 1, "-sim_linear"]
+    cases = {"friction": ["-contact_mu", "0.15"], "frictionless": ["-contact_mu", "0"],
+             "friction_negative": ["-contact_mu", "0.15", "-sweep_rotation", "negative"]}
+    for tag, extra in cases.items():
+        name = "diag_sweep_" + tag
+        path = st.file(name + ".h5")
+        casing = [a for a in CASING]
+        casing[casing.index("-contact_mu") + 1] = extra[1]
+        st.run(args.ranks, ["sweep", "-out", path] + base + casing + extra[2:], name, path + ".done", name)
+        if name in st.rec and "error" not in st.rec[name]:
+            open(path + ".done", "w").close()
+    rom_all = st.file("rom_r54_alldamped.h5")
+    args_all = rom_args(mesh, 10, 20, rom_all)
+    args_all[args_all.index("-nlrom_damping_modes") + 1] = "all"
+    st.run(args.ranks, args_all, "nlrom r54, every mode damped", rom_all, "rom_r54_alldamped")
+    for tag, rom, mu in (("830", "rom_r54.h5", "0.15"), ("830_frictionless", "rom_r54.h5", "0"),
+                         ("830_alldamped", "rom_r54_alldamped.h5", "0.15")):
+        out = st.file("diag_sim_%s.h5" % tag)
+        casing = [a for a in CASING]
+        casing[casing.index("-contact_mu") + 1] = mu
+        st.run(1, ["simulate", "-rom", st.file(rom), "-sim_omega", 830,
+                   "-sim_revolutions", 5, "-sim_dt", DT, "-sim_output_every", 20, "-sim_linear", "-out", out] + casing,
+               "simulate diag %s" % tag, out, "diag_sim_" + tag)
 
 
 def parse_range(s):
@@ -243,6 +281,8 @@ def main():
     ap.add_argument("--pod-harmonic-omega", type=float, default=2000.0, help="pod (a): [rad/s]")
     ap.add_argument("--pod-trainings", default="contact,harmonic,contact_linear",
                     help="pod: which trainings (contact, harmonic, contact_linear)")
+    ap.add_argument("--diag-revs", type=float, default=20.0, help="diagnosis: revolutions per speed")
+    ap.add_argument("--diag-range", default="750:2150:100", help="diagnosis: speed grid min:max:step [rad/s]")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
@@ -296,6 +336,9 @@ def main():
             st.run(args.ranks, sargs, "%s (%s, %s rad/s)" % (name, rom, rng), path + ".done", name)
             if name in st.rec and "error" not in st.rec[name]:
                 open(path + ".done", "w").close()
+
+    if "diagnosis" in stages:
+        diagnosis_stage(st, args, mesh)
 
     if "stress" in stages:
         f1b = st.rec.get("f1b_hz") or first_bending_hz(st.file("rom_r79.h5"))

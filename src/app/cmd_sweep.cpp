@@ -54,10 +54,11 @@ void run_sweep(MPI_Comm comm) {
   int size = 1;
   MPI_Comm_size(comm, &size);
   print0(comm,
-         "morse sweep: %ld speeds %.6g..%.6g rad/s (%ld already in %s), %.6g revolutions each, dt "
+         "morse sweep: %ld speeds %.6g..%.6g rad/s%s (%ld already in %s), %.6g revolutions each, dt "
          "%.4g s (critical %.4g s), "
          "r = %zu, %s, %d lanes per rank (%s kernel) on %d rank(s)\n",
-         n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step, nd, so.out.c_str(), s.revolutions,
+         n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step,
+         so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(), s.revolutions,
          so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane", size);
   sim::SweepStats st;
   {

@@ -273,6 +273,13 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                              "", o->batched, &o->batched, nullptr));
   PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
+  const char* senses[] = {"negative", "positive", "Rotation", "", nullptr};
+  PetscEnum sense = o->rotation > 0 ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
+  PetscCall(MorseOptionsEnum("-sweep_rotation",
+                             "positive: the blade turns at +omega about +z (the casing's lobes pass it towards -theta "
+                             "and friction acts along -e_theta); negative: at -omega",
+                             "", senses, sense, &sense, nullptr));
+  o->rotation = sense == static_cast<PetscEnum>(1) ? 1 : -1;
   PetscOptionsEnd();
   auto bad = [&](const std::string& e) {
     if (o->error.empty()) o->error = e;
@@ -307,10 +314,11 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
                 "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
                 "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
-                "spectrum_decimation=block_mean\n",
+                "spectrum_decimation=block_mean\nrotation=%d\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
-                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0);
+                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0,
+                o.rotation);
   return b;
 }
 
@@ -366,7 +374,7 @@ std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_
   const std::set<std::int64_t> done(done_idx.begin(), done_idx.end());
   std::vector<SpeedTask> todo;
   for (long i = 0; i < n_speeds(); ++i)
-    if (!done.count(i)) todo.push_back({i, omega_min + static_cast<double>(i) * omega_step});
+    if (!done.count(i)) todo.push_back({i, rotation * (omega_min + static_cast<double>(i) * omega_step)});
   return todo;
 }
 
