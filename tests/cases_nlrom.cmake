@@ -158,6 +158,39 @@ morse_add_error_case(nlrom_massless_fmax_negative
 morse_add_error_case(nlrom_massless_fmax_without_massless
   "morse: error: -nlrom_massless_fmax applies to -nlrom_boundary_mass massless" ml_fmax2.h5 BOX
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_massless_fmax 100)
+# Damping (issue 28): -nlrom_damping_modes takes a count or all, strictly; -nlrom_rayleigh two finite
+# values, and neither with -nlrom_damping_modal nor with a massless boundary.
+morse_add_error_case(nlrom_damping_modes_suffix
+  "morse: error: -nlrom_damping_modes 5abc: expected a number of modes >= 0 or all" damp_suffix.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_damping_modal 5e-4
+       -nlrom_damping_modes 5abc)
+morse_add_error_case(nlrom_damping_modes_negative
+  "morse: error: -nlrom_damping_modes -2: expected a number of modes >= 0 or all" damp_negative.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_damping_modal 5e-4
+       -nlrom_damping_modes -2)
+morse_add_error_case(nlrom_rayleigh_one_value
+  "morse: error: -nlrom_rayleigh takes two values alpha,beta \\(got 1\\)" damp_ray_one.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_rayleigh 1)
+morse_add_error_case(nlrom_rayleigh_nan
+  "morse: error: -nlrom_rayleigh nan,0: item 'nan': expected a finite number" damp_ray_nan.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_rayleigh nan,0)
+morse_add_error_case(nlrom_rayleigh_massless
+  "morse: error: -nlrom_rayleigh is not defined on the massless model \\(-nlrom_boundary_mass massless\\)"
+  damp_ray_massless.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass massless
+       -nlrom_rayleigh 1,1e-6)
+morse_add_error_case(nlrom_rayleigh_with_modal
+  "morse: error: -nlrom_rayleigh and -nlrom_damping_modal are two damping models: give one of them"
+  damp_ray_modal.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_rayleigh 1,1e-6
+       -nlrom_damping_modal 5e-4 -nlrom_damping_modes all)
+# and both run and write their model (tests/test_nlrom.cpp checks the ratios against closed forms).
+morse_add_ok_case(nlrom_damping_all nlrom_damping_all.h5
+  nlrom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -boundary x1 -nlrom_num_fixed_modes 3
+  -nlrom_forces none -nlrom_damping_modal 5e-4 -nlrom_damping_modes all)
+morse_add_ok_case(nlrom_damping_rayleigh nlrom_damping_rayleigh.h5
+  nlrom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -boundary x1 -nlrom_num_fixed_modes 3
+  -nlrom_forces none -nlrom_rayleigh 10,1e-7)
 morse_add_error_case(nlrom_massless_bad_mass
   "morse: error: .*-nlrom_boundary_mass" ml_mass.h5 BOX
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass light)

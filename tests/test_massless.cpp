@@ -129,6 +129,36 @@ TEST(Massless, FreeBoundaryFrequenciesConvergeToTheFullModel) {
   EXPECT_GT(first / last, 10.0);
 }
 
+// -nlrom_damping_modes all on a massless model: every dynamic mode of the model with its static
+// coordinates condensed gets the ratio xi. With M_dd = I, C_dd = sum 2 xi w_k x_k x_k^T has the
+// eigenvalues 2 xi w_k (w_k^2: free_eigenvalues), and C is zero on the static coordinates.
+TEST(Massless, ModalDampingOnEveryDynamicMode) {
+  const auto m = beam(10);
+  auto rm = massless_cb(m, 12);
+  const double xi = 5e-4;
+  nlrom::make_massless(&rm, rm.n_static, xi, nlrom::kAllModes);
+  const std::size_t r = static_cast<std::size_t>(rm.r), ns = static_cast<std::size_t>(rm.n_static), nd = r - ns;
+  const auto w2 = nlrom::free_eigenvalues(rm);
+  ASSERT_EQ(rm.damping_omega.size(), nd);
+  std::vector<double> Cdd(nd * nd), I(nd * nd, 0.0);
+  double static_part = 0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < r; ++j) {
+      if (i >= ns && j >= ns)
+        Cdd[(i - ns) * nd + j - ns] = rm.C[i * r + j];
+      else
+        static_part = std::max(static_part, std::abs(rm.C[i * r + j]));
+    }
+  for (std::size_t i = 0; i < nd; ++i) I[i * nd + i] = 1.0;
+  const auto c = eigen::dense_eigenvalues(static_cast<int>(nd), Cdd, I);
+  for (std::size_t k = 0; k < nd; ++k) {
+    const double w = std::sqrt(w2[k]);
+    EXPECT_NEAR(c[k] / (2 * w), xi, 1e-10) << "dynamic mode " << k;
+    EXPECT_NEAR(rm.damping_omega[k], w, 1e-10 * w) << "dynamic mode " << k;
+  }
+  EXPECT_EQ(static_part, 0.0);
+}
+
 // A boundary coordinate without stiffness (an isolated node: its static equilibrium is
 // singular) is refused by make_massless with that reason.
 TEST(Massless, BoundaryWithoutStiffnessIsRefused) {

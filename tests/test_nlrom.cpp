@@ -14,8 +14,10 @@
 #include "given_options.hpp"
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/session.hpp"
+#include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "scratch.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -461,6 +463,9 @@ TEST(Nlrom, StoredModelRoundTrips) {
   info.boundary_set = "x1";
   info.forces = "exact";
   info.t2_forces_seconds = 2.5;
+  info.damping = "rayleigh";
+  info.rayleigh_alpha = 10.0;
+  info.rayleigh_beta = 1e-7;
   int pid = world_rank() == 0 ? static_cast<int>(getpid()) : 0;
   MPI_Bcast(&pid, 1, MPI_INT, 0, PETSC_COMM_WORLD);
   const std::string file = cat("/tmp/morse_test_nlrom_stored_", pid, ".h5");
@@ -475,6 +480,20 @@ TEST(Nlrom, StoredModelRoundTrips) {
   EXPECT_EQ(sm.model.M, rm.M);
   EXPECT_EQ(sm.model.K, rm.K);
   EXPECT_EQ(sm.model.C, rm.C);
+  {
+    // A file written before the damping model was recorded (no /nlrom@damping) reads as before.
+    MPI_Barrier(PETSC_COMM_WORLD);
+    if (world_rank() == 0) {
+      EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "damping"), "rayleigh");
+      const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+      EXPECT_GE(H5Adelete_by_name(f, "/nlrom", "damping", H5P_DEFAULT), 0);
+      H5Fclose(f);
+    }
+    MPI_Barrier(PETSC_COMM_WORLD);
+    EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "damping"), "");
+    EXPECT_EQ(nlrom::read_stored_model(PETSC_COMM_WORLD, file, {"x1"}).model.C, rm.C);
+    MPI_Barrier(PETSC_COMM_WORLD);
+  }
   EXPECT_EQ(sm.model.g.A, rm.g.A);
   EXPECT_EQ(sm.model.g.B, rm.g.B);
   EXPECT_EQ(sm.boundary_nodes, basis.cb.boundary_node_ids);
@@ -507,11 +526,24 @@ TEST(Nlrom, StoredModelRoundTrips) {
     EXPECT_TRUE(io::read_attribute(file, "/nlrom", "t2_forces_seconds", &x, &err) && x == 2.5) << err;
     EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "forces"), "exact");
     EXPECT_EQ(io::read_string_attribute(file, "/nlrom", "boundary_set"), "x1");
+    EXPECT_TRUE(io::read_attribute(file, "/nlrom", "rayleigh_alpha", &x, &err) && x == 10.0) << err;
+    EXPECT_TRUE(io::read_attribute(file, "/nlrom", "rayleigh_beta", &x, &err) && x == 1e-7) << err;
     std::vector<double> w;
     std::vector<hsize_t> d;
     EXPECT_TRUE(io::read_doubles(file, "/nlrom/damping/omega", &w, &d, &err) && w == rm.damping_omega) << err;
     std::remove(file.c_str());
   }
+  // An unknown damping model is refused when read, naming the file and the attribute.
+  info.damping = "viscous";
+  {
+    io::H5Output out(PETSC_COMM_WORLD, file);
+    io::write_provenance(out, "nlrom", "SI");
+    nlrom::write_stored_model(out, m.lm, m.dofs, basis, rm, info);
+    out.commit();
+  }
+  test::expect_error_parts([&] { nlrom::read_stored_model(PETSC_COMM_WORLD, file, {"x1"}); },
+                           {file + ": /nlrom@damping is 'viscous' (none, modal or rayleigh)"}, "an unknown damping");
+  info.damping = "none";
   // A NaN in a stored operator is refused when read, naming the file and the dataset (it used to
   // surface as "the reduced mass matrix is not positive definite").
   rm.K[5] = std::nan("");
@@ -531,6 +563,122 @@ TEST(Nlrom, StoredModelRoundTrips) {
   }
   MPI_Barrier(PETSC_COMM_WORLD);
   if (world_rank() == 0) std::remove(file.c_str());
+}
+
+namespace {
+
+// x_i^T C x_i / (2 omega_i) of every mode i of (K, M) (x_i M-normalized: the modal damping ratio),
+// the omega_i, and the largest |x_i^T C x_j| / (2 sqrt(omega_i omega_j)) over i != j.
+struct ModalRatios {
+  std::vector<double> ratio, omega;
+  double coupling = 0;
+};
+ModalRatios modal_ratios(const nlrom::ReducedModel& rm) {
+  const std::size_t r = static_cast<std::size_t>(rm.r);
+  std::vector<double> X;
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm.K, rm.M, &X);
+  ModalRatios out;
+  for (std::size_t i = 0; i < r; ++i) out.omega.push_back(std::sqrt(w[i]));
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < r; ++j) {
+      double c = 0;
+      for (std::size_t a = 0; a < r; ++a)
+        for (std::size_t b = 0; b < r; ++b) c += X[a * r + i] * rm.C[a * r + b] * X[b * r + j];
+      if (i == j)
+        out.ratio.push_back(c / (2 * out.omega[i]));
+      else
+        out.coupling = std::max(out.coupling, std::abs(c) / (2 * std::sqrt(out.omega[i] * out.omega[j])));
+    }
+  return out;
+}
+
+}  // namespace
+
+// -nlrom_damping_modes all (seed 003 §2: proportional damping, xi on every mode): every mode of the
+// reduced model has the ratio xi, and the modes stay uncoupled; the partial form damps the first k
+// and leaves the others at zero.
+TEST(Nlrom, ModalDampingOnEveryMode) {
+  const auto m = box(ElementType::Hex8);
+  const auto c = test::cb_basis(m, "x1", 5);
+  const double xi = 5e-4;
+  const auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), xi, nlrom::kAllModes);
+  const auto mr = modal_ratios(rm);
+  ASSERT_EQ(rm.r, c.n());
+  ASSERT_EQ(rm.damping_omega.size(), static_cast<std::size_t>(rm.r));
+  for (PetscInt i = 0; i < rm.r; ++i) {
+    EXPECT_NEAR(mr.ratio[i], xi, 1e-10) << "mode " << i;
+    EXPECT_NEAR(rm.damping_omega[i], mr.omega[i], 1e-10 * mr.omega[i]) << "mode " << i;
+  }
+  EXPECT_LT(mr.coupling, 1e-10);
+  const PetscInt k = 3;
+  const auto part = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), xi, k);
+  const auto pr = modal_ratios(part);
+  ASSERT_EQ(part.damping_omega.size(), static_cast<std::size_t>(k));
+  for (PetscInt i = 0; i < part.r; ++i) EXPECT_NEAR(pr.ratio[i], i < k ? xi : 0.0, 1e-10) << "mode " << i;
+}
+
+// Rayleigh damping C~ = A M~ + B K~: every mode has the ratio A / (2 omega) + B omega / 2, and the
+// modes stay uncoupled. Refused on a massless model.
+TEST(Nlrom, RayleighDampingRatios) {
+  const auto m = box(ElementType::Hex8);
+  const auto c = test::cb_basis(m, "x1", 5);
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
+  // A and B with comparable shares at the lowest mode.
+  const double w1 = std::sqrt(eigen::dense_eigenvalues(static_cast<int>(rm.r), rm.K, rm.M)[0]);
+  const double A = 2e-3 * w1, B = 2e-3 / w1;
+  nlrom::rayleigh_damping(&rm, A, B);
+  EXPECT_TRUE(rm.damping_omega.empty());
+  const auto mr = modal_ratios(rm);
+  for (PetscInt i = 0; i < rm.r; ++i) {
+    const double expected = A / (2 * mr.omega[i]) + B * mr.omega[i] / 2;
+    EXPECT_NEAR(mr.ratio[i], expected, 1e-10 * std::max(1.0, expected)) << "mode " << i;
+  }
+  EXPECT_LT(mr.coupling, 1e-10);
+  rm.massless = true;
+  test::expect_error_parts([&] { nlrom::rayleigh_damping(&rm, A, B); }, {"Rayleigh", "massless"}, "massless model");
+}
+
+// -nlrom_damping_modes takes a count or all, strictly; -nlrom_rayleigh takes two finite values >= 0,
+// and not with modal damping nor a massless boundary. Each refusal names the option.
+TEST(Options, OfflineDamping) {
+  auto read = [](std::initializer_list<std::pair<const char*, const char*>> given) {
+    test::GivenOptions g(given);
+    nlrom::OfflineSettings s;
+    s.basis.boundary_set = "root";
+    EXPECT_EQ(s.set_from_options(PETSC_COMM_WORLD), PETSC_SUCCESS);
+    return s;
+  };
+  auto s = read({{"-nlrom_damping_modal", "5e-4"}, {"-nlrom_damping_modes", "all"}});
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.damping_modes, nlrom::kAllModes);
+  EXPECT_EQ(s.damping(), "modal");
+  s = read({{"-nlrom_damping_modal", "5e-4"}, {"-nlrom_damping_modes", "7"}});
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.damping_modes, 7);
+  EXPECT_EQ(s.damping(), "modal");
+  EXPECT_EQ(read({}).damping(), "none");
+  for (const char* bad : {"5abc", "-2", "1e3", "99999999999999999999999", "All"})
+    EXPECT_EQ(read({{"-nlrom_damping_modes", bad}}).error,
+              cat("-nlrom_damping_modes ", bad, ": expected a number of modes >= 0 or all"))
+        << bad;
+  s = read({{"-nlrom_rayleigh", "2,1e-6"}});
+  EXPECT_EQ(s.error, "");
+  EXPECT_EQ(s.damping(), "rayleigh");
+  EXPECT_EQ(s.rayleigh_alpha, 2.0);
+  EXPECT_EQ(s.rayleigh_beta, 1e-6);
+  EXPECT_EQ(read({{"-nlrom_rayleigh", "1"}}).error, "-nlrom_rayleigh takes two values alpha,beta (got 1)");
+  EXPECT_EQ(read({{"-nlrom_rayleigh", "1,2,3"}}).error, "-nlrom_rayleigh takes two values alpha,beta (got 3)");
+  EXPECT_EQ(read({{"-nlrom_rayleigh", "1,-2"}}).error, "-nlrom_rayleigh 1,-2: alpha and beta must be finite and >= 0");
+  test::expect_error_parts(
+      [&] {
+        read({{"-nlrom_rayleigh", "nan,0"}});
+      },
+      {"-nlrom_rayleigh nan,0: item 'nan': expected a finite number"}, "nan");
+  EXPECT_EQ(read({{"-nlrom_rayleigh", "1,0"}, {"-nlrom_damping_modal", "0.01"}, {"-nlrom_damping_modes", "3"}}).error,
+            "-nlrom_rayleigh and -nlrom_damping_modal are two damping models: give one of them");
+  EXPECT_NE(read({{"-nlrom_rayleigh", "1,0"}, {"-nlrom_boundary_mass", "massless"}})
+                .error.find("-nlrom_rayleigh is not defined on the massless model"),
+            std::string::npos);
 }
 
 // The offline settings read their options and validate them with the boundary set.

@@ -93,6 +93,7 @@ void run_nlrom(MPI_Comm comm) {
   auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.massless ? 0.0 : no.damping_xi,
                                  no.damping_modes);
   rm.n_b = basis.n_b;
+  if (no.rayleigh_given) nlrom::rayleigh_damping(&rm, no.rayleigh_alpha, no.rayleigh_beta);
   if (no.massless) {
     nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes);
     double free_dt = 0;
@@ -114,7 +115,10 @@ void run_nlrom(MPI_Comm comm) {
   info.derivative_selection = no.basis.random_derivatives ? "random" : "weight";
   info.step_displacement = no.step_displacement;
   info.filter_pod = no.n_filter;
+  info.damping = no.damping();
   info.modal_damping_ratio = no.damping_xi;
+  info.rayleigh_alpha = no.rayleigh_alpha;
+  info.rayleigh_beta = no.rayleigh_beta;
   info.t2_forces_seconds = t2;
   info.t3_projection_seconds = t3;
   rm.g = std::move(g);

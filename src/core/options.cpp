@@ -319,4 +319,21 @@ PetscErrorCode get_string_list(MPI_Comm comm, const char* name, const char* help
   return PETSC_SUCCESS;
 }
 
+PetscErrorCode get_rayleigh(PetscOptionItems* PetscOptionsObject, const char* name, const char* help, double* alpha,
+                            double* beta, PetscBool* set, std::string* error) {
+  PetscReal ab[3] = {0, 0, 0};  // room for a third value, so that one too many is counted, not cut off
+  PetscInt n = 3;
+  PetscCall(MorseOptionsRealArray(name, help, "", ab, &n, set));
+  if (!*set) return PETSC_SUCCESS;
+  std::string why;
+  if (n != 2)
+    why = cat(name, " takes two values alpha,beta (got ", n, ")");
+  else if (!(std::isfinite(ab[0]) && std::isfinite(ab[1]) && ab[0] >= 0 && ab[1] >= 0))
+    why = cat(name, " ", ab[0], ",", ab[1], ": alpha and beta must be finite and >= 0");
+  else
+    *alpha = ab[0], *beta = ab[1];
+  if (error->empty()) *error = why;
+  return PETSC_SUCCESS;
+}
+
 }  // namespace morse::options

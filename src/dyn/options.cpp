@@ -103,8 +103,6 @@ PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
       options::get_string_list(comm, "-fom_monitor", "Node sets whose displacement histories are written", &monitor));
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE, lin = linear ? PETSC_TRUE : PETSC_FALSE;
-  PetscReal ray[2] = {0, 0};
-  PetscInt n_ray = 2;
   std::string scheme_name = scheme == Scheme::Energy ? "energy" : "trapezoidal";
   std::string newton_name = newton == Newton::Modified ? "modified" : "krylov";
   PetscOptionsBegin(comm, nullptr, "morse fom options", "");
@@ -122,13 +120,9 @@ PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
                              modal_xi, &modal_xi, nullptr));
   PetscCall(MorseOptionsInt("-fom_damping_modes", "Number of modes carrying -fom_damping_modal", "", damping_modes,
                             &damping_modes, nullptr));
-  PetscCall(MorseOptionsRealArray("-fom_rayleigh", "Rayleigh damping alpha,beta: C = alpha M + beta K", "", ray, &n_ray,
-                                  &set));
-  if (set) {
-    if (n_ray != 2) error = "-fom_rayleigh takes two values: alpha,beta";
-    rayleigh_alpha = ray[0];
-    rayleigh_beta = ray[1];
-  }
+  PetscCall(options::get_rayleigh(PetscOptionsObject, "-fom_rayleigh",
+                                  "Rayleigh damping alpha,beta: C = alpha M + beta K", &rayleigh_alpha, &rayleigh_beta,
+                                  &set, &error));
   PetscCall(MorseOptionsReal("-fom_newton_rtol", "Newton tolerance: ||R|| <= rtol * force scale + atol", "",
                              newton_rtol, &newton_rtol, nullptr));
   PetscCall(
@@ -185,7 +179,6 @@ PetscErrorCode FomSettings::set_from_options(MPI_Comm comm) {
   bad(modal_xi >= 0 && modal_xi < 1, cat("-fom_damping_modal must be in [0, 1) (got ", modal_xi, ")"));
   bad(damping_modes >= 0, cat("-fom_damping_modes must be >= 0 (got ", damping_modes, ")"));
   bad(!(modal_xi > 0) || damping_modes > 0, "-fom_damping_modal needs -fom_damping_modes K > 0");
-  bad(rayleigh_alpha >= 0 && rayleigh_beta >= 0, "-fom_rayleigh: alpha and beta must be >= 0");
   bad(newton_rtol > 0 && newton_atol >= 0 && newton_max_it > 0,
       "-fom_newton_rtol, -fom_newton_max_it must be positive and -fom_newton_atol >= 0");
   bad(refactor_every >= 0, "-fom_refactor_every must be >= 0");

@@ -452,6 +452,7 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
   rm.K = cb::project_symmetric(comm, K, V);
   rm.M = cb::project_symmetric(comm, M, V);
   rm.C.assign(static_cast<std::size_t>(r) * r, 0.0);
+  if (k == kAllModes) k = r;
   if (xi > 0 && k > 0) {
     MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
     std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
@@ -467,6 +468,16 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
     }
   }
   return rm;
+}
+
+void rayleigh_damping(ReducedModel* rm, double alpha, double beta) {
+  MORSE_CHECK(!rm->massless,
+              "nlrom: Rayleigh damping is not defined on a massless model (its static coordinates have no mass)");
+  MORSE_CHECK(std::isfinite(alpha) && std::isfinite(beta) && alpha >= 0 && beta >= 0, "nlrom: Rayleigh damping alpha ",
+              alpha, ", beta ", beta, " must be finite and >= 0");
+  rm->C.resize(rm->M.size());
+  for (std::size_t i = 0; i < rm->C.size(); ++i) rm->C[i] = alpha * rm->M[i] + beta * rm->K[i];
+  rm->damping_omega.clear();
 }
 
 }  // namespace morse::nlrom

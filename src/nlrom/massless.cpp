@@ -243,6 +243,7 @@ void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k) {
               "massless boundary: the model needs boundary and dynamic "
               "coordinates (r = ",
               r, ", n_b = ", rm->n_b, ", static ", ns, ")");
+  if (k == kAllModes) k = static_cast<PetscInt>(nd);
   MORSE_CHECK(k >= 0 && static_cast<std::size_t>(k) <= nd, "massless boundary: ", k,
               " damped modes asked from a model of ", nd, " dynamic coordinates");
   const auto Keff = condensed_stiffness(*rm, ns);  // also proves K_ss positive definite

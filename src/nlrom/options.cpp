@@ -5,6 +5,7 @@
 #include <petscsys.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -15,9 +16,29 @@
 
 namespace morse::nlrom {
 
+namespace {
+
+// The value of -nlrom_damping_modes: `all` (kAllModes) or a count >= 0, the whole text an integer
+// within PetscInt's range. Returns why not, naming the option and the text, or "".
+std::string parse_damping_modes(const char* text, PetscInt* modes) {
+  const std::string why = cat("-nlrom_damping_modes ", text, ": expected a number of modes >= 0 or all");
+  if (std::string(text) == "all") {
+    *modes = kAllModes;
+    return {};
+  }
+  if (!options::value_error("-nlrom_damping_modes", text, options::Value::Int).empty()) return why;
+  const long long k = std::strtoll(text, nullptr, 10);  // in range: value_error checked it
+  if (k < 0) return why;
+  *modes = static_cast<PetscInt>(k);
+  return {};
+}
+
+}  // namespace
+
 PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   char buf[PETSC_MAX_PATH_LEN] = "";
-  PetscBool set = PETSC_FALSE, tfinal_set = PETSC_FALSE, dt_set = PETSC_FALSE;
+  PetscBool set = PETSC_FALSE, tfinal_set = PETSC_FALSE, dt_set = PETSC_FALSE, rayleigh = PETSC_FALSE;
+  std::string modes_error, rayleigh_error;
   auto& b = basis;
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
   PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
@@ -67,8 +88,16 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
                              "Modal damping ratio on the first -nlrom_damping_modes modes of "
                              "the reduced model",
                              "", damping_xi, &damping_xi, nullptr));
-  PetscCall(MorseOptionsInt("-nlrom_damping_modes", "Reduced modes carrying -nlrom_damping_modal", "", damping_modes,
-                            &damping_modes, nullptr));
+  // A count or `all`: read as text (PETSc's integer option cannot take a word) and parsed here.
+  buf[0] = 0;
+  PetscCall(MorseOptionsString("-nlrom_damping_modes",
+                               "Reduced modes carrying -nlrom_damping_modal: a count K, or all (every mode; with a "
+                               "massless boundary every dynamic mode)",
+                               "", "0", buf, sizeof buf, &set));
+  if (set) modes_error = parse_damping_modes(buf, &damping_modes);
+  PetscCall(options::get_rayleigh(PetscOptionsObject, "-nlrom_rayleigh",
+                                  "Rayleigh damping alpha,beta of the reduced model: C~ = alpha M~ + beta K~",
+                                  &rayleigh_alpha, &rayleigh_beta, &rayleigh, &rayleigh_error));
   const char* masses[] = {"carrying", "massless", "BoundaryMass", "", nullptr};
   PetscEnum bm = massless ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
   PetscCall(MorseOptionsEnum("-nlrom_boundary_mass",
@@ -101,14 +130,28 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   bad(!dt_set || (std::isfinite(b.training_dt) && b.training_dt > 0),
       cat("-nlrom_training_dt must be a finite positive time step [s] (got ", b.training_dt, ")"));
   bad(!b.boundary_set.empty(), "morse nlrom: no boundary set given: use -boundary SET");
-  bad(damping_xi >= 0 && damping_xi < 1 && damping_modes >= 0,
+  bad(modes_error.empty(), modes_error);
+  bad(damping_xi >= 0 && damping_xi < 1 && (damping_modes >= 0 || damping_modes == kAllModes),
       "-nlrom_damping_modal must be in [0, 1) and -nlrom_damping_modes >= 0");
+  bad(rayleigh_error.empty(), rayleigh_error);
+  rayleigh_given = rayleigh;
+  bad(!(rayleigh_given && damping_xi > 0),
+      "-nlrom_rayleigh and -nlrom_damping_modal are two damping models: give one of them");
+  bad(!(rayleigh_given && massless),
+      "-nlrom_rayleigh is not defined on the massless model (-nlrom_boundary_mass massless): on its zero-mass "
+      "block (the quasi-static coordinates) alpha M~ vanishes and beta K~ would not; use -nlrom_damping_modal, "
+      "which acts on its dynamic modes");
   bad(n_filter >= 0, "-nlrom_filter_pod must be >= 0");
   bad(std::isfinite(massless_fmax) && massless_fmax >= 0,
       cat("-nlrom_massless_fmax must be a finite frequency >= 0 [Hz] (got ", massless_fmax, ")"));
   bad(massless || massless_fmax == 0, "-nlrom_massless_fmax applies to -nlrom_boundary_mass massless");
   bad(!(n_filter > 0 && b.snapshots.empty()), "-nlrom_filter_pod needs -nlrom_snapshots FILE.h5");
   return PETSC_SUCCESS;
+}
+
+std::string OfflineSettings::damping() const {
+  if (rayleigh_given) return "rayleigh";
+  return damping_xi > 0 && damping_modes != 0 ? "modal" : "none";
 }
 
 UMat force_filter(const fe::Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {

@@ -204,6 +204,13 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
         err = cat(file, ": /nlrom@boundary_mass is '", bm, "' (carrying or massless)");
         ok = false;
       }
+      // /nlrom/C is the damping whatever its model; a file written before the choice existed has
+      // no attribute (modal damping, or none).
+      const auto dm = io::read_string_attribute(file, "/nlrom", "damping");
+      if (ok && !dm.empty() && dm != "none" && dm != "modal" && dm != "rayleigh") {
+        err = cat(file, ": /nlrom@damping is '", dm, "' (none, modal or rayleigh)");
+        ok = false;
+      }
       for (std::size_t i = 0; ok && m.massless && i < r; ++i)
         for (std::size_t j = 0; j < static_cast<std::size_t>(m.n_static); ++j)
           if (m.M[i * r + j] != 0.0 || m.M[j * r + i] != 0.0) {
@@ -341,7 +348,10 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   out.attribute_int("/nlrom", "n_extra", basis.n_extra);
   out.attribute("/nlrom", "step_displacement", info.step_displacement);
   out.attribute_int("/nlrom", "filter_pod", info.filter_pod);
+  out.attribute("/nlrom", "damping", info.damping);
   out.attribute("/nlrom", "modal_damping_ratio", info.modal_damping_ratio);
+  out.attribute("/nlrom", "rayleigh_alpha", info.rayleigh_alpha);
+  out.attribute("/nlrom", "rayleigh_beta", info.rayleigh_beta);
   out.attribute("/nlrom", "t1_basis_seconds", basis.seconds);
   out.attribute("/nlrom", "t2_forces_seconds", info.t2_forces_seconds);
   out.attribute("/nlrom", "t3_projection_seconds", info.t3_projection_seconds);

@@ -135,6 +135,15 @@ std::string magnitude_error(const std::string& name, double value);
 /// reaches the code. Every rank reads the same options: every rank throws. Returns 0.
 PetscErrorCode check_value(PetscOptions options, const char* prefix, const char* name, Value kind);
 
+/// Rayleigh damping C = alpha M + beta K from option `name` given as alpha,beta (-fom_rayleigh,
+/// -nlrom_rayleigh), read inside a PetscOptionsBegin block (PetscOptionsObject: the block's) and
+/// registered with `help`. alpha and beta are left unchanged if the option is not given; *set says
+/// whether it is. A given value that is not two numbers, or has one negative, is recorded in *error
+/// (if still empty) naming the option ("-nlrom_rayleigh takes two values alpha,beta (got 1)"); a
+/// non-finite one is refused by check_value (throws). Returns a PETSc error code. Collective.
+PetscErrorCode get_rayleigh(PetscOptionItems* PetscOptionsObject, const char* name, const char* help, double* alpha,
+                            double* beta, PetscBool* set, std::string* error);
+
 }  // namespace morse::options
 
 // Drop-in replacements for PETSc's option getters inside a PetscOptionsBegin/End block: same

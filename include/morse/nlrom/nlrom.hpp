@@ -151,6 +151,10 @@ UMat pod(Mat X, PetscInt n, std::vector<double>* sigma);
 /// of snapshots, naming -nlrom_filter_pod and the file. Collective.
 UMat force_filter(const fe::Model& md, const fe::Svk& svk, const std::string& file, PetscInt n);
 
+/// -nlrom_damping_modes all: modal damping on every mode of the reduced model (project_model), or
+/// on every dynamic mode of a massless one (make_massless).
+inline constexpr PetscInt kAllModes = -1;
+
 /// The settings of the offline stage (`morse nlrom`): the basis, the identification of the reduced
 /// force and the reduced modal damping.
 struct OfflineSettings {
@@ -160,7 +164,10 @@ struct OfflineSettings {
   PetscInt n_filter = 0;            ///< -nlrom_filter_pod: POD filter vectors of g_nl (0: none)
   double step_displacement = 0.01;  ///< -step_displacement (StepSettings::displacement)
   double damping_xi = 0.0;          ///< -nlrom_damping_modal (project_model's xi)
-  PetscInt damping_modes = 0;       ///< -nlrom_damping_modes (project_model's k)
+  PetscInt damping_modes = 0;       ///< -nlrom_damping_modes K|all (project_model's k; all: kAllModes)
+  bool rayleigh_given = false;      ///< -nlrom_rayleigh given (rayleigh_damping)
+  double rayleigh_alpha = 0.0;      ///< -nlrom_rayleigh alpha,beta: C~ = alpha M~ + beta K~
+  double rayleigh_beta = 0.0;
   /// -nlrom_boundary_mass carrying|massless: the boundary keeps its mass (seed 003), or is
   /// massless (make_massless; the damping then acts on the dynamic coordinates only).
   bool massless = false;
@@ -169,12 +176,16 @@ struct OfflineSettings {
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
   /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
-  /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal, -nlrom_damping_modes and
-  /// -nlrom_boundary_mass (docs/user-guide.md), then validates them with basis.boundary_set (call it after setting
-  /// that): the first bad value (unknown basis or force method, no boundary set, damping ratio
-  /// outside [0, 1), a filter without snapshots, ...) is recorded in `error`. Uses
-  /// PetscOptionsBegin: returns a PETSc error code. Collective.
+  /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal, -nlrom_damping_modes K|all,
+  /// -nlrom_rayleigh alpha,beta and -nlrom_boundary_mass (docs/user-guide.md), then validates them with
+  /// basis.boundary_set (call it after setting that): the first bad value (unknown basis or force
+  /// method, no boundary set, damping ratio outside [0, 1), a mode count neither a count nor all,
+  /// Rayleigh damping with modal damping or with a massless boundary, a filter without snapshots, ...)
+  /// is recorded in `error`. Uses PetscOptionsBegin: returns a PETSc error code. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
+  /// The damping model asked for, as /nlrom@damping records it: "rayleigh" (-nlrom_rayleigh),
+  /// "modal" (-nlrom_damping_modal > 0 on K > 0 or all modes) or "none".
+  std::string damping() const;
 };
 
 // ------------------------------------------------------------------------------------------
@@ -226,8 +237,8 @@ UMat transform_basis(Mat V, const std::vector<double>& S);
 
 /// Makes the model projected on the basis V T (massless_transform) massless: M = diag(0, I) (the
 /// residual mass dropped; the dynamic coordinates are M-normalized modes), C zero on the first
-/// n_static coordinates, and modal damping
-/// xi on the first k modes of the model with its static coordinates free (condensed statically:
+/// n_static coordinates, and modal damping xi on the first k modes (k = kAllModes: every dynamic
+/// mode) of the model with its static coordinates free (condensed statically:
 /// K_dd - K_ds K_ss^-1 K_sd with M_dd), on the dynamic coordinates only:
 /// C_dd = sum 2 xi w_k (M_dd x_k)(M_dd x_k)^T. Sets rm->massless, rm->n_static and
 /// rm->damping_omega. Throws if K_ss is not positive definite (a boundary node without stiffness)
@@ -290,15 +301,17 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
 
 /// How a `morse nlrom` file's model was built, recorded as attributes of /nlrom.
 struct StoredInfo {
-  std::string basis = "cb";                     ///< -nlrom_basis: cb, cbmd or pod
-  std::string forces = "step";                  ///< -nlrom_forces: step or exact
-  std::string boundary_set;                     ///< the interface node set
-  std::string derivative_selection = "weight";  ///< cbmd: weight or random
-  double step_displacement = 0;                 ///< -step_displacement (STEP)
-  PetscInt filter_pod = 0;                      ///< -nlrom_filter_pod
-  double modal_damping_ratio = 0;               ///< -nlrom_damping_modal
-  double t2_forces_seconds = 0;                 ///< offline time of the forces (t1 is basis.seconds)
-  double t3_projection_seconds = 0;             ///< offline time of the projection
+  std::string basis = "cb";                      ///< -nlrom_basis: cb, cbmd or pod
+  std::string forces = "step";                   ///< -nlrom_forces: step or exact
+  std::string boundary_set;                      ///< the interface node set
+  std::string derivative_selection = "weight";   ///< cbmd: weight or random
+  double step_displacement = 0;                  ///< -step_displacement (STEP)
+  PetscInt filter_pod = 0;                       ///< -nlrom_filter_pod
+  std::string damping = "none";                  ///< none, modal or rayleigh (OfflineSettings::damping)
+  double modal_damping_ratio = 0;                ///< -nlrom_damping_modal
+  double rayleigh_alpha = 0, rayleigh_beta = 0;  ///< -nlrom_rayleigh
+  double t2_forces_seconds = 0;                  ///< offline time of the forces (t1 is basis.seconds)
+  double t3_projection_seconds = 0;              ///< offline time of the projection
 };
 
 /// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on
@@ -311,7 +324,14 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
                         const ReducedModel& rm, const StoredInfo& info);
 
 /// M~ = V^T M V, K~ = V^T K V (symmetrized), and modal damping xi on the first k modes of the
-/// reduced model itself: C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T. Collective.
+/// reduced model itself (k = kAllModes: all r of them): C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T, with
+/// x_k the M~-normalized modes of (K~, M~) (theory §8.6). Throws if k exceeds r. Collective.
 ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscInt k);
+
+/// Rayleigh damping of a mass-carrying reduced model: C~ = alpha M~ + beta K~ (replacing C~; every
+/// mode m gets the ratio alpha / (2 w_m) + beta w_m / 2; theory §8.6). rm->damping_omega is cleared
+/// (it lists modally damped modes). Throws for a massless model (Rayleigh damping is not defined on
+/// its zero-mass block) or a negative or non-finite coefficient. Called on every rank alike.
+void rayleigh_damping(ReducedModel* rm, double alpha, double beta);
 
 }  // namespace morse::nlrom
