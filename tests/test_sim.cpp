@@ -716,6 +716,125 @@ void check_sweep(bool massless) {
 TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(false); }
 TEST(Sim, MasslessSweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(true); }
 
+// Adaptive refinement of a sweep: the rules (RMS jump, a change of the dominant frequency, a
+// failure on one side), then a refined sweep of the clamped box on the casing against the sweep of
+// the whole fine grid: every refined speed is the fine grid's result (bitwise), the largest RMS is
+// found at the same speed, no two neighbouring refined speeds farther apart than the fine step
+// still differ, and fewer speeds were run.
+TEST(SimRun, RefinementBisectsWhereNeighboursDiffer) {
+  sim::SweepOptions so;
+  so.omega_min = 100, so.omega_max = 900, so.omega_step = 200, so.refine_step = 25;
+  EXPECT_EQ(so.stride(), 8);
+  EXPECT_EQ(so.n_speeds(), 33);
+  const auto coarse = so.todo({});
+  ASSERT_EQ(coarse.size(), 5u);
+  EXPECT_EQ(coarse[2].index, 16);
+  EXPECT_EQ(coarse[2].omega, 500.0);
+  const std::vector<double> freqs = {0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 100};
+  auto result = [&](long index, double rms, std::size_t peak) {
+    sim::SpeedResult R;
+    R.index = index, R.rms = rms, R.spectrum.assign(freqs.size(), 0.1);
+    R.spectrum[0] = 5, R.spectrum[peak] = 1;  // f = 0 does not count
+    return R;
+  };
+  std::vector<sim::SpeedResult> done = {result(0, 1.05, 5), result(8, 1.1, 5), result(16, 2, 5), result(24, 1, 5),
+                                        result(32, 1, 9)};
+  auto next = so.refine(done, freqs);
+  ASSERT_EQ(next.size(), 3u);  // 8-16 and 16-24 (RMS, and the peak at 16), 24-32 (90 against 50 Hz)
+  EXPECT_EQ(next[0].index, 12);
+  EXPECT_EQ(next[1].index, 20);
+  EXPECT_EQ(next[2].index, 28);
+  EXPECT_EQ(next[2].omega, 800.0);
+  // A peak between alike neighbours: both sides of it are bisected.
+  next = so.refine({result(0, 1, 5), result(8, 1.05, 5), result(16, 1, 5)}, freqs);
+  ASSERT_EQ(next.size(), 2u);
+  EXPECT_EQ(next[0].index, 4);
+  EXPECT_EQ(next[1].index, 12);
+  // Two bins apart is not a new line; a failure on one side is a difference; neighbours one fine
+  // step apart are not refined.
+  EXPECT_FALSE(sim::speeds_differ(result(0, 1, 5), result(1, 1, 7), freqs, 0.2, 0.05));
+  EXPECT_TRUE(sim::speeds_differ(result(0, 1, 5), result(1, 1, 8), freqs, 0.2, 0.05));
+  auto failed = result(1, 1, 5);
+  failed.status = 1;
+  EXPECT_TRUE(sim::speeds_differ(result(0, 1, 5), failed, freqs, 0.2, 0.05));
+  EXPECT_TRUE(so.refine({result(3, 1, 5), result(4, 9, 5)}, freqs).empty());
+  EXPECT_TRUE(so.refine({result(0, 1, 5), result(8, 1.05, 5), result(16, 1.1, 5)}, freqs).size() == 1u)
+      << "the rising edge's top (16) has one interval beside it";
+  so.rotation = -1;
+  EXPECT_EQ(so.refine(done, freqs)[0].omega, -400.0);
+  so.refine_step = 0;
+  EXPECT_TRUE(so.refine(done, freqs).empty()) << "no refinement asked";
+}
+
+TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
+  auto m = box(ElementType::Hex8, 4);
+  auto c = test::cb_basis(m, "x1", 3);
+  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  auto rm =
+      nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.01, static_cast<PetscInt>(r));
+  rm.n_b = c.n_b;
+  const auto X = boundary_positions(m, c);
+  sim::SweepSettings s;
+  s.base.dt = 0.5 * sim::critical_step(rm);
+  s.base.linear = true;
+  s.base.contact.obstacle = sim::Obstacle::Casing;
+  s.base.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, 0.0};
+  s.base.contact.mu = 0.15;
+  for (std::size_t k = 0; k < nb; ++k) {
+    sim::ContactNode node;
+    node.dof = 3 * k;
+    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
+    s.base.contact.nodes.push_back(node);
+  }
+  s.revolutions = 3.0;
+  s.monitor.assign(r, 0.0);
+  const double rho = std::hypot(X[0], X[1]);
+  s.monitor[0] = X[0] / rho, s.monitor[1] = X[1] / rho;
+  s.spectrum_fmax = 2000.0;
+  s.spectrum_bins = 40;
+  s.batch = 4;
+  sim::SweepOptions so;
+  so.omega_min = 800, so.omega_max = 2400, so.omega_step = 400, so.refine_step = 25;
+  so.refine_rms = 0.1;
+  const auto freqs = s.frequencies();
+  std::vector<sim::SpeedResult> refined;
+  std::size_t n_run = 0;
+  sim::sweep_rounds(
+      PETSC_COMM_WORLD, rm, s, so, so.todo({}), &refined, freqs, [](const sim::SpeedResult&) {}, &n_run);
+  std::vector<sim::SpeedTask> all;
+  for (long i = 0; i < so.n_speeds(); ++i) all.push_back({i, so.omega_min + static_cast<double>(i) * so.refine_step});
+  std::vector<sim::SpeedResult> fine(all.size());
+  sim::sweep(PETSC_COMM_WORLD, rm, s, all,
+             [&](const sim::SpeedResult& R) { fine[static_cast<std::size_t>(R.index)] = R; });
+  // Decided on rank 0 (which holds the results), shared.
+  int ok_same = 1, ok_done = 1, same_peak = 0;
+  long runs = static_cast<long>(n_run), w_ref = -1, w_fine = -1;
+  if (world_rank() == 0) {
+    std::sort(refined.begin(), refined.end(),
+              [](const sim::SpeedResult& a, const sim::SpeedResult& b) { return a.index < b.index; });
+    for (const auto& R : refined) {
+      const auto& F = fine[static_cast<std::size_t>(R.index)];
+      ok_same &= R.omega == F.omega && R.rms == F.rms && R.spectrum == F.spectrum;
+    }
+    for (std::size_t k = 0; k + 1 < refined.size(); ++k)
+      if (refined[k + 1].index - refined[k].index >= 2)
+        ok_done &= !sim::speeds_differ(refined[k], refined[k + 1], freqs, so.refine_rms, so.refine_frequency);
+    auto peak = [](const std::vector<sim::SpeedResult>& v) {
+      return std::max_element(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.rms < b.rms; })->index;
+    };
+    w_ref = peak(refined), w_fine = peak(fine);
+    same_peak = w_ref == w_fine;
+    print0(PETSC_COMM_SELF, "  refined sweep: %zu of %zu speeds run, peak RMS at %.0f rad/s (fine grid: %.0f)\n",
+           refined.size(), fine.size(), so.omega_min + w_ref * so.refine_step, so.omega_min + w_fine * so.refine_step);
+  }
+  for (int* v : {&ok_same, &ok_done, &same_peak}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  MPI_Bcast(&runs, 1, MPI_LONG, 0, PETSC_COMM_WORLD);
+  EXPECT_EQ(ok_same, 1) << "a refined speed differs from the same speed of the fine grid";
+  EXPECT_EQ(ok_done, 1) << "neighbouring refined speeds still differ";
+  EXPECT_EQ(same_peak, 1) << "the refinement missed the fine grid's peak";
+  EXPECT_LT(runs, so.n_speeds()) << "the refinement ran the whole fine grid";
+}
+
 // The energy balance of central differences (sim::EnergyWork): the discrete energy E_{n+1/2}
 // changes by the works of the load, the normal contact forces and friction, less the damping
 // dissipation. The clamped box with a harmonic load on its free face, modal damping on every
@@ -1166,6 +1285,24 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   so = read({{"-sweep_omega_min", "1"}, {"-sweep_omega_max", "1000001"}, {"-sweep_omega_step", "1"}});
   EXPECT_NE(so.error.find("-sweep_omega_max 1000001 and -sweep_omega_step 1 give 1000001 speeds"), std::string::npos)
       << so.error;
+  // The sense of rotation: the grid's magnitudes, turned negative, and a key of the settings.
+  so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "1000"}, {"-sweep_omega_step", "100"}});
+  EXPECT_EQ(so.rotation, 1);
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "1000"},
+             {"-sweep_omega_step", "100"},
+             {"-sweep_rotation", "negative"}});
+  EXPECT_EQ(so.rotation, -1);
+  const auto todo = so.todo({1});
+  ASSERT_EQ(todo.size(), 2u);
+  EXPECT_EQ(todo[0].omega, -800.0);
+  EXPECT_EQ(todo[1].omega, -1000.0);
+  EXPECT_NE(sim::settings_text(so, sim::SweepSettings(), 15).find("\nrotation=-1\n"), std::string::npos);
+  test::expect_error_parts(
+      [&] {
+        read({{"-sweep_rotation", "sideways"}});
+      },
+      {"-sweep_rotation", "sideways"}, "an unknown sense of rotation");
 }
 
 // simulate's options refuse non-finite initial states and steps, a case given twice and a case

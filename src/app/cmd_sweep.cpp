@@ -50,23 +50,31 @@ void run_sweep(MPI_Comm comm) {
   const int rank = rank_of(comm);
   const std::vector<std::int64_t> done_idx = sim::resume_sweep(comm, so.out, so.restart, &rec);
   const long nd = static_cast<long>(done_idx.size());
-  const std::vector<sim::SpeedTask> todo = so.todo(done_idx);
+  std::vector<sim::SpeedTask> todo = so.todo(done_idx);
   int size = 1;
   MPI_Comm_size(comm, &size);
+  const long coarse = (n_speeds - 1) / so.stride() + 1;
+  const double last = so.omega_min + static_cast<double>(coarse - 1) * so.omega_step;
   print0(comm,
          "morse sweep: %ld speeds %.6g..%.6g rad/s%s (%ld already in %s), %.6g revolutions each, dt "
          "%.4g s (critical %.4g s), "
          "r = %zu, %s, %d lanes per rank (%s kernel) on %d rank(s)\n",
-         n_speeds, so.omega_min, so.omega_min + (n_speeds - 1) * so.omega_step,
-         so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(), s.revolutions,
-         so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane", size);
+         coarse, so.omega_min, last, so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(),
+         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane",
+         size);
+  if (so.refine_step > 0)
+    print0(comm,
+           "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "
+           "down to %.6g rad/s (a grid of %ld speeds)\n",
+           so.refine_rms, so.refine_frequency, so.refine_step, n_speeds);
   sim::SweepStats st;
+  std::size_t n_run = 0;
   {
     StageTimer timer(comm, "Sweep");
-    st = sim::sweep(comm, sm.model, s, todo, [&](const sim::SpeedResult& R) {
-      rec.results.push_back(R);
-      sim::write_sweep(so.out, rec);  // rank 0: atomic checkpoint
-    });
+    st = sim::sweep_rounds(
+        comm, sm.model, s, so, todo, &rec.results, rec.frequencies,
+        [&](const sim::SpeedResult&) { sim::write_sweep(so.out, rec); },  // rank 0: checkpoint
+        &n_run);
   }
   double lane_steps = static_cast<double>(st.lane_steps), kernel = st.kernel_seconds, wall = st.seconds;
   MPI_Allreduce(MPI_IN_PLACE, &lane_steps, 1, MPI_DOUBLE, MPI_SUM, comm);
@@ -75,7 +83,7 @@ void run_sweep(MPI_Comm comm) {
   print0(comm,
          "morse sweep: %zu speeds in %.2f s, %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
          "in the force kernels\n",
-         todo.size(), wall, wall > 0 ? lane_steps / wall : 0.0, wall > 0 ? lane_steps / wall / size : 0.0,
+         n_run, wall, wall > 0 ? lane_steps / wall : 0.0, wall > 0 ? lane_steps / wall / size : 0.0,
          wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
   std::string failed;
   if (rank == 0)

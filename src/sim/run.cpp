@@ -273,6 +273,15 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                              "", o->batched, &o->batched, nullptr));
   PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_refine_step",
+                             "Adaptive refinement down to this speed step [rad/s] (0: none); -sweep_omega_step must "
+                             "be a power-of-two multiple of it",
+                             "", o->refine_step, &o->refine_step, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_refine_rms", "Refine between two speeds whose RMS differ by this fraction", "",
+                             o->refine_rms, &o->refine_rms, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_refine_frequency",
+                             "Refine between two speeds whose dominant frequencies differ by this fraction", "",
+                             o->refine_frequency, &o->refine_frequency, nullptr));
   const char* senses[] = {"negative", "positive", "Rotation", "", nullptr};
   PetscEnum sense = o->rotation > 0 ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
   PetscCall(MorseOptionsEnum("-sweep_rotation",
@@ -287,12 +296,33 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   for (const auto& [name, v] : {std::pair<const char*, double>{"-sweep_omega_min", o->omega_min},
                                 {"-sweep_omega_max", o->omega_max},
                                 {"-sweep_omega_step", o->omega_step},
+                                {"-sweep_refine_step", o->refine_step},
+                                {"-sweep_refine_rms", o->refine_rms},
+                                {"-sweep_refine_frequency", o->refine_frequency},
                                 {"-sim_dt", o->dt},
                                 {"-sweep_spectrum_fmax", o->fmax}})
     if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (o->error.empty() && o->refine_step != 0) {
+    // The coarse step must be 2^k fine steps (k >= 1), so that bisection lands on the fine grid.
+    const double ratio = o->omega_step / o->refine_step;
+    const double k = std::log2(ratio);
+    if (!(o->refine_step > 0))
+      bad(cat("-sweep_refine_step must be > 0 (got ", o->refine_step, "; 0: no refinement)"));
+    else if (!(o->omega_step > o->refine_step))
+      bad(cat("-sweep_refine_step ", o->refine_step, " rad/s is not below the grid's step -sweep_omega_step ",
+              o->omega_step, " rad/s: refinement goes from the grid's step down to it"));
+    else if (!(k <= 30 && std::abs(k - std::round(k)) < 1e-9))
+      bad(cat("-sweep_omega_step ", o->omega_step, " / -sweep_refine_step ", o->refine_step, " = ", ratio,
+              " is not a power of two: refinement bisects the grid's step down to -sweep_refine_step"));
+    else if (!(o->refine_rms > 0 && o->refine_frequency > 0))
+      bad(cat("-sweep_refine_rms and -sweep_refine_frequency must be > 0 (got ", o->refine_rms, ", ",
+              o->refine_frequency, ")"));
+  }
   if (o->error.empty() && o->omega_step > 0 && o->omega_max > o->omega_min) {
-    // The count in floating point first: it may not fit any integer.
-    const double n = std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) + 1;
+    // The count in floating point first: it may not fit any integer (with refinement, of the
+    // fine grid).
+    const double fine = o->refine_step > 0 ? o->refine_step : o->omega_step;
+    const double n = std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) * (o->omega_step / fine) + 1;
     if (n > static_cast<double>(kMaxSweepSpeeds)) {
       const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1);
       char b[512];
@@ -314,11 +344,12 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
                 "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
                 "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
-                "spectrum_decimation=block_mean\nrotation=%d\n",
+                "spectrum_decimation=block_mean\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
+                "refine_frequency=%.17g\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
                 c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0,
-                o.rotation);
+                o.rotation, o.refine_step, o.refine_rms, o.refine_frequency);
   return b;
 }
 
@@ -366,16 +397,99 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   return s;
 }
 
+long SweepOptions::stride() const { return refine_step > 0 ? std::lround(omega_step / refine_step) : 1; }
+
 long SweepOptions::n_speeds() const {
-  return omega_max == omega_min ? 1 : static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) + 1;
+  if (omega_max == omega_min) return 1;
+  return static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) * stride() + 1;
 }
 
 std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_idx) const {
   const std::set<std::int64_t> done(done_idx.begin(), done_idx.end());
+  const double step = refine_step > 0 ? refine_step : omega_step;
   std::vector<SpeedTask> todo;
-  for (long i = 0; i < n_speeds(); ++i)
-    if (!done.count(i)) todo.push_back({i, rotation * (omega_min + static_cast<double>(i) * omega_step)});
+  for (long i = 0; i < n_speeds(); i += stride())
+    if (!done.count(i)) todo.push_back({i, rotation * (omega_min + static_cast<double>(i) * step)});
   return todo;
+}
+
+bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector<double>& freqs, double rms_jump,
+                   double frequency_jump) {
+  if ((a.status != 0) != (b.status != 0)) return true;
+  if (a.status != 0) return false;  // both failed: nothing to locate between them
+  if (std::abs(a.rms - b.rms) > rms_jump * std::max(a.rms, b.rms)) return true;
+  auto dominant = [&](const SpeedResult& x) {  // the largest amplitude above f = 0
+    std::size_t k = 0;
+    for (std::size_t j = 1; j < x.spectrum.size() && j < freqs.size(); ++j)
+      if (freqs[j] > 0 && (k == 0 || x.spectrum[j] > x.spectrum[k])) k = j;
+    return k;
+  };
+  const std::size_t ka = dominant(a), kb = dominant(b);
+  if (ka == 0 || kb == 0 || freqs.size() < 2) return false;
+  const double fa = freqs[ka], fb = freqs[kb], bin = freqs[1] - freqs[0];
+  return std::abs(fa - fb) > frequency_jump * std::max(fa, fb) && std::abs(fa - fb) > 2.0 * bin;
+}
+
+SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,
+                        std::vector<SpeedTask> todo, std::vector<SpeedResult>* done, const std::vector<double>& freqs,
+                        const std::function<void(const SpeedResult&)>& on_result, std::size_t* n_run) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  SweepStats st;
+  *n_run = 0;
+  for (int round = 0;; ++round) {
+    if (!todo.empty()) {
+      if (round > 0) print0(comm, "morse sweep: refinement round %d: %zu speeds\n", round, todo.size());
+      const auto rs = sweep(comm, m, s, todo, [&](const SpeedResult& R) {
+        done->push_back(R);
+        on_result(R);
+      });
+      st.lane_steps += rs.lane_steps, st.seconds += rs.seconds, st.kernel_seconds += rs.kernel_seconds;
+      *n_run += todo.size();
+    }
+    // The next round, decided on rank 0 (which holds the results) and shared.
+    std::vector<SpeedTask> next;
+    if (rank == 0) next = so.refine(*done, freqs);
+    long nn = static_cast<long>(next.size());
+    MPI_Bcast(&nn, 1, MPI_LONG, 0, comm);
+    std::vector<std::int64_t> idx(static_cast<std::size_t>(nn));
+    std::vector<double> om(static_cast<std::size_t>(nn));
+    for (std::size_t i = 0; rank == 0 && i < next.size(); ++i) idx[i] = next[i].index, om[i] = next[i].omega;
+    MPI_Bcast(idx.data(), static_cast<int>(nn), MPI_INT64_T, 0, comm);
+    MPI_Bcast(om.data(), static_cast<int>(nn), MPI_DOUBLE, 0, comm);
+    if (nn == 0) break;
+    todo.clear();
+    for (long i = 0; i < nn; ++i) todo.push_back({static_cast<long>(idx[i]), om[i]});
+  }
+  return st;
+}
+
+std::vector<SpeedTask> SweepOptions::refine(const std::vector<SpeedResult>& done,
+                                            const std::vector<double>& freqs) const {
+  std::vector<SpeedTask> out;
+  if (!(refine_step > 0)) return out;
+  std::vector<const SpeedResult*> by_index;
+  for (const auto& R : done) by_index.push_back(&R);
+  std::sort(by_index.begin(), by_index.end(),
+            [](const SpeedResult* x, const SpeedResult* y) { return x->index < y->index; });
+  // A local maximum of the RMS (an interaction) is located to the fine step: both intervals
+  // beside it are bisected even if its neighbours are alike.
+  const std::size_t n = by_index.size();
+  auto peak = [&](std::size_t k) {
+    const SpeedResult& x = *by_index[k];
+    if (x.status != 0) return false;
+    const bool left = k == 0 || by_index[k - 1]->status != 0 || by_index[k - 1]->rms < x.rms;
+    const bool right = k + 1 == n || by_index[k + 1]->status != 0 || by_index[k + 1]->rms < x.rms;
+    return left && right && n > 1;
+  };
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const SpeedResult &a = *by_index[k], &b = *by_index[k + 1];
+    if (b.index - a.index < 2) continue;
+    if (!peak(k) && !peak(k + 1) && !speeds_differ(a, b, freqs, refine_rms, refine_frequency)) continue;
+    const long mid = (a.index + b.index) / 2;
+    out.push_back({mid, rotation * (omega_min + static_cast<double>(mid) * refine_step)});
+  }
+  return out;
 }
 
 std::string settings_difference(const std::string& stored, const std::string& now) {

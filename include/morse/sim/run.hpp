@@ -84,6 +84,12 @@ struct SweepOptions {
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
   int rotation = 1;
+  /// Adaptive refinement (-sweep_refine_step D > 0): the speed grid is then the fine grid
+  /// omega_min + i D, the coarse speeds (every omega_step = 2^k D) run first, and rounds of
+  /// refine() bisect every pair of neighbouring finished speeds that differ, down to D.
+  double refine_step = 0.0;
+  double refine_rms = 0.2;         ///< -sweep_refine_rms: relative RMS jump that refines
+  double refine_frequency = 0.05;  ///< -sweep_refine_frequency: relative change of the dominant frequency
   ContactOptions contact;
   std::string error;  ///< a bad value, naming the option (raised by check())
 
@@ -104,11 +110,35 @@ struct SweepOptions {
   /// The sweep settings for the stored model sm: dt, linear, the casing contact of -contact_set,
   /// -sim_revolutions (default 200), the spectrum, batch and the radial row of -sweep_monitor.
   SweepSettings settings(const nlrom::StoredModel& sm) const;
-  /// The size of the speed grid omega_min, omega_min + step, ..., omega_max.
+  /// The size of the speed grid omega_min, omega_min + step, ..., omega_max (with refinement: of
+  /// the fine grid of step refine_step up to the last coarse speed).
   long n_speeds() const;
-  /// The speeds of the grid not in done_idx (indices of finished speeds), in grid order.
+  /// Grid points per coarse step: omega_step / refine_step (1 without refinement).
+  long stride() const;
+  /// The (coarse) speeds of the grid not in done_idx (indices of finished speeds), in grid order.
   std::vector<SpeedTask> todo(const std::vector<std::int64_t>& done_idx) const;
+  /// The next refinement round after the finished speeds `done` (all coarse speeds among them):
+  /// for every two neighbouring finished speeds (by index) at least two grid points apart that
+  /// differ (speeds_differ), or of which one is a local maximum of the RMS (an interaction, located
+  /// to refine_step), the speed midway. Empty: the refinement is over (or there is none). freqs: the
+  /// spectrum's frequencies.
+  std::vector<SpeedTask> refine(const std::vector<SpeedResult>& done, const std::vector<double>& freqs) const;
 };
+
+/// Runs the speeds of todo (sim::sweep), then the refinement rounds of so.refine() until none is
+/// left. done (rank 0): the finished speeds, those of a resumed file included; each new result is
+/// appended to it before on_result(result) runs (the checkpoint). freqs: the spectrum's
+/// frequencies. *n_run: the speeds run. Prints each round on rank 0. Collective.
+SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,
+                        std::vector<SpeedTask> todo, std::vector<SpeedResult>* done, const std::vector<double>& freqs,
+                        const std::function<void(const SpeedResult&)>& on_result, std::size_t* n_run);
+
+/// Whether two speeds of a sweep differ enough to refine between them: one failed and not the
+/// other; RMS values a relative rms_jump apart (|a - b| > rms_jump max(a, b)); or dominant spectral
+/// frequencies (the largest amplitude above f = 0) a relative frequency_jump apart and more than
+/// two frequency bins.
+bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector<double>& freqs, double rms_jump,
+                   double frequency_jump);
 
 /// The "key=value" lines that define a sweep (SweepRecord::settings): a resumed sweep must match
 /// them exactly. Not collective.
