@@ -55,12 +55,12 @@ def main():
         ax[0].semilogy(r["omega"], 1e3 * r["rms"], "o-", color=c, label=label, ms=4)
     ax[0].set_ylabel("RMS of u_r at LE, 2nd half [mm]")
     ax[0].legend(fontsize=8)
-    ax[0].set_title("linear r54, %s revolutions per speed" % "20", fontsize=9)
+    ax[0].set_title("linear r54, 20 revolutions per speed", fontsize=9, pad=16)
     w = d["friction"]["omega"]
     dw = 0.25 * (w[1] - w[0]) if len(w) > 1 else 10
     for k, (tag, label, c) in enumerate(CASES):
         r = d[tag]
-        ax[1].bar(r["omega"] + (k - 1) * dw, r["friction"], width=dw, color=c, label="friction, " + label)
+        ax[1].bar(r["omega"] + (k - 1) * dw, r["friction"], width=dw, color=c, label=label)
         ax[1].bar(r["omega"] + (k - 1) * dw, r["normal"], width=dw, color=c, alpha=0.4)
     ax[1].set_yscale("symlog", linthresh=10)
     ax[1].set_ylabel("work on the blade, 2nd half [J]\n(solid: friction, light: normal)")
