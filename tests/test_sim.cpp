@@ -797,6 +797,20 @@ TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
   so.omega_min = 800, so.omega_max = 2400, so.omega_step = 400, so.refine_step = 25;
   so.refine_rms = 0.1;
   const auto freqs = s.frequencies();
+  // The predicted cost counts the coarse speeds' steps, and the rest of the fine grid as the bound.
+  {
+    const auto cost = sim::predict_sweep_cost(PETSC_COMM_WORLD, rm, s, so, so.todo({}), {}, 0.05);
+    double coarse = 0, rest = 0;
+    for (long i = 0; i < so.n_speeds(); ++i) {
+      const double w = so.omega_min + static_cast<double>(i) * so.refine_step;
+      const double n = std::ceil(s.revolutions * 2 * M_PI / w / s.base.dt - 1e-9);
+      (i % so.stride() == 0 ? coarse : rest) += n;
+    }
+    EXPECT_EQ(cost.steps, coarse);
+    EXPECT_EQ(cost.refine_steps, rest);
+    EXPECT_GT(cost.rate, 0.0);
+    EXPECT_NEAR(cost.core_hours, coarse / cost.rate / 3600.0, 1e-12 * cost.core_hours);
+  }
   std::vector<sim::SpeedResult> refined;
   std::size_t n_run = 0;
   sim::sweep_rounds(

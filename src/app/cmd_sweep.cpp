@@ -67,6 +67,18 @@ void run_sweep(MPI_Comm comm) {
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "
            "down to %.6g rad/s (a grid of %ld speeds)\n",
            so.refine_rms, so.refine_frequency, so.refine_step, n_speeds);
+  const auto cost = sim::predict_sweep_cost(comm, sm.model, s, so, todo, done_idx);
+  if (cost.rate > 0) {
+    print0(comm,
+           "morse sweep: predicted cost: %.4g steps, %.3g core-hours at %.4g steps/s per rank (measured), about %s "
+           "on %d rank(s)\n",
+           cost.steps, cost.core_hours, cost.rate, duration_text(cost.wall_seconds).c_str(), size);
+    if (so.refine_step > 0)
+      print0(
+          comm,
+          "morse sweep: refinement: at most %.4g more steps, %.3g core-hours (if every speed of the fine grid ran)\n",
+          cost.refine_steps, cost.refine_core_hours);
+  }
   sim::SweepStats st;
   std::size_t n_run = 0;
   {
@@ -81,10 +93,10 @@ void run_sweep(MPI_Comm comm) {
   MPI_Allreduce(MPI_IN_PLACE, &kernel, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
   print0(comm,
-         "morse sweep: %zu speeds in %.2f s, %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
+         "morse sweep: %zu speeds in %.2f s (%.3g core-hours), %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
          "in the force kernels\n",
-         n_run, wall, wall > 0 ? lane_steps / wall : 0.0, wall > 0 ? lane_steps / wall / size : 0.0,
-         wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
+         n_run, wall, wall * size / 3600.0, wall > 0 ? lane_steps / wall : 0.0,
+         wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)

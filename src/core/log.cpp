@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -166,6 +167,21 @@ void print0(MPI_Comm comm, const char* fmt, ...) {
   std::vprintf(fmt, ap);
   va_end(ap);
   std::fflush(stdout);
+}
+
+std::string duration_text(double seconds) {
+  char b[64];
+  if (!std::isfinite(seconds))
+    std::snprintf(b, sizeof b, "an unknown time");
+  else if (seconds < 120.0)
+    std::snprintf(b, sizeof b, "%.0f s", seconds);
+  else if (seconds < 7200.0)
+    std::snprintf(b, sizeof b, "%.1f min", seconds / 60.0);
+  else if (seconds < 3.0 * 86400.0)
+    std::snprintf(b, sizeof b, "%.1f h", seconds / 3600.0);
+  else
+    std::snprintf(b, sizeof b, "%.1f days", seconds / 86400.0);
+  return b;
 }
 
 }  // namespace morse

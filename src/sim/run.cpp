@@ -430,6 +430,37 @@ bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector
   return std::abs(fa - fb) > frequency_jump * std::max(fa, fb) && std::abs(fa - fb) > 2.0 * bin;
 }
 
+SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
+                             const SweepOptions& so, const std::vector<SpeedTask>& todo,
+                             const std::vector<std::int64_t>& done_idx, double seconds) {
+  SweepCost c;
+  if (todo.empty() && !(so.refine_step > 0)) return c;
+  auto steps_of = [&](double omega) {
+    return static_cast<double>(detail::step_count(s.revolutions * 2.0 * M_PI / std::abs(omega), s.base.dt));
+  };
+  std::set<std::int64_t> planned(done_idx.begin(), done_idx.end());
+  double slowest = 0.0;
+  for (const auto& t : todo) {
+    c.steps += steps_of(t.omega), planned.insert(t.index);
+    if (slowest == 0.0 || std::abs(t.omega) < std::abs(slowest)) slowest = t.omega;
+  }
+  if (so.refine_step > 0)
+    for (long i = 0; i < so.n_speeds(); ++i)
+      if (!planned.count(i)) c.refine_steps += steps_of(so.omega_min + static_cast<double>(i) * so.refine_step);
+  if (slowest == 0.0) slowest = so.rotation * so.omega_min;
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  double rate = measure_step_rate(m, s, slowest, seconds);
+  MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
+  c.rate = rate / size;
+  if (c.rate > 0) {
+    c.core_hours = c.steps / c.rate / 3600.0;
+    c.wall_seconds = c.core_hours * 3600.0 / size;
+    c.refine_core_hours = c.refine_steps / c.rate / 3600.0;
+  }
+  return c;
+}
+
 SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,
                         std::vector<SpeedTask> todo, std::vector<SpeedResult>* done, const std::vector<double>& freqs,
                         const std::function<void(const SpeedResult&)>& on_result, std::size_t* n_run) {

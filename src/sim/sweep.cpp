@@ -420,6 +420,27 @@ constexpr int kResult = 1, kRequest = 2, kBye = 4;
 
 }  // namespace
 
+double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds) {
+  SweepSettings one = s;
+  one.batch = 1;
+  one.revolutions = 1e9;  // the lane never finishes while it is timed
+  Batch batch(m, one);
+  batch.start({0, omega});
+  std::vector<SpeedResult> done;
+  SweepStats st;
+  long steps = 0, chunk = 50;
+  const auto t0 = std::chrono::steady_clock::now();
+  double dt = 0.0;
+  while (true) {
+    for (long k = 0; k < chunk; ++k) batch.step(&done, &st);
+    steps += chunk;
+    dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (dt >= seconds || !done.empty()) break;
+    chunk = std::min(chunk * 2, 100000L);
+  }
+  return dt > 0 ? static_cast<double>(steps) / dt : 0.0;
+}
+
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result) {
   const std::size_t r = static_cast<std::size_t>(m.r);

@@ -77,6 +77,9 @@ class Progress {
   std::chrono::steady_clock::time_point start_, last_;
 };
 
+/// A duration for people: "42 s", "12.5 min", "5.2 h" or "3.1 days".
+std::string duration_text(double seconds);
+
 /// printf on rank 0 of comm (PetscPrintf), throwing on error.
 void print0(MPI_Comm comm, const char* fmt, ...);
 

@@ -125,6 +125,21 @@ struct SweepOptions {
   std::vector<SpeedTask> refine(const std::vector<SpeedResult>& done, const std::vector<double>& freqs) const;
 };
 
+/// The predicted cost of a sweep, from a measured step rate (measure_step_rate, every rank for
+/// `seconds` at the lowest speed of todo, the mean taken).
+struct SweepCost {
+  double steps = 0.0;         ///< of the speeds of todo
+  double rate = 0.0;          ///< steps per second per rank
+  double core_hours = 0.0;    ///< steps / rate
+  double wall_seconds = 0.0;  ///< core_hours over the ranks (perfect balance)
+  double refine_steps = 0.0;  ///< refinement: at most this many more (every fine speed not done)
+  double refine_core_hours = 0.0;
+};
+/// Collective. With nothing to run, the rate is not measured (all zero).
+SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
+                             const SweepOptions& so, const std::vector<SpeedTask>& todo,
+                             const std::vector<std::int64_t>& done_idx, double seconds = 0.3);
+
 /// Runs the speeds of todo (sim::sweep), then the refinement rounds of so.refine() until none is
 /// left. done (rank 0): the finished speeds, those of a resumed file included; each new result is
 /// appended to it before on_result(result) runs (the checkpoint). freqs: the spectrum's

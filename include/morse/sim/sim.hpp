@@ -340,6 +340,11 @@ struct SweepStats {
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
 
+/// Steps per second of one lane of a sweep at speed omega, measured over about `seconds` of wall
+/// time (the time loop only: the same lane machinery as sweep(), from rest, so the first steps
+/// are contact-free). Not collective: for the predicted cost of a sweep (cmd sweep).
+double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds);
+
 /// A sweep file (docs/hdf5-schema.md, /sweep): the settings that define the sweep, the frequency
 /// grid, the model's eigenfrequencies and the finished speeds sorted by index.
 struct SweepRecord {
