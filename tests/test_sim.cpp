@@ -65,6 +65,35 @@ std::vector<double> boundary_positions(const Model& m, const cb::CBResult& c) {
   return X;
 }
 
+// The contact nodes of the CB boundary, from boundary_positions (node k's u_x is coordinate 3k).
+std::vector<sim::ContactNode> boundary_contact_nodes(const std::vector<double>& X) {
+  std::vector<sim::ContactNode> nodes(X.size() / 3);
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    nodes[k].dof = 3 * k;
+    for (int d = 0; d < 3; ++d) nodes[k].x[d] = X[3 * k + d];
+  }
+  return nodes;
+}
+
+// The reduced model of the CB basis c of the box with exact tensors and modal damping xi on every
+// (dynamic) mode; massless: the basis made massless first (nlrom::massless_transform).
+nlrom::ReducedModel box_model(const Model& m, const cb::CBResult& c, bool massless, double xi) {
+  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+  const PetscInt r = c.n();
+  UMat V;
+  PetscInt n_static = 0;
+  if (massless) {
+    const auto rm0 = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
+    V = nlrom::transform_basis(c.T.get(), nlrom::massless_transform(rm0.M, rm0.K, r, c.n_b, 0.0, &n_static));
+  }
+  Mat basis = massless ? V.get() : c.T.get();
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, basis, m.ops.K.get(), m.ops.M.get(), massless ? 0.0 : xi, r);
+  rm.n_b = c.n_b;
+  if (massless) nlrom::make_massless(&rm, n_static, xi, r - n_static);
+  rm.g = nlrom::exact_forces(svk, basis);
+  return rm;
+}
+
 // Exact and STEP (1 mm) tensors of a CB basis of the clamped box with r = 30 (12 boundary DOFs
 // of face x1 and 18 fixed-interface modes), where every index pattern (repeated, distinct) occurs.
 std::pair<nlrom::CubicForce, nlrom::CubicForce> box_forces_r30() {
@@ -508,12 +537,7 @@ TEST(Sim, ContactWithGrowingCasing) {
   s.contact.casing.clearance = 1e-3;
   s.contact.casing.bump_height = 2e-3;
   s.contact.casing.width = 10.0;
-  for (std::size_t k = 0; k < nb; ++k) {
-    sim::ContactNode node;
-    node.dof = 3 * k;
-    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
-    s.contact.nodes.push_back(node);
-  }
+  s.contact.nodes = boundary_contact_nodes(X);
   double min_gap = 1e300;
   int active = 0;
   std::vector<double> qT(r), gT(nb), lT(nb);
@@ -589,22 +613,9 @@ namespace {
 // modes; each lane then solves its boundary's equilibrium (with the shared kernels) every step.
 void check_sweep(bool massless) {
   auto m = box(ElementType::Hex8, 4);
-  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
   auto c = test::cb_basis(m, "x1", 3);
   const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
-  UMat V;
-  PetscInt n_static = 0;
-  if (massless) {
-    const auto rm0 = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
-    V = nlrom::transform_basis(
-        c.T.get(), nlrom::massless_transform(rm0.M, rm0.K, static_cast<PetscInt>(r), c.n_b, 0.0, &n_static));
-  }
-  Mat basis = massless ? V.get() : c.T.get();
-  auto rm = nlrom::project_model(PETSC_COMM_WORLD, basis, m.ops.K.get(), m.ops.M.get(), massless ? 0.0 : 0.01,
-                                 static_cast<PetscInt>(r));
-  rm.n_b = c.n_b;
-  if (massless) nlrom::make_massless(&rm, n_static, 0.01, static_cast<PetscInt>(r) - n_static);
-  rm.g = nlrom::exact_forces(svk, basis);
+  const auto rm = box_model(m, c, massless, 0.01);
   int rank = 0;
   MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
   const auto X = boundary_positions(m, c);
@@ -615,12 +626,7 @@ void check_sweep(bool massless) {
   s.base.contact.casing.bump_height = 6e-4;
   s.base.contact.casing.width = 0.3;
   s.base.contact.mu = 0.15;
-  for (std::size_t k = 0; k < nb; ++k) {
-    sim::ContactNode node;
-    node.dof = 3 * k;
-    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
-    s.base.contact.nodes.push_back(node);
-  }
+  s.base.contact.nodes = boundary_contact_nodes(X);
   s.revolutions = 3.0;
   s.monitor.assign(r, 0.0);
   {
@@ -769,7 +775,7 @@ TEST(SimRun, RefinementBisectsWhereNeighboursDiffer) {
 TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
   auto m = box(ElementType::Hex8, 4);
   auto c = test::cb_basis(m, "x1", 3);
-  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
+  const std::size_t r = static_cast<std::size_t>(c.n());
   auto rm =
       nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.01, static_cast<PetscInt>(r));
   rm.n_b = c.n_b;
@@ -780,12 +786,7 @@ TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
   s.base.contact.obstacle = sim::Obstacle::Casing;
   s.base.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, 0.0};
   s.base.contact.mu = 0.15;
-  for (std::size_t k = 0; k < nb; ++k) {
-    sim::ContactNode node;
-    node.dof = 3 * k;
-    for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
-    s.base.contact.nodes.push_back(node);
-  }
+  s.base.contact.nodes = boundary_contact_nodes(X);
   s.revolutions = 3.0;
   s.monitor.assign(r, 0.0);
   const double rho = std::hypot(X[0], X[1]);
@@ -861,8 +862,8 @@ struct BalanceRun {
   sim::EnergyWork w;
   long rows = 0;
 };
-BalanceRun balance_run(const nlrom::ReducedModel& rm, const std::vector<double>& X, std::size_t nb, bool contact,
-                       bool linear, double h, double mu, double amplitude) {
+BalanceRun balance_run(const nlrom::ReducedModel& rm, const std::vector<double>& X, bool contact, bool linear, double h,
+                       double mu, double amplitude) {
   const std::size_t r = static_cast<std::size_t>(rm.r);
   sim::Settings s;
   s.dt = h;
@@ -872,16 +873,11 @@ BalanceRun balance_run(const nlrom::ReducedModel& rm, const std::vector<double>&
     s.contact.obstacle = sim::Obstacle::Casing;
     s.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, 1500.0};
     s.contact.mu = mu;
-    for (std::size_t k = 0; k < nb; ++k) {
-      sim::ContactNode node;
-      node.dof = 3 * k;
-      for (int d = 0; d < 3; ++d) node.x[d] = X[3 * k + d];
-      s.contact.nodes.push_back(node);
-    }
+    s.contact.nodes = boundary_contact_nodes(X);
   }
   sim::ReducedLoad load;  // 2 kN per node along y at 2,500 rad/s on the face
   load.p.assign(r, 0.0);
-  for (std::size_t k = 0; k < nb; ++k) load.p[3 * k + 1] = 1.0;
+  for (std::size_t k = 0; k < X.size() / 3; ++k) load.p[3 * k + 1] = 1.0;
   load.amplitude = amplitude, load.omega = 2500.0;
   BalanceRun R;
   double e0 = 0;
@@ -902,28 +898,14 @@ BalanceRun balance_run(const nlrom::ReducedModel& rm, const std::vector<double>&
 
 TEST(Sim, EnergyBalanceClosesExactlyWhenLinearAndAtSecondOrderWhenNot) {
   auto m = box(ElementType::Hex8, 4);
-  fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
   auto c = test::cb_basis(m, "x1", 3);
-  const std::size_t r = static_cast<std::size_t>(c.n()), nb = static_cast<std::size_t>(c.n_b) / 3;
   const auto X = boundary_positions(m, c);
   for (bool massless : {false, true}) {
-    UMat V;
-    PetscInt n_static = 0;
-    if (massless) {
-      const auto rm0 = nlrom::project_model(PETSC_COMM_WORLD, c.T.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
-      V = nlrom::transform_basis(
-          c.T.get(), nlrom::massless_transform(rm0.M, rm0.K, static_cast<PetscInt>(r), c.n_b, 0.0, &n_static));
-    }
-    Mat basis = massless ? V.get() : c.T.get();
-    auto rm = nlrom::project_model(PETSC_COMM_WORLD, basis, m.ops.K.get(), m.ops.M.get(), massless ? 0.0 : 0.02,
-                                   static_cast<PetscInt>(r));
-    rm.n_b = c.n_b;
-    if (massless) nlrom::make_massless(&rm, n_static, 0.02, static_cast<PetscInt>(r) - n_static);
-    rm.g = nlrom::exact_forces(svk, basis);
+    const auto rm = box_model(m, c, massless, 0.02);
     const double h = 0.5 * sim::critical_step(rm);
     const char* name = massless ? "massless" : "mass-carrying";
     // Linear, with contact and friction: every term at work, the balance exact.
-    const auto L = balance_run(rm, X, nb, true, true, h, 0.15, 2e3);
+    const auto L = balance_run(rm, X, true, true, h, 0.15, 2e3);
     print0(PETSC_COMM_WORLD,
            "  %s, linear, contact: %ld rows, works: load %.4e, normal %.4e, friction %.4e, damping %.4e J; "
            "residual %.2e of %.2e J\n",
@@ -933,12 +915,12 @@ TEST(Sim, EnergyBalanceClosesExactlyWhenLinearAndAtSecondOrderWhenNot) {
     EXPECT_GT(std::abs(L.w.friction), 1e-4 * L.scale) << name << ": friction should work";
     EXPECT_GT(L.w.damping, 1e-3 * L.scale) << name;
     // Without friction, its work is zero and the balance still closes.
-    const auto F = balance_run(rm, X, nb, true, true, h, 0.0, 2e3);
+    const auto F = balance_run(rm, X, true, true, h, 0.0, 2e3);
     EXPECT_EQ(F.w.friction, 0.0) << name;
     EXPECT_LT(F.residual, 1e-10 * F.scale) << name;
     // Nonlinear, without contact, at amplitudes where g~ matters: the residual falls as h^2.
-    const auto N1 = balance_run(rm, X, nb, false, false, h, 0.0, 1e5);
-    const auto N2 = balance_run(rm, X, nb, false, false, h / 2, 0.0, 1e5);
+    const auto N1 = balance_run(rm, X, false, false, h, 0.0, 1e5);
+    const auto N2 = balance_run(rm, X, false, false, h / 2, 0.0, 1e5);
     const double rate = std::log2(N1.residual / N2.residual);
     print0(PETSC_COMM_WORLD, "  %s, nonlinear: residual %.3e -> %.3e J of %.3e J (rate %.2f)\n", name, N1.residual,
            N2.residual, N1.scale, rate);
