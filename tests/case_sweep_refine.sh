@@ -3,7 +3,8 @@
 # to 1/8 of its step runs refinement rounds and adds speeds between the coarse ones; run again, it
 # resumes with every speed done and runs nothing. A file cut back to its coarse speeds plus part of
 # a round (as a killed run leaves it) resumes to the same speeds and the same results, bitwise. Bad
-# refinement options are refused naming them, before anything runs. Skipped (77) without
+# refinement options are refused naming them, before anything runs, and a model rebuilt at the same
+# path with other damping is not resumed into the old model's file. Skipped (77) without
 # /usr/bin/python3 and h5py.
 # usage: case_sweep_refine.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
@@ -72,4 +73,16 @@ pattern="-sweep_omega_step 400 / -sweep_refine_step 30 = 13.3333 is not a power 
 refused -sweep_refine_step 30
 pattern="-sweep_refine_rms and -sweep_refine_frequency must be > 0"
 refused -sweep_refine_rms 0
-echo "case: ok: refined sweep, resumed whole and after a cut, bad options refused"
+# The model rebuilt at the same path with other damping: its file is not resumed, nothing changed.
+cp "$d/full.h5" "$d/before.h5"
+run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces none \
+  -nlrom_damping_modal 0.02 -nlrom_damping_modes all -mesh_node_sets tipnode -mesh_node_set_tipnode "$tip" \
+  -out "$d/cb.h5"
+set +e
+out=$(run "${sweep[@]}" -out "$d/full.h5" 2>&1)
+rc=$?
+set -e
+test $rc -ne 0 || { echo "case: FAIL: a sweep of another model was resumed"; exit 1; }
+grep -q "holds a sweep with other settings (model: " <<<"$out" || { echo "case: FAIL: model not named: $out"; exit 1; }
+cmp -s "$d/full.h5" "$d/before.h5" || { echo "case: FAIL: the file was changed"; exit 1; }
+echo "case: ok: refined sweep, resumed whole and after a cut, bad options and another model refused"

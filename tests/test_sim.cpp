@@ -1293,7 +1293,18 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   ASSERT_EQ(todo.size(), 2u);
   EXPECT_EQ(todo[0].omega, -800.0);
   EXPECT_EQ(todo[1].omega, -1000.0);
-  EXPECT_NE(sim::settings_text(so, sim::SweepSettings(), 15).find("\nrotation=-1\n"), std::string::npos);
+  nlrom::ReducedModel model;
+  model.r = 2, model.K = {2, -1, -1, 2}, model.M = {1, 0, 0, 1}, model.C.assign(4, 0.0);
+  const auto text = sim::settings_text(so, sim::SweepSettings(), model);
+  EXPECT_NE(text.find("\nrotation=-1\n"), std::string::npos);
+  // The model's numbers are a key: the same model, the same text; another stiffness, another.
+  EXPECT_NE(text.find("\nmodel=" + nlrom::fingerprint(model) + "\n"), std::string::npos);
+  EXPECT_EQ(nlrom::fingerprint(model).size(), 16u);
+  auto other = model;
+  other.K[0] = 2.0000000001;
+  EXPECT_NE(nlrom::fingerprint(other), nlrom::fingerprint(model));
+  EXPECT_NE(sim::settings_difference(text, sim::settings_text(so, sim::SweepSettings(), other)).find("model: "),
+            std::string::npos);
   test::expect_error_parts(
       [&] {
         read({{"-sweep_rotation", "sideways"}});

@@ -40,7 +40,7 @@ void run_sweep(MPI_Comm comm) {
               " s (2 / omega_max of the reduced model); use -sim_dt <= ", hc);
   const long n_speeds = so.n_speeds();
   sim::SweepRecord rec;
-  rec.settings = sim::settings_text(so, s, r);
+  rec.settings = sim::settings_text(so, s, sm.model);
   rec.units = sm.units;
   rec.rom = files::absolute_path(so.rom);  // valid from any directory
   rec.n_speeds = n_speeds;

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <numeric>
 #include <random>
 
@@ -478,6 +480,25 @@ void rayleigh_damping(ReducedModel* rm, double alpha, double beta) {
   rm->C.resize(rm->M.size());
   for (std::size_t i = 0; i < rm->C.size(); ++i) rm->C[i] = alpha * rm->M[i] + beta * rm->K[i];
   rm->damping_omega.clear();
+}
+
+std::string fingerprint(const ReducedModel& m) {
+  std::uint64_t h = 1469598103934665603ULL;  // FNV-1a, 64 bits
+  auto bytes = [&](const void* p, std::size_t n) {
+    const auto* c = static_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 1099511628211ULL;
+  };
+  auto doubles = [&](const std::vector<double>& v) {
+    const std::uint64_t n = v.size();
+    bytes(&n, sizeof n);
+    bytes(v.data(), v.size() * sizeof(double));
+  };
+  const std::int64_t head[3] = {m.r, m.massless ? 1 : 0, m.n_static};
+  bytes(head, sizeof head);
+  for (const auto* v : {&m.K, &m.M, &m.C, &m.g.A, &m.g.B}) doubles(*v);
+  char out[17];
+  std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+  return out;
 }
 
 }  // namespace morse::nlrom

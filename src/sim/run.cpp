@@ -337,7 +337,8 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   return o->contact.set_from_options(comm);
 }
 
-std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::size_t r) {
+std::string settings_text(const SweepOptions& o, const SweepSettings& s, const nlrom::ReducedModel& m) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
   char b[2048];
   const auto& c = o.contact.casing;
   std::snprintf(b, sizeof b,
@@ -345,11 +346,11 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::si
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
                 "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
                 "spectrum_decimation=block_mean\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
-                "refine_frequency=%.17g\n",
+                "refine_frequency=%.17g\nmodel=%s\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
                 c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0,
-                o.rotation, o.refine_step, o.refine_rms, o.refine_frequency);
+                o.rotation, o.refine_step, o.refine_rms, o.refine_frequency, nlrom::fingerprint(m).c_str());
   return b;
 }
 

@@ -323,6 +323,11 @@ struct StoredInfo {
 void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const Basis& basis,
                         const ReducedModel& rm, const StoredInfo& info);
 
+/// A fingerprint of the model's numbers (K~, M~, C~, the cubic force, r, the massless layout):
+/// 16 hex digits of a 64-bit FNV-1a hash of their bytes. Two files of the same model give the same
+/// text; a model rebuilt with other options (at the same path) another. Not collective.
+std::string fingerprint(const ReducedModel& m);
+
 /// M~ = V^T M V, K~ = V^T K V (symmetrized), and modal damping xi on the first k modes of the
 /// reduced model itself (k = kAllModes: all r of them): C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T, with
 /// x_k the M~-normalized modes of (K~, M~) (theory §8.6). Throws if k exceeds r. Collective.

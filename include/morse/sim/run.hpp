@@ -156,8 +156,9 @@ bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector
                    double frequency_jump);
 
 /// The "key=value" lines that define a sweep (SweepRecord::settings): a resumed sweep must match
-/// them exactly. Not collective.
-std::string settings_text(const SweepOptions& o, const SweepSettings& s, std::size_t r);
+/// them exactly. They include the model's fingerprint (nlrom::fingerprint), so that a model
+/// rebuilt at the same path is not resumed into the old one's file. Not collective.
+std::string settings_text(const SweepOptions& o, const SweepSettings& s, const nlrom::ReducedModel& m);
 
 /// Resumes a sweep: rank 0 reads `out` (unless restart) and, if it holds a sweep with the settings
 /// of rec, takes its finished speeds into rec; then writes rec as the first checkpoint (which also
