@@ -132,6 +132,17 @@ foreach(np 1 2)
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
 endforeach()
 
+# The cluster recipe (run/cluster) with fake sbatch and srun: a chain of jobs runs and resumes a
+# sweep from an options file (skipped without h5py).
+foreach(np 1 2)
+  add_test(NAME case_cluster_chain_np${np}
+           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_cluster_chain.sh
+                   ${MORSE_CASE_DIR}/cluster_chain_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
+                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
+  set_tests_properties(case_cluster_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
+endforeach()
+
 # A second run on the output of a running sweep is refused (naming the output and the holder's
 # pid), and the ranks of a sweep whose launcher is killed (kill -9 of its process group) stop
 # within 1 s without writing the file again (skipped without setsid, pgrep or h5py).
