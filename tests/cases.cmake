@@ -233,6 +233,20 @@ morse_add_ok_case(modes_solver_options modes_solver_options.h5
 # The block solver by spectrum slicing from the command line (3 slices, one communicator).
 morse_add_ok_case(modes_block_slices modes_block_slices.h5
   modes -mesh '${MORSE_CASE_BOX}' -clamp x0 -modes_nev 12 -modes_block_slices 3 ${MORSE_CASE_MATERIAL_STR})
+# A misspelled block-solver option is refused once the solver and its factor are set up, before
+# the solve (issue 26): with the option it probably meant.
+morse_add_error_case(reduce_block_misspelled
+  "morse: error: unknown option\\(s\\): -cb_block_max_dimm \\(did you mean -cb_block_max_dim\\?\\): not read by the block eigen solver of the fixed-interface modes"
+  reduce_block_misspelled.h5 BOX
+  ARGS reduce -mesh ${MORSE_CASE_BOX} -clamp x0 -boundary x1 -cb_num_fixed_modes 4 -cb_block_max_dimm 40
+       ${MORSE_CASE_MATERIAL})
+# With Krylov-Schur, a misspelled -modes_eps_ option is noticed before the solve (SLEPc reads some
+# of its options later), then refused at the end.
+morse_add_error_case(modes_eps_misspelled
+  "notice: not \\(yet\\) read by the eigen solver of the full-model modes: -modes_eps_ncvv"
+  modes_eps_misspelled.h5 BOX
+  ARGS modes -mesh ${MORSE_CASE_BOX} -clamp x0 -modes_nev 6 -modes_eigen_solver krylovschur -modes_eps_ncvv 40
+       ${MORSE_CASE_MATERIAL})
 # Slices on subcommunicators that do not divide the ranks: refused, naming the option.
 morse_add_error_case(modes_bad_partitions
   "morse: error: -modes_block_partitions 3 must divide the number of ranks"

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
 
 namespace morse::options {
 
@@ -213,6 +214,20 @@ void check_prefix_used(MPI_Comm comm, const std::string& prefix, const std::stri
   collective_check(
       comm, bad.empty() ? std::string()
                         : cat("unknown option(s):", bad, ": not read by ", what, " once they are set up (see -help)"));
+}
+
+void notice_prefix_unused(MPI_Comm comm, const std::string& prefix, const std::string& what,
+                          const std::vector<std::string>& later) {
+  const std::string bad = unused_options([&](const char* name) {
+    const std::string n(name);
+    if (n.rfind(prefix, 0) != 0) return false;
+    for (const auto& l : later)
+      if (n.find(l) != std::string::npos) return false;
+    return true;
+  });
+  if (!bad.empty())
+    print0(comm, "  notice: not (yet) read by %s:%s; unknown options are refused at the end of the run\n", what.c_str(),
+           bad.c_str());
 }
 
 namespace {

@@ -634,6 +634,9 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
   MORSE_CALL(MatCholeskyFactorNumeric(F.get(), Ash, &info));
   *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   detail::check_null_pivots(comm, F.get(), shift, s.what);
+  // Every -<prefix>block_ option has been read now (the solver's at its start, the factor's
+  // here): a misspelled one is refused before the solve, not at the end of the run.
+  options::check_prefix_used(comm, s.prefix + "block_", cat("the block eigen solver of the ", s.what));
   return F;
 }
 

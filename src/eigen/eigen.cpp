@@ -402,6 +402,11 @@ Eigenpairs solve_eigen_krylovschur(Mat K, Mat M, const EigenSettings& s, Vec sig
     MORSE_CALL(EPSSetUp(eps));
     out.factor_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  // A misspelled solver option, said before the solve (SLEPc reads its view and error options,
+  // and a sliced solve its children's, only later: those are checked at the end of the run).
+  options::notice_prefix_unused(comm, s.prefix + "eps_", "the eigen solver of the " + s.what,
+                                {"view", "converged_reason", "error_", "krylovschur_"});
+  options::notice_prefix_unused(comm, s.prefix + "st_", "the eigen solver of the " + s.what, {"view"});
   if (Mat F = out.factor()) detail::check_null_pivots(comm, F, s.shift, s.what);
   {
     StageTimer timer(comm, s.stage + "EigenSolve");

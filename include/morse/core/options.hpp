@@ -96,6 +96,13 @@ void check_unknown(MPI_Comm comm, bool early);
 /// refused before the run goes on instead of at its end. Collective (every rank throws).
 void check_prefix_used(MPI_Comm comm, const std::string& prefix, const std::string& what);
 
+/// The same list as a notice on rank 0, not an error, for solvers that read some options of their
+/// prefix only later (SLEPc's -<prefix>eps_view..., the children of a sliced solve): "notice: not
+/// (yet) read by <what>: -a (did you mean -b?); unknown options are refused at the end of the
+/// run". Options whose name contains one of `later` are left out. Collective.
+void notice_prefix_unused(MPI_Comm comm, const std::string& prefix, const std::string& what,
+                          const std::vector<std::string>& later);
+
 /// A comma-separated list option (e.g. -load_sets LE,tip; -sim_monitor LE) read under `prefix`
 /// (may be null) and registered with its help text; at most 64 items. `list` is left unchanged if
 /// the option is not given. Uses PetscOptionsBegin: returns a PETSc error code. Collective.
