@@ -125,7 +125,7 @@ class Study:
 def rom_args(mesh, nfixed, nmd, out):
     return ["nlrom", "-mesh", mesh, "-clamp", "root", "-boundary", "tip", "-nlrom_basis", "cbmd",
             "-nlrom_num_fixed_modes", nfixed, "-nlrom_num_derivatives", nmd, "-nlrom_training_tfinal", 0.0314,
-            "-nlrom_damping_modal", "5e-4", "-nlrom_damping_modes", 10, "-nlrom_forces", "exact",
+            "-nlrom_damping_modal", "5e-4", "-nlrom_damping_modes", "all", "-nlrom_forces", "exact",
             "-load_sets", "LE", "-load_LE_dir", "y", "-load_LE_amplitude", 300, "-load_LE_omega", 2000, "-out", out]
 
 
@@ -140,11 +140,17 @@ def simulate(st, rom, omega, revs, dt, linear, name, every):
 def diagnosis_stage(st, args, mesh):
     """Why the linear maps were not physical (docs/contact.md): linear sweeps of r54 over
     --diag-revs revolutions with friction (both senses of rotation) and without, the energy
-    balance of each speed (/sweep/energy_balance), and single runs at 830 rad/s with the study's
-    damping (10 modes) and with every mode damped."""
+    balance of each speed (/sweep/energy_balance), and single runs at 830 rad/s with the damping on
+    10 modes and on every mode."""
     print("diagnosis: linear r54, %g revolutions per speed" % args.diag_revs, flush=True)
     lo, hi, step = parse_range(args.diag_range)
-    base = ["-rom", st.file("rom_r54.h5"), "-sweep_omega_min", lo, "-sweep_omega_max", hi, "-sweep_omega_step",
+    # The model of the sweeps on this page: r54 with the damping on its first 10 modes (the form
+    # before -nlrom_damping_modes all became the study's default), and r54 with every mode damped.
+    rom10 = st.file("rom_r54_damp10.h5")
+    args10 = rom_args(mesh, 10, 20, rom10)
+    args10[args10.index("-nlrom_damping_modes") + 1] = 10
+    st.run(args.ranks, args10, "nlrom r54, 10 modes damped", rom10, "rom_r54_damp10")
+    base = ["-rom", rom10, "-sweep_omega_min", lo, "-sweep_omega_max", hi, "-sweep_omega_step",
             step, "-sim_revolutions", args.diag_revs, "-sim_dt", DT, "-sweep_batch", 1, "-sim_linear"]
     cases = {"friction": ["-contact_mu", "0.15"], "frictionless": ["-contact_mu", "0"],
              "friction_negative": ["-contact_mu", "0.15", "-sweep_rotation", "negative"]}
@@ -160,7 +166,7 @@ def diagnosis_stage(st, args, mesh):
     args_all = rom_args(mesh, 10, 20, rom_all)
     args_all[args_all.index("-nlrom_damping_modes") + 1] = "all"
     st.run(args.ranks, args_all, "nlrom r54, every mode damped", rom_all, "rom_r54_alldamped")
-    for tag, rom, mu in (("830", "rom_r54.h5", "0.15"), ("830_frictionless", "rom_r54.h5", "0"),
+    for tag, rom, mu in (("830", "rom_r54_damp10.h5", "0.15"), ("830_frictionless", "rom_r54_damp10.h5", "0"),
                          ("830_alldamped", "rom_r54_alldamped.h5", "0.15")):
         out = st.file("diag_sim_%s.h5" % tag)
         casing = [a for a in CASING]
@@ -250,7 +256,7 @@ def pod_stage(st, args, mesh, every):
         rom = st.file("rom_pod_%s.h5" % tag)
         nargs = ["nlrom", "-mesh", mesh, "-clamp", "root", "-boundary", "tip", "-nlrom_basis", "pod", "-nlrom_num_pod",
                  args.pod_num, "-nlrom_snapshots", fom, "-nlrom_forces", "exact", "-nlrom_damping_modal", "5e-4",
-                 "-nlrom_damping_modes", 10, "-out", rom]
+                 "-nlrom_damping_modes", "all", "-out", rom]
         if not st.run(args.ranks, nargs, "nlrom pod %s (24 + %d)" % (tag, args.pod_num), rom, "rom_pod_" + tag):
             continue
         hc = critical_step(rom)
