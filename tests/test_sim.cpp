@@ -722,6 +722,62 @@ void check_sweep(bool massless) {
 TEST(Sim, SweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(false); }
 TEST(Sim, MasslessSweepMatchesSingleRunsOnAnyRanksAndBatch) { check_sweep(true); }
 
+// The casing's kinematics against a closed form (issue 28 §1): one tip node on a stiff, heavily
+// damped isotropic spring (r = 3, omega_n = 10^6 rad/s, far above the bump passage), so that it
+// follows the casing quasi-statically. Derived independently of the code: the casing of revolution
+// about z has the radius R + c0 - s(t) f(phi) at the fixed-frame angle phi, s(t) = 1 - exp(-alpha
+// t); the blade turning at Omega puts the node at phi = theta0 + Omega t, so the node is in contact
+// when s(t) f(theta0 + Omega t) > c0 and then sits on the casing, u_r = c0 - s f; friction opposes
+// the node's sliding along the casing (along sign(Omega) e_theta) with mu lambda, and the spring
+// answers lambda = k |u_r| with u_theta = -mu sign(Omega) |u_r|. Both senses of rotation.
+TEST(Sim, RigidTipFollowsTheRotatingCasing) {
+  const double k = 1e12, mass = 1e0, R = 0.25, theta0 = 0.3, mu = 0.2;
+  const double wn = std::sqrt(k / mass);
+  nlrom::ReducedModel m;
+  m.r = 3;
+  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
+  for (int i = 0; i < 3; ++i) m.K[4 * i] = k, m.M[4 * i] = mass, m.C[4 * i] = 2.0 * 0.8 * wn * mass;
+  for (double omega : {100.0, -100.0}) {
+    sim::Settings s;
+    s.linear = true;
+    s.dt = 0.5 * sim::critical_step(m);
+    s.t_final = 2 * 2 * M_PI / std::abs(omega);
+    s.contact.obstacle = sim::Obstacle::Casing;
+    s.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, omega};
+    s.contact.mu = mu;
+    sim::ContactNode node;
+    node.x[0] = R * std::cos(theta0), node.x[1] = R * std::sin(theta0);
+    s.contact.nodes.push_back(node);
+    const double er[2] = {std::cos(theta0), std::sin(theta0)}, et[2] = {-std::sin(theta0), std::cos(theta0)};
+    const double alpha = std::log(100.0) / (0.2 * s.t_final), hb = 6e-4, c0 = 2e-4, w = 0.3;
+    auto casing_push = [&](double t) {  // s(t) f(phi) at the node's fixed-frame angle
+      double phi = std::fmod(theta0 + omega * t, M_PI);
+      if (phi < 0) phi += M_PI;
+      const double z = (phi - M_PI / 2) / w;
+      return (1 - std::exp(-alpha * t)) * hb * std::exp(-z * z);
+    };
+    double err_r = 0, err_t = 0, first = -1, first_closed = -1;
+    long steps = 0;
+    sim::integrate(m, {}, s, [&](const sim::StepState& x) {
+      const double t = x.t, ur = er[0] * x.q[0] + er[1] * x.q[1], ut = et[0] * x.q[0] + et[1] * x.q[1];
+      const double push = casing_push(t), closed = std::min(0.0, c0 - push);
+      err_r = std::max(err_r, std::abs(ur - closed));
+      err_t = std::max(err_t, std::abs(ut - (omega > 0 ? -1 : 1) * mu * std::abs(closed)));
+      if (first < 0 && x.contact_normal[0] > 0) first = t;
+      if (first_closed < 0 && push > c0) first_closed = t;
+      ++steps;
+    });
+    print0(PETSC_COMM_WORLD,
+           "  rigid tip, Omega %+.0f rad/s: %ld steps, first contact at %.6f s (closed form %.6f s), "
+           "|u_r - closed| <= %.2e m, |u_theta - closed| <= %.2e m of h_b = %.1e m\n",
+           omega, steps, first, first_closed, err_r, err_t, hb);
+    EXPECT_LT(err_r, 1e-3 * (hb - c0)) << "omega " << omega;
+    EXPECT_LT(err_t, 1e-3 * mu * (hb - c0)) << "omega " << omega;
+    EXPECT_NEAR(first, first_closed, 2e-3 * s.t_final) << "omega " << omega;
+    EXPECT_GT(first_closed, 0.0);
+  }
+}
+
 // Adaptive refinement of a sweep: the rules (RMS jump, a change of the dominant frequency, a
 // failure on one side), then a refined sweep of the clamped box on the casing against the sweep of
 // the whole fine grid: every refined speed is the fine grid's result (bitwise), the largest RMS is
