@@ -982,6 +982,12 @@ TEST(Sim, EnergyBalanceClosesExactlyWhenLinearAndAtSecondOrderWhenNot) {
            N2.residual, N1.scale, rate);
     EXPECT_GT(rate, 1.7) << name;
     EXPECT_LT(N1.residual, 1e-2 * N1.scale) << name;
+    // Switched off (-sim_energy_balance false): no works offered.
+    sim::Settings off;
+    off.dt = h, off.t_final = 10 * h, off.linear = true, off.energy_balance = false;
+    bool any = false;
+    sim::integrate(rm, {}, off, [&](const sim::StepState& x) { any = any || x.work != nullptr; });
+    EXPECT_FALSE(any) << name;
   }
 }
 

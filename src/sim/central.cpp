@@ -550,7 +550,7 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
   ss.q = q.data();
   ss.v = v.data();
   ss.active = c_active;
-  ss.work = &ledger.work();
+  ss.work = s.energy_balance ? &ledger.work() : nullptr;
   ss.energy_qa = qm.data(), ss.energy_qb = q.data();  // E_{-1/2}
   ss.dt = h;
   ss.nonlinear = kernel != nullptr;
@@ -582,12 +582,12 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
     if (!finite)
       throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
                       ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
-    if (nc && corr.forces_of_state)  // the equilibrium forces of state n act in step n
-      ledger.add(qm.data(), qp.data(), loads, t, c_lam.data(), c_fric.data());
-    else if (nc)
-      ledger.add(qm.data(), qp.data(), loads, t, corr.normal(), corr.friction());
-    else
-      ledger.add(qm.data(), qp.data(), loads, t, nullptr, nullptr);
+    if (s.energy_balance) {
+      // The contact forces of step n: the equilibrium's of state n (massless), or the correction's.
+      const double* lam = !nc ? nullptr : corr.forces_of_state ? c_lam.data() : corr.normal();
+      const double* fric = !nc ? nullptr : corr.forces_of_state ? c_fric.data() : corr.friction();
+      ledger.add(qm.data(), qp.data(), loads, t, lam, fric);
+    }
     if (n > 0) {  // state n with its central velocity
       for (std::size_t i = 0; i < r; ++i) v[i] = (qp[i] - qm[i]) / (2.0 * h);
       ss.q = q.data();

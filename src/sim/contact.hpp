@@ -45,7 +45,7 @@ class EnergyLedger {
  private:
   std::size_t r_;
   double h_;
-  std::vector<double> cw_, cv_;  // damping: eigenvalues cv_ (nonzero) and vectors cw_ [k][r]
+  std::vector<double> cw_, cv_, y_;  // damping: eigenvalues cv_ (nonzero), vectors cw_ [r][k], y_ = W^T d
   std::vector<std::size_t> dofs_;
   std::vector<double> normals_, d_;
   EnergyWork w_;

@@ -44,11 +44,14 @@ EnergyLedger::EnergyLedger(const nlrom::ReducedModel& m, const ContactSettings* 
     std::vector<double> I(r_ * r_, 0.0), X;
     for (std::size_t i = 0; i < r_; ++i) I[i * r_ + i] = 1.0;
     const auto c = eigen::dense_eigenvalues(static_cast<int>(r_), m.C, I, &X);
-    for (std::size_t k = 0; k < r_; ++k) {
-      if (std::abs(c[k]) <= 1e-14 * cmax) continue;
-      cv_.push_back(c[k]);
-      for (std::size_t i = 0; i < r_; ++i) cw_.push_back(X[i * r_ + k]);
-    }
+    std::vector<std::size_t> keep;
+    for (std::size_t k = 0; k < r_; ++k)
+      if (std::abs(c[k]) > 1e-14 * cmax) keep.push_back(k), cv_.push_back(c[k]);
+    // cw_[i][j] = component i of eigenvector keep[j]: y = W^T d is then a sum of columns scaled by
+    // d_i, whose inner loop over j has no reduction (it vectorizes).
+    for (std::size_t i = 0; i < r_; ++i)
+      for (std::size_t k : keep) cw_.push_back(X[i * r_ + k]);
+    y_.assign(cv_.size(), 0.0);
   }
   if (contact && !contact->nodes.empty()) {
     normals_ = contact_normals(*contact);
@@ -65,11 +68,17 @@ void EnergyLedger::add(const double* qm, const double* qp, const std::vector<Red
     for (std::size_t i = 0; i < r_; ++i) x += l.p[i] * d_[i];
     w_.external += c * x;
   }
-  for (std::size_t k = 0; k < cv_.size(); ++k) {  // d^T C d / h = sum_k c_k (w_k . d)^2 / h
-    const double* w = &cw_[k * r_];
+  if (const std::size_t nk = cv_.size(); nk > 0) {  // d^T C d / h = sum_k c_k (w_k . d)^2 / h
+    double* __restrict y = y_.data();
+    for (std::size_t k = 0; k < nk; ++k) y[k] = 0.0;
+    for (std::size_t i = 0; i < r_; ++i) {
+      const double di = d_[i];
+      const double* __restrict w = &cw_[i * nk];
+      for (std::size_t k = 0; k < nk; ++k) y[k] += w[k] * di;
+    }
     double x = 0.0;
-    for (std::size_t i = 0; i < r_; ++i) x += w[i] * d_[i];
-    w_.damping += cv_[k] * x * x / h_;
+    for (std::size_t k = 0; k < nk; ++k) x += cv_[k] * y[k] * y[k];
+    w_.damping += x / h_;
   }
   if (!lam) return;
   for (std::size_t k = 0; k < dofs_.size(); ++k) {

@@ -303,7 +303,7 @@ class Batch {
       }
       if (!fail) {
         for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];
-        balance(ln, slot, n1);
+        if (s_.base.energy_balance) balance(ln, slot, n1);
         record(ln, n1, t);
       }
       ln.n = n1;

@@ -48,6 +48,7 @@ struct SimOptions {
   std::string rom, out = "simulate.h5", snapshots;
   Settings s;
   PetscBool linear = PETSC_FALSE;
+  PetscBool energy_balance = PETSC_TRUE;  ///< -sim_energy_balance
   PetscInt every = 1;
   std::vector<std::string> monitor, cases;
   ContactOptions contact;
@@ -81,6 +82,7 @@ struct SweepOptions {
   double omega_min = 0, omega_max = 0, omega_step = 0, dt = 0, fmax = 10000.0;
   PetscInt bins = 500, batch = 8;
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, batched = PETSC_FALSE;
+  PetscBool energy_balance = PETSC_TRUE;  ///< -sim_energy_balance
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
   int rotation = 1;
