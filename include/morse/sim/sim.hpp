@@ -104,7 +104,7 @@ struct Settings {
   double dt = 0.0;
   KernelLayout kernel = KernelLayout::Auto;
   double t_final = 0.0;
-  bool linear = false;         ///< g~ = 0
+  bool linear = false;  ///< g~ = 0
   /// The energy balance (EnergyWork, central differences): about k r multiply-adds per step for C~
   /// of rank k, up to 2 times the time of a linear step at r = 54 with every mode damped.
   bool energy_balance = true;
