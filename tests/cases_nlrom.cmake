@@ -110,50 +110,35 @@ foreach(np 1 2)
     ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box)
 endforeach()
 
+# morse_add_box_script(NAME TIMEOUT): tests/case_NAME.sh on the box (DIR MORSE NP BOX MPIEXEC
+# [MPI FLAGS] -- MATERIAL) as case_NAME_np1 and _np2; exit status 77 skips (no h5py, no setsid).
+function(morse_add_box_script name timeout)
+  foreach(np 1 2)
+    add_test(NAME case_${name}_np${np}
+             COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_${name}.sh
+                     ${MORSE_CASE_DIR}/${name}_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
+                     ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
+    set_tests_properties(case_${name}_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT ${timeout}
+      ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
+  endforeach()
+endfunction()
+
 # Corrupt sweep checkpoints (datasets of the wrong shape, an index given twice or outside the
 # grid) are refused naming the file and the dataset, and left unchanged (skipped without h5py).
-foreach(np 1 2)
-  add_test(NAME case_sweep_checkpoint_np${np}
-           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_sweep_checkpoint.sh
-                   ${MORSE_CASE_DIR}/sweep_checkpoint_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
-                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
-  set_tests_properties(case_sweep_checkpoint_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
-    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
-endforeach()
+morse_add_box_script(sweep_checkpoint 300)
 
 # Adaptive refinement of a sweep: rounds run, a finished refined sweep resumes whole, a cut file
 # resumes to the same speeds bitwise, bad refinement options refused (skipped without h5py).
-foreach(np 1 2)
-  add_test(NAME case_sweep_refine_np${np}
-           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_sweep_refine.sh
-                   ${MORSE_CASE_DIR}/sweep_refine_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
-                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
-  set_tests_properties(case_sweep_refine_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
-    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
-endforeach()
+morse_add_box_script(sweep_refine 300)
 
 # The cluster recipe (run/cluster) with fake sbatch and srun: a chain of jobs runs and resumes a
 # sweep from an options file (skipped without h5py).
-foreach(np 1 2)
-  add_test(NAME case_cluster_chain_np${np}
-           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_cluster_chain.sh
-                   ${MORSE_CASE_DIR}/cluster_chain_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
-                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
-  set_tests_properties(case_cluster_chain_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 300
-    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
-endforeach()
+morse_add_box_script(cluster_chain 300)
 
 # A second run on the output of a running sweep is refused (naming the output and the holder's
 # pid), and the ranks of a sweep whose launcher is killed (kill -9 of its process group) stop
 # within 1 s without writing the file again (skipped without setsid, pgrep or h5py).
-foreach(np 1 2)
-  add_test(NAME case_sweep_lock_np${np}
-           COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_sweep_lock.sh
-                   ${MORSE_CASE_DIR}/sweep_lock_np${np} $<TARGET_FILE:morse> ${np} ${MORSE_CASE_BOX}
-                   ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -- ${MORSE_CASE_MATERIAL})
-  set_tests_properties(case_sweep_lock_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 120
-    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box SKIP_RETURN_CODE 77)
-endforeach()
+morse_add_box_script(sweep_lock 120)
 
 # Massless-boundary models (issue 27): the fixture builds one (exact tensors, a one-node set for the
 # sweep monitor: node 5 is a corner of face x1); bad options and runs are refused with the option,
