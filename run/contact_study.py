@@ -137,6 +137,13 @@ def simulate(st, rom, omega, revs, dt, linear, name, every):
     return out if ok else None
 
 
+def casing_with_mu(mu):
+    """The study's casing options with the friction coefficient mu."""
+    casing = list(CASING)
+    casing[casing.index("-contact_mu") + 1] = mu
+    return casing
+
+
 def diagnosis_stage(st, args, mesh):
     """Why the linear maps were not physical (docs/contact.md): linear sweeps of r54 over
     --diag-revs revolutions with friction (both senses of rotation) and without, the energy
@@ -152,14 +159,12 @@ def diagnosis_stage(st, args, mesh):
     st.run(args.ranks, args10, "nlrom r54, 10 modes damped", rom10, "rom_r54_damp10")
     base = ["-rom", rom10, "-sweep_omega_min", lo, "-sweep_omega_max", hi, "-sweep_omega_step",
             step, "-sim_revolutions", args.diag_revs, "-sim_dt", DT, "-sweep_batch", 1, "-sim_linear"]
-    cases = {"friction": ["-contact_mu", "0.15"], "frictionless": ["-contact_mu", "0"],
-             "friction_negative": ["-contact_mu", "0.15", "-sweep_rotation", "negative"]}
-    for tag, extra in cases.items():
+    cases = {"friction": ("0.15", []), "frictionless": ("0", []),
+             "friction_negative": ("0.15", ["-sweep_rotation", "negative"])}
+    for tag, (mu, extra) in cases.items():
         name = "diag_sweep_" + tag
         path = st.file(name + ".h5")
-        casing = [a for a in CASING]
-        casing[casing.index("-contact_mu") + 1] = extra[1]
-        st.run(args.ranks, ["sweep", "-out", path] + base + casing + extra[2:], name, path + ".done", name)
+        st.run(args.ranks, ["sweep", "-out", path] + base + casing_with_mu(mu) + extra, name, path + ".done", name)
         if name in st.rec and "error" not in st.rec[name]:
             open(path + ".done", "w").close()
     rom_all = st.file("rom_r54_alldamped.h5")
@@ -169,10 +174,8 @@ def diagnosis_stage(st, args, mesh):
     for tag, rom, mu in (("830", "rom_r54_damp10.h5", "0.15"), ("830_frictionless", "rom_r54_damp10.h5", "0"),
                          ("830_alldamped", "rom_r54_alldamped.h5", "0.15")):
         out = st.file("diag_sim_%s.h5" % tag)
-        casing = [a for a in CASING]
-        casing[casing.index("-contact_mu") + 1] = mu
-        st.run(1, ["simulate", "-rom", st.file(rom), "-sim_omega", 830,
-                   "-sim_revolutions", 5, "-sim_dt", DT, "-sim_output_every", 20, "-sim_linear", "-out", out] + casing,
+        st.run(1, ["simulate", "-rom", st.file(rom), "-sim_omega", 830, "-sim_revolutions", 5, "-sim_dt", DT,
+                   "-sim_output_every", 20, "-sim_linear", "-out", out] + casing_with_mu(mu),
                "simulate diag %s" % tag, out, "diag_sim_" + tag)
 
 

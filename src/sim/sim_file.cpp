@@ -1,6 +1,7 @@
 // sim/sim_file.cpp: the file of a reduced run (/sim of `morse simulate`; sim/sim.hpp,
 // docs/hdf5-schema.md).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -11,6 +12,20 @@
 #include "morse/sim/sim.hpp"
 
 namespace morse::sim {
+
+namespace {
+// The datasets of /sim/energy_balance, in the order written and read.
+template <class Balance>
+auto balance_columns(Balance& b) {
+  using Column = std::pair<const char*, decltype(&b.time)>;
+  return std::array<Column, 6>{{{"time", &b.time},
+                                {"energy", &b.energy},
+                                {"external", &b.external},
+                                {"normal", &b.normal},
+                                {"friction", &b.friction},
+                                {"damping", &b.damping}}};
+}
+}  // namespace
 
 void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const Stats& stats) {
   const bool implicit = s.scheme == Scheme::Trapezoidal;
@@ -26,12 +41,7 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
   if (!rec.balance.time.empty()) {
     const auto& b = rec.balance;
     const std::string g = "/sim/energy_balance";
-    out.write(g + "/time", b.time);
-    out.write(g + "/energy", b.energy);
-    out.write(g + "/external", b.external);
-    out.write(g + "/normal", b.normal);
-    out.write(g + "/friction", b.friction);
-    out.write(g + "/damping", b.damping);
+    for (const auto& [name, v] : balance_columns(b)) out.write(g + "/" + name, *v);
     out.attribute(g, "period", b.period);
     out.attribute(g, "description",
                   "energy balance of central differences (theory 10.6): energy(i) - energy(0) = external + normal + "
@@ -132,17 +142,11 @@ SimRecord read_sim(const std::string& file, const std::vector<std::string>& sets
               ": /sim/energy, /sim/q or /sim/final do not match ", nt, " times of ", r, " coordinates");
   if (io::has_object(file, "/sim/energy_balance")) {
     auto& b = rec.balance;
-    doubles("/sim/energy_balance/time", &b.time);
-    doubles("/sim/energy_balance/energy", &b.energy);
-    doubles("/sim/energy_balance/external", &b.external);
-    doubles("/sim/energy_balance/normal", &b.normal);
-    doubles("/sim/energy_balance/friction", &b.friction);
-    doubles("/sim/energy_balance/damping", &b.damping);
+    for (const auto& [name, v] : balance_columns(b)) doubles(cat("/sim/energy_balance/", name), v);
     MORSE_CHECK(io::read_attribute(file, "/sim/energy_balance", "period", &b.period, &err), err);
-    const std::size_t nb = b.time.size();
-    MORSE_CHECK(b.energy.size() == nb && b.external.size() == nb && b.normal.size() == nb && b.friction.size() == nb &&
-                    b.damping.size() == nb,
-                file, ": the datasets of /sim/energy_balance do not all have ", nb, " rows");
+    for (const auto& [name, v] : balance_columns(b))
+      MORSE_CHECK(v->size() == b.time.size(), file, ": /sim/energy_balance/", name, " has ", v->size(),
+                  " rows, /sim/energy_balance/time ", b.time.size());
   }
   for (const auto& name : sets) {
     SimRecord::Set set;

@@ -252,7 +252,7 @@ class Batch {
     if (m_.massless)
       ln.boundary =
           std::make_unique<detail::MasslessBoundary>(m_, ln.cs.get(), ln.res.t_final, !s_.base.linear, raw_, tangent_);
-    ln.ledger = std::make_unique<detail::EnergyLedger>(m_, ln.cs.get(), h);
+    if (s_.base.energy_balance) ln.ledger = std::make_unique<detail::EnergyLedger>(m_, ln.cs.get(), h);
     if (ln.cs) ln.lam_prev.assign(ln.cs->nodes.size(), 0.0), ln.fric_prev.assign(3 * ln.cs->nodes.size(), 0.0);
     // At rest: q_0 = q_{-1} = 0.
     for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
