@@ -165,6 +165,13 @@ morse_add_error_case(nlrom_massless_fmax_negative
 morse_add_error_case(nlrom_massless_fmax_without_massless
   "morse: error: -nlrom_massless_fmax applies to -nlrom_boundary_mass massless" ml_fmax2.h5 BOX
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_massless_fmax 100)
+morse_add_error_case(nlrom_massless_scaled_without_fmax
+  "morse: error: -nlrom_massless_interior scaled needs -nlrom_massless_fmax HZ > 0" ml_scaled.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass massless
+       -nlrom_massless_interior scaled)
+morse_add_error_case(nlrom_massless_interior_without_massless
+  "morse: error: -nlrom_massless_interior applies to -nlrom_boundary_mass massless" ml_scaled2.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_massless_interior static)
 # Damping (issue 28): -nlrom_damping_modes takes a count or all, strictly; -nlrom_rayleigh two finite
 # values, and neither with -nlrom_damping_modal nor with a massless boundary.
 morse_add_error_case(nlrom_damping_modes_suffix

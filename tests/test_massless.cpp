@@ -7,7 +7,11 @@
 //  - their frequencies converge to the full model's (the block eigen solver on K, M) as the number
 //    of fixed-interface modes grows, exactly as the mass-carrying model's do;
 //  - its critical steps are ordered: every static coordinate held <= the contact normals held <=
-//    free, and the free one is 2 / omega of its highest dynamic mode.
+//    free, and the free one is 2 / omega of its highest dynamic mode;
+//  - with its interior mass-scaled (-nlrom_massless_interior scaled), the z coordinates are
+//    K-orthogonal to the rest, their frequencies are capped at the scaling frequency and the other
+//    modes are unchanged; a nonlinear run converges to the static interior's at second order in
+//    the load frequency over the scaling frequency.
 #include <petscsys.h>
 #include <gtest/gtest.h>
 
@@ -18,7 +22,9 @@
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
+#include "morse/fe/nonlinear.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "morse/sim/sim.hpp"
 #include "scratch.hpp"
 #include "util.hpp"
 
@@ -181,4 +187,145 @@ TEST(Massless, CutBelowEveryModeIsRefused) {
   test::expect_error_parts([&] { nlrom::massless_transform(c.M, c.K, c.n(), c.n_b, 1e-3, &n_static); },
                            {"-nlrom_massless_fmax 0.001 Hz is below the lowest mode of the model"},
                            "a cut below every mode");
+}
+
+namespace {
+
+// The CB basis of the beam (boundary x1, 12 fixed-interface modes) made massless with the modes
+// above fmax_hz residual, projected, with exact tensors if `tensors`; not yet make_massless'd.
+// *V receives the basis, *n_static the static count of massless_transform.
+nlrom::ReducedModel massless_projected(const test::Model& m, double fmax_hz, bool tensors, PetscInt* n_static) {
+  auto c = test::cb_basis(m, "x1", 12);
+  auto V = nlrom::transform_basis(c.T.get(), nlrom::massless_transform(c.M, c.K, c.n(), c.n_b, fmax_hz, n_static));
+  auto rm = nlrom::project_model(PETSC_COMM_WORLD, V.get(), m.ops.K.get(), m.ops.M.get(), 0.0, 0);
+  rm.n_b = c.n_b;
+  if (tensors) {
+    fe::Svk svk(m.lm, m.dofs, test::steel(), m.ops.K.get());
+    rm.g = nlrom::exact_forces(svk, V.get());
+  }
+  return rm;
+}
+
+// The cut between the reduced model's modes 6 and 7 [Hz].
+double cut_6_7(const test::Model& m) {
+  auto probe = test::cb_basis(m, "x1", 12);
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(probe.n()), probe.K, probe.M);
+  return 0.5 * (std::sqrt(w[5]) + std::sqrt(w[6])) / (2.0 * M_PI);
+}
+
+}  // namespace
+
+// -nlrom_massless_interior scaled (make_massless with a scaling frequency f_c): the z coordinates
+// (residual combinations that vanish on the boundary) are K-orthogonal to the boundary and the
+// dynamic modes (theory §11.7: Z^T K Psi = 0 since Z vanishes on the boundary), so giving them the
+// mass K_zz / w_c^2 puts each at w_c exactly and leaves every other mode of the free model as the
+// static interior has it; only the boundary is static, and the free critical step is 2 / w_c.
+TEST(Massless, ScaledInteriorIsDecoupledAndCappedAtItsFrequency) {
+  const auto m = beam(10);
+  const double fcut = cut_6_7(m);
+  PetscInt n_static = 0;
+  const auto rm0 = massless_projected(m, fcut, false, &n_static);
+  const std::size_t r = static_cast<std::size_t>(rm0.r), nb = static_cast<std::size_t>(rm0.n_b),
+                    ns = static_cast<std::size_t>(n_static), nz = ns - nb, nd = r - ns;
+  ASSERT_EQ(nd, 6u);
+  ASSERT_GT(nz, 0u);
+  // Coupling of z with everything else, normalized by the diagonal: sqrt(K_ii K_jj).
+  double coupling = 0, wz_min = 1e300, wz_max = 0;
+  for (std::size_t i = nb; i < ns; ++i) {
+    wz_min = std::min(wz_min, std::sqrt(rm0.K[i * r + i])), wz_max = std::max(wz_max, std::sqrt(rm0.K[i * r + i]));
+    for (std::size_t j = 0; j < r; ++j)
+      if (j != i)
+        coupling = std::max(coupling, std::abs(rm0.K[i * r + j]) / std::sqrt(rm0.K[i * r + i] * rm0.K[j * r + j]));
+  }
+  const double fc = 0.5 * (fcut + wz_min / (2.0 * M_PI));  // above every dynamic mode, below every z
+  auto st = rm0, sc = rm0;
+  nlrom::make_massless(&st, n_static, 0.0, 0);
+  nlrom::make_massless(&sc, n_static, 0.0, 0, fc);
+  const auto wst = nlrom::free_eigenvalues(st), wsc = nlrom::free_eigenvalues(sc);
+  ASSERT_EQ(wsc.size(), nd + nz);
+  const double wc2 = std::pow(2.0 * M_PI * fc, 2);
+  double d_low = 0, d_cap = 0, d_mass = 0;
+  ASSERT_LT(wst[nd - 1], wc2);
+  for (std::size_t k = 0; k < nd; ++k) d_low = std::max(d_low, std::abs(wsc[k] / wst[k] - 1.0));
+  for (std::size_t k = nd; k < nd + nz; ++k) d_cap = std::max(d_cap, std::abs(wsc[k] / wc2 - 1.0));
+  for (std::size_t i = nb; i < ns; ++i)
+    d_mass = std::max(d_mass, std::abs(sc.M[i * r + i] * wc2 / sc.K[i * r + i] - 1.0));
+  double free_dt = 0;
+  nlrom::massless_critical_step(sc, &free_dt);
+  print0(PETSC_COMM_WORLD,
+         "  cut %.1f Hz: %zu dynamic, %zu z at %.0f-%.0f Hz, scaled to %.0f Hz; z coupling %.1e; low modes "
+         "unchanged to %.1e, z at f_c to %.1e; free step %.4e s = 2 / w_c %.4e s\n",
+         fcut, nd, nz, wz_min / (2 * M_PI), wz_max / (2 * M_PI), fc, coupling, d_low, d_cap, free_dt,
+         2.0 / std::sqrt(wc2));
+  EXPECT_EQ(sc.n_static, rm0.n_b);
+  EXPECT_LT(coupling, 1e-8);
+  EXPECT_LT(d_low, 1e-8);
+  EXPECT_LT(d_cap, 1e-8);
+  EXPECT_LT(d_mass, 1e-12);
+  EXPECT_NEAR(free_dt, 2.0 / std::sqrt(wc2), 1e-8 * free_dt);
+}
+
+// A nonlinear run (exact tensors; a smooth tip load F (1 - cos W t), F of 7 % of the beam's length
+// in linear static deflection, W a fifth of the first bending frequency; the CB model without
+// modal derivatives stiffens, and the tip reaches about 5 % of the length): the mass-scaled interior responds
+// quasi-statically up to O((W / w_c)^2), so its tip history converges to the static interior's at
+// second order as the scaling frequency f_c doubles (both run with the same step).
+TEST(Massless, ScaledInteriorConvergesToTheStaticOneAtSecondOrder) {
+  const auto m = beam(10);
+  PetscInt n_static = 0;
+  const auto rm0 = massless_projected(m, cut_6_7(m), true, &n_static);
+  const std::size_t r = static_cast<std::size_t>(rm0.r), nb = static_cast<std::size_t>(rm0.n_b);
+  double wz_min = 1e300;
+  for (std::size_t i = nb; i < static_cast<std::size_t>(n_static); ++i)
+    wz_min = std::min(wz_min, std::sqrt(rm0.K[i * r + i]));
+  auto st = rm0;
+  nlrom::make_massless(&st, n_static, 0.0, 0);
+  const double w1 = std::sqrt(nlrom::free_eigenvalues(st)[0]);
+  // Tip force in y on the 8 face nodes: 0.07 m of static deflection by Euler-Bernoulli.
+  const double EI = test::steel().E * 0.1 * 0.1 * 0.1 * 0.1 / 12.0, F = 3.0 * EI * 0.07;
+  sim::ReducedLoad constant, wave;
+  constant.p.assign(r, 0.0);
+  for (std::size_t k = 0; k < nb / 3; ++k) constant.p[3 * k + 1] = F / static_cast<double>(nb / 3);
+  wave.p = constant.p;
+  constant.amplitude = wave.amplitude = 1.0;
+  wave.omega = w1 / 5.0, wave.phase = -0.5 * M_PI;  // F (1 - cos W t)
+  const double fcs[3] = {wz_min / 8.0, wz_min / 4.0, wz_min / 2.0};
+  std::vector<nlrom::ReducedModel> models;
+  double dt = sim::critical_step(st);
+  for (double wc : fcs) {
+    models.push_back(rm0);
+    nlrom::make_massless(&models.back(), n_static, 0.0, 0, wc / (2.0 * M_PI));
+    dt = std::min(dt, sim::critical_step(models.back()));
+  }
+  sim::Settings s;
+  s.dt = 0.25 * dt;
+  s.t_final = 2.0 * (2.0 * M_PI / wave.omega);
+  s.energy_balance = false;
+  auto history = [&](const nlrom::ReducedModel& rm) {
+    std::vector<double> u;
+    sim::integrate(rm, {constant, wave}, s, [&](const sim::StepState& x) {
+      for (std::size_t a = 0; a < nb; ++a) u.push_back(x.q[a]);
+    });
+    return u;
+  };
+  const auto ref = history(st);
+  double peak = 0;
+  for (double u : ref) peak = std::max(peak, std::abs(u));
+  double err[3];
+  for (int k = 0; k < 3; ++k) {
+    const auto u = history(models[static_cast<std::size_t>(k)]);
+    ASSERT_EQ(u.size(), ref.size());
+    err[k] = 0;
+    for (std::size_t i = 0; i < u.size(); ++i) err[k] = std::max(err[k], std::abs(u[i] - ref[i]));
+    err[k] /= peak;
+  }
+  const double rate1 = std::log2(err[0] / err[1]), rate2 = std::log2(err[1] / err[2]);
+  print0(PETSC_COMM_WORLD,
+         "  tip peak %.4f m (W / w_1 = 0.2, %ld steps); max tip error against the static interior at f_c = "
+         "f_z,min/8, /4, /2: %.2e %.2e %.2e (rates %.2f %.2f)\n",
+         peak, static_cast<long>(ref.size() / nb), err[0], err[1], err[2], rate1, rate2);
+  EXPECT_GT(peak, 0.04);
+  EXPECT_LT(err[2], 1e-3);
+  EXPECT_GT(rate1, 1.7);
+  EXPECT_GT(rate2, 1.7);
 }

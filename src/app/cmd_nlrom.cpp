@@ -64,11 +64,17 @@ void run_nlrom(MPI_Comm comm) {
     const auto rm0 = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), 0.0, 0);
     basis.V = nlrom::transform_basis(
         basis.V.get(), nlrom::massless_transform(rm0.M, rm0.K, r, basis.n_b, no.massless_fmax, &n_static));
-    nlrom::relabel_massless(&basis, n_static);
-    print0(comm,
-           "morse nlrom: massless boundary (MacNeal): %d dynamic modes, %d boundary coordinates and %d more "
-           "residual combinations quasi-static\n",
-           (int)(r - n_static), (int)basis.n_b, (int)(n_static - basis.n_b));
+    nlrom::relabel_massless(&basis, n_static, no.massless_scaled);
+    if (no.massless_scaled)
+      print0(comm,
+             "morse nlrom: massless boundary (MacNeal): %d dynamic modes, %d boundary coordinates quasi-static, %d "
+             "residual combinations dynamic with their mass scaled to %g Hz at most\n",
+             (int)(r - n_static), (int)basis.n_b, (int)(n_static - basis.n_b), no.massless_fmax);
+    else
+      print0(comm,
+             "morse nlrom: massless boundary (MacNeal): %d dynamic modes, %d boundary coordinates and %d more "
+             "residual combinations quasi-static\n",
+             (int)(r - n_static), (int)basis.n_b, (int)(n_static - basis.n_b));
   }
 
   auto t2a = std::chrono::steady_clock::now();
@@ -95,7 +101,7 @@ void run_nlrom(MPI_Comm comm) {
   rm.n_b = basis.n_b;
   if (no.rayleigh_given) nlrom::rayleigh_damping(&rm, no.rayleigh_alpha, no.rayleigh_beta);
   if (no.massless) {
-    nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes);
+    nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes, no.massless_scaled ? no.massless_fmax : 0.0);
     double free_dt = 0;
     const double held_dt = nlrom::massless_critical_step(rm, &free_dt);
     print0(comm, "morse nlrom: critical step of central differences %.4g s (static coordinates held; free: %.4g s)\n",
@@ -118,6 +124,8 @@ void run_nlrom(MPI_Comm comm) {
   info.damping = no.damping();
   info.modal_damping_ratio = no.damping_xi;
   info.rayleigh_alpha = no.rayleigh_alpha;
+  if (no.massless) info.massless_interior = no.massless_scaled ? "scaled" : "static";
+  info.massless_fmax = no.massless_fmax;
   info.rayleigh_beta = no.rayleigh_beta;
   info.t2_forces_seconds = t2;
   info.t3_projection_seconds = t3;

@@ -196,11 +196,11 @@ std::vector<double> massless_transform(const std::vector<double>& M, const std::
   return T;
 }
 
-void relabel_massless(Basis* basis, PetscInt n_static) {
+void relabel_massless(Basis* basis, PetscInt n_static, bool scaled) {
   const PetscInt r = basis->r();
   basis->labels.resize(static_cast<std::size_t>(basis->n_b));
   for (PetscInt k = basis->n_b; k < n_static; ++k)
-    basis->labels.push_back(cat("quasi-static mode ", k - basis->n_b + 1));
+    basis->labels.push_back(cat(scaled ? "mass-scaled mode " : "quasi-static mode ", k - basis->n_b + 1));
   for (PetscInt k = n_static; k < r; ++k) basis->labels.push_back(cat("dynamic mode ", k - n_static + 1));
 }
 
@@ -237,19 +237,31 @@ UMat transform_basis(Mat V, const std::vector<double>& S) {
   return W;
 }
 
-void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k) {
-  const std::size_t r = static_cast<std::size_t>(rm->r), ns = static_cast<std::size_t>(n_static), nd = r - ns;
-  MORSE_CHECK(rm->n_b > 0 && n_static >= rm->n_b && ns < r,
+void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k, double scaled_fmax) {
+  const std::size_t r = static_cast<std::size_t>(rm->r);
+  MORSE_CHECK(rm->n_b > 0 && n_static >= rm->n_b && static_cast<std::size_t>(n_static) < r,
               "massless boundary: the model needs boundary and dynamic "
               "coordinates (r = ",
-              r, ", n_b = ", rm->n_b, ", static ", ns, ")");
+              r, ", n_b = ", rm->n_b, ", static ", n_static, ")");
+  MORSE_CHECK(std::isfinite(scaled_fmax) && scaled_fmax >= 0, "massless boundary: the scaling frequency ", scaled_fmax,
+              " Hz is not a finite frequency >= 0");
+  // Scaled: the z coordinates [n_b, n_static) stay dynamic with mass max(1, K_zz / w_c^2).
+  const std::size_t z0 = static_cast<std::size_t>(rm->n_b), z1 = static_cast<std::size_t>(n_static);
+  const double wc2 = std::pow(2.0 * M_PI * scaled_fmax, 2);
+  if (scaled_fmax > 0) n_static = rm->n_b;
+  const std::size_t ns = static_cast<std::size_t>(n_static), nd = r - ns;
   if (k == kAllModes) k = static_cast<PetscInt>(nd);
   MORSE_CHECK(k >= 0 && static_cast<std::size_t>(k) <= nd, "massless boundary: ", k,
               " damped modes asked from a model of ", nd, " dynamic coordinates");
   const auto Keff = condensed_stiffness(*rm, ns);  // also proves K_ss positive definite
-  // MacNeal: the residual mass is dropped, so the mass is that of the M-normalized dynamic modes.
+  // MacNeal: the residual mass is dropped, so the mass is that of the M-normalized dynamic modes
+  // (and of the scaled z).
   for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = 0; j < r; ++j) rm->M[i * r + j] = i >= ns && i == j ? 1.0 : 0.0;
+    for (std::size_t j = 0; j < r; ++j) {
+      double m = i >= ns && i == j ? 1.0 : 0.0;
+      if (scaled_fmax > 0 && i == j && i >= z0 && i < z1) m = std::max(1.0, rm->K[i * r + i] / wc2);
+      rm->M[i * r + j] = m;
+    }
   std::fill(rm->C.begin(), rm->C.end(), 0.0);
   rm->damping_omega.clear();
   if (xi > 0 && k > 0) {

@@ -40,6 +40,7 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   PetscBool set = PETSC_FALSE, tfinal_set = PETSC_FALSE, dt_set = PETSC_FALSE, rayleigh = PETSC_FALSE;
   std::string modes_error, rayleigh_error;
   auto& b = basis;
+  PetscBool mi_set = PETSC_FALSE;  // -nlrom_massless_interior given
   PetscOptionsBegin(comm, nullptr, "morse nlrom options", "");
   PetscCall(MorseOptionsString("-nlrom_basis", "cb | cbmd (CB + modal derivatives) | pod (POD + constraint modes)", "",
                                basis_name.c_str(), buf, sizeof buf, &set));
@@ -109,6 +110,14 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
                              "Massless boundary: the modes of the reduced model (boundary free) above this frequency "
                              "[Hz] are residual, quasi-static (0: all but the n_b highest)",
                              "", massless_fmax, &massless_fmax, nullptr));
+  const char* interiors[] = {"static", "scaled", "MasslessInterior", "", nullptr};
+  PetscEnum mi = massless_scaled ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
+  PetscCall(MorseOptionsEnum("-nlrom_massless_interior",
+                             "Massless boundary: the residual combinations that vanish on the boundary are static "
+                             "(MacNeal, solved with the boundary) or scaled (dynamic, their mass raised so that none "
+                             "is above -nlrom_massless_fmax; only the boundary static)",
+                             "", interiors, mi, &mi, &mi_set));
+  massless_scaled = mi == static_cast<PetscEnum>(1);
   PetscOptionsEnd();
   auto bad = [&](bool ok, const std::string& why) {
     if (!ok && error.empty()) error = why;
@@ -145,6 +154,10 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
   bad(std::isfinite(massless_fmax) && massless_fmax >= 0,
       cat("-nlrom_massless_fmax must be a finite frequency >= 0 [Hz] (got ", massless_fmax, ")"));
   bad(massless || massless_fmax == 0, "-nlrom_massless_fmax applies to -nlrom_boundary_mass massless");
+  bad(massless || !mi_set, "-nlrom_massless_interior applies to -nlrom_boundary_mass massless");
+  bad(!massless_scaled || massless_fmax > 0,
+      "-nlrom_massless_interior scaled needs -nlrom_massless_fmax HZ > 0: the frequency that no scaled mode may "
+      "exceed");
   bad(!(n_filter > 0 && b.snapshots.empty()), "-nlrom_filter_pod needs -nlrom_snapshots FILE.h5");
   return PETSC_SUCCESS;
 }

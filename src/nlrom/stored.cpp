@@ -339,7 +339,11 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   if (!rm.damping_omega.empty()) out.write("/nlrom/damping/omega", rm.damping_omega);
   out.attribute("/nlrom", "basis", info.basis);
   out.attribute("/nlrom", "boundary_mass", rm.massless ? std::string("massless") : std::string("carrying"));
-  if (rm.massless) out.attribute_int("/nlrom", "n_static_coordinates", rm.n_static);
+  if (rm.massless) {
+    out.attribute_int("/nlrom", "n_static_coordinates", rm.n_static);
+    out.attribute("/nlrom", "massless_interior", info.massless_interior);
+    out.attribute("/nlrom", "massless_fmax", info.massless_fmax);
+  }
   out.attribute("/nlrom", "forces", info.forces);
   out.attribute("/nlrom", "boundary_set", info.boundary_set);
   out.attribute_int("/nlrom", "r", r);

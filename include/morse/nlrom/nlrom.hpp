@@ -172,12 +172,18 @@ struct OfflineSettings {
   /// massless (make_massless; the damping then acts on the dynamic coordinates only).
   bool massless = false;
   double massless_fmax = 0.0;  ///< -nlrom_massless_fmax: modes above it are residual (quasi-static); 0: n_b of them
-  std::string error;           ///< a bad option value, naming the option (raised by the caller, after -help)
+  /// -nlrom_massless_interior static|scaled: the residual combinations that vanish on the boundary
+  /// (z) are quasi-static (MacNeal, static: solved with the boundary at every step) or keep a mass
+  /// raised so that none is above -nlrom_massless_fmax (scaled: selective mass scaling; only the
+  /// boundary is static). scaled needs -nlrom_massless_fmax > 0.
+  bool massless_scaled = false;
+  std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
   /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
   /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal, -nlrom_damping_modes K|all,
-  /// -nlrom_rayleigh alpha,beta and -nlrom_boundary_mass (docs/user-guide.md), then validates them with
+  /// -nlrom_rayleigh alpha,beta, -nlrom_boundary_mass, -nlrom_massless_fmax and -nlrom_massless_interior
+  /// (docs/user-guide.md), then validates them with
   /// basis.boundary_set (call it after setting that): the first bad value (unknown basis or force
   /// method, no boundary set, damping ratio outside [0, 1), a mode count neither a count nor all,
   /// Rayleigh damping with modal damping or with a massless boundary, a filter without snapshots, ...)
@@ -229,8 +235,9 @@ std::vector<double> massless_transform(const std::vector<double>& M, const std::
                                        PetscInt n_b, double fmax_hz, PetscInt* n_static);
 
 /// The labels of a basis after massless_transform: the boundary's kept, then "quasi-static mode k"
-/// and "dynamic mode k" (held-boundary modes, ascending). Called on every rank alike.
-void relabel_massless(Basis* basis, PetscInt n_static);
+/// (or "mass-scaled mode k" if scaled) and "dynamic mode k" (held-boundary modes, ascending). Called
+/// on every rank alike.
+void relabel_massless(Basis* basis, PetscInt n_static, bool scaled = false);
 
 /// The basis V S (MPIDENSE, V's layout), for S of massless_transform. Collective.
 UMat transform_basis(Mat V, const std::vector<double>& S);
@@ -243,7 +250,14 @@ UMat transform_basis(Mat V, const std::vector<double>& S);
 /// C_dd = sum 2 xi w_k (M_dd x_k)(M_dd x_k)^T. Sets rm->massless, rm->n_static and
 /// rm->damping_omega. Throws if K_ss is not positive definite (a boundary node without stiffness)
 /// or k exceeds the dynamic coordinates.
-void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k);
+///
+/// scaled_fmax > 0 (-nlrom_massless_interior scaled): the z coordinates [n_b, n_static) are not
+/// made static but keep a mass m_z = max(1, K_zz / w_c^2), w_c = 2 pi scaled_fmax (selective mass
+/// scaling): z is K-orthogonal to u_b and eta (theory §11.7), so the linear model's z frequencies
+/// become min(w_z, w_c) and the rest is unchanged; only the boundary is static (rm->n_static = n_b).
+/// Their response to forces well below w_c stays quasi-static to O((w / w_c)^2), and no
+/// equilibrium of z has to be solved (a cubic model can lose it under contact: a limit point).
+void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k, double scaled_fmax = 0.0);
 
 /// The critical step of central differences on a massless model: 2 / omega_max of (K_dd, M_dd),
 /// the dynamic part with the static coordinates held (contact can only stiffen the dynamics up to
@@ -312,6 +326,8 @@ struct StoredInfo {
   double rayleigh_alpha = 0, rayleigh_beta = 0;  ///< -nlrom_rayleigh
   double t2_forces_seconds = 0;                  ///< offline time of the forces (t1 is basis.seconds)
   double t3_projection_seconds = 0;              ///< offline time of the projection
+  std::string massless_interior;                 ///< massless: static or scaled (-nlrom_massless_interior)
+  double massless_fmax = 0;                      ///< massless: -nlrom_massless_fmax [Hz]
 };
 
 /// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on
