@@ -172,6 +172,23 @@ morse_add_error_case(nlrom_massless_scaled_without_fmax
 morse_add_error_case(nlrom_massless_interior_without_massless
   "morse: error: -nlrom_massless_interior applies to -nlrom_boundary_mass massless" ml_scaled2.h5 BOX
   ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_massless_interior static)
+# Selective mass scaling (-nlrom_mass_scaling_fmax): the command reports the modes moved and the
+# critical step before and after (the library's checks are in test_massless).
+add_test(NAME case_nlrom_mass_scaling
+         COMMAND ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS} -n 1 $<TARGET_FILE:morse> nlrom ${MORSE_NLR_BOX} -boundary x1
+                 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact -nlrom_mass_scaling_fmax 2000
+                 -nlrom_damping_modal 0.01 -nlrom_damping_modes all -out ${MORSE_CASE_DIR}/case_rom_mass_scaled.h5)
+set_tests_properties(case_nlrom_mass_scaling PROPERTIES LABELS "case;np1" TIMEOUT 120
+  ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box
+  PASS_REGULAR_EXPRESSION "mass scaling: [0-9]+ modes above 2000 Hz moved to it; critical step of central differences 1.59[0-9]*e-04 s"
+  FAIL_REGULAR_EXPRESSION "morse: error")
+morse_add_error_case(nlrom_mass_scaling_massless
+  "morse: error: -nlrom_mass_scaling_fmax applies to a mass-carrying model" ms_massless.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_boundary_mass massless
+       -nlrom_mass_scaling_fmax 1000)
+morse_add_error_case(nlrom_mass_scaling_negative
+  "morse: error: -nlrom_mass_scaling_fmax must be a finite frequency >= 0 \\[Hz\\] \\(got -3\\)" ms_negative.h5 BOX
+  ARGS nlrom ${MORSE_NLR_BOX} -boundary x1 -nlrom_num_fixed_modes 3 -nlrom_mass_scaling_fmax -3)
 # Damping (issue 28): -nlrom_damping_modes takes a count or all, strictly; -nlrom_rayleigh two finite
 # values, and neither with -nlrom_damping_modal nor with a massless boundary.
 morse_add_error_case(nlrom_damping_modes_suffix

@@ -99,6 +99,17 @@ void run_nlrom(MPI_Comm comm) {
   auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.massless ? 0.0 : no.damping_xi,
                                  no.damping_modes);
   rm.n_b = basis.n_b;
+  std::size_t mass_scaled = 0;
+  if (no.mass_scaling_fmax > 0) {  // the damping of the scaled modes at their new frequency
+    auto step = [](const nlrom::ReducedModel& m) { return 2.0 / std::sqrt(nlrom::free_eigenvalues(m).back()); };
+    const double dt0 = step(rm);
+    mass_scaled = nlrom::scale_modal_mass(&rm, no.mass_scaling_fmax);
+    nlrom::modal_damping(&rm, no.damping_xi, no.damping_modes);
+    print0(comm,
+           "morse nlrom: mass scaling: %zu modes above %g Hz moved to it; critical step of central differences %.4g s "
+           "(without scaling %.4g s)\n",
+           mass_scaled, no.mass_scaling_fmax, step(rm), dt0);
+  }
   if (no.rayleigh_given) nlrom::rayleigh_damping(&rm, no.rayleigh_alpha, no.rayleigh_beta);
   if (no.massless) {
     nlrom::make_massless(&rm, n_static, no.damping_xi, no.damping_modes, no.massless_scaled ? no.massless_fmax : 0.0);
@@ -126,6 +137,8 @@ void run_nlrom(MPI_Comm comm) {
   info.rayleigh_alpha = no.rayleigh_alpha;
   if (no.massless) info.massless_interior = no.massless_scaled ? "scaled" : "static";
   info.massless_fmax = no.massless_fmax;
+  info.mass_scaling_fmax = no.mass_scaling_fmax;
+  info.mass_scaled_modes = mass_scaled;
   info.rayleigh_beta = no.rayleigh_beta;
   info.t2_forces_seconds = t2;
   info.t3_projection_seconds = t3;

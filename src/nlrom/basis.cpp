@@ -454,22 +454,59 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
   rm.K = cb::project_symmetric(comm, K, V);
   rm.M = cb::project_symmetric(comm, M, V);
   rm.C.assign(static_cast<std::size_t>(r) * r, 0.0);
+  modal_damping(&rm, xi, k);
+  return rm;
+}
+
+void modal_damping(ReducedModel* rm, double xi, PetscInt k) {
+  const PetscInt r = rm->r;
+  rm->C.assign(static_cast<std::size_t>(r) * r, 0.0);
+  rm->damping_omega.clear();
   if (k == kAllModes) k = r;
   if (xi > 0 && k > 0) {
     MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
     std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
-    const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm.K, rm.M, &X);
+    const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm->K, rm->M, &X);
     for (PetscInt m = 0; m < k; ++m) {
       const double om = std::sqrt(std::max(0.0, w[m]));
-      rm.damping_omega.push_back(om);
+      rm->damping_omega.push_back(om);
       std::vector<double> Mx(r, 0.0);
       for (PetscInt i = 0; i < r; ++i)
-        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm.M[i * r + j] * X[j * r + m];
+        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm->M[i * r + j] * X[j * r + m];
       for (PetscInt i = 0; i < r; ++i)
-        for (PetscInt j = 0; j < r; ++j) rm.C[i * r + j] += 2.0 * xi * om * Mx[i] * Mx[j];
+        for (PetscInt j = 0; j < r; ++j) rm->C[i * r + j] += 2.0 * xi * om * Mx[i] * Mx[j];
     }
   }
-  return rm;
+}
+
+std::size_t scale_modal_mass(ReducedModel* rm, double fmax_hz) {
+  MORSE_CHECK(!rm->massless, "nlrom: mass scaling applies to a mass-carrying model (-nlrom_boundary_mass carrying)");
+  MORSE_CHECK(std::isfinite(fmax_hz) && fmax_hz > 0, "nlrom: the mass-scaling frequency ", fmax_hz,
+              " Hz must be finite and > 0");
+  const std::size_t r = static_cast<std::size_t>(rm->r);
+  const double wc2 = std::pow(2.0 * M_PI * fmax_hz, 2);
+  std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm->K, rm->M, &X);
+  // M' = M + sum over the modes above w_c of (w_k / w_c^2 - 1) (M x_k)(M x_k)^T: x_k^T M' x_l =
+  // delta_kl max(1, w_k / w_c^2), so mode k keeps its shape at min(w_k, w_c). The additions are
+  // computed from the unchanged M and applied at the end.
+  std::vector<double> add(r * r, 0.0), Mx(r);
+  std::size_t n = 0;
+  for (std::size_t m = 0; m < r; ++m) {
+    if (w[m] <= wc2) continue;
+    ++n;
+    const double a = w[m] / wc2 - 1.0;
+    for (std::size_t i = 0; i < r; ++i) {
+      double x = 0.0;
+      for (std::size_t j = 0; j < r; ++j) x += rm->M[i * r + j] * X[j * r + m];
+      Mx[i] = x;
+    }
+    for (std::size_t i = 0; i < r; ++i)
+      for (std::size_t j = 0; j < r; ++j) add[i * r + j] += a * Mx[i] * Mx[j];
+  }
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < r; ++j) rm->M[i * r + j] += 0.5 * (add[i * r + j] + add[j * r + i]);
+  return n;
 }
 
 void rayleigh_damping(ReducedModel* rm, double alpha, double beta) {

@@ -118,6 +118,10 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
                              "is above -nlrom_massless_fmax; only the boundary static)",
                              "", interiors, mi, &mi, &mi_set));
   massless_scaled = mi == static_cast<PetscEnum>(1);
+  PetscCall(MorseOptionsReal("-nlrom_mass_scaling_fmax",
+                             "Selective mass scaling of a mass-carrying model: the modes of the reduced model above "
+                             "this frequency [Hz] keep their shapes at this frequency (0: none)",
+                             "", mass_scaling_fmax, &mass_scaling_fmax, nullptr));
   PetscOptionsEnd();
   auto bad = [&](bool ok, const std::string& why) {
     if (!ok && error.empty()) error = why;
@@ -155,6 +159,11 @@ PetscErrorCode OfflineSettings::set_from_options(MPI_Comm comm) {
       cat("-nlrom_massless_fmax must be a finite frequency >= 0 [Hz] (got ", massless_fmax, ")"));
   bad(massless || massless_fmax == 0, "-nlrom_massless_fmax applies to -nlrom_boundary_mass massless");
   bad(massless || !mi_set, "-nlrom_massless_interior applies to -nlrom_boundary_mass massless");
+  bad(std::isfinite(mass_scaling_fmax) && mass_scaling_fmax >= 0,
+      cat("-nlrom_mass_scaling_fmax must be a finite frequency >= 0 [Hz] (got ", mass_scaling_fmax, ")"));
+  bad(!(massless && mass_scaling_fmax > 0),
+      "-nlrom_mass_scaling_fmax applies to a mass-carrying model; a massless boundary has no boundary mass to scale "
+      "(its residual combinations: -nlrom_massless_interior scaled)");
   bad(!massless_scaled || massless_fmax > 0,
       "-nlrom_massless_interior scaled needs -nlrom_massless_fmax HZ > 0: the frequency that no scaled mode may "
       "exceed");

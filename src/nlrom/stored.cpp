@@ -344,6 +344,8 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
     out.attribute("/nlrom", "massless_interior", info.massless_interior);
     out.attribute("/nlrom", "massless_fmax", info.massless_fmax);
   }
+  out.attribute("/nlrom", "mass_scaling_fmax", info.mass_scaling_fmax);
+  out.attribute_int("/nlrom", "mass_scaled_modes", static_cast<PetscInt>(info.mass_scaled_modes));
   out.attribute("/nlrom", "forces", info.forces);
   out.attribute("/nlrom", "boundary_set", info.boundary_set);
   out.attribute_int("/nlrom", "r", r);

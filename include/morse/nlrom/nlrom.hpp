@@ -177,13 +177,16 @@ struct OfflineSettings {
   /// raised so that none is above -nlrom_massless_fmax (scaled: selective mass scaling; only the
   /// boundary is static). scaled needs -nlrom_massless_fmax > 0.
   bool massless_scaled = false;
+  /// -nlrom_mass_scaling_fmax F [Hz]: selective mass scaling of a mass-carrying model
+  /// (scale_modal_mass): the modes above F are moved to F with their shapes kept; 0: none.
+  double mass_scaling_fmax = 0.0;
   std::string error;  ///< a bad option value, naming the option (raised by the caller, after -help)
   /// Reads -nlrom_basis, -nlrom_num_fixed_modes, -nlrom_num_derivatives, -nlrom_num_pod,
   /// -nlrom_snapshots, -nlrom_training_tfinal, -nlrom_training_dt, -nlrom_mgs_tol,
   /// -nlrom_derivative_selection weight|random, -nlrom_derivative_seed, -nlrom_forces,
   /// -step_displacement, -nlrom_filter_pod, -nlrom_damping_modal, -nlrom_damping_modes K|all,
-  /// -nlrom_rayleigh alpha,beta, -nlrom_boundary_mass, -nlrom_massless_fmax and -nlrom_massless_interior
-  /// (docs/user-guide.md), then validates them with
+  /// -nlrom_rayleigh alpha,beta, -nlrom_boundary_mass, -nlrom_massless_fmax, -nlrom_massless_interior and
+  /// -nlrom_mass_scaling_fmax (docs/user-guide.md), then validates them with
   /// basis.boundary_set (call it after setting that): the first bad value (unknown basis or force
   /// method, no boundary set, damping ratio outside [0, 1), a mode count neither a count nor all,
   /// Rayleigh damping with modal damping or with a massless boundary, a filter without snapshots, ...)
@@ -328,6 +331,8 @@ struct StoredInfo {
   double t3_projection_seconds = 0;              ///< offline time of the projection
   std::string massless_interior;                 ///< massless: static or scaled (-nlrom_massless_interior)
   double massless_fmax = 0;                      ///< massless: -nlrom_massless_fmax [Hz]
+  double mass_scaling_fmax = 0;                  ///< -nlrom_mass_scaling_fmax [Hz] (0: none)
+  std::size_t mass_scaled_modes = 0;             ///< the modes it scaled
 };
 
 /// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on
@@ -348,6 +353,21 @@ std::string fingerprint(const ReducedModel& m);
 /// reduced model itself (k = kAllModes: all r of them): C~ = sum 2 xi w_k (M~ x_k)(M~ x_k)^T, with
 /// x_k the M~-normalized modes of (K~, M~) (theory §8.6). Throws if k exceeds r. Collective.
 ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscInt k);
+
+/// Replaces rm->C by the modal damping of project_model: xi on the first k modes of (K~, M~)
+/// (k = kAllModes: all of them); zero if xi or k is 0. Sets rm->damping_omega. Called on every
+/// rank alike.
+void modal_damping(ReducedModel* rm, double xi, PetscInt k);
+
+/// Selective mass scaling of a mass-carrying reduced model (-nlrom_mass_scaling_fmax F; theory
+/// §8.7): every mode x_k of (K~, M~) above w_c = 2 pi F gets the modal mass w_k^2 / w_c^2 instead of 1,
+///   M~' = M~ + sum_{w_k > w_c} (w_k^2 / w_c^2 - 1) (M~ x_k)(M~ x_k)^T,
+/// so it keeps its shape at the frequency w_c, and the modes below are unchanged (shapes, masses,
+/// frequencies). The highest frequency of the free model is then w_c, and that of any model with
+/// contact constraints no higher (Cauchy interlacing): the critical step of central differences
+/// is at least 2 / w_c. Apply damping after it (modal_damping, rayleigh_damping). Returns the
+/// number of modes scaled. Throws for a massless model or F not finite and > 0.
+std::size_t scale_modal_mass(ReducedModel* rm, double fmax_hz);
 
 /// Rayleigh damping of a mass-carrying reduced model: C~ = alpha M~ + beta K~ (replacing C~; every
 /// mode m gets the ratio alpha / (2 w_m) + beta w_m / 2; theory §8.6). rm->damping_omega is cleared
