@@ -3,7 +3,8 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,pod,sweep,stress,diagnosis] [--ranks N] [--revs 10] [--sweep-revs 5]
+        [--stages roms,single,pod,sweep,stress,diagnosis,maps] [--ranks N] [--revs 10] [--sweep-revs 5]
+        [--maps linear] [--map-range 750:2190:16] [--map-refine 1] [--map-revs 200] [--rotation auto]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
         [--pod-revs 5] [--pod-train-revs 1] [--pod-fom-dt 1e-6] [--pod-snap-every 5] [--pod-num 20]
         [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
@@ -35,6 +36,15 @@ stopped and resumed, and the stages can run at different times.
           turning the other way (-sweep_rotation negative), each with its energy balance; single runs
           at 830 rad/s (5 revolutions) with friction, without, and with every mode damped. Figure:
           run/plot_contact_diagnosis.py. About 9 minutes on 2 cores.
+  maps    the seed's maps at the seed's scale (issue 28 §3): `morse sweep` of r79 made fast by
+          selective mass scaling (-nlrom_mass_scaling_fmax 20000, theory §8.7: the modes above
+          20 kHz moved to 20 kHz; docs/contact.md "Faster models"), --map-revs revolutions per
+          speed (the seed: 200), a coarse grid --map-range refined to --map-refine rad/s where
+          neighbours differ (the seed's 1 rad/s), for each of --maps (linear: step 8e-6 s;
+          nonlinear: --map-dt-nonlinear, 5e-7 s), in the sense of rotation --rotation (auto: the
+          leading edge leads, from the LE and TE sets of the model; positive; negative). The
+          linear map takes about 15 minutes on 2 cores; a nonlinear one is a cluster job
+          (run/cluster/): its predicted cost is printed first, and it resumes.
   stress  the 1B/eo8 interaction of each sweep (the critical speed nearest 2 pi f_1B / 8 from above,
           within 60 %): a single run at that speed, then `morse stress` at the time of the largest
           radial displacement at LE (Fig. 25).
@@ -179,6 +189,51 @@ def diagnosis_stage(st, args, mesh):
                "simulate diag %s" % tag, out, "diag_sim_" + tag)
 
 
+def rotation_of(rom):
+    """The sense of rotation in which the blade's leading edge leads: the chord runs from the LE
+    against the rotation (any compressor or turbine rotor), so the sign of Omega is that of
+    theta_LE - theta_TE at the tip (theta about z). Returns ("negative"|"positive", derivation text)."""
+    with h5py.File(rom, "r") as f:
+        ids = f["/mesh/node_ids"][()]
+        X = f["/mesh/coordinates"][()]
+        th = {}
+        for s in ("LE", "TE"):
+            nodes = f["/nlrom/node_sets/" + s][()]
+            P = X[np.isin(ids, nodes)]
+            k = np.argmax(np.hypot(P[:, 0], P[:, 1]))  # the set's node at the tip
+            th[s] = (math.atan2(P[k, 1], P[k, 0]), P[k, 2])
+    sense = "negative" if th["LE"][0] < th["TE"][0] else "positive"
+    text = ("tip LE at theta %.4f rad, z %.4f m; TE at theta %.4f rad, z %.4f m: the leading edge leads for Omega %s"
+            % (th["LE"][0], th["LE"][1], th["TE"][0], th["TE"][1], "< 0" if sense == "negative" else "> 0"))
+    return sense, text
+
+
+def maps_stage(st, args, mesh):
+    """The seed-scale maps of the mass-scaled r79 (see the module docstring)."""
+    rom = st.file("rom_r79_ms20k.h5")
+    margs = rom_args(mesh, 15, 40, rom) + ["-nlrom_mass_scaling_fmax", 20000]
+    if not st.run(args.ranks, margs, "nlrom r79 mass-scaled to 20 kHz", rom, "rom_r79_ms20k"):
+        return
+    sense, why = (args.rotation, "given") if args.rotation != "auto" else rotation_of(rom)
+    print("  rotation: %s (%s)" % (sense, why), flush=True)
+    st.rec["map_rotation"] = {"sense": sense, "why": why}
+    lo, hi, step = parse_range(args.map_range)
+    for tag in args.maps.split(","):
+        lin = tag == "linear"
+        name = "map_%s_%s" % (tag, sense)
+        path = st.file(name + ".h5")
+        dt = 8e-6 if lin else args.map_dt_nonlinear
+        sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
+                 "-sweep_omega_step", step, "-sweep_refine_step", args.map_refine, "-sim_revolutions", args.map_revs,
+                 "-sim_dt", dt, "-sweep_rotation", sense] + CASING + (["-sim_linear"] if lin else [])
+        st.rec.pop(name, None) if not os.path.exists(path) else None
+        st.run(args.ranks, sargs, "%s (r79 mass-scaled, %s rad/s, refined to %s)" % (name, args.map_range,
+                                                                                       args.map_refine),
+               path + ".done", name)
+        if name in st.rec and "error" not in st.rec[name]:
+            open(path + ".done", "w").close()
+
+
 def parse_range(s):
     lo, hi, step = (float(x) for x in s.split(":"))
     return lo, hi, step
@@ -292,6 +347,12 @@ def main():
                     help="pod: which trainings (contact, harmonic, contact_linear)")
     ap.add_argument("--diag-revs", type=float, default=20.0, help="diagnosis: revolutions per speed")
     ap.add_argument("--diag-range", default="750:2150:100", help="diagnosis: speed grid min:max:step [rad/s]")
+    ap.add_argument("--maps", default="linear", help="maps: linear and/or nonlinear")
+    ap.add_argument("--map-range", default="750:2190:16", help="maps: coarse grid min:max:step [rad/s]")
+    ap.add_argument("--map-refine", type=float, default=1.0, help="maps: finest step [rad/s]")
+    ap.add_argument("--map-revs", type=float, default=200.0, help="maps: revolutions per speed")
+    ap.add_argument("--map-dt-nonlinear", type=float, default=5e-7, help="maps: step of the nonlinear map [s]")
+    ap.add_argument("--rotation", default="auto", choices=["auto", "positive", "negative"])
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
@@ -348,6 +409,9 @@ def main():
 
     if "diagnosis" in stages:
         diagnosis_stage(st, args, mesh)
+
+    if "maps" in stages:
+        maps_stage(st, args, mesh)
 
     if "stress" in stages:
         f1b = st.rec.get("f1b_hz") or first_bending_hz(st.file("rom_r79.h5"))

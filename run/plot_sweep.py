@@ -63,8 +63,19 @@ def load(path):
     d["spectrum"] = np.asarray(d["spectrum"], float).reshape(n, nf)
     if len(d["rms"]) != n or len(d["status"]) != n:
         fail(f"{path}: inconsistent /sweep datasets")
+    # A sweep turning negatively (-sweep_rotation negative) stores -|omega|: plotted as the speed |omega|,
+    # in ascending order, and named so.
+    d["negative"] = bool(np.all(d["omega"] < 0))
+    if d["negative"]:
+        order = np.argsort(np.abs(d["omega"]))
+        for k in ("omega", "rms", "status"):
+            d[k] = np.asarray(d[k])[order]
+        d["omega"] = np.abs(d["omega"])
+        d["spectrum"] = d["spectrum"][order]
     lin = d["settings"].get("linear")
     d["name"] = {"0": "nonlinear", "1": "linear"}.get(lin, os.path.basename(path))
+    if d["negative"]:
+        d["name"] += ", turning negatively (|omega| shown)"
     d["path"] = path
     return d
 
