@@ -213,6 +213,39 @@ double cut_6_7(const test::Model& m) {
   return 0.5 * (std::sqrt(w[5]) + std::sqrt(w[6])) / (2.0 * M_PI);
 }
 
+// The smooth tip load F (1 - cos W t) in y on the nb / 3 boundary nodes of face x1 (coordinates
+// 3k + 1 of a CB or massless model): F gives 7 % of the beam's length in linear static deflection
+// (Euler-Bernoulli), W = w1 / 5.
+std::vector<sim::ReducedLoad> smooth_tip_load(std::size_t r, std::size_t nb, double w1) {
+  const double EI = test::steel().E * 0.1 * 0.1 * 0.1 * 0.1 / 12.0, F = 3.0 * EI * 0.07;
+  sim::ReducedLoad constant, wave;
+  constant.p.assign(r, 0.0);
+  for (std::size_t k = 0; k < nb / 3; ++k) constant.p[3 * k + 1] = F / static_cast<double>(nb / 3);
+  wave.p = constant.p;
+  constant.amplitude = wave.amplitude = 1.0;
+  wave.omega = w1 / 5.0, wave.phase = -0.5 * M_PI;  // F (1 - cos W t)
+  return {constant, wave};
+}
+
+// The first nb coordinates of every step of a run.
+std::vector<double> boundary_history(const nlrom::ReducedModel& m, const std::vector<sim::ReducedLoad>& loads,
+                                     const sim::Settings& s, std::size_t nb) {
+  std::vector<double> u;
+  sim::integrate(m, loads, s, [&](const sim::StepState& x) {
+    for (std::size_t a = 0; a < nb; ++a) u.push_back(x.q[a]);
+  });
+  return u;
+}
+
+// max |u - ref| / max |ref| over histories of the same length.
+double relative_error(const std::vector<double>& u, const std::vector<double>& ref) {
+  MORSE_CHECK(u.size() == ref.size(), "relative_error: histories of ", u.size(), " and ", ref.size(), " values");
+  double e = 0, peak = 0;
+  for (std::size_t i = 0; i < u.size(); ++i)
+    e = std::max(e, std::abs(u[i] - ref[i])), peak = std::max(peak, std::abs(ref[i]));
+  return e / peak;
+}
+
 }  // namespace
 
 // -nlrom_massless_interior scaled (make_massless with a scaling frequency f_c): the z coordinates
@@ -281,14 +314,7 @@ TEST(Massless, ScaledInteriorConvergesToTheStaticOneAtSecondOrder) {
   auto st = rm0;
   nlrom::make_massless(&st, n_static, 0.0, 0);
   const double w1 = std::sqrt(nlrom::free_eigenvalues(st)[0]);
-  // Tip force in y on the 8 face nodes: 0.07 m of static deflection by Euler-Bernoulli.
-  const double EI = test::steel().E * 0.1 * 0.1 * 0.1 * 0.1 / 12.0, F = 3.0 * EI * 0.07;
-  sim::ReducedLoad constant, wave;
-  constant.p.assign(r, 0.0);
-  for (std::size_t k = 0; k < nb / 3; ++k) constant.p[3 * k + 1] = F / static_cast<double>(nb / 3);
-  wave.p = constant.p;
-  constant.amplitude = wave.amplitude = 1.0;
-  wave.omega = w1 / 5.0, wave.phase = -0.5 * M_PI;  // F (1 - cos W t)
+  const auto loads = smooth_tip_load(r, nb, w1);
   const double fcs[3] = {wz_min / 8.0, wz_min / 4.0, wz_min / 2.0};
   std::vector<nlrom::ReducedModel> models;
   double dt = sim::critical_step(st);
@@ -299,26 +325,14 @@ TEST(Massless, ScaledInteriorConvergesToTheStaticOneAtSecondOrder) {
   }
   sim::Settings s;
   s.dt = 0.25 * dt;
-  s.t_final = 2.0 * (2.0 * M_PI / wave.omega);
+  s.t_final = 2.0 * (2.0 * M_PI / loads[1].omega);
   s.energy_balance = false;
-  auto history = [&](const nlrom::ReducedModel& rm) {
-    std::vector<double> u;
-    sim::integrate(rm, {constant, wave}, s, [&](const sim::StepState& x) {
-      for (std::size_t a = 0; a < nb; ++a) u.push_back(x.q[a]);
-    });
-    return u;
-  };
-  const auto ref = history(st);
+  const auto ref = boundary_history(st, loads, s, nb);
   double peak = 0;
   for (double u : ref) peak = std::max(peak, std::abs(u));
   double err[3];
-  for (int k = 0; k < 3; ++k) {
-    const auto u = history(models[static_cast<std::size_t>(k)]);
-    ASSERT_EQ(u.size(), ref.size());
-    err[k] = 0;
-    for (std::size_t i = 0; i < u.size(); ++i) err[k] = std::max(err[k], std::abs(u[i] - ref[i]));
-    err[k] /= peak;
-  }
+  for (int k = 0; k < 3; ++k)
+    err[k] = relative_error(boundary_history(models[static_cast<std::size_t>(k)], loads, s, nb), ref);
   const double rate1 = std::log2(err[0] / err[1]), rate2 = std::log2(err[1] / err[2]);
   print0(PETSC_COMM_WORLD,
          "  tip peak %.4f m (W / w_1 = 0.2, %ld steps); max tip error against the static interior at f_c = "
@@ -390,25 +404,12 @@ TEST(MassScaling, NonlinearRunConvergesAtSecondOrder) {
   }
   const std::size_t r = static_cast<std::size_t>(rm.r), nb = static_cast<std::size_t>(rm.n_b);
   const auto w = nlrom::free_eigenvalues(rm);
-  const double EI = test::steel().E * 0.1 * 0.1 * 0.1 * 0.1 / 12.0, F = 3.0 * EI * 0.07;
-  sim::ReducedLoad constant, wave;
-  constant.p.assign(r, 0.0);
-  for (std::size_t k = 0; k < nb / 3; ++k) constant.p[3 * k + 1] = F / static_cast<double>(nb / 3);
-  wave.p = constant.p;
-  constant.amplitude = wave.amplitude = 1.0;
-  wave.omega = std::sqrt(w[0]) / 5.0, wave.phase = -0.5 * M_PI;  // F (1 - cos W t)
+  const auto loads = smooth_tip_load(r, nb, std::sqrt(w[0]));
   sim::Settings s;
   s.dt = 0.25 * sim::critical_step(rm);
-  s.t_final = 2.0 * M_PI / wave.omega;
+  s.t_final = 2.0 * M_PI / loads[1].omega;
   s.energy_balance = false;
-  auto history = [&](const nlrom::ReducedModel& model) {
-    std::vector<double> u;
-    sim::integrate(model, {constant, wave}, s, [&](const sim::StepState& x) {
-      for (std::size_t a = 0; a < nb; ++a) u.push_back(x.q[a]);
-    });
-    return u;
-  };
-  const auto ref = history(rm);
+  const auto ref = boundary_history(rm, loads, s, nb);
   double peak = 0;
   for (double u : ref) peak = std::max(peak, std::abs(u));
   const double wtop = std::sqrt(w.back());
@@ -416,11 +417,7 @@ TEST(MassScaling, NonlinearRunConvergesAtSecondOrder) {
   for (int k = 0; k < 3; ++k) {
     auto sc = rm;
     nlrom::scale_modal_mass(&sc, wtop / (2.0 * M_PI) / std::pow(2.0, 5 - k));  // f_top / 32, / 16, / 8
-    const auto u = history(sc);
-    ASSERT_EQ(u.size(), ref.size());
-    err[k] = 0;
-    for (std::size_t i = 0; i < u.size(); ++i) err[k] = std::max(err[k], std::abs(u[i] - ref[i]));
-    err[k] /= peak;
+    err[k] = relative_error(boundary_history(sc, loads, s, nb), ref);
   }
   const double rate1 = std::log2(err[0] / err[1]), rate2 = std::log2(err[1] / err[2]);
   print0(PETSC_COMM_WORLD,
