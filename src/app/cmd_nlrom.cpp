@@ -17,6 +17,7 @@
 #include "morse/core/options.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "morse/sim/sim.hpp"
 
 namespace morse::app::detail {
 
@@ -96,19 +97,21 @@ void run_nlrom(MPI_Comm comm) {
   }
   const double t2 = std::chrono::duration<double>(std::chrono::steady_clock::now() - t2a).count();
   auto t3a = std::chrono::steady_clock::now();
-  auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), no.massless ? 0.0 : no.damping_xi,
+  // Modal damping after the mass scaling (each mode damped at its new frequency); a massless model
+  // gets its own in make_massless.
+  const bool damp_later = no.massless || no.mass_scaling_fmax > 0;
+  auto rm = nlrom::project_model(comm, basis.V.get(), md.K.get(), md.M.get(), damp_later ? 0.0 : no.damping_xi,
                                  no.damping_modes);
   rm.n_b = basis.n_b;
   std::size_t mass_scaled = 0;
-  if (no.mass_scaling_fmax > 0) {  // the damping of the scaled modes at their new frequency
-    auto step = [](const nlrom::ReducedModel& m) { return 2.0 / std::sqrt(nlrom::free_eigenvalues(m).back()); };
-    const double dt0 = step(rm);
+  if (no.mass_scaling_fmax > 0) {
+    const double dt0 = sim::critical_step(rm);
     mass_scaled = nlrom::scale_modal_mass(&rm, no.mass_scaling_fmax);
     nlrom::modal_damping(&rm, no.damping_xi, no.damping_modes);
     print0(comm,
            "morse nlrom: mass scaling: %zu modes above %g Hz moved to it; critical step of central differences %.4g s "
            "(without scaling %.4g s)\n",
-           mass_scaled, no.mass_scaling_fmax, step(rm), dt0);
+           mass_scaled, no.mass_scaling_fmax, sim::critical_step(rm), dt0);
   }
   if (no.rayleigh_given) nlrom::rayleigh_damping(&rm, no.rayleigh_alpha, no.rayleigh_beta);
   if (no.massless) {

@@ -17,6 +17,7 @@
 #include "morse/eigen/eigen.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "nlrom/modal_damping.hpp"
 
 namespace morse::nlrom {
 
@@ -453,30 +454,39 @@ ReducedModel project_model(MPI_Comm comm, Mat V, Mat K, Mat M, double xi, PetscI
   rm.r = r;
   rm.K = cb::project_symmetric(comm, K, V);
   rm.M = cb::project_symmetric(comm, M, V);
-  rm.C.assign(static_cast<std::size_t>(r) * r, 0.0);
   modal_damping(&rm, xi, k);
   return rm;
 }
 
+namespace detail {
+
+std::vector<double> modal_damping_matrix(std::size_t n, const std::vector<double>& K, const std::vector<double>& M,
+                                         double xi, PetscInt k, std::vector<double>* omega) {
+  std::vector<double> C(n * n, 0.0);
+  if (!(xi > 0 && k > 0)) return C;
+  std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(n), K, M, &X);
+  std::vector<double> Mx(n);
+  for (std::size_t m = 0; m < static_cast<std::size_t>(k); ++m) {
+    const double om = std::sqrt(std::max(0.0, w[m]));
+    omega->push_back(om);
+    std::fill(Mx.begin(), Mx.end(), 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) Mx[i] += M[i * n + j] * X[j * n + m];
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) C[i * n + j] += 2.0 * xi * om * Mx[i] * Mx[j];
+  }
+  return C;
+}
+
+}  // namespace detail
+
 void modal_damping(ReducedModel* rm, double xi, PetscInt k) {
   const PetscInt r = rm->r;
-  rm->C.assign(static_cast<std::size_t>(r) * r, 0.0);
-  rm->damping_omega.clear();
   if (k == kAllModes) k = r;
-  if (xi > 0 && k > 0) {
-    MORSE_CHECK(k <= r, "nlrom: ", k, " damped modes asked from a reduced model of ", r);
-    std::vector<double> X;  // M-normalized modes, column m = mode m (row-major)
-    const auto w = eigen::dense_eigenvalues(static_cast<int>(r), rm->K, rm->M, &X);
-    for (PetscInt m = 0; m < k; ++m) {
-      const double om = std::sqrt(std::max(0.0, w[m]));
-      rm->damping_omega.push_back(om);
-      std::vector<double> Mx(r, 0.0);
-      for (PetscInt i = 0; i < r; ++i)
-        for (PetscInt j = 0; j < r; ++j) Mx[i] += rm->M[i * r + j] * X[j * r + m];
-      for (PetscInt i = 0; i < r; ++i)
-        for (PetscInt j = 0; j < r; ++j) rm->C[i * r + j] += 2.0 * xi * om * Mx[i] * Mx[j];
-    }
-  }
+  MORSE_CHECK(!(xi > 0 && k > r), "nlrom: ", k, " damped modes asked from a reduced model of ", r);
+  rm->damping_omega.clear();
+  rm->C = detail::modal_damping_matrix(static_cast<std::size_t>(r), rm->K, rm->M, xi, k, &rm->damping_omega);
 }
 
 std::size_t scale_modal_mass(ReducedModel* rm, double fmax_hz) {

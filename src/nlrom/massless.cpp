@@ -12,6 +12,7 @@
 #include "morse/core/log.hpp"
 #include "morse/eigen/eigen.hpp"
 #include "morse/nlrom/nlrom.hpp"
+#include "nlrom/modal_damping.hpp"
 
 namespace morse::nlrom {
 
@@ -262,22 +263,12 @@ void make_massless(ReducedModel* rm, PetscInt n_static, double xi, PetscInt k, d
       if (scaled_fmax > 0 && i == j && i >= z0 && i < z1) m = std::max(1.0, rm->K[i * r + i] / wc2);
       rm->M[i * r + j] = m;
     }
-  std::fill(rm->C.begin(), rm->C.end(), 0.0);
+  // Modal damping of the model with its static coordinates condensed, on the dynamic block only.
   rm->damping_omega.clear();
-  if (xi > 0 && k > 0) {
-    const auto Mdd = block(rm->M, r, ns, nd, ns, nd);
-    std::vector<double> X;  // M_dd-normalized modes of the free model, column m = mode m
-    const auto w = eigen::dense_eigenvalues(static_cast<int>(nd), Keff, Mdd, &X);
-    for (PetscInt m = 0; m < k; ++m) {
-      const double om = std::sqrt(std::max(0.0, w[static_cast<std::size_t>(m)]));
-      rm->damping_omega.push_back(om);
-      std::vector<double> Mx(nd, 0.0);
-      for (std::size_t i = 0; i < nd; ++i)
-        for (std::size_t j = 0; j < nd; ++j) Mx[i] += Mdd[i * nd + j] * X[j * nd + static_cast<std::size_t>(m)];
-      for (std::size_t i = 0; i < nd; ++i)
-        for (std::size_t j = 0; j < nd; ++j) rm->C[(ns + i) * r + ns + j] += 2.0 * xi * om * Mx[i] * Mx[j];
-    }
-  }
+  const auto Cdd = detail::modal_damping_matrix(nd, Keff, block(rm->M, r, ns, nd, ns, nd), xi, k, &rm->damping_omega);
+  std::fill(rm->C.begin(), rm->C.end(), 0.0);
+  for (std::size_t i = 0; i < nd; ++i)
+    for (std::size_t j = 0; j < nd; ++j) rm->C[(ns + i) * r + ns + j] = Cdd[i * nd + j];
   rm->massless = true;
   rm->n_static = n_static;
 }
