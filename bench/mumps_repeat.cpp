@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "morse/core/factor.hpp"
 #include "morse/core/session.hpp"
 #include "morse/fe/model.hpp"
 
@@ -140,7 +141,7 @@ void run(MPI_Comm comm) {
     Mat A, F;
     CHK(MatDuplicate(K, MAT_COPY_VALUES, &A));
     CHK(MatAXPY(A, -sigmas[s], M, SAME_NONZERO_PATTERN));
-    CHK(MatGetFactor(A, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, &F));
+    CHK(MatGetFactor(A, morse::cholesky_solver(PETSC_COMM_WORLD), MAT_FACTOR_CHOLESKY, &F));  // -factor_repeatable
     MatFactorInfo info;
     CHK(MatFactorInfoInitialize(&info));
     CHK(MatCholeskyFactorSymbolic(F, A, nullptr, &info));

@@ -13,21 +13,25 @@
 # analysis (ICNTL(28) = 2) aborts, Debian's MUMPS has neither PT-SCOTCH nor ParMETIS; PETSc 3.18
 # does not pass ICNTL(48) or ICNTL(58); MUMPS's scheduling parameters (KEEP) are not reachable.
 #
-#     bench/mumps_repeat.sh [-n N] [-l LIB] [mesh.msh ...]   # default: N = 5, meshes/blade.msh
+#     bench/mumps_repeat.sh [-n N] [-l LIB] [-v NAMES] [mesh.msh ...]   # default: N = 5, meshes/blade.msh
 #
+# -v: only the configurations named (comma-separated, e.g. defaults,repeatable). The last
+# configuration, repeatable, is morse's -factor_repeatable (MUMPS on rank 0 alone,
+# morse/core/factor.hpp): it must give one pattern for every quantity.
 # -l: the morse library to link (default build/libmorse_lib.a of this checkout, else of
 # /work/main). Prints a table and writes bench/results/mumps_repeat_<UTC>.json. At most 2 ranks.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-N=5 LIB=
-while getopts "n:l:" o; do case $o in n) N=$OPTARG ;; l) LIB=$OPTARG ;; *) exit 2 ;; esac; done
+N=5 LIB= ONLY=
+while getopts "n:l:v:" o; do case $o in n) N=$OPTARG ;; l) LIB=$OPTARG ;; v) ONLY=,$OPTARG, ;; *) exit 2 ;; esac; done
 shift $((OPTIND - 1))
 MESHES=("${@:-meshes/blade.msh}")
 [ -n "$LIB" ] || for LIB in build/libmorse_lib.a /work/main/build/libmorse_lib.a; do [ -f "$LIB" ] && break; done
 VARIANTS=("defaults|" "icntl13_1|-mat_mumps_icntl_13 1" "icntl24_0|-mat_mumps_icntl_24 0"
   "cntl1_0|-mat_mumps_cntl_1 0" "icntl14_100|-mat_mumps_icntl_14 100" "amd|-mat_mumps_icntl_7 0"
   "amf|-mat_mumps_icntl_7 2" "scotch|-mat_mumps_icntl_7 3" "pord|-mat_mumps_icntl_7 4"
-  "metis|-mat_mumps_icntl_7 5" "qamd|-mat_mumps_icntl_7 6" "rhs_block_1|-mat_mumps_icntl_27 1")
+  "metis|-mat_mumps_icntl_7 5" "qamd|-mat_mumps_icntl_7 6" "rhs_block_1|-mat_mumps_icntl_27 1"
+  "repeatable|-factor_repeatable")
 . run/env 2>/dev/null || . /work/main/run/env
 export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 TMP=$(mktemp -d /tmp/mumps_repeat.XXXXXX)
@@ -40,6 +44,7 @@ $CXX_CMD
 for mesh in "${MESHES[@]}"; do
   for v in "${VARIANTS[@]}"; do
     name=${v%%|*} opts=${v#*|}
+    [ -n "$ONLY" ] && [[ $ONLY != *",$name,"* ]] && continue
     for np in 1 2; do
       [ "$np" = 1 ] && [ "$name" != defaults ] && continue
       cfg="$TMP/$(basename "$mesh" .msh)_${name}_np$np"

@@ -262,3 +262,10 @@ add_test(NAME case_rank_count
          COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_rank_count.sh ${MORSE_CASE_DIR}/rank_count
                  $<TARGET_FILE:morse> ${MORSE_CASE_DATA} ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS})
 set_tests_properties(case_rank_count PROPERTIES LABELS "case;np4" TIMEOUT 300 ENVIRONMENT "${MORSE_CASE_ENV}")
+
+# --- bitwise repeatable on 2 ranks with -factor_repeatable: modes, static, reduce and nlrom run
+# three times each give the same bits (tests/case_repeatable.sh).
+add_test(NAME case_repeatable_np2
+         COMMAND ${MORSE_BASH} ${CMAKE_CURRENT_SOURCE_DIR}/case_repeatable.sh ${MORSE_CASE_DIR}/repeatable
+                 $<TARGET_FILE:morse> ${MORSE_MPIEXEC} ${MORSE_MPI_FLAGS})
+set_tests_properties(case_repeatable_np2 PROPERTIES LABELS "case;np2" TIMEOUT 600 ENVIRONMENT "${MORSE_CASE_ENV}")

@@ -36,24 +36,6 @@ Small small_beam() {
   return s;
 }
 
-// The whole matrix, row-major, on every rank.
-std::vector<double> dense(Mat A) {
-  PetscInt n = 0, rs = 0, re = 0;
-  MORSE_CALL(MatGetSize(A, &n, nullptr));
-  MORSE_CALL(MatGetOwnershipRange(A, &rs, &re));
-  std::vector<double> d(static_cast<std::size_t>(n) * n, 0.0);
-  for (PetscInt r = rs; r < re; ++r) {
-    PetscInt nc;
-    const PetscInt* cols;
-    const PetscScalar* vals;
-    MORSE_CALL(MatGetRow(A, r, &nc, &cols, &vals));
-    for (PetscInt k = 0; k < nc; ++k) d[r * n + cols[k]] = PetscRealPart(vals[k]);
-    MORSE_CALL(MatRestoreRow(A, r, &nc, &cols, &vals));
-  }
-  MPI_Allreduce(MPI_IN_PLACE, d.data(), static_cast<int>(d.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
-  return d;
-}
-
 // max over the entries of |V_a^T M V_b - I| (V_a, V_b MPIDENSE with as many columns): 0 when V_b
 // is M-orthonormal (V_a = V_b), or holds the same shapes and signs as V_a.
 double identity_deviation(Mat M, Mat Va, Mat Vb) {
@@ -62,7 +44,7 @@ double identity_deviation(Mat M, Mat Va, Mat Vb) {
   MORSE_CALL(MatTransposeMatMult(Va, MV.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, X.ptr()));
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(X.get(), &n, nullptr));
-  auto x = dense(X.get());
+  auto x = test::dense_matrix(X.get());
   double err = 0;
   for (PetscInt i = 0; i < n; ++i)
     for (PetscInt j = 0; j < n; ++j) err = std::max(err, std::abs(x[i * n + j] - (i == j ? 1.0 : 0.0)));
@@ -77,7 +59,8 @@ TEST(Eigen, InertiaCountsMatchTheDenseSpectrum) {
   auto s = small_beam();
   PetscInt n = 0;
   MORSE_CALL(MatGetSize(s.ops.K.get(), &n, nullptr));
-  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(s.ops.K.get()), dense(s.ops.M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), test::dense_matrix(s.ops.K.get()),
+                                      test::dense_matrix(s.ops.M.get()));
   eigen::InertiaCounter counter(s.ops.K.get(), s.ops.M.get(), "test_inertia_");
   for (PetscInt k : {PetscInt(0), PetscInt(1), PetscInt(5), PetscInt(40), n / 2, n - 2}) {
     const double sigma = 0.5 * (lam[k] + lam[k + 1]);
@@ -169,7 +152,7 @@ TEST(Eigen, EveryModeGuaranteedBySylvesterInertia) {
     const PetscInt m = 40, n = 3 * m;
     UMat K, M;
     clustered(m, &K, &M);
-    auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+    auto lam = eigen::dense_eigenvalues(static_cast<int>(n), test::dense_matrix(K.get()), test::dense_matrix(M.get()));
     // Cutoff between clusters 10 and 11 (eigenvalues 30..32 and 33..35).
     const double cutoff = 0.5 * (lam[29] + lam[30]);
     eigen::EigenSettings s;
@@ -343,7 +326,7 @@ TEST(Eigen, BlockSolverIndependentOfBlockSize) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), test::dense_matrix(K.get()), test::dense_matrix(M.get()));
   std::vector<eigen::Eigenpairs> runs;
   for (auto [block, dim] : {std::pair<int, int>{1, 0}, {2, 0}, {5, 0}, {16, 0}, {5, 50}}) {
     SCOPED_TRACE(cat("block ", block, " max dim ", dim));
@@ -365,7 +348,7 @@ TEST(Eigen, BlockSolverIndependentOfBlockSize) {
     UMat MV, X;
     MORSE_CALL(MatMatMult(M.get(), runs[r].V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
     MORSE_CALL(MatTransposeMatMult(runs[0].V.get(), MV.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, X.ptr()));
-    auto x = dense(X.get());
+    auto x = test::dense_matrix(X.get());
     double worst = 0;
     for (int c = 0; c < 10; ++c)
       for (int j = 3 * c; j < 3 * c + 3; ++j) {
@@ -405,7 +388,7 @@ TEST(Eigen, BlockSlicesOnSubcommunicators) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), test::dense_matrix(K.get()), test::dense_matrix(M.get()));
   eigen::EigenSettings s;
   s.omega2_max = 0.5 * (lam[29] + lam[30]);
   s.solver = "block";
@@ -478,7 +461,7 @@ TEST(Eigen, CountCheckRefactorsTheSolverFactor) {
   const PetscInt m = 40, n = 3 * m;
   UMat K, M;
   clustered(m, &K, &M);
-  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), dense(K.get()), dense(M.get()));
+  auto lam = eigen::dense_eigenvalues(static_cast<int>(n), test::dense_matrix(K.get()), test::dense_matrix(M.get()));
   for (const auto& [nev, shift] : {std::pair<PetscInt, double>{29, 0.0}, {12, 0.5 * (lam[14] + lam[15])}}) {
     SCOPED_TRACE(cat("nev ", nev));
     eigen::EigenSettings t;

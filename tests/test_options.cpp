@@ -54,6 +54,7 @@ TEST(Options, EditDistanceCountsTranspositionsAsOne) {
 }
 
 TEST(Options, RegistrationUnderTheBlockPrefix) {
+  opt::clear();  // Session's own (-factor_repeatable)
   GivenOptions given;
   double c = 1e-3, mu = 0.1;
   ASSERT_EQ(read_options(&c, &mu), 0);

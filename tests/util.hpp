@@ -131,6 +131,24 @@ inline double mac(Mat M, Vec a, Vec b) {
   return ab * ab / (aa * bb);
 }
 
+/// The whole matrix, row-major, on every rank.
+inline std::vector<double> dense_matrix(Mat A) {
+  PetscInt n = 0, rs = 0, re = 0;
+  MORSE_CALL(MatGetSize(A, &n, nullptr));
+  MORSE_CALL(MatGetOwnershipRange(A, &rs, &re));
+  std::vector<double> d(static_cast<std::size_t>(n) * n, 0.0);
+  for (PetscInt r = rs; r < re; ++r) {
+    PetscInt nc;
+    const PetscInt* cols;
+    const PetscScalar* vals;
+    MORSE_CALL(MatGetRow(A, r, &nc, &cols, &vals));
+    for (PetscInt k = 0; k < nc; ++k) d[r * n + cols[k]] = PetscRealPart(vals[k]);
+    MORSE_CALL(MatRestoreRow(A, r, &nc, &cols, &vals));
+  }
+  MPI_Allreduce(MPI_IN_PLACE, d.data(), static_cast<int>(d.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  return d;
+}
+
 /// Solves A x = b with a MUMPS LU/Cholesky (KSPPREONLY). Collective.
 inline void direct_solve(Mat A, Vec b, Vec x) {
   UKSP ksp;

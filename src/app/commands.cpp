@@ -11,6 +11,7 @@
 
 #include "app/common.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 
@@ -39,6 +40,7 @@ void print_stage_table(MPI_Comm comm) {
 void run_command(MPI_Comm comm, const std::string& command, const std::vector<std::string>& args) {
   stage_records().clear();
   options::clear();  // the registrations (and the unknown-option check) belong to one command
+  read_factorization_options();
   wall_seconds();
   if (command == "modes")
     detail::run_modes(comm);

@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/units.hpp"
 #include "morse/eigen/eigen.hpp"
@@ -245,7 +246,8 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
     out.factor_reused = F != nullptr;
     if (!F) {
       auto t0 = std::chrono::steady_clock::now();
-      MORSE_CALL(MatGetFactor(Kii.get(), MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, own_factor.ptr()));
+      MORSE_CALL(MatGetFactor(Kii.get(), cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(Kii.get()))),
+                              MAT_FACTOR_CHOLESKY, own_factor.ptr()));
       F = own_factor.get();
       MORSE_CALL(MatMumpsSetIcntl(F, 24, 1));
       MatFactorInfo info;

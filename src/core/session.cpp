@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 
 namespace morse {
 
@@ -197,6 +198,7 @@ Session::Session(int* argc, char*** argv, const char* help) {
   // PETSc errors become morse::Error exceptions carrying PETSc's message (MORSE_CALL); the
   // default handler would also print a traceback on every rank.
   MORSE_CALL(PetscPushErrorHandler(PetscReturnErrorHandler, nullptr));
+  init_factorization();
 }
 
 Session::~Session() {

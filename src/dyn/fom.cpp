@@ -20,6 +20,7 @@
 #include <cmath>
 
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
@@ -40,7 +41,7 @@ class IterationSolver {
     PC pc;
     MORSE_CALL(KSPGetPC(ksp_.get(), &pc));
     MORSE_CALL(PCSetType(pc, PCCHOLESKY));
-    MORSE_CALL(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+    MORSE_CALL(PCFactorSetMatSolverType(pc, cholesky_solver(comm)));
     MORSE_CALL(KSPSetFromOptions(ksp_.get()));
   }
   /// Low-rank term U diag(c) U^T (U dense, columns; c > 0). Set before factor().

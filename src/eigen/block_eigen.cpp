@@ -25,6 +25,7 @@
 #include "eigen/detail/singular.hpp"
 #include "eigen/detail/testing.hpp"
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/core/units.hpp"
@@ -621,7 +622,8 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
     MORSE_CALL(MatSetOption(A.get(), MAT_SYMMETRIC, PETSC_TRUE));
     Ash = A.get();
   }
-  MORSE_CALL(MatGetFactor(Ash, MATSOLVERMUMPS, MAT_FACTOR_CHOLESKY, F.ptr()));
+  MORSE_CALL(MatGetFactor(Ash, cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(Ash))),
+                          MAT_FACTOR_CHOLESKY, F.ptr()));
   MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
   MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
   MORSE_CALL(MatSetFromOptions(F.get()));
