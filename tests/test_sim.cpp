@@ -637,19 +637,30 @@ void check_sweep(bool massless) {
   s.spectrum_bins = 40;
   std::vector<sim::SpeedTask> tasks;
   for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
+  long mine = 0;  // speeds this rank ran in the last sweep
   auto run = [&](MPI_Comm comm, int batch, bool batched) {
     std::vector<sim::SpeedResult> out(tasks.size());
     sim::SweepSettings sb = s;
     sb.batch = batch;
     sb.batched = batched;
-    sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) { out[static_cast<std::size_t>(R.index)] = R; });
+    mine = sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) {
+             out[static_cast<std::size_t>(R.index)] = R;
+           }).speeds;
     return out;
   };
   // Both kernels: the batched pass and the auto kernel lane by lane.
   std::vector<sim::SpeedResult> one, lane;
   for (bool batched : {true, false}) {
     const auto all = run(PETSC_COMM_WORLD, 6, batched);  // two lane groups per pass; rank 0 holds the results
-    auto alone = run(PETSC_COMM_SELF, 1, batched);       // every rank alone, one lane
+    // 6 lanes per rank but 5 speeds: no rank holds more than its share, ceil(5 / ranks).
+    long total = 0, most = 0;
+    int size = 1;
+    MPI_Comm_size(PETSC_COMM_WORLD, &size);
+    MPI_Allreduce(&mine, &total, 1, MPI_LONG, MPI_SUM, PETSC_COMM_WORLD);
+    MPI_Allreduce(&mine, &most, 1, MPI_LONG, MPI_MAX, PETSC_COMM_WORLD);
+    EXPECT_EQ(total, static_cast<long>(tasks.size()));
+    EXPECT_LE(most, (static_cast<long>(tasks.size()) + size - 1) / size) << "a rank took more than its share";
+    auto alone = run(PETSC_COMM_SELF, 1, batched);  // every rank alone, one lane
     // Bitwise agreement, decided on rank 0 and shared.
     int same = 1;
     if (rank == 0)
