@@ -246,8 +246,7 @@ CBResult craig_bampton(Mat K, Mat M, Vec w, const CBSettings& s, CBResult out) {
     out.factor_reused = F != nullptr;
     if (!F) {
       auto t0 = std::chrono::steady_clock::now();
-      MORSE_CALL(MatGetFactor(Kii.get(), cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(Kii.get()))),
-                              MAT_FACTOR_CHOLESKY, own_factor.ptr()));
+      MORSE_CALL(MatGetFactor(Kii.get(), cholesky_solver(Kii.get()), MAT_FACTOR_CHOLESKY, own_factor.ptr()));
       F = own_factor.get();
       MORSE_CALL(MatMumpsSetIcntl(F, 24, 1));
       MatFactorInfo info;

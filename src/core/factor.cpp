@@ -40,21 +40,25 @@ Repeatable* state(Mat F) {
   return static_cast<Repeatable*>(ctx);
 }
 
+// Runs work and returns the message of what it threw ("" if nothing). Not collective.
+template <class Work>
+std::string caught(Work&& work) {
+  try {
+    work();
+  } catch (const std::exception& e) {
+    const std::string err = message_of(e);
+    return err.empty() ? "failed" : err;
+  }
+  return {};
+}
+
 // Runs work (on rank 0 only, or on every rank) and turns an exception into the same PETSc error
 // on every rank, so that a failure of rank 0's MUMPS cannot leave the others waiting.
 template <class Work>
 PetscErrorCode collective(MPI_Comm comm, bool root_only, Work&& work) {
   PetscMPIInt rank = 0;
   MPI_Comm_rank(comm, &rank);
-  std::string err;
-  if (!root_only || rank == 0) {
-    try {
-      work();
-    } catch (const std::exception& e) {
-      err = message_of(e);
-      if (err.empty()) err = "failed";
-    }
-  }
+  const std::string err = !root_only || rank == 0 ? caught(work) : std::string();
   try {
     collective_check(comm, err);
   } catch (const std::exception& e) {
@@ -150,15 +154,7 @@ PetscErrorCode numeric(Mat F, Mat A, const MatFactorInfo* info) {
 void solve_on_root(Repeatable& r, Vec b, Vec x) {
   MORSE_CALL(VecScatterBegin(r.to0, b, r.b0, INSERT_VALUES, SCATTER_FORWARD));
   MORSE_CALL(VecScatterEnd(r.to0, b, r.b0, INSERT_VALUES, SCATTER_FORWARD));
-  std::string err;
-  if (r.rank == 0) {
-    try {
-      MORSE_CALL(MatSolve(r.F0, r.b0, r.x0));
-    } catch (const std::exception& e) {
-      err = message_of(e);
-    }
-  }
-  collective_check(r.comm, err);
+  collective_check(r.comm, r.rank == 0 ? caught([&] { MORSE_CALL(MatSolve(r.F0, r.b0, r.x0)); }) : std::string());
   MORSE_CALL(VecScatterBegin(r.to0, r.x0, x, INSERT_VALUES, SCATTER_REVERSE));
   MORSE_CALL(VecScatterEnd(r.to0, r.x0, x, INSERT_VALUES, SCATTER_REVERSE));
 }
@@ -201,15 +197,8 @@ PetscErrorCode mat_solve(Mat F, Mat B, Mat X) {
       MORSE_CALL(MatDenseRestoreArray(seq, &a));
     };
     move_columns(B, B0.get(), SCATTER_FORWARD);
-    std::string err;
-    if (r.rank == 0 && k > 0) {
-      try {
-        MORSE_CALL(MatMatSolve(r.F0, B0.get(), X0.get()));
-      } catch (const std::exception& e) {
-        err = message_of(e);
-      }
-    }
-    collective_check(r.comm, err);
+    collective_check(r.comm, r.rank == 0 && k > 0 ? caught([&] { MORSE_CALL(MatMatSolve(r.F0, B0.get(), X0.get())); })
+                                                  : std::string());
     move_columns(X, X0.get(), SCATTER_REVERSE);
   });
 }
@@ -346,5 +335,7 @@ const char* cholesky_solver(MPI_Comm comm) {
   MPI_Comm_size(comm, &size);
   return g_repeatable && size > 1 ? kRepeatableSolver : MATSOLVERMUMPS;
 }
+
+const char* cholesky_solver(Mat A) { return cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(A))); }
 
 }  // namespace morse

@@ -622,8 +622,7 @@ UMat factor_shifted(Mat K, Mat M, double shift, const EigenSettings& s, double* 
     MORSE_CALL(MatSetOption(A.get(), MAT_SYMMETRIC, PETSC_TRUE));
     Ash = A.get();
   }
-  MORSE_CALL(MatGetFactor(Ash, cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(Ash))),
-                          MAT_FACTOR_CHOLESKY, F.ptr()));
+  MORSE_CALL(MatGetFactor(Ash, cholesky_solver(Ash), MAT_FACTOR_CHOLESKY, F.ptr()));
   MORSE_CALL(MatSetOptionsPrefix(F.get(), (s.prefix + "block_").c_str()));
   MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));  // null pivots: singular K
   MORSE_CALL(MatSetFromOptions(F.get()));

@@ -149,8 +149,7 @@ PetscInt InertiaCounter::count(double sigma) {
   if (!F_) {
     // K - sigma M is indefinite: MUMPS's symmetric indefinite LDL^T (not flagged SPD), with the
     // inertia available in parallel (ICNTL(13) = 1) and room for delayed pivots (ICNTL(14)).
-    MORSE_CALL(MatGetFactor(A_.get(), cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(A_.get()))),
-                            MAT_FACTOR_CHOLESKY, F_.ptr()));
+    MORSE_CALL(MatGetFactor(A_.get(), cholesky_solver(A_.get()), MAT_FACTOR_CHOLESKY, F_.ptr()));
     MORSE_CALL(MatMumpsSetIcntl(F_.get(), 14, 50));
     // -<prefix>inertia_mat_mumps_* reach this factorization, but ICNTL(13) = 1 (the inertia in
     // parallel needs it) is set after them.

@@ -181,8 +181,7 @@ UMat modal_derivatives(const fe::Svk& svk, Mat T, const std::vector<PetscInt>& b
   MORSE_CALL(MatZeroRowsColumns(Kb.get(), static_cast<PetscInt>(own_b.size()), own_b.data(), 1.0, nullptr, nullptr));
   MORSE_CALL(MatSetOption(Kb.get(), MAT_SYMMETRIC, PETSC_TRUE));
   UMat F;
-  MORSE_CALL(MatGetFactor(Kb.get(), cholesky_solver(PetscObjectComm(reinterpret_cast<PetscObject>(Kb.get()))),
-                          MAT_FACTOR_CHOLESKY, F.ptr()));
+  MORSE_CALL(MatGetFactor(Kb.get(), cholesky_solver(Kb.get()), MAT_FACTOR_CHOLESKY, F.ptr()));
   MORSE_CALL(MatMumpsSetIcntl(F.get(), 24, 1));
   MatFactorInfo info;
   MORSE_CALL(MatFactorInfoInitialize(&info));

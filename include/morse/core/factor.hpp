@@ -39,5 +39,7 @@ void set_repeatable_factorization(bool on);
 /// -factor_repeatable is on and comm has several ranks, else MATSOLVERMUMPS (one rank is
 /// repeatable as it is).
 const char* cholesky_solver(MPI_Comm comm);
+/// The same for a factor of A (A's communicator).
+const char* cholesky_solver(Mat A);
 
 }  // namespace morse
