@@ -76,6 +76,13 @@ morse_add_error_case(nlrom_tensor_too_large
   nlrom_tensor_too_large.h5
   ARGS nlrom -mesh ${MORSE_CASE_DIR}/box_large.msh -clamp x0 ${MORSE_CASE_MATERIAL} -boundary x1
        -nlrom_num_fixed_modes 5000 -nlrom_forces exact)
+# A Newton failure of the implicit scheme names the time reached, the residual history and what
+# to try, and leaves no file.
+morse_add_error_case(simulate_newton_failure
+  "morse: error: simulate: Newton did not converge at t = 0.0001 \\(step 1\\) in 0 iterations \\(tolerance [0-9.e+-]+; \\|\\|R\\|\\| per iteration: [0-9.e+-]+\\); last converged time 0\\. Try a smaller -sim_dt, a larger -sim_newton_max_it"
+  simulate_newton_failure.h5
+  ARGS simulate -rom ${MORSE_CASE_DIR}/case_rom.h5 -sim_scheme trapezoidal -sim_dt 1e-4 -sim_tfinal 1e-3
+       -sim_newton_max_it 0 -load_sets x1 -load_x1_dir y -load_x1_amplitude 100)
 morse_add_error_case(simulate_output_too_large
   "morse: error: simulate: writing 1000000000001 output rows \\(1000000000000 steps, -sim_output_every 1\\) needs [0-9.]+ [TP]B for the histories \\(r = 15\\);.*raise -sim_output_every"
   simulate_output_too_large.h5
@@ -88,6 +95,7 @@ morse_add_error_case(sweep_spectrum_too_large
 foreach(np 1 2)
   set_tests_properties(case_nlrom_tensor_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_box_large)
   set_tests_properties(case_simulate_output_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_rom)
+  set_tests_properties(case_simulate_newton_failure_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_rom)
 endforeach()
 
 # Chains: fom with snapshots -> nlrom (three bases, STEP and exact, POD filtering) -> simulate,
@@ -230,7 +238,7 @@ morse_add_error_case(simulate_massless_dt_above_critical
   ml_dt.h5
   ARGS simulate -rom ${MORSE_ML_ROM} -sim_dt 1 -sim_tfinal 10 -contact_set x1 -casing_clearance 2e-4)
 morse_add_error_case(simulate_massless_trapezoidal
-  "morse: error: simulate: the implicit scheme \\(-sim_scheme trapezoidal\\) does not take a massless-boundary model"
+  "morse: error: simulate: the implicit schemes \\(-sim_scheme trapezoidal, energy\\) do not take a massless-boundary model"
   ml_trap.h5
   ARGS simulate -rom ${MORSE_ML_ROM} -sim_dt 1e-5 -sim_tfinal 1e-4 -sim_scheme trapezoidal)
 morse_add_error_case(simulate_massless_contact_not_boundary

@@ -443,9 +443,9 @@ double CubicKernel::bytes() const {
 
 Stats integrate(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& loads, const Settings& s,
                 const std::function<void(const StepState&)>& callback) {
-  if (s.scheme == Scheme::Trapezoidal) {
+  if (s.scheme != Scheme::Central) {
     MORSE_CHECK(!m.massless,
-                "simulate: the implicit scheme (-sim_scheme trapezoidal) does not take a massless-boundary "
+                "simulate: the implicit schemes (-sim_scheme trapezoidal, energy) do not take a massless-boundary "
                 "model; use -sim_scheme central (its step is set by the internal modes)");
     return integrate_trapezoidal(m, loads, s, callback);
   }

@@ -128,11 +128,12 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
                              nullptr));
   PetscCall(MorseOptionsReal("-sim_tfinal", "Final time [s]", "", o->s.t_final, &o->s.t_final, &set));
   o->tfinal_set = set;
-  const char* schemes[] = {"central", "trapezoidal", "Scheme", "", nullptr};
+  const char* schemes[] = {"central", "trapezoidal", "energy", "Scheme", "", nullptr};
   PetscEnum scheme = static_cast<PetscEnum>(o->s.scheme);
   PetscCall(MorseOptionsEnum("-sim_scheme",
-                             "central (explicit, eq. 40-41; dt below the critical step) or trapezoidal (implicit, "
-                             "Newton on the reduced model: morse fom's scheme, any dt)",
+                             "central (explicit, eq. 40-41; dt below the critical step), trapezoidal (implicit, "
+                             "Newton on the reduced model: morse fom's scheme, any dt) or energy (implicit, the "
+                             "nonlinear force averaged over the step: exact energy conservation, any dt)",
                              "", schemes, scheme, &scheme, nullptr));
   o->s.scheme = static_cast<Scheme>(scheme);
   PetscCall(MorseOptionsReal("-sim_newton_rtol", "trapezoidal: Newton tolerance relative to the force scale", "",
@@ -141,6 +142,18 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsInt("-sim_newton_max_it", "trapezoidal: Newton iterations per step before the run stops", "",
                             max_it, &max_it, nullptr));
   o->s.newton_max_it = static_cast<int>(max_it);
+  PetscBool flag = o->s.newton_line_search ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(MorseOptionsBool("-sim_newton_line_search",
+                             "trapezoidal: when the full Newton step does not lower the incremental potential, "
+                             "step to its first minimum along the Newton direction (exact: a quartic; theory 9.1)",
+                             "", flag, &flag, nullptr));
+  o->s.newton_line_search = flag == PETSC_TRUE;
+  flag = o->s.error_estimate ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(MorseOptionsBool("-sim_error_estimate",
+                             "trapezoidal: estimate the local time-discretization error of each step "
+                             "(Zienkiewicz-Xie, theory 9.2), printed at the end and written to /sim",
+                             "", flag, &flag, nullptr));
+  o->s.error_estimate = flag == PETSC_TRUE;
   const char* layouts[] = {"auto", "folded", "potential", "KernelLayout", "", nullptr};
   PetscEnum layout = static_cast<PetscEnum>(o->s.kernel);
   PetscCall(MorseOptionsEnum("-sim_kernel",

@@ -28,7 +28,7 @@ auto balance_columns(Balance& b) {
 }  // namespace
 
 void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const Stats& stats) {
-  const bool implicit = s.scheme == Scheme::Trapezoidal;
+  const bool implicit = s.scheme != Scheme::Central;
   const auto nt = static_cast<hsize_t>(rec.time.size());
   out.write("/sim/time", rec.time);
   out.write("/sim/energy", rec.energy);
@@ -116,8 +116,20 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
   out.attribute("/sim", "seconds", stats.seconds);
   out.attribute("/sim", "critical_dt", stats.critical_dt);
   out.attribute("/sim", "kernel", stats.kernel);
-  out.attribute("/sim", "scheme", implicit ? "trapezoidal" : "central");
-  if (implicit) out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
+  out.attribute("/sim", "scheme", s.scheme == Scheme::Energy ? "energy" : (implicit ? "trapezoidal" : "central"));
+  if (implicit) {
+    out.attribute_int("/sim", "newton_iterations", stats.newton_iterations);
+    out.attribute_int("/sim", "line_searches", stats.line_searches);
+    out.attribute_int("/sim", "newton_floor_steps", stats.newton_floor_steps);
+    out.attribute("/sim", "newton_floor_ratio", stats.newton_floor_ratio);
+  }
+  if (stats.error_estimated) {
+    out.attribute("/sim", "error_local_max", stats.error_local_max);
+    out.attribute("/sim", "error_local_max_time", stats.error_time);
+    out.attribute("/sim", "error_local_rms", stats.error_local_rms);
+    out.attribute("/sim", "error_sum", stats.error_sum);
+    out.attribute("/sim", "error_q_max", stats.error_q_max);
+  }
   dyn::write_load_description(out, "/sim/load", rec.load);
 }
 

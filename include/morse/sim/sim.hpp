@@ -94,13 +94,23 @@ std::vector<ContactNode> contact_nodes(const nlrom::StoredModel& sm, const std::
 ///  - Trapezoidal: the implicit scheme of `morse fom` (trapezoidal rule, Newton with the exact
 ///    reduced tangent K~ + dg~/dq): no stability limit, the same step as the full model, and with a
 ///    basis spanning the whole space the same discrete solution as `morse fom`.
-enum class Scheme { Central, Trapezoidal };
+///  - Energy: the same, with the nonlinear force averaged over the step exactly (the average
+///    vector field, theory §9.3): the discrete energy is conserved exactly without damping and
+///    load, at any step (the trapezoidal rule can gain energy from a stiff nonlinear force).
+enum class Scheme { Central, Trapezoidal, Energy };
 
 struct Settings {
   Scheme scheme = Scheme::Central;
   ContactSettings contact;
   double newton_rtol = 1e-8;  ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
   int newton_max_it = 100;    ///< reduced Newton is cheap; stiff constraint modes need many at large dt
+  /// Trapezoidal, nonlinear with a potential: when the full Newton step does not lower the
+  /// incremental potential enough (Armijo), step to the first minimum of the potential along the
+  /// Newton direction, exactly (it is a quartic; theory §9.1). -sim_newton_line_search.
+  bool newton_line_search = true;
+  /// Trapezoidal: estimate the local time-discretization error of every step (Zienkiewicz–Xie,
+  /// theory §9.2; about 8 r^2 flops per step). -sim_error_estimate.
+  bool error_estimate = true;
   double dt = 0.0;
   KernelLayout kernel = KernelLayout::Auto;
   double t_final = 0.0;
@@ -163,7 +173,17 @@ struct Stats {
   std::string kernel = "linear";                  ///< folded | potential | implicit | linear (no nonlinear force)
   double kernel_flops = 0.0, kernel_bytes = 0.0;  ///< per step (CubicKernel::flops(), bytes())
   long steps = 0;
-  long newton_iterations = 0;    ///< Trapezoidal
+  long newton_iterations = 0;  ///< Trapezoidal
+  long line_searches = 0;      ///< Trapezoidal: Newton steps shortened by the line search
+  /// Trapezoidal: steps whose Newton stopped at the round-off floor of the residual (a correction
+  /// below 1e-8 |q| in the quadratic phase) above the tolerance, and the largest ||R|| / tolerance.
+  long newton_floor_steps = 0;
+  double newton_floor_ratio = 0.0;
+  /// Trapezoidal with Settings::error_estimate: the local error estimate e_n = h^2 (a_n - a_{n-1}) / 12
+  /// of each step in the M-norm: its largest value (and time), its rms over the steps, its sum (a
+  /// bound on the accumulated error if errors do not cancel), and the largest |q|_M of the run.
+  bool error_estimated = false;
+  double error_local_max = 0.0, error_time = 0.0, error_local_rms = 0.0, error_sum = 0.0, error_q_max = 0.0;
   long boundary_iterations = 0;  ///< massless boundary: equilibrium iterations (one per step if linear)
   long tangent_updates = 0;      ///< massless boundary: tangent compliances computed
   double seconds = 0.0;
@@ -250,6 +270,11 @@ class TangentKernel {
   std::vector<double> Hp_, S_;
   mutable std::vector<double> x_, y2_, y3_;
 };
+
+/// The line search of the implicit scheme: for phi with phi'(a) = c0 + c1 a + c2 a^2 + c3 a^3 and
+/// c0 < 0, the first a > 0 where phi' changes sign from - to + (phi's first minimum along a > 0),
+/// to the last bits; -1 if phi' < 0 for every a > 0; 0 if c0 >= 0.
+double first_minimum_of_quartic(double c0, double c1, double c2, double c3);
 
 /// Integrates from the initial state to t_final with s.scheme. Central: refuses (throws, naming
 /// the limit) a dt above critical_step(); stops with an error naming the time reached if the state
