@@ -304,3 +304,40 @@ TEST(Implicit, ErrorEstimateMatchesThePhaseErrorOfAnOscillator) {
     last_max = st.error_local_max;
   }
 }
+
+// The round-off floor stop: with a tolerance no residual can meet (rtol = 0), most steps end on
+// the floor rule (a full step below 1e-8 |q| right after one below 1e-4 |q|) and are counted, and
+// the states agree with a run that converges normally (rtol 1e-10, no step on the floor) to that
+// run's own accuracy: the stop comes only once the quadratic phase has left nothing to correct.
+TEST(Implicit, RoundOffFloorStopsOnlyInTheQuadraticPhase) {
+  auto rm = three_dof();
+  sim::ReducedLoad load;
+  load.p = {2.0e4, -1.0e4, 1.5e4};
+  load.amplitude = 1.0;
+  load.omega = 150.0;
+  for (auto scheme : {sim::Scheme::Trapezoidal, sim::Scheme::Energy}) {
+    auto run = [&](double rtol, sim::Stats* st) {
+      sim::Settings s;
+      s.scheme = scheme;
+      s.dt = 5e-4;
+      s.t_final = 0.1;
+      s.newton_rtol = rtol;
+      std::vector<double> out;
+      *st = sim::integrate(rm, {load}, s, [&](const sim::StepState& x) { out.insert(out.end(), x.q, x.q + 3); });
+      return out;
+    };
+    sim::Stats tight, floor;
+    const auto a = run(1e-10, &tight), b = run(0.0, &floor);
+    ASSERT_EQ(a.size(), b.size());
+    double d = 0, n = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i])), n = std::max(n, std::abs(a[i]));
+    print0(PETSC_COMM_WORLD, "  %s: rtol 0: %ld of %ld steps on the floor, %.2f iterations per step (rtol 1e-10: %.2f); "
+           "largest difference %.2e of max |q|\n", scheme == sim::Scheme::Energy ? "energy" : "trapezoidal",
+           floor.newton_floor_steps, floor.steps, double(floor.newton_iterations) / floor.steps,
+           double(tight.newton_iterations) / tight.steps, d / n);
+    // The others end on a correction at the last bits (1e-13 |q|) or an exact zero.
+    EXPECT_GT(floor.newton_floor_steps, floor.steps / 2) << "the floor rule did not stop most steps";
+    EXPECT_EQ(tight.newton_floor_steps, 0);
+    EXPECT_LT(d, 1e-9 * n);  // the rtol 1e-10 run's own error
+  }
+}
