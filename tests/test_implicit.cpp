@@ -331,10 +331,11 @@ TEST(Implicit, RoundOffFloorStopsOnlyInTheQuadraticPhase) {
     ASSERT_EQ(a.size(), b.size());
     double d = 0, n = 0;
     for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i])), n = std::max(n, std::abs(a[i]));
-    print0(PETSC_COMM_WORLD, "  %s: rtol 0: %ld of %ld steps on the floor, %.2f iterations per step (rtol 1e-10: %.2f); "
-           "largest difference %.2e of max |q|\n", scheme == sim::Scheme::Energy ? "energy" : "trapezoidal",
-           floor.newton_floor_steps, floor.steps, double(floor.newton_iterations) / floor.steps,
-           double(tight.newton_iterations) / tight.steps, d / n);
+    print0(PETSC_COMM_WORLD,
+           "  %s: rtol 0: %ld of %ld steps on the floor, %.2f iterations per step (rtol 1e-10: %.2f); "
+           "largest difference %.2e of max |q|\n",
+           scheme == sim::Scheme::Energy ? "energy" : "trapezoidal", floor.newton_floor_steps, floor.steps,
+           double(floor.newton_iterations) / floor.steps, double(tight.newton_iterations) / tight.steps, d / n);
     // The others end on a correction at the last bits (1e-13 |q|) or an exact zero.
     EXPECT_GT(floor.newton_floor_steps, floor.steps / 2) << "the floor rule did not stop most steps";
     EXPECT_EQ(tight.newton_floor_steps, 0);

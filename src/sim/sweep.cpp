@@ -470,16 +470,21 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   const std::size_t share =
       std::max<std::size_t>(1, (todo.size() + static_cast<std::size_t>(size) - 1) / static_cast<std::size_t>(size));
   std::vector<SpeedResult> done;
+  // Progress counts lane steps, not finished speeds (with several lanes per rank, every speed may
+  // finish near the end): rank 0 counts its own, the other ranks report theirs with every message
+  // and at least every second.
   if (rank == 0) {
-    double total = 0.0, progress = 0.0;
+    double total = 0.0;
     for (const auto& t : todo) total += s.revolutions * 2.0 * M_PI / std::abs(t.omega) / s.base.dt;
     Progress prog(comm, cat("sweep (", todo.size(), " speeds on ", size, " rank(s))"), std::max(total, 1.0));
     std::size_t next = 0, received = 0;
     int byes = 0;
+    long remote_steps = 0;
+    unsigned long ticks = 0;
+    auto report = [&]() { prog.update(static_cast<double>(st.lane_steps + remote_steps)); };
     auto accept = [&](const SpeedResult& R) {
       ++received;
-      progress += R.t_final / s.base.dt;
-      prog.update(progress);
+      report();
       on_result(R);
     };
     auto handle = [&](const MPI_Status& status) {
@@ -489,6 +494,8 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
       MPI_Recv(buf.data(), len, MPI_CHAR, status.MPI_SOURCE, kTagMsg, comm, MPI_STATUS_IGNORE);
       morse::detail::Unpacker up(buf);
       const int flags = up.get<int>();
+      remote_steps += up.get<long>();
+      report();
       if (flags & kResult) accept(unpack(&up));
       if (flags & kRequest) {
         long idx = -1;
@@ -509,6 +516,7 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
         done.clear();
         batch.step(&done, &st);
         for (const auto& R : done) accept(R);
+        if ((++ticks & 1023) == 0) report();
         continue;
       }
       if (received == todo.size() && byes == size - 1) break;
@@ -521,9 +529,15 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
     MPI_Request req = MPI_REQUEST_NULL;
     int outstanding = 0;
     bool exhausted = false;
+    long reported = 0;  // lane steps already reported to rank 0
+    unsigned long ticks = 0;
+    auto last_report = std::chrono::steady_clock::now();
     auto send = [&](int flags, const SpeedResult* R) {
       morse::detail::Packer pk;
       pk.put(flags);
+      pk.put(static_cast<long>(st.lane_steps - reported));
+      reported = st.lane_steps;
+      last_report = std::chrono::steady_clock::now();
       if (R) pack(&pk, *R);
       auto& buf = pk.buffer();
       MPI_Send(buf.data(), static_cast<int>(buf.size()), MPI_CHAR, 0, kTagMsg, comm);
@@ -549,6 +563,9 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
         done.clear();
         batch.step(&done, &st);
         for (const auto& R : done) send(kResult | (exhausted ? 0 : kRequest), &R);
+        if ((++ticks & 1023) == 0 &&
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - last_report).count() >= 1.0)
+          send(0, nullptr);  // progress only
         continue;
       }
       if (outstanding > 0) {
