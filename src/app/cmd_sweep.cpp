@@ -88,15 +88,18 @@ void run_sweep(MPI_Comm comm) {
         [&](const sim::SpeedResult&) { sim::write_sweep(so.out, rec); },  // rank 0: checkpoint
         &n_run);
   }
-  double lane_steps = static_cast<double>(st.lane_steps), kernel = st.kernel_seconds, wall = st.seconds;
+  double lane_steps = static_cast<double>(st.lane_steps), kernel = st.kernel_seconds, wall = st.seconds,
+         idle = st.idle_seconds;
   MPI_Allreduce(MPI_IN_PLACE, &lane_steps, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &kernel, 1, MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &idle, 1, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
   print0(comm,
          "morse sweep: %zu speeds in %.2f s (%.3g core-hours), %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
-         "in the force kernels\n",
+         "in the force kernels, %.0f%% idle (no speed to advance: the load-balance loss)\n",
          n_run, wall, wall * size / 3600.0, wall > 0 ? lane_steps / wall : 0.0,
-         wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0);
+         wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0,
+         wall > 0 ? 100.0 * idle / (wall * size) : 0.0);
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)

@@ -501,7 +501,7 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
         on_result(R);
       });
       st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
-          st.kernel_seconds += rs.kernel_seconds;
+          st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
       *n_run += todo.size();
     }
     // The next round, decided on rank 0 (which holds the results) and shared.

@@ -521,7 +521,9 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
       }
       if (received == todo.size() && byes == size - 1) break;
       MPI_Status status;
+      const auto w0 = std::chrono::steady_clock::now();
       MPI_Probe(MPI_ANY_SOURCE, kTagMsg, comm, &status);
+      st.idle_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
       handle(status);
     }
   } else {
@@ -569,7 +571,9 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
         continue;
       }
       if (outstanding > 0) {
+        const auto w0 = std::chrono::steady_clock::now();
         MPI_Wait(&req, MPI_STATUS_IGNORE);
+        st.idle_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
         got_reply();
         continue;
       }
@@ -578,6 +582,11 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
     }
   }
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // A rank that left the loop early (its last speed done, nothing more to take) idles until the
+  // slowest rank ends: the sweep's wall time is the longest rank's.
+  double longest = st.seconds;
+  MPI_Allreduce(MPI_IN_PLACE, &longest, 1, MPI_DOUBLE, MPI_MAX, comm);
+  st.idle_seconds += longest - st.seconds;
   return st;
 }
 

@@ -355,6 +355,9 @@ struct SweepStats {
   long speeds = 0;      ///< speeds finished on this rank
   double seconds = 0.0;
   double kernel_seconds = 0.0;  ///< in the batched linear + cubic product
+  /// With no speed to advance: waiting for a speed to be handed out, or (rank 0) for the other
+  /// ranks to finish theirs. The load-balance loss of the sweep.
+  double idle_seconds = 0.0;
 };
 
 /// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
