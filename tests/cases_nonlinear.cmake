@@ -54,6 +54,15 @@ morse_add_ok_case(static_ok static_ok.h5
 morse_add_ok_case(fom_ok fom_ok.h5
   fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir z
   -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_monitor x1 -fom_snapshot_every 5)
+# The energy scheme keeps the balance (no drift warning) and fom prints its energy diagnostics.
+morse_add_ok_case(fom_energy_scheme_balance fom_energy_ok.h5
+  fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir z
+  -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_scheme energy)
+foreach(np 1 2)
+  set_tests_properties(case_fom_energy_scheme_balance_np${np} PROPERTIES
+    PASS_REGULAR_EXPRESSION "energy: balance drift [0-9.e+-]+ J \\(largest total energy [0-9.e+-]+ J\\).*case: ok: "
+    FAIL_REGULAR_EXPRESSION "morse: error;warning: the energy balance drifts")
+endforeach()
 morse_add_ok_case(fom_linear_damped_ok fom_linear_ok.h5
   fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir y
   -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_linear -fom_damping_modal 0.01
