@@ -104,3 +104,25 @@ morse_add_ok_case(fom_history_csv_ok fom_history_csv.h5
 morse_add_ok_case(fom_history_h5_ok fom_history_h5.h5
   fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -fom_dt 1e-4 -fom_tfinal 5e-3
   -load_history '${MORSE_CASE_DATA}/load_history_box.h5' -load_history_outside hold -load_history_scale 0.5)
+
+# morse stress -fom: the stress of a full-model snapshot (seed 003 Fig. 11's reference). A fom run
+# with snapshots, then the stress of its snapshot nearest 1e-3 s: the file is written, its time is
+# the snapshot's, and every mesh node (the clamped ones at rest) has a displacement.
+foreach(np 1 2)
+  set(fo ${MORSE_CASE_DIR}/stress_fom_src_np${np}.h5)
+  set(so ${MORSE_CASE_DIR}/stress_fom_np${np}.h5)
+  add_test(NAME case_stress_from_fom_np${np}
+           COMMAND ${MORSE_BASH} -c "rm -f '${fo}' '${so}' && '${MORSE_MPIEXEC}' ${MORSE_CASE_MPI_FLAGS_STR} -n ${np} '$<TARGET_FILE:morse>' fom -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -load_sets x1 -load_x1_dir z -load_x1_amplitude 1e6 -load_x1_omega 300 -fom_dt 1e-4 -fom_tfinal 2e-3 -fom_snapshot_every 5 -out '${fo}' >/dev/null && '${MORSE_MPIEXEC}' ${MORSE_CASE_MPI_FLAGS_STR} -n ${np} '$<TARGET_FILE:morse>' stress -mesh '${MORSE_CASE_BOX}' -clamp x0 ${MORSE_CASE_MATERIAL_STR} -fom '${fo}' -stress_time 1.04e-3 -out '${so}' && test -s '${so}'")
+  set_tests_properties(case_stress_from_fom_np${np} PROPERTIES LABELS "case;np${np}" TIMEOUT 120
+    ENVIRONMENT "${MORSE_CASE_ENV}" FIXTURES_REQUIRED morse_case_box
+    PASS_REGULAR_EXPRESSION "stress of the full model at t = 0\\.001 s \\(snapshot 2 of .*max von Mises [0-9.e+]+ MPa.*morse: wrote"
+    FAIL_REGULAR_EXPRESSION "morse: error")
+endforeach()
+morse_add_error_case(stress_fom_without_time "morse: error: morse stress -fom: give -stress_time" stress_fom_no_time.h5 BOX
+  ARGS stress ${MORSE_NL_BOX} -fom ${MORSE_CASE_DIR}/stress_fom_src_np1.h5)
+morse_add_error_case(stress_fom_and_rom "morse: error: morse stress: give either -fom, or -rom and -sim, not both"
+  stress_fom_and_rom.h5 BOX
+  ARGS stress ${MORSE_NL_BOX} -fom ${MORSE_CASE_DIR}/x.h5 -rom ${MORSE_CASE_DIR}/y.h5 -stress_time 0)
+morse_add_error_case(stress_fom_no_snapshots "morse: error: .*no_such_fom\\.h5: no full-field snapshots"
+  stress_fom_no_snapshots.h5 BOX
+  ARGS stress ${MORSE_NL_BOX} -fom ${MORSE_CASE_DIR}/no_such_fom.h5 -stress_time 0)

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -409,6 +411,28 @@ TEST(RunFile, FomFileRoundTrips) {
     EXPECT_EQ(lb.loads[0].omega, 7.0);
     test::expect_error_parts([&] { dyn::read_fom(file, {"tip"}); }, {file, "/fom/sets/tip"},
                              "read_fom of a missing set");
+  }
+  // One snapshot as nodal displacements (morse stress -fom): the nearest to the time asked, the
+  // probe's samples at the nodes of x1, every node with a free DOF present.
+  {
+    const auto f = dyn::read_fom_snapshot(file, 0.6);
+    EXPECT_EQ(f.index, 1);
+    EXPECT_EQ(f.time, 0.5);
+    EXPECT_EQ(f.n_rows, 3);
+    const auto x1 = probe.sample(us[1].get());  // rank 0 only
+    if (world_rank() == 0) {
+      std::map<std::int64_t, std::size_t> at;
+      for (std::size_t j = 0; j < f.node_ids.size(); ++j) at[f.node_ids[j]] = j;
+      ASSERT_EQ(f.u.size(), 3 * f.node_ids.size());
+      for (std::size_t n = 0; n < probe.node_ids().size(); ++n) {
+        ASSERT_TRUE(at.count(probe.node_ids()[n]));
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(f.u[3 * at[probe.node_ids()[n]] + c], x1[3 * n + c]);
+      }
+      EXPECT_TRUE(std::is_sorted(f.node_ids.begin(), f.node_ids.end()));
+    }
+    const std::string none = file + ".none.h5";
+    test::expect_error_parts([&] { dyn::read_fom_snapshot(none, 0.0); }, {none, "no full-field snapshots"},
+                             "a fom file without snapshots");
   }
   auto X = dyn::read_fom_snapshots(m.lm, m.dofs, file);
   PetscInt n_snap = 0;

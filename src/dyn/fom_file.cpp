@@ -1,6 +1,8 @@
 // dyn/fom_file.cpp: the file of a full-order run (/fom of `morse fom`), written and read back
 // (dyn/dyn.hpp, docs/hdf5-schema.md).
+#include <cmath>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -152,6 +154,38 @@ FomHistory read_fom(const std::string& file, const std::vector<std::string>& set
     h.sets.push_back(std::move(set));
   }
   return h;
+}
+
+SnapshotField read_fom_snapshot(const std::string& file, double time) {
+  SnapshotField f;
+  std::string err;
+  std::vector<hsize_t> d;
+  std::vector<double> times, row;
+  std::vector<std::int64_t> ids, comps;
+  if (!io::read_doubles(file, "/fom/snapshots/time", &times, &d, &err) || times.empty())
+    throw Error(cat(file, ": no full-field snapshots (run morse fom with -fom_snapshot_every K)"));
+  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_node_ids", &ids, &d, &err), err);
+  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_components", &comps, &d, &err), err);
+  MORSE_CHECK(ids.size() == comps.size(), file, ": /fom/snapshots/dof_node_ids has ", ids.size(),
+              " entries and dof_components ", comps.size());
+  std::size_t k = 0;
+  for (std::size_t j = 1; j < times.size(); ++j)
+    if (std::abs(times[j] - time) < std::abs(times[k] - time)) k = j;
+  MORSE_CHECK(io::read_double_row(file, "/fom/snapshots/u", static_cast<std::int64_t>(k), &row, &err), err);
+  MORSE_CHECK(row.size() == ids.size(), file, ": /fom/snapshots/u has ", row.size(), " columns but the DOF map ",
+              ids.size());
+  f.time = times[k], f.index = static_cast<std::int64_t>(k), f.n_rows = static_cast<std::int64_t>(times.size());
+  std::map<std::int64_t, std::size_t> at;
+  for (auto id : ids) at.emplace(id, 0);
+  std::size_t n = 0;
+  for (auto& [id, slot] : at) slot = n++, f.node_ids.push_back(id);
+  f.u.assign(3 * n, 0.0);
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    MORSE_CHECK(comps[j] >= 0 && comps[j] <= 2, file, ": /fom/snapshots/dof_components[", j, "] = ", comps[j],
+                " is not 0, 1 or 2");
+    f.u[3 * at[ids[j]] + static_cast<std::size_t>(comps[j])] = row[j];
+  }
+  return f;
 }
 
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file) {

@@ -627,6 +627,12 @@ PetscErrorCode StressOptions::set_from_options(MPI_Comm comm) {
   buf[0] = 0;
   PetscCall(MorseOptionsString("-sim", "A morse simulate file (/sim/time, /sim/q)", "", buf, buf, sizeof buf, &set));
   if (set) o->sim = buf;
+  buf[0] = 0;
+  PetscCall(MorseOptionsString("-fom",
+                               "A morse fom file with snapshots (-fom_snapshot_every): the stress of its snapshot "
+                               "nearest -stress_time, instead of -rom and -sim",
+                               "", buf, buf, sizeof buf, &set));
+  if (set) o->fom = buf;
   PetscCall(MorseOptionsReal("-stress_time",
                              "Time [s] of the stress (the nearest stored step); default: the time of "
                              "the largest |radial displacement| at -stress_monitor",

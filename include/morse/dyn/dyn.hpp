@@ -460,6 +460,19 @@ void write_fom(io::H5Output& out, const FomHistory& h, const std::vector<double>
 /// Serial, any rank.
 FomHistory read_fom(const std::string& file, const std::vector<std::string>& sets);
 
+/// One full-field snapshot of a fom file as nodal displacements.
+struct SnapshotField {
+  double time = 0.0;                   ///< of the snapshot
+  std::int64_t index = 0;              ///< its row in /fom/snapshots/u
+  std::int64_t n_rows = 0;             ///< the snapshots of the file
+  std::vector<std::int64_t> node_ids;  ///< the nodes with a free DOF, ascending
+  std::vector<double> u;               ///< [node][3]; a constrained component is 0
+};
+/// The snapshot of a fom file nearest to `time` (/fom/snapshots/{time,u,dof_node_ids,
+/// dof_components}). Throws naming the file if it has no snapshots, if the DOF map and the rows
+/// disagree, or if a component is not 0, 1 or 2. Serial, any rank.
+SnapshotField read_fom_snapshot(const std::string& file, double time);
+
 /// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
 /// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file);

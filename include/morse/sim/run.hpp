@@ -175,13 +175,14 @@ std::vector<std::int64_t> resume_sweep(MPI_Comm comm, const std::string& out, bo
 
 /// The options of `morse stress`.
 struct StressOptions {
-  std::string rom, sim, monitor = "LE", measure;
+  std::string rom, sim, fom, monitor = "LE", measure;
   double time = -1.0;
   PetscBool time_set = PETSC_FALSE, xdmf = PETSC_TRUE;
   std::string error;  ///< a bad value, naming the option (raised by the command after -help)
 
-  /// Reads -rom, -sim, -stress_time, -stress_monitor, -stress_measure linear|nonlinear (another
-  /// value is recorded in `error`) and -stress_xdmf. Collective.
+  /// Reads -rom, -sim, -fom (a morse fom file with snapshots: its snapshot nearest -stress_time,
+  /// instead of -rom and -sim), -stress_time, -stress_monitor, -stress_measure linear|nonlinear
+  /// (another value is recorded in `error`) and -stress_xdmf. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
 };
 
