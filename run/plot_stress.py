@@ -7,7 +7,7 @@ usage: /usr/bin/python3 run/plot_stress.py STRESS.h5 [STRESS2.h5] [--out PNG] [-
 
 Reads /mesh (coordinates, node_ids, topology: XDMF "Mixed" list of type code + 0-based node indices in
 VTK order; tet4/10, wedge6/15, hex8/20) and /stress (displacement [1][n][3] m, von_mises [1][n] Pa,
-von_mises_element [1][n_elements] Pa, attributes time [s], measure, max_von_mises [Pa]) of one or two
+von_mises_element [1][n_elements] Pa, attributes time [s], measure, max_von_mises [Pa]) of one to four
 stress files. Needs numpy, h5py, matplotlib (Agg).
 Writes PNG (default: the first file with .h5 replaced by .png): one 3-D panel per file showing the
 boundary faces (faces of exactly one element, straight-sided through the corner nodes) of the mesh
@@ -177,7 +177,7 @@ def plot(runs, labels, out, title, view, field, scale, vmax):
 def main():
     p = argparse.ArgumentParser(usage="%(prog)s STRESS.h5 [STRESS2.h5] [options]",
                                 description=__doc__.split("\n\n")[0])
-    p.add_argument("files", nargs="+", metavar="STRESS.h5", help="one or two morse stress files")
+    p.add_argument("files", nargs="+", metavar="STRESS.h5", help="one to four morse stress files (one panel each)")
     p.add_argument("--out", help="output PNG (default: first file with .h5 replaced by .png)")
     p.add_argument("--title", help="figure title")
     p.add_argument("--labels", help="comma-separated panel labels (default: measure and time of each file)")
@@ -189,8 +189,8 @@ def main():
     p.add_argument("--vmax", type=float, help="top of the colour scale [MPa] (default: the largest value); "
                    "larger values are drawn in the top colour, e.g. to see past a singular node")
     a = p.parse_args()
-    if len(a.files) > 2:
-        p.error("at most two stress files")
+    if len(a.files) > 4:
+        p.error("at most four stress files")
     try:
         view = tuple(float(v) for v in a.view.split(","))
         assert len(view) == 2
