@@ -363,12 +363,13 @@ struct SweepStats {
 /// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
 /// speeds one at a time (longest first) to whichever rank has a free lane, and also computes.
 /// Each rank advances up to s.batch speeds together, and never more than its fair share
-/// ceil(todo.size() / ranks), so that a short sweep is not given whole to one rank; with s.batched the cubic force of
-/// all its speeds is one pass over the folded tensor (a matrix-matrix product with the monomials formed per lane). The
-/// arithmetic of a speed does not depend on which other speeds share its pass, so a speed's result is bitwise the same
-/// on any number of ranks and with any batch. A speed that fails (NaN, contact that does not settle) is returned with
-/// status 1 and does not stop the others. on_result runs on rank 0 for each finished speed, in the order they finish
-/// (the checkpoint); rank 0 prints the progress as results arrive. Collective. Returns this rank's counters.
+/// ceil(todo.size() / ranks), so that a short sweep is not given whole to one rank (rank 0 also
+/// leaves every rank it has not heard from yet its share, for a rank that starts late); with s.batched the cubic force
+/// of all its speeds is one pass over the folded tensor (a matrix-matrix product with the monomials formed per lane).
+/// The arithmetic of a speed does not depend on which other speeds share its pass, so a speed's result is bitwise the
+/// same on any number of ranks and with any batch. A speed that fails (NaN, contact that does not settle) is returned
+/// with status 1 and does not stop the others. on_result runs on rank 0 for each finished speed, in the order they
+/// finish (the checkpoint); rank 0 prints the progress as results arrive. Collective. Returns this rank's counters.
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
 
