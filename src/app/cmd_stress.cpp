@@ -24,11 +24,11 @@ namespace morse::app::detail {
 
 namespace {
 
+// gm: the mesh gathered on rank 0 (mesh::gather_to_rank0).
 void write_stress_file(MPI_Comm comm, const CommonOptions& o, const sim::StressOptions& so, const Model& md,
-                       io::H5Output& out, const std::vector<std::int64_t>& node_ids, const std::vector<double>& u,
-                       const sim::StressField& f, sim::StressRecord rec) {
+                       const mesh::Mesh& gm, io::H5Output& out, const std::vector<std::int64_t>& node_ids,
+                       const std::vector<double>& u, const sim::StressField& f, sim::StressRecord rec) {
   StageTimer t(comm, "Write");
-  auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_provenance(out, "stress", md.units);
   io::write_mesh(out, gm);
   if (rank_of(comm) == 0) {
@@ -106,7 +106,7 @@ void run_stress_fom(MPI_Comm comm, const CommonOptions& o, const sim::StressOpti
   sim::StressRecord rec;
   rec.time = hdr[0], rec.step = static_cast<std::int64_t>(hdr[1]), rec.measure = measure;
   rec.sim = files::absolute_path(so.fom);
-  write_stress_file(comm, o, so, md, out, ids, u, f, rec);
+  write_stress_file(comm, o, so, md, gm, out, ids, u, f, rec);
 }
 
 }  // namespace
@@ -152,7 +152,7 @@ void run_stress(MPI_Comm comm) {
   rec.time = st.time, rec.step = st.step, rec.measure = st.measure;
   rec.rom = files::absolute_path(so.rom), rec.sim = files::absolute_path(so.sim);
   if (!so.time_set) rec.monitor = so.monitor, rec.monitor_radial_displacement = st.radial;
-  write_stress_file(comm, o, so, md, out, sm.node_ids, u, f, rec);
+  write_stress_file(comm, o, so, md, mesh::gather_to_rank0(*md.mesh), out, sm.node_ids, u, f, rec);
 }
 
 }  // namespace morse::app::detail

@@ -356,11 +356,10 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
   // step on). An unresolved stiff mode (omega h >> 1,
   // which the rule rings at the Nyquist frequency) contributes about its ringing amplitude, not
   // (omega h)^2 times it as an acceleration-based estimate would. Measured in the M-norm.
-  std::vector<double> qm1, qm2, e(r), mq(3 * r);
+  std::vector<double> qm1, qm2, e(r);
   const bool estimate = s.error_estimate;
   auto m_norm = [&](const std::vector<double>& x) {
-    stacked(x.data(), mq.data());
-    return std::sqrt(std::max(0.0, dot(r, x.data(), mq.data())));
+    return std::sqrt(std::max(0.0, quadratic_form(r, m.M.data(), x.data(), x.data())));
   };
   double q_max = 0.0, e_sum = 0.0, e_sq = 0.0;
   long n_estimates = 0;

@@ -104,12 +104,12 @@ struct Settings {
   ContactSettings contact;
   double newton_rtol = 1e-8;  ///< Trapezoidal: ||R|| <= rtol * max(inertia, internal, load norms)
   int newton_max_it = 100;    ///< reduced Newton is cheap; stiff constraint modes need many at large dt
-  /// Trapezoidal, nonlinear with a potential: when the full Newton step does not lower the
+  /// Implicit schemes, nonlinear with a potential: when the full Newton step does not lower the
   /// incremental potential enough (Armijo), step to the first minimum of the potential along the
   /// Newton direction, exactly (it is a quartic; theory §9.1). -sim_newton_line_search.
   bool newton_line_search = true;
-  /// Trapezoidal: estimate the local time-discretization error of every step (Zienkiewicz–Xie,
-  /// theory §9.2; about 8 r^2 flops per step). -sim_error_estimate.
+  /// Implicit schemes: estimate the local time-discretization error of every step from the last
+  /// four states (theory §9.2; about 2 r^2 flops per step). -sim_error_estimate.
   bool error_estimate = true;
   double dt = 0.0;
   KernelLayout kernel = KernelLayout::Auto;
@@ -173,15 +173,16 @@ struct Stats {
   std::string kernel = "linear";                  ///< folded | potential | implicit | linear (no nonlinear force)
   double kernel_flops = 0.0, kernel_bytes = 0.0;  ///< per step (CubicKernel::flops(), bytes())
   long steps = 0;
-  long newton_iterations = 0;  ///< Trapezoidal
-  long line_searches = 0;      ///< Trapezoidal: Newton steps shortened by the line search
-  /// Trapezoidal: steps whose Newton stopped at the round-off floor of the residual (a correction
+  long newton_iterations = 0;  ///< implicit schemes
+  long line_searches = 0;      ///< implicit schemes: Newton steps shortened by the line search
+  /// Implicit schemes: steps whose Newton stopped at the round-off floor of the residual (a correction
   /// below 1e-8 |q| in the quadratic phase) above the tolerance, and the largest ||R|| / tolerance.
   long newton_floor_steps = 0;
   double newton_floor_ratio = 0.0;
-  /// Trapezoidal with Settings::error_estimate: the local error estimate e_n = h^2 (a_n - a_{n-1}) / 12
-  /// of each step in the M-norm: its largest value (and time), its rms over the steps, its sum (a
-  /// bound on the accumulated error if errors do not cancel), and the largest |q|_M of the run.
+  /// Implicit schemes with Settings::error_estimate: the local error estimate
+  /// e_n = (q_n - (3 q_{n-1} - 3 q_{n-2} + q_{n-3})) / 12 of each step in the M-norm: its largest
+  /// value (and time), its rms over the steps, its sum (the order of the accumulated drift: 2/pi of
+  /// an oscillator's phase drift), and the largest |q|_M of the run.
   bool error_estimated = false;
   double error_local_max = 0.0, error_time = 0.0, error_local_rms = 0.0, error_sum = 0.0, error_q_max = 0.0;
   long boundary_iterations = 0;  ///< massless boundary: equilibrium iterations (one per step if linear)
