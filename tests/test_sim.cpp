@@ -339,6 +339,102 @@ TEST(Sim, PotentialKernelMatchesFolded) {
   EXPECT_THROW(sim::CubicKernel(bad, P3, sim::KernelLayout::Potential), Error);
 }
 
+// The batched potential kernel (CubicKernelBatch) against the reference O(r^4) loops of
+// CubicForce, P3 g~(q), lane by lane, at r = 30 (every index pattern; triangles of every size, so
+// every partial row block of 1..3 rows) and r = 7: 12 lanes of different q in 3 groups, scattered
+// in a wider array. Each lane's bits do not depend on its group's partner, position or order (a
+// pair of groups, 2 rows at a time; a group alone, 4 rows at a time). Float coefficients differ
+// from double by their rounding only.
+TEST(Sim, BatchedPotentialKernelMatchesReferenceAndIsBitwisePerLane) {
+  const auto [exact, step] = box_forces_r30();
+  for (const nlrom::CubicForce* force : {&exact, &step}) {
+    for (std::size_t r : {std::size_t{30}, std::size_t{7}}) {
+      nlrom::CubicForce g = *force;
+      if (r < g.r) {  // the leading r x r block of coordinates: the tensors of the first r modes
+        nlrom::CubicForce h;
+        h.r = r;
+        h.A.assign(nlrom::n_quadratic(r) * r, 0.0), h.B.assign(nlrom::n_cubic(r) * r, 0.0);
+        std::size_t m = 0, m2 = 0;
+        for (std::size_t i = 0; i < g.r; ++i)
+          for (std::size_t j = i; j < g.r; ++j, ++m)
+            if (j < r) {
+              for (std::size_t p = 0; p < r; ++p) h.A[m2 * r + p] = g.A[m * g.r + p];
+              ++m2;
+            }
+        m = 0, m2 = 0;
+        for (std::size_t i = 0; i < g.r; ++i)
+          for (std::size_t j = i; j < g.r; ++j)
+            for (std::size_t k = j; k < g.r; ++k, ++m)
+              if (k < r) {
+                for (std::size_t p = 0; p < r; ++p) h.B[m2 * r + p] = g.B[m * g.r + p];
+                ++m2;
+              }
+        g = std::move(h);
+      }
+      std::vector<double> P3(r * r);
+      for (std::size_t i = 0; i < r * r; ++i) P3[i] = std::sin(1.0 + 0.37 * static_cast<double>(i));
+      const sim::CubicKernel pot(g, P3, sim::KernelLayout::Potential);
+      const sim::CubicKernelBatch batch(pot), single(pot, true);
+      EXPECT_EQ(single.bytes(), batch.bytes() / 2);
+      const std::size_t L = 16, lanes = 12;  // groups 0, 1, 2 used; group 3 must stay untouched
+      std::vector<double> Q(r * L, 0.0), Y(r * L, 7.0);
+      for (std::size_t j = 0; j < r; ++j)
+        for (std::size_t l = 0; l < lanes; ++l)
+          Q[j * L + l] = 1e-3 * std::cos(0.9 * static_cast<double>(j) + 0.31 * static_cast<double>(l) + 0.2);
+      const std::size_t all[3] = {0, 1, 2};
+      batch.apply(L, all, 3, Q.data(), Y.data());
+      double worst = 0.0;
+      std::vector<double> q(r), gq(r);
+      for (std::size_t l = 0; l < lanes; ++l) {
+        for (std::size_t j = 0; j < r; ++j) q[j] = Q[j * L + l];
+        g.evaluate(q.data(), gq.data());
+        double d = 0.0, scale = 0.0;
+        for (std::size_t p = 0; p < r; ++p) {
+          double y = 0.0;
+          for (std::size_t k = 0; k < r; ++k) y += P3[p * r + k] * gq[k];
+          d = std::max(d, std::abs(Y[p * L + l] - y)), scale = std::max(scale, std::abs(y));
+        }
+        ASSERT_GT(scale, 0.0);
+        worst = std::max(worst, d / scale);
+      }
+      // STEP tensors are a potential only to their identification error: the batched kernel
+      // evaluates the nearest potential, as CubicKernel does.
+      const double tol = force == &exact ? 1e-12 : 10.0 * pot.asymmetry() + 1e-12;
+      EXPECT_LT(worst, tol) << "r " << r << (force == &exact ? " exact" : " STEP");
+      for (std::size_t j = 0; j < r; ++j)
+        for (std::size_t l = lanes; l < L; ++l) EXPECT_EQ(Y[j * L + l], 7.0) << "a group not listed was written";
+      // The same lanes in other passes: each group alone (one group, 4 rows at a time), and the
+      // groups in another order (group 2 paired with group 0, group 1 alone).
+      std::vector<double> Y1(r * L, 0.0), Y2(r * L, 0.0);
+      for (std::size_t gi = 0; gi < 3; ++gi) batch.apply(L, &all[gi], 1, Q.data(), Y1.data());
+      const std::size_t reordered[3] = {2, 0, 1};
+      batch.apply(L, reordered, 3, Q.data(), Y2.data());
+      bool same = true;
+      for (std::size_t j = 0; j < r; ++j)
+        for (std::size_t l = 0; l < lanes; ++l)
+          same = same && Y1[j * L + l] == Y[j * L + l] && Y2[j * L + l] == Y[j * L + l];
+      EXPECT_TRUE(same) << "a lane's bits depend on the groups beside it (r " << r << ")";
+      // Float coefficients: |c - fl(c)| <= 2^-24 |c|, so each output moves by at most 2^-24 times
+      // the sum of its terms' magnitudes (bounded here by 100 times the output scale), and it moves.
+      std::vector<double> Yf(r * L, 0.0);
+      single.apply(L, all, 3, Q.data(), Yf.data());
+      double df = 0.0, sf = 0.0;
+      for (std::size_t j = 0; j < r; ++j)
+        for (std::size_t l = 0; l < lanes; ++l)
+          df = std::max(df, std::abs(Yf[j * L + l] - Y[j * L + l])), sf = std::max(sf, std::abs(Y[j * L + l]));
+      EXPECT_LT(df, 100.0 * std::ldexp(1.0, -24) * sf) << "float coefficients, r " << r;
+      EXPECT_GT(df, 0.0) << "float coefficients give double results";
+      print0(PETSC_COMM_WORLD, "  batched potential kernel, r = %zu (%s): %.2e of the reference; float %.2e\n", r,
+             force == &exact ? "exact" : "STEP", worst, df / sf);
+    }
+  }
+  // A force that is no gradient has no potential kernel to batch.
+  auto bad = exact;
+  bad.A[5 * 30 + 7] += 1e-3 * bad.max_abs_A();
+  std::vector<double> P3(900, 0.5);
+  EXPECT_THROW(sim::CubicKernelBatch(sim::CubicKernel(bad, P3, sim::KernelLayout::Auto)), Error);
+}
+
 // The implicit scheme's one-pass force and tangent (TangentKernel: Euler's theorem on the
 // homogeneous parts, the symmetric fourth-derivative storage when g~ is a gradient) against the
 // reference O(r^4) loops of CubicForce, and the tangent of those against central differences of
@@ -638,20 +734,28 @@ void check_sweep(bool massless) {
   std::vector<sim::SpeedTask> tasks;
   for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
   long mine = 0;  // speeds this rank ran in the last sweep
-  auto run = [&](MPI_Comm comm, int batch, bool batched) {
+  auto run = [&](MPI_Comm comm, int batch, sim::SweepKernel kernel, bool single) {
     std::vector<sim::SpeedResult> out(tasks.size());
     sim::SweepSettings sb = s;
     sb.batch = batch;
-    sb.batched = batched;
+    sb.kernel = kernel;
+    sb.single = single;
     mine = sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) {
              out[static_cast<std::size_t>(R.index)] = R;
            }).speeds;
     return out;
   };
-  // Both kernels: the batched pass and the auto kernel lane by lane.
-  std::vector<sim::SpeedResult> one, lane;
-  for (bool batched : {true, false}) {
-    const auto all = run(PETSC_COMM_WORLD, 6, batched);  // two lane groups per pass; rank 0 holds the results
+  // Every kernel: the batched potential pass (in double and with float coefficients), the batched
+  // folded pass, and the auto kernel lane by lane. On one rank, 5 speeds in 6 lanes are two groups
+  // of 4 lanes, which the potential kernel takes as a pair (2 rows at a time); alone, one group (4
+  // rows at a time): the bits must not change.
+  std::vector<sim::SpeedResult> one, lane, folded, single;
+  const std::pair<sim::SweepKernel, bool> kernels[] = {{sim::SweepKernel::Potential, false},
+                                                       {sim::SweepKernel::Folded, false},
+                                                       {sim::SweepKernel::Lane, false},
+                                                       {sim::SweepKernel::Potential, true}};
+  for (auto [kernel, sp] : kernels) {
+    const auto all = run(PETSC_COMM_WORLD, 6, kernel, sp);  // two lane groups per pass; rank 0 holds the results
     // 6 lanes per rank but 5 speeds: no rank holds more than its share, ceil(5 / ranks).
     long total = 0, most = 0;
     int size = 1;
@@ -660,7 +764,7 @@ void check_sweep(bool massless) {
     MPI_Allreduce(&mine, &most, 1, MPI_LONG, MPI_MAX, PETSC_COMM_WORLD);
     EXPECT_EQ(total, static_cast<long>(tasks.size()));
     EXPECT_LE(most, (static_cast<long>(tasks.size()) + size - 1) / size) << "a rank took more than its share";
-    auto alone = run(PETSC_COMM_SELF, 1, batched);  // every rank alone, one lane
+    auto alone = run(PETSC_COMM_SELF, 1, kernel, sp);  // every rank alone, one lane
     // Bitwise agreement, decided on rank 0 and shared.
     int same = 1;
     if (rank == 0)
@@ -674,8 +778,10 @@ void check_sweep(bool massless) {
                 a.work_end.damping == b.work_end.damping && a.work_half.friction == b.work_half.friction;
       }
     MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
-    EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (batched " << batched << ")";
-    (batched ? one : lane) = std::move(alone);
+    EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (kernel " << sim::kernel_name(kernel)
+                       << (sp ? ", float" : "") << ")";
+    (sp ? single : kernel == sim::SweepKernel::Potential ? one : kernel == sim::SweepKernel::Folded ? folded : lane) =
+        std::move(alone);
   }
   // Against sim::integrate, speed by speed (on every rank, from `one`).
   int touched = 0;
@@ -706,7 +812,14 @@ void check_sweep(bool massless) {
       act = std::max(act, x.active);
     });
     const auto& R = one[i];
-    EXPECT_NEAR(lane[i].rms, R.rms, 1e-9 * R.rms) << "per-lane vs batched kernel";
+    EXPECT_NEAR(lane[i].rms, R.rms, 1e-9 * R.rms) << "per-lane vs batched potential kernel";
+    EXPECT_NEAR(folded[i].rms, R.rms, 1e-9 * R.rms) << "batched folded vs batched potential kernel";
+    // Float coefficients: each rounded by at most 2^-24 relative; over 3 revolutions of contact the
+    // response moves by about that times the force's share of the response (measured 1e-7).
+    EXPECT_NEAR(single[i].rms, R.rms, 1e-5 * R.rms) << "float vs double coefficients";
+    EXPECT_NEAR(single[i].max_force, R.max_force, 1e-4 * R.max_force + 1e-12) << "float vs double coefficients";
+    print0(PETSC_COMM_WORLD, "  sweep: omega %.0f rad/s, float coefficients: rms %.2e relative\n", R.omega,
+           std::abs(single[i].rms - R.rms) / R.rms);
     EXPECT_EQ(R.steps, n_steps);
     EXPECT_NEAR(R.rms, std::sqrt(sum2 / cnt), 1e-9 * R.rms) << "omega " << tasks[i].omega;
     EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);

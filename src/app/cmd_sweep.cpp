@@ -58,9 +58,9 @@ void run_sweep(MPI_Comm comm) {
   print0(comm,
          "morse sweep: %ld speeds %.6g..%.6g rad/s%s (%ld already in %s), %.6g revolutions each, dt "
          "%.4g s (critical %.4g s), "
-         "r = %zu, %s, %d lanes per rank (%s kernel) on %d rank(s)\n",
+         "r = %zu, %s, %d lanes per rank (-sweep_kernel %s) on %d rank(s)\n",
          coarse, so.omega_min, last, so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(),
-         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, so.batched ? "batched" : "per-lane",
+         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, sim::kernel_name(so.kernel),
          size);
   if (so.refine_step > 0)
     print0(comm,
@@ -96,9 +96,10 @@ void run_sweep(MPI_Comm comm) {
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
   print0(comm,
          "morse sweep: %zu speeds in %.2f s (%.3g core-hours), %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
-         "in the force kernels, %.0f%% idle (no speed to advance: the load-balance loss)\n",
+         "in the force kernels (%s%s), %.0f%% idle (no speed to advance: the load-balance loss)\n",
          n_run, wall, wall * size / 3600.0, wall > 0 ? lane_steps / wall : 0.0,
          wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0,
+         so.linear ? "linear" : sim::kernel_name(st.kernel), so.single ? ", float coefficients" : "",
          wall > 0 ? 100.0 * idle / (wall * size) : 0.0);
   std::string failed;
   if (rank == 0)

@@ -225,16 +225,6 @@ CubicKernel::CubicKernel(const nlrom::CubicForce& g, const std::vector<double>& 
   fold(g.B, n3, n2);
 }
 
-// The hot loops of the online stage: built for AVX2 + FMA as well as for the baseline, the
-// processor picks at run time (GCC function multiversioning). The clone is named by ISA level
-// (x86-64-v3: AVX2, FMA, BMI2), which GCC dispatches on the CPU's features: "arch=haswell" is
-// dispatched on the CPU model and never chosen on AMD processors.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define MORSE_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define MORSE_KERNEL_CLONES
-#endif
-
 namespace detail {
 MORSE_KERNEL_CLONES
 void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, const double* __restrict x,

@@ -12,6 +12,17 @@
 
 #include "morse/sim/sim.hpp"
 
+// The hot loops of the online stage: built for AVX2 + FMA as well as for the baseline, the
+// processor picks at run time (GCC function multiversioning). The clone is named by ISA level
+// (x86-64-v3: AVX2, FMA, BMI2), which GCC dispatches on the CPU's features: "arch=haswell" is
+// dispatched on the CPU model and never chosen on AMD processors. In the x86-64-v3 clone GCC fuses
+// a * b + c into one FMA (C++ contracts by default).
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define MORSE_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define MORSE_KERNEL_CLONES
+#endif
+
 namespace morse::sim::detail {
 
 /// Rows per panel of panel_product.

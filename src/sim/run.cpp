@@ -289,10 +289,20 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                             o->bins, &o->bins, nullptr));
   PetscCall(MorseOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
                             o->batch, &o->batch, nullptr));
-  PetscCall(MorseOptionsBool("-sweep_batched",
-                             "Cubic force of a rank's speeds as one batched pass of the folded tensor (else the "
-                             "auto kernel speed by speed, faster on the machines measured: bench/sweep_bench.py)",
-                             "", o->batched, &o->batched, nullptr));
+  {
+    const char* kernels[] = {"auto", "lane", "folded", "potential", "SweepKernel", "", nullptr};
+    PetscEnum kernel = static_cast<PetscEnum>(o->kernel);
+    PetscCall(MorseOptionsEnum("-sweep_kernel",
+                               "Cubic force of a rank's speeds: potential (one pass over the potential coefficients "
+                               "for all of them), folded (one pass of the folded tensor), lane (speed by speed), or "
+                               "auto (potential when the force has one, else lane)",
+                               "", kernels, kernel, &kernel, nullptr));
+    o->kernel = static_cast<SweepKernel>(kernel);
+  }
+  PetscCall(MorseOptionsBool("-sweep_float",
+                             "Potential kernel: coefficients in float (half the bytes), arithmetic in double; check "
+                             "its accuracy on your model (docs/user-guide.md)",
+                             "", o->single, &o->single, nullptr));
   PetscCall(MorseOptionsBool("-sweep_restart", "Start again even if -out holds finished speeds", "", o->restart,
                              &o->restart, nullptr));
   PetscCall(MorseOptionsReal("-sweep_refine_step",
@@ -366,12 +376,12 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
   std::snprintf(b, sizeof b,
                 "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
-                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nbatched=%d\n"
+                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nkernel=%s\nfloat=%d\n"
                 "spectrum_decimation=block_mean\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
                 "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
-                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, s.batched ? 1 : 0,
+                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel), s.single ? 1 : 0,
                 o.rotation, o.refine_step, o.refine_rms, o.refine_frequency, nlrom::fingerprint(m).c_str(),
                 o.energy_balance ? 1 : 0);
   return b;
@@ -417,7 +427,8 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.spectrum_fmax = fmax;
   s.spectrum_bins = static_cast<int>(bins);
   s.batch = static_cast<int>(batch);
-  s.batched = batched;
+  s.kernel = kernel;
+  s.single = single;
   s.monitor = sm.radial_row(monitor, "-sweep_monitor");
   return s;
 }
@@ -475,7 +486,11 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   if (slowest == 0.0) slowest = so.rotation * so.omega_min;
   int size = 1;
   MPI_Comm_size(comm, &size);
-  double rate = measure_step_rate(m, s, slowest, seconds);
+  // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
+  const std::size_t per_rank = (todo.size() + static_cast<std::size_t>(size) - 1) / static_cast<std::size_t>(size);
+  const int lanes = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(1, s.batch)),
+                                                           std::max<std::size_t>(1, per_rank)));
+  double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
   c.rate = rate / size;
   if (c.rate > 0) {
@@ -502,6 +517,7 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
       });
       st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
           st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
+          st.kernel = rs.kernel;
       *n_run += todo.size();
     }
     // The next round, decided on rank 0 (which holds the results) and shared.

@@ -205,10 +205,28 @@ class Batch {
       detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
     }
     const std::size_t rp = (r_ + 3) / 4 * 4;
-    if (!s.base.linear && !s.batched) {
+    SweepKernel kind = s.base.linear ? SweepKernel::Lane : s.kernel;
+    if (!s.base.linear && (kind == SweepKernel::Auto || kind == SweepKernel::Potential)) {
+      // Auto: the potential form whenever g~ has one (CubicKernel's Auto keeps the folded one for
+      // small r, where it is faster lane by lane, not batched).
+      auto k = std::make_unique<CubicKernel>(
+          m.g, P3_, kind == SweepKernel::Potential ? KernelLayout::Potential : KernelLayout::Auto);
+      if (!k->potential() && k->asymmetry() <= 1e-6)
+        k = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Potential);
+      if (k->potential()) {
+        potential_ = std::make_unique<CubicKernelBatch>(*k, s.single);
+        kind = SweepKernel::Potential;
+      } else {
+        lane_kernel_ = std::move(k);
+        kind = SweepKernel::Lane;
+      }
+    }
+    MORSE_CHECK(!s.single || kind == SweepKernel::Potential,
+                "sweep: float coefficients (-sweep_float) need the potential kernel (-sweep_kernel potential or "
+                "auto with a force that is the gradient of a potential)");
+    if (!s.base.linear && kind == SweepKernel::Lane && !lane_kernel_) {
       lane_kernel_ = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Auto);
-      y_.assign(r_, 0.0);
-    } else if (!s.base.linear) {
+    } else if (!s.base.linear && kind == SweepKernel::Folded) {
       CubicKernel k(m.g, P3_, KernelLayout::Folded);
       const auto& W = k.folded();
       n_ = W.size() / r_;
@@ -217,6 +235,8 @@ class Batch {
         for (std::size_t p = 0; p < r_; ++p) W_[(p / 4) * 4 * n_ + 4 * m + p % 4] = W[m * r_ + p];
       Z_.assign(n_ * L_, 0.0);
     }
+    if (lane_kernel_) y_.assign(r_, 0.0);
+    kind_ = s.base.linear ? SweepKernel::Lane : kind;
     Q_.assign(r_ * L_, 0.0), Qm_.assign(r_ * L_, 0.0), Qp_.assign(r_ * L_, 0.0), Y_.assign(rp * L_, 0.0);
     lanes_.resize(want);
     col_.resize(r_), colm_.resize(r_);
@@ -277,6 +297,11 @@ class Batch {
         lane_kernel_->apply(col_.data(), y_.data());
         for (std::size_t p = 0; p < r_; ++p) Qp_[p * L_ + slot] -= y_[p];
       }
+    } else if (potential_) {
+      potential_->apply(L_, groups_.data(), groups_.size(), Q_.data(), Y_.data());
+      for (auto g : groups_)
+        for (std::size_t p = 0; p < r_; ++p)
+          for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
     } else if (!s_.base.linear) {
       batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), n_, Q_.data(), Y_.data(), Z_.data());
       for (auto g : groups_)
@@ -388,8 +413,14 @@ class Batch {
   const std::vector<ReducedLoad> no_loads_;
   std::vector<std::size_t> groups_;
   std::vector<Lane> lanes_;
-  std::unique_ptr<CubicKernel> lane_kernel_;  // !batched
+  std::unique_ptr<CubicKernel> lane_kernel_;         // SweepKernel::Lane
+  std::unique_ptr<CubicKernelBatch> potential_;      // SweepKernel::Potential
+  SweepKernel kind_ = SweepKernel::Lane;
   std::vector<double> y_;
+
+ public:
+  /// The kernel in use (Auto resolved; Lane for a linear run).
+  SweepKernel kernel() const { return kind_; }
 };
 
 void pack(morse::detail::Packer* pk, const SpeedResult& R) {
@@ -422,12 +453,13 @@ constexpr int kResult = 1, kRequest = 2, kBye = 4;
 
 }  // namespace
 
-double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds) {
+double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds,
+                         int lanes) {
   SweepSettings one = s;
-  one.batch = 1;
-  one.revolutions = 1e9;  // the lane never finishes while it is timed
+  one.batch = std::max(1, std::min(lanes, s.batch));
+  one.revolutions = 1e9;  // the lanes never finish while they are timed
   Batch batch(m, one);
-  batch.start({0, omega});
+  for (int k = 0; k < one.batch; ++k) batch.start({k, omega});
   std::vector<SpeedResult> done;
   SweepStats st;
   long steps = 0, chunk = 50;
@@ -440,7 +472,20 @@ double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, d
     if (dt >= seconds || !done.empty()) break;
     chunk = std::min(chunk * 2, 100000L);
   }
-  return dt > 0 ? static_cast<double>(steps) / dt : 0.0;
+  return dt > 0 ? static_cast<double>(steps) * one.batch / dt : 0.0;
+}
+
+const char* kernel_name(SweepKernel k) {
+  switch (k) {
+    case SweepKernel::Lane:
+      return "lane";
+    case SweepKernel::Folded:
+      return "folded";
+    case SweepKernel::Potential:
+      return "potential";
+    default:
+      return "auto";
+  }
 }
 
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
@@ -464,6 +509,7 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   SweepStats st;
   const auto t0 = std::chrono::steady_clock::now();
   Batch batch(m, s);
+  st.kernel = batch.kernel();
   // A rank holds at most its fair share of the speeds at once: with more lanes than that, the
   // first rank to ask would take nearly all of a short sweep (measured: 8 of 9 speeds on one of
   // 2 ranks, the other idle after its one speed). Each finished speed asks for one more.

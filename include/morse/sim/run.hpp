@@ -81,7 +81,8 @@ struct SweepOptions {
   std::string rom, out = "sweep.h5", monitor = "LE";
   double omega_min = 0, omega_max = 0, omega_step = 0, dt = 0, fmax = 10000.0;
   PetscInt bins = 500, batch = 8;
-  PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, batched = PETSC_FALSE;
+  PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, single = PETSC_FALSE;
+  SweepKernel kernel = SweepKernel::Auto;  ///< -sweep_kernel
   PetscBool energy_balance = PETSC_TRUE;  ///< -sim_energy_balance
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
@@ -97,7 +98,7 @@ struct SweepOptions {
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
-  /// -sweep_batched, -sweep_restart, -sweep_rotation and the contact options (ContactOptions::set_from_options).
+  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation and the contact options (ContactOptions::set_from_options).
   /// A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, or a grid of more than
   /// kMaxSweepSpeeds speeds (the message gives the file size it would need) is recorded in
   /// `error`. Collective.

@@ -233,6 +233,43 @@ class CubicKernel {
   std::vector<double> W_;             // Folded: (n2 + n3) x r, row-major
   mutable std::vector<double> z_;     // Folded: monomials; Potential: g
   std::vector<double> c3_, c4_, P3_;  // Potential: energy coefficients (sorted indices), P3
+  friend class CubicKernelBatch;
+};
+
+/// The nonlinear term G = P3 g~ of several lanes (speeds of a sweep) in one pass over the potential
+/// coefficients of a CubicKernel (KernelLayout::Potential): every coefficient loaded feeds the
+/// multiply-adds of all the lanes, so the pass turns from bandwidth-bound (one lane) to compute-bound
+/// (theory §10.4). Lanes come in groups of 4, stored lane-inner (Q[j L + l], L a multiple of 4); two
+/// groups share each pass over a row block held in registers.
+///  - A lane's arithmetic (the order of its sums, where it fuses multiply-adds) does not depend on
+///    the lane's group, on how many groups share the pass or which: a speed gives the same bits
+///    whichever speeds run beside it.
+///  - The gradient is summed in another order than CubicKernel's: the two agree to round-off, not
+///    bitwise.
+///  - Float coefficients (`single`): the coefficients rounded to float (half the bytes), the
+///    products and sums in double. Their error is that of the rounding, about 6e-8 relative per
+///    coefficient.
+/// Built for AVX2 + FMA (x86-64-v3) and the baseline; the processor picks at run time.
+class CubicKernelBatch {
+ public:
+  /// Throws unless k holds the potential layout (k.potential()).
+  explicit CubicKernelBatch(const CubicKernel& k, bool single = false);
+  /// Y(:, groups) = G(Q(:, groups)) for the ng listed groups of 4 lanes (Y r x L, lane-inner; the
+  /// other columns are left alone). No allocation after the first call with this many groups.
+  void apply(std::size_t L, const std::size_t* groups, std::size_t ng, const double* Q, double* Y) const;
+  std::size_t r() const { return r_; }
+  bool single() const { return single_; }
+  /// Floating-point operations per lane and bytes of coefficients read by one apply() (whatever the
+  /// number of lanes).
+  double flops() const;
+  double bytes() const;
+
+ private:
+  std::size_t r_ = 0, n3_ = 0, n4_ = 0;
+  bool single_ = false;
+  std::vector<double> c3_, c4_, P3_;  // padded (the kernel loads 4 from any coefficient)
+  std::vector<float> c3f_, c4f_;
+  mutable std::vector<double> X_, G_;  // the listed groups, compact: r x 4 ng
 };
 
 /// The nonlinear force and its tangent in one pass, for Newton in the implicit scheme. By Euler's
@@ -298,6 +335,11 @@ struct SpeedTask {
   double omega = 0.0;
 };
 
+/// The cubic force kernel of a sweep's lanes (SweepSettings::kernel).
+enum class SweepKernel { Auto, Lane, Folded, Potential };
+/// "auto", "lane", "folded", "potential".
+const char* kernel_name(SweepKernel k);
+
 /// Everything a constant-speed run of a sweep records (Fig. 23–24 of seed 003).
 struct SpeedResult {
   long index = -1;
@@ -329,11 +371,16 @@ struct SweepSettings {
   double spectrum_fmax = 0.0;   ///< [Hz]; 0: no spectrum
   int spectrum_bins = 0;        ///< frequencies k fmax / bins, k = 0..bins
   int batch = 8;                ///< speeds advanced together per rank (lanes)
-  /// The cubic force of the lanes: true = one batched pass of the folded tensor for all lanes
-  /// (matrix-matrix product); false = CubicKernel (KernelLayout::Auto) lane by lane. Measured on
-  /// the 2-core EPYC at r = 54 (bench/sweep_bench.py): 2,200 lane-steps/s batched (16 lanes, 7
-  /// GFLOP/s) against 4,100 steps/s for the potential kernel lane by lane, hence the default.
-  bool batched = false;
+  /// The cubic force of the lanes (-sweep_kernel), measured on the 2-core EPYC in bench/README.md
+  /// ("Batched potential kernel"):
+  ///  - Auto: Potential when g~ is the gradient of a potential (exact tensors, STEP), else Lane.
+  ///  - Potential: CubicKernelBatch, one pass over the potential coefficients for all the lanes of
+  ///    a rank (compute-bound from 8 lanes).
+  ///  - Folded: one pass of the folded tensor for all lanes (a matrix-matrix product; any force).
+  ///  - Lane: CubicKernel (KernelLayout::Auto) lane by lane.
+  SweepKernel kernel = SweepKernel::Auto;
+  /// Potential: float coefficients, double arithmetic (CubicKernelBatch; -sweep_float).
+  bool single = false;
   /// The frequency grid of the spectrum (empty without one).
   std::vector<double> frequencies() const;
 };
@@ -359,14 +406,15 @@ struct SweepStats {
   /// With no speed to advance: waiting for a speed to be handed out, or (rank 0) for the other
   /// ranks to finish theirs. The load-balance loss of the sweep.
   double idle_seconds = 0.0;
+  SweepKernel kernel = SweepKernel::Lane;  ///< the cubic force kernel used (Auto resolved)
 };
 
 /// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
 /// speeds one at a time (longest first) to whichever rank has a free lane, and also computes.
 /// Each rank advances up to s.batch speeds together, and never more than its fair share
 /// ceil(todo.size() / ranks), so that a short sweep is not given whole to one rank (rank 0 also
-/// leaves every rank it has not heard from yet its share, for a rank that starts late); with s.batched the cubic force
-/// of all its speeds is one pass over the folded tensor (a matrix-matrix product with the monomials formed per lane).
+/// leaves every rank it has not heard from yet its share, for a rank that starts late); the cubic force of its
+/// speeds is one pass of s.kernel over all of them (Potential, Folded) or one per speed (Lane).
 /// The arithmetic of a speed does not depend on which other speeds share its pass, so a speed's result is bitwise the
 /// same on any number of ranks and with any batch. A speed that fails (NaN, contact that does not settle) is returned
 /// with status 1 and does not stop the others. on_result runs on rank 0 for each finished speed, in the order they
@@ -374,10 +422,12 @@ struct SweepStats {
 SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                  const std::vector<SpeedTask>& todo, const std::function<void(const SpeedResult&)>& on_result);
 
-/// Steps per second of one lane of a sweep at speed omega, measured over about `seconds` of wall
-/// time (the time loop only: the same lane machinery as sweep(), from rest, so the first steps
-/// are contact-free). Not collective: for the predicted cost of a sweep (cmd sweep).
-double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds);
+/// Lane-steps per second of a rank of a sweep advancing `lanes` speeds at omega together (at most
+/// s.batch), measured over about `seconds` of wall time (the time loop only: the same lane
+/// machinery as sweep(), from rest, so the first steps are contact-free). Not collective: for the
+/// predicted cost of a sweep (cmd sweep).
+double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, double omega, double seconds,
+                         int lanes = 1);
 
 /// A sweep file (docs/hdf5-schema.md, /sweep): the settings that define the sweep, the frequency
 /// grid, the model's eigenfrequencies and the finished speeds sorted by index.

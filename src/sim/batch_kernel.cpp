@@ -1,0 +1,257 @@
+// The batched potential kernel of a sweep's lanes (see morse/sim/sim.hpp, CubicKernelBatch, and
+// docs/theory.md §10.4).
+//
+// g~ is the gradient of V(q) = sum c3 q_i q_j q_k (i <= j <= k) + sum c4 q_i q_j q_k q_l
+// (i <= j <= k <= l). For fixed i (cubic) or fixed i <= j (quartic), the coefficients form a
+// triangle: row k (k = j .. r - 1) holds the columns l = k .. r - 1, contiguous. Row k contributes
+// acc_k = sum_l c(k, l) q_l (its slots other than l) and g_l += c(k, l) s_k (slot l), with
+// s_k = q_i q_k (cubic, j = i) or q_i q_j q_k (quartic). The rows of a triangle are taken R at a
+// time: each column l then loads q_l and g_l once for R rows, and each coefficient, broadcast once,
+// feeds 2 multiply-adds per group of 4 lanes.
+//
+// A lane's arithmetic does not depend on R nor on the groups beside it: acc_k is one sum over l in
+// increasing order from zero, and g_l receives the rows' terms in increasing k, then the rows'
+// other-slot terms in the same order as row by row (a row's other slots i, j, k are never columns of
+// the later rows of its triangle). So one group (R = 4) and a pair of groups (R = 2) give the same
+// bits, lane by lane.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
+#include "morse/core/error.hpp"
+#include "morse/sim/sim.hpp"
+#include "sim/contact.hpp"
+
+namespace morse::sim {
+
+namespace {
+
+// The helpers below pass 256-bit vectors by value but are always inlined: no call, no ABI.
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double v4 __attribute__((vector_size(32), aligned(8)));
+inline __attribute__((always_inline)) v4 vld(const double* p) { return *reinterpret_cast<const v4*>(p); }
+inline __attribute__((always_inline)) void vst(double* p, v4 v) { *reinterpret_cast<v4*>(p) = v; }
+// The coefficient at c in all 4 lanes. Written as a load of 4 and a shuffle, which GCC turns into
+// one vbroadcastsd from memory in the AVX2 clone (a broadcast of a scalar used twice becomes
+// vmovddup + vinsertf128, a shuffle on a multiply-add port); the coefficient arrays are padded so
+// that the 4 loaded never pass their end.
+typedef long long m4 __attribute__((vector_size(32)));
+typedef float f4 __attribute__((vector_size(16), aligned(4)));
+typedef int i4 __attribute__((vector_size(16)));
+inline __attribute__((always_inline)) v4 bcast(const double* c) { return __builtin_shuffle(vld(c), m4{0, 0, 0, 0}); }
+inline __attribute__((always_inline)) v4 bcast(const float* c) {
+  return __builtin_convertvector(__builtin_shuffle(*reinterpret_cast<const f4*>(c), i4{0, 0, 0, 0}), v4);
+}
+constexpr std::size_t kPad = 4;
+
+// Rows kb .. kb + RH - 1 of a triangle of n columns (row kb + a: its column l at p[a][l]), for NG
+// groups of 4 lanes at X and G (row stride ld). Returns acc[a][g] and adds the rows' slot-l terms
+// to G.
+template <int NG, int RH, class T>
+inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t n, const T* const* p,
+                                                     const v4 (*s_in)[NG], v4 (*acc_out)[NG],
+                                                     const double* __restrict X, double* __restrict G,
+                                                     std::size_t ld) {
+  // Local copies indexed by constants only (the loops over a and g unroll), so that they live in
+  // registers: acc in memory would put a store-to-load forwarding into every multiply-add chain.
+  v4 acc[RH][NG], s[RH][NG];
+  const T* pa[RH];
+#pragma GCC unroll 4
+  for (int a = 0; a < RH; ++a) {
+    pa[a] = p[a];
+#pragma GCC unroll 4
+    for (int g = 0; g < NG; ++g) acc[a][g] = v4{0.0, 0.0, 0.0, 0.0}, s[a][g] = s_in[a][g];
+  }
+  // The triangle of the block: row a has the columns kb + a .. kb + RH - 1 of it.
+#pragma GCC unroll 4
+  for (int a = 0; a < RH; ++a)
+    for (std::size_t l = kb + static_cast<std::size_t>(a); l < kb + RH; ++l) {
+      const v4 c = bcast(pa[a] + l);
+#pragma GCC unroll 4
+      for (int g = 0; g < NG; ++g) {
+        acc[a][g] += c * vld(X + l * ld + 4 * g);
+        vst(G + l * ld + 4 * g, vld(G + l * ld + 4 * g) + c * s[a][g]);
+      }
+    }
+  // The rectangle: every row of the block, columns kb + RH .. n - 1.
+  for (std::size_t l = kb + RH; l < n; ++l) {
+    v4 x[NG], y[NG];
+#pragma GCC unroll 4
+    for (int g = 0; g < NG; ++g) x[g] = vld(X + l * ld + 4 * g), y[g] = vld(G + l * ld + 4 * g);
+#pragma GCC unroll 4
+    for (int a = 0; a < RH; ++a) {
+      const v4 c = bcast(pa[a] + l);
+#pragma GCC unroll 4
+      for (int g = 0; g < NG; ++g) {
+        acc[a][g] += c * x[g];
+        y[g] += c * s[a][g];
+      }
+    }
+#pragma GCC unroll 4
+    for (int g = 0; g < NG; ++g) vst(G + l * ld + 4 * g, y[g]);
+  }
+#pragma GCC unroll 4
+  for (int a = 0; a < RH; ++a)
+#pragma GCC unroll 4
+    for (int g = 0; g < NG; ++g) acc_out[a][g] = acc[a][g];
+}
+
+// Rows kb .. kb + rh - 1 for a run-time rh <= RH: row_block with rh as a constant.
+template <int NG, int RH, class T>
+inline __attribute__((always_inline)) void row_block_upto(std::size_t rh, std::size_t kb, std::size_t n,
+                                                          const T* const* p, const v4 (*s)[NG], v4 (*acc)[NG],
+                                                          const double* __restrict X, double* __restrict G,
+                                                          std::size_t ld) {
+  if constexpr (RH >= 1) {
+    if (rh == RH)
+      row_block<NG, RH>(kb, n, p, s, acc, X, G, ld);
+    else
+      row_block_upto<NG, RH - 1>(rh, kb, n, p, s, acc, X, G, ld);
+  }
+}
+
+// One triangle: rows k0 .. n - 1 of coefficients C (row k0 first), fixed indices i (and j when
+// Quartic), for NG groups at X and G, R rows at a time. A row's slot-k term goes to G(k) when the
+// row is done; its slot-i (and slot-j) terms are summed over the triangle's rows in order, in
+// registers, and added to G(i) (and G(j)) at the end.
+template <int NG, int R, bool Quartic, class T>
+inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j, std::size_t k0, std::size_t n,
+                                                    const T* C, const double* __restrict X, double* __restrict G,
+                                                    std::size_t ld) {
+  v4 base[NG], xi[NG], xj[NG], si[NG], sj[NG];
+  for (int g = 0; g < NG; ++g) {
+    xi[g] = vld(X + i * ld + 4 * g), xj[g] = vld(X + j * ld + 4 * g);
+    base[g] = Quartic ? xi[g] * xj[g] : xi[g];
+    si[g] = sj[g] = v4{0.0, 0.0, 0.0, 0.0};
+  }
+  const T* row = C;
+  for (std::size_t kb = k0; kb < n; kb += R) {
+    const std::size_t rh = std::min<std::size_t>(R, n - kb);
+    const T* p[R];
+    v4 s[R][NG], acc[R][NG];
+    for (std::size_t a = 0; a < rh; ++a) {
+      p[a] = row - (kb + a);  // column l of row kb + a at p[a][l] (inside C: rows before it are longer)
+      row += n - (kb + a);
+      for (int g = 0; g < NG; ++g) s[a][g] = base[g] * vld(X + (kb + a) * ld + 4 * g);
+    }
+    row_block_upto<NG, R>(rh, kb, n, p, s, acc, X, G, ld);
+    for (std::size_t a = 0; a < rh; ++a) {
+      const std::size_t k = kb + a;
+      for (int g = 0; g < NG; ++g) {
+        const v4 xk = vld(X + k * ld + 4 * g);
+        if (Quartic) {
+          si[g] += acc[a][g] * (xj[g] * xk);
+          sj[g] += acc[a][g] * (xi[g] * xk);
+        } else {
+          si[g] += acc[a][g] * xk;
+        }
+        double* gk = G + k * ld + 4 * g;
+        vst(gk, vld(gk) + acc[a][g] * base[g]);
+      }
+    }
+  }
+  for (int g = 0; g < NG; ++g) {
+    double* gi = G + i * ld + 4 * g;
+    vst(gi, vld(gi) + si[g]);
+    if (Quartic) {
+      double* gj = G + j * ld + 4 * g;
+      vst(gj, vld(gj) + sj[g]);
+    }
+  }
+}
+
+// Every triangle for the groups at X, G (ng groups, row stride 4 ng): pairs of groups 3 rows at a
+// time (16 vector registers), a last single group 4 rows at a time (11); the fastest measured on
+// the 2-core EPYC (bench/README.md, "Batched potential kernel").
+template <bool Quartic, class T>
+inline __attribute__((always_inline)) void triangles(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
+                                                     std::size_t ng, const T* C, const double* X, double* G) {
+  const std::size_t ld = 4 * ng;
+  std::size_t g = 0;
+  for (; g + 2 <= ng; g += 2) triangle<2, 3, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+  if (g < ng) triangle<1, 4, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+}
+
+template <class T>
+inline __attribute__((always_inline)) void gradient(std::size_t r, std::size_t ng, const T* c3, const T* c4,
+                                                    const double* X, double* G) {
+  std::memset(G, 0, sizeof(double) * r * 4 * ng);
+  for (std::size_t i = 0; i < r; ++i) {  // cubic: triangle of rows j = i .. r - 1
+    triangles<false>(i, i, i, r, ng, c3, X, G);
+    c3 += (r - i) * (r - i + 1) / 2;
+  }
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) {  // quartic: triangle of rows k = j .. r - 1
+      triangles<true>(i, j, j, r, ng, c4, X, G);
+      c4 += (r - j) * (r - j + 1) / 2;
+    }
+}
+
+MORSE_KERNEL_CLONES
+void gradient_double(std::size_t r, std::size_t ng, const double* c3, const double* c4, const double* X, double* G) {
+  gradient(r, ng, c3, c4, X, G);
+}
+
+MORSE_KERNEL_CLONES
+void gradient_float(std::size_t r, std::size_t ng, const float* c3, const float* c4, const double* X, double* G) {
+  gradient(r, ng, c3, c4, X, G);
+}
+
+// Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing.
+MORSE_KERNEL_CLONES
+void project(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict P3,
+             const double* __restrict G, double* __restrict Y) {
+  const std::size_t ld = 4 * ng;
+  for (std::size_t p = 0; p < r; ++p)
+    for (std::size_t g = 0; g < ng; ++g) {
+      v4 y = {0.0, 0.0, 0.0, 0.0};
+      for (std::size_t k = 0; k < r; ++k) y += bcast(&P3[p * r + k]) * vld(G + k * ld + 4 * g);
+      vst(Y + p * L + 4 * groups[g], y);
+    }
+}
+
+}  // namespace
+
+CubicKernelBatch::CubicKernelBatch(const CubicKernel& k, bool single) : r_(k.r()), single_(single) {
+  MORSE_CHECK(k.potential(), "sweep: the batched potential kernel needs a reduced force that is the gradient of a "
+                             "potential (relative asymmetry ", k.asymmetry(), "); use the per-lane kernel");
+  P3_ = k.P3_;
+  n3_ = k.c3_.size(), n4_ = k.c4_.size();
+  if (single) {
+    c3f_.assign(k.c3_.begin(), k.c3_.end());
+    c4f_.assign(k.c4_.begin(), k.c4_.end());
+    c3f_.resize(n3_ + kPad, 0.0f), c4f_.resize(n4_ + kPad, 0.0f);
+  } else {
+    c3_ = k.c3_, c4_ = k.c4_;
+    c3_.resize(n3_ + kPad, 0.0), c4_.resize(n4_ + kPad, 0.0);
+  }
+  P3_.resize(r_ * r_ + kPad, 0.0);
+}
+
+void CubicKernelBatch::apply(std::size_t L, const std::size_t* groups, std::size_t ng, const double* Q,
+                             double* Y) const {
+  if (ng == 0) return;
+  const std::size_t ld = 4 * ng;
+  // X and G on 64-byte boundaries: their 32-byte rows of a group then never straddle a cache line.
+  if (X_.size() < r_ * ld + 8) X_.resize(r_ * ld + 8), G_.resize(r_ * ld + 8);
+  auto aligned = [](std::vector<double>& v) {
+    const auto a = reinterpret_cast<std::uintptr_t>(v.data());
+    return v.data() + ((64 - a % 64) % 64) / sizeof(double);
+  };
+  double *X = aligned(X_), *G = aligned(G_);
+  for (std::size_t j = 0; j < r_; ++j)
+    for (std::size_t g = 0; g < ng; ++g) std::memcpy(X + j * ld + 4 * g, Q + j * L + 4 * groups[g], 4 * sizeof(double));
+  if (single_)
+    gradient_float(r_, ng, c3f_.data(), c4f_.data(), X, G);
+  else
+    gradient_double(r_, ng, c3_.data(), c4_.data(), X, G);
+  project(r_, L, groups, ng, P3_.data(), G, Y);
+}
+
+double CubicKernelBatch::flops() const {
+  return 4.0 * static_cast<double>(n3_ + n4_) + 2.0 * static_cast<double>(r_ * r_);
+}
+
+double CubicKernelBatch::bytes() const { return (single_ ? 4.0 : 8.0) * static_cast<double>(n3_ + n4_); }
+
+}  // namespace morse::sim
