@@ -210,6 +210,14 @@ int main(int argc, char** argv) {
       emit(cases[c].kernel, cases[c].B, med[c], cases[c].lanes_per_pass, cases[c].bytes, samples[c]);
     std::printf("]}");
   }
-  std::printf("], \"seconds\": %g, \"reps\": %d, \"checksum\": %.17g}\n", seconds, reps, checksum);
+  double rss_mb = 0.0;  // peak resident memory (VmHWM)
+  if (FILE* f = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::strncmp(line, "VmHWM:", 6) == 0) rss_mb = std::atof(line + 6) / 1024.0;
+    std::fclose(f);
+  }
+  std::printf("], \"seconds\": %g, \"reps\": %d, \"max_rss_mb\": %.1f, \"checksum\": %.17g}\n", seconds, reps, rss_mb,
+              checksum);
   return 0;
 }

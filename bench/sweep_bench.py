@@ -4,7 +4,7 @@
 usage:
     /usr/bin/python3 bench/sweep_bench.py                 # meshes/blade_coarse.msh, tip basis, 3 runs
     /usr/bin/python3 bench/sweep_bench.py --runs 1 --derivatives 20 --mesh meshes/blade.msh
-    /usr/bin/python3 bench/sweep_bench.py --fixed 15 --derivatives 40 --lanes 1,8 --limits   # r = 79, the seed's
+    /usr/bin/python3 bench/sweep_bench.py --fixed 15 --derivatives 40 --dt 5e-8 --limits   # r = 79, the seed's
 
 The model: `morse nlrom` with boundary `tip` (8 contact nodes, 24 physical DOFs), --fixed
 fixed-interface modes and --derivatives modal derivatives, exact tensors (r = 24 + fixed + derivatives).
@@ -12,11 +12,13 @@ Parts, each --runs times (medians):
   - single: `morse simulate` on one core with casing contact at 1,450 rad/s (the unbatched
     kernel that `auto` picks: potential above r = 56): steps/s, and with --limits its GFLOP/s and
     coefficient GB/s against the FMA peak and read bandwidth measured by bench/machine_limits.cpp;
-  - batch: `morse sweep -sweep_batched` on one core with L speeds and -sweep_batch L, L = 1, 4, 8, 16, 32:
-    lane-steps/s and the gain over L = 1 and over the single run; per lane-step the folded
-    product does 2 (n2 + n3) r flops, so the achieved GFLOP/s;
-  - scaling: the same 16-speed sweep (batch 8, the default per-lane kernel) on 1 and 2 ranks:
-    efficiency t1 / (2 t2).
+  - batch: `morse sweep` on one core with L speeds and -sweep_batch L, L in --lanes, for each kernel
+    of --kernels (-sweep_kernel lane, potential, folded; float = potential with -sweep_float):
+    lane-steps/s and the gain over the lane kernel with as many lanes;
+  - map: the same 16-speed sweep (-sweep_batch 8) on 2 ranks with each kernel of --kernels, and on 1
+    rank with the default kernel: lane-steps/s per core, the gain of each kernel over `lane` (the
+    sweep's kernel before the batched potential kernel, issue 29: target x3 at r = 79), and the
+    2-rank efficiency t1 / (2 t2).
 Writes bench/results/sweep_<UTC>_<mesh>_r<r>.json (summary, runs, git, blas).
 Exit status 0 on success, 2 if morse failed.
 """
@@ -47,17 +49,20 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--dt", type=float, default=1e-7)
     ap.add_argument("--revolutions", type=float, default=0.1, help="per speed in the batch part")
-    ap.add_argument("--lanes", default="1,4,8,16,32")
+    ap.add_argument("--lanes", default="1,4,8,16")
+    ap.add_argument("--kernels", default="lane,potential,float,folded",
+                    help="sweep kernels to time (lane, potential, float, folded)")
     ap.add_argument("--limits", action="store_true",
                     help="measure the machine's FMA peak and read bandwidth (bench/machine_limits.cpp) and give the "
                          "single run's ratio to them")
+    ap.add_argument("--rom", help="reuse this morse nlrom file (the tip boundary) instead of building one")
     args = ap.parse_args()
     morse = os.path.join(ROOT, "build", "morse")
     if not os.path.exists(morse):
         sys.exit("sweep_bench: build morse first (run/test or cmake --build build)")
     work = tempfile.mkdtemp(prefix="sweep_bench_")
-    rom = os.path.join(work, "rom.h5")
-    res, _ = run_mpi("nlrom", [morse, "nlrom", "-mesh", args.mesh, "-clamp", "root", "-boundary", "tip",
+    rom = args.rom or os.path.join(work, "rom.h5")
+    res, _ = ({}, None) if args.rom else run_mpi("nlrom", [morse, "nlrom", "-mesh", args.mesh, "-clamp", "root", "-boundary", "tip",
                                "-nlrom_basis", "cbmd", "-nlrom_num_fixed_modes", str(args.fixed),
                                "-nlrom_num_derivatives", str(args.derivatives), "-nlrom_training_tfinal", "0.0314",
                                "-nlrom_damping_modal", "5e-4", "-nlrom_damping_modes", "10", "-nlrom_forces", "exact",
@@ -83,49 +88,75 @@ def main():
                                "kernel_mb_per_step": float(k.group(3)) if k else None})
     lanes = [int(x) for x in args.lanes.split(",")]
 
-    def sweep(n_speeds, batch, ranks, revolutions, batched):
+    kernels = args.kernels.split(",")
+    for k in kernels:
+        if k not in ("lane", "potential", "float", "folded"):
+            sys.exit("sweep_bench: unknown kernel %s" % k)
+
+    def kernel_options(kernel):
+        return ["-sweep_kernel", "potential", "-sweep_float"] if kernel == "float" else ["-sweep_kernel", kernel]
+
+    def sweep(n_speeds, batch, ranks, revolutions, kernel):
         res, _ = run_mpi("sweep", [morse, "sweep", "-rom", rom, "-sweep_omega_min", "1000", "-sweep_omega_max",
                                    str(1000 + n_speeds - 1), "-sweep_omega_step", "1", "-sim_revolutions",
                                    str(revolutions), "-sweep_batch", str(batch), "-sweep_monitor", "LE",
                                    "-sweep_spectrum_bins", "50", "-sweep_restart",
-                                   "-out", os.path.join(work, "sweep.h5")] + casing +
-                                  (["-sweep_batched"] if batched else []), ranks, work, 1)
+                                   "-out", os.path.join(work, "sweep.h5")] + casing + kernel_options(kernel),
+                         ranks, work, 1)
         if res is None:
             return None
-        return {"lane_steps_per_s": rate(res["stdout"], r"s, ([\d.e+]+) steps/s over all ranks"),
+        return {"lane_steps_per_s": rate(res["stdout"], r"([\d.e+]+) steps/s over all ranks"),
                 "seconds": rate(res["stdout"], r"speeds in ([\d.]+) s"),
-                "kernel_percent": rate(res["stdout"], r"([\d.]+)% in the batched kernel"),
+                "kernel_percent": rate(res["stdout"], r"([\d.]+)% in the force kernels"),
+                "idle_percent": rate(res["stdout"], r"([\d.]+)% idle"),
                 "max_rss_mb": res.get("rank_max_rss_mb")}
 
+    runs["batch"] = {k: {} for k in kernels}
+    runs["map"] = {k: [] for k in kernels}
     for L in lanes:
-        runs["batch"][str(L)] = []
+        for k in kernels:
+            runs["batch"][k][str(L)] = []
         for _ in range(args.runs):
-            x = sweep(L, L, 1, args.revolutions, True)
+            for k in kernels:  # interleaved: the machine's drift hits every kernel alike
+                x = sweep(L, L, 1, args.revolutions, k)
+                if x is None:
+                    return 2
+                runs["batch"][k][str(L)].append(x)
+    for _ in range(args.runs):
+        for k in kernels:
+            x = sweep(16, 8, 2, args.revolutions, k)
             if x is None:
                 return 2
-            runs["batch"][str(L)].append(x)
-    for ranks in (1, 2):
-        for _ in range(args.runs):
-            x = sweep(16, 8, ranks, args.revolutions, False)
-            if x is None:
-                return 2
-            runs["scaling"][str(ranks)].append(x)
+            runs["map"][k].append(x)
+        x = sweep(16, 8, 1, args.revolutions, "potential")
+        if x is None:
+            return 2
+        runs["scaling"]["1"].append(x)
+    runs["scaling"]["2"] = runs["map"].get("potential", [])
     n2 = r_size * (r_size + 1) // 2
     n3 = r_size * (r_size + 1) * (r_size + 2) // 6
-    flops = 2.0 * (n2 + n3) * r_size + 4.0 * r_size * r_size
+    n4 = r_size * (r_size + 1) * (r_size + 2) * (r_size + 3) // 24
+    flops_potential = 4.0 * (n3 + n4) + 2.0 * r_size * r_size  # per lane-step, useful
     single = med([x["steps_per_s"] for x in runs["single"]])
-    batch = {L: med([x["lane_steps_per_s"] for x in runs["batch"][str(L)]]) for L in lanes}
-    t1 = med([x["seconds"] for x in runs["scaling"]["1"]])
-    t2 = med([x["seconds"] for x in runs["scaling"]["2"]])
+    batch = {k: {L: med([x["lane_steps_per_s"] for x in runs["batch"][k][str(L)]]) for L in lanes} for k in kernels}
+    mapr = {k: med([x["lane_steps_per_s"] for x in runs["map"][k]]) for k in kernels}
     summary = {
-        "r": r_size, "dt": args.dt, "flops_per_lane_step_folded": flops,
+        "r": r_size, "dt": args.dt, "flops_per_lane_step_potential": flops_potential,
         "single_steps_per_s": single, "single_kernel": runs["single"][0]["kernel"],
-        "batch_lane_steps_per_s": {str(L): batch[L] for L in lanes},
-        "batch_gain_over_one_lane": {str(L): batch[L] / batch[lanes[0]] for L in lanes},
-        "batch_gain_over_single_run": {str(L): batch[L] / single for L in lanes},
-        "batch_gflops": {str(L): batch[L] * flops * 1e-9 for L in lanes},
-        "sweep16_seconds_1_rank": t1, "sweep16_seconds_2_ranks": t2, "scaling_efficiency_2_ranks": t1 / (2 * t2),
+        "batch_lane_steps_per_s": {k: {str(L): batch[k][L] for L in lanes} for k in kernels},
+        "map16_2ranks_lane_steps_per_s_per_core": {k: mapr[k] / 2 for k in kernels},
+        "map16_2ranks_idle_percent": {k: med([x["idle_percent"] for x in runs["map"][k]]) for k in kernels},
     }
+    if "lane" in kernels:
+        summary["batch_gain_over_lane_kernel"] = {k: {str(L): batch[k][L] / batch["lane"][L] for L in lanes}
+                                                  for k in kernels}
+        summary["map16_gain_over_lane_kernel"] = {k: mapr[k] / mapr["lane"] for k in kernels}
+    if "potential" in kernels:
+        summary["batch_potential_gflops"] = {str(L): batch["potential"][L] * flops_potential * 1e-9 for L in lanes}
+        t1 = med([x["seconds"] for x in runs["scaling"]["1"]])
+        t2 = med([x["seconds"] for x in runs["scaling"]["2"]])
+        summary.update({"sweep16_seconds_1_rank": t1, "sweep16_seconds_2_ranks": t2,
+                        "scaling_efficiency_2_ranks": t1 / (2 * t2)})
     # The single run against the machine: the kernel streams its coefficients once per step.
     k0 = runs["single"][0]
     if k0["kernel_flops_per_step"]:
@@ -147,10 +178,16 @@ def main():
             if "single_ratio_over_fma_peak" in summary else ""))
     print("  single run (unbatched %s kernel, contact): %.0f steps/s" % (summary["single_kernel"], single))
     for L in lanes:
-        print("  batch %2d lanes: %8.0f lane-steps/s, x%.2f over 1 lane, x%.2f over the single run, %.1f GFLOP/s"
-              % (L, batch[L], summary["batch_gain_over_one_lane"][str(L)], summary["batch_gain_over_single_run"][str(L)],
-                 summary["batch_gflops"][str(L)]))
-    print("  16-speed sweep: %.2f s on 1 rank, %.2f s on 2 ranks: efficiency %.1f %%" % (t1, t2, 100 * t1 / (2 * t2)))
+        print("  one core, %2d lanes: %s" % (L, ", ".join(
+            "%s %.0f%s" % (k, batch[k][L], " (x%.2f)" % summary["batch_gain_over_lane_kernel"][k][str(L)]
+                           if "lane" in kernels else "") for k in kernels)) + " lane-steps/s")
+    print("  16-speed map on 2 ranks, lane-steps/s per core: %s" % ", ".join(
+        "%s %.0f%s" % (k, mapr[k] / 2, " (x%.2f)" % summary["map16_gain_over_lane_kernel"][k] if "lane" in kernels
+                       else "") for k in kernels))
+    if "sweep16_seconds_1_rank" in summary:
+        print("  16-speed sweep (potential): %.2f s on 1 rank, %.2f s on 2 ranks: efficiency %.1f %%" % (
+            summary["sweep16_seconds_1_rank"], summary["sweep16_seconds_2_ranks"],
+            100 * summary["scaling_efficiency_2_ranks"]))
     stamp = datetime.datetime.utcnow().strftime("%Y-%m-%dT%H%M%SZ")
     name = os.path.splitext(os.path.basename(args.mesh))[0]
     os.makedirs(RESULTS, exist_ok=True)

@@ -101,6 +101,18 @@ void run_sweep(MPI_Comm comm) {
          wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0,
          so.linear ? "linear" : sim::kernel_name(st.kernel), so.single ? ", float coefficients" : "",
          wall > 0 ? 100.0 * idle / (wall * size) : 0.0);
+  if (size > 1) {  // the load balance, rank by rank
+    std::vector<double> idles(static_cast<std::size_t>(size), 0.0);
+    MPI_Gather(&st.idle_seconds, 1, MPI_DOUBLE, idles.data(), 1, MPI_DOUBLE, 0, comm);
+    std::string per_rank;
+    for (int k = 0; k < size; ++k) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%s%d: %.0f%%", k ? ", " : "", k,
+                    wall > 0 ? 100.0 * idles[static_cast<std::size_t>(k)] / wall : 0.0);
+      per_rank += b;
+    }
+    print0(comm, "morse sweep: idle per rank: %s\n", per_rank.c_str());
+  }
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)

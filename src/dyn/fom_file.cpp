@@ -156,34 +156,40 @@ FomHistory read_fom(const std::string& file, const std::vector<std::string>& set
   return h;
 }
 
-SnapshotField read_fom_snapshot(const std::string& file, double time) {
-  SnapshotField f;
+SnapshotRow read_fom_snapshot_row(const std::string& file, double time) {
+  SnapshotRow s;
   std::string err;
   std::vector<hsize_t> d;
-  std::vector<double> times, row;
-  std::vector<std::int64_t> ids, comps;
+  std::vector<double> times;
   if (!io::read_doubles(file, "/fom/snapshots/time", &times, &d, &err) || times.empty())
     throw Error(cat(file, ": no full-field snapshots (run morse fom with -fom_snapshot_every K)"));
-  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_node_ids", &ids, &d, &err), err);
-  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_components", &comps, &d, &err), err);
-  MORSE_CHECK(ids.size() == comps.size(), file, ": /fom/snapshots/dof_node_ids has ", ids.size(),
-              " entries and dof_components ", comps.size());
+  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_node_ids", &s.node_ids, &d, &err), err);
+  MORSE_CHECK(io::read_ints(file, "/fom/snapshots/dof_components", &s.components, &d, &err), err);
+  MORSE_CHECK(s.node_ids.size() == s.components.size(), file, ": /fom/snapshots/dof_node_ids has ", s.node_ids.size(),
+              " entries and dof_components ", s.components.size());
   std::size_t k = 0;
   for (std::size_t j = 1; j < times.size(); ++j)
     if (std::abs(times[j] - time) < std::abs(times[k] - time)) k = j;
-  MORSE_CHECK(io::read_double_row(file, "/fom/snapshots/u", static_cast<std::int64_t>(k), &row, &err), err);
-  MORSE_CHECK(row.size() == ids.size(), file, ": /fom/snapshots/u has ", row.size(), " columns but the DOF map ",
-              ids.size());
-  f.time = times[k], f.index = static_cast<std::int64_t>(k), f.n_rows = static_cast<std::int64_t>(times.size());
+  MORSE_CHECK(io::read_double_row(file, "/fom/snapshots/u", static_cast<std::int64_t>(k), &s.u, &err), err);
+  MORSE_CHECK(s.u.size() == s.node_ids.size(), file, ": /fom/snapshots/u has ", s.u.size(),
+              " columns but the DOF map ", s.node_ids.size());
+  s.time = times[k], s.index = static_cast<std::int64_t>(k), s.n_rows = static_cast<std::int64_t>(times.size());
+  return s;
+}
+
+SnapshotField read_fom_snapshot(const std::string& file, double time) {
+  const SnapshotRow row = read_fom_snapshot_row(file, time);
+  SnapshotField f;
+  f.time = row.time, f.index = row.index, f.n_rows = row.n_rows;
   std::map<std::int64_t, std::size_t> at;
-  for (auto id : ids) at.emplace(id, 0);
+  for (auto id : row.node_ids) at.emplace(id, 0);
   std::size_t n = 0;
   for (auto& [id, slot] : at) slot = n++, f.node_ids.push_back(id);
   f.u.assign(3 * n, 0.0);
-  for (std::size_t j = 0; j < ids.size(); ++j) {
-    MORSE_CHECK(comps[j] >= 0 && comps[j] <= 2, file, ": /fom/snapshots/dof_components[", j, "] = ", comps[j],
-                " is not 0, 1 or 2");
-    f.u[3 * at[ids[j]] + static_cast<std::size_t>(comps[j])] = row[j];
+  for (std::size_t j = 0; j < row.node_ids.size(); ++j) {
+    const auto c = row.components[j];
+    MORSE_CHECK(c >= 0 && c <= 2, file, ": /fom/snapshots/dof_components[", j, "] = ", c, " is not 0, 1 or 2");
+    f.u[3 * at[row.node_ids[j]] + static_cast<std::size_t>(c)] = row.u[j];
   }
   return f;
 }

@@ -65,8 +65,6 @@ Indicator compare_runs(const std::string& fom, const std::string& rom, const Com
   Indicator ind;
   std::string err;
   std::vector<hsize_t> d;
-  std::vector<double> snap_t, row;
-  std::vector<std::int64_t> ids, comps;
   auto need = [&](bool ok) {
     if (!ok) throw Error(err);
   };
@@ -105,19 +103,10 @@ Indicator compare_runs(const std::string& fom, const std::string& rom, const Com
   // e1: full fields at the snapshot nearest to t_max.
   std::string model = s.rom_model.empty() ? files::resolve_stored_path(sr.rom, rom) : s.rom_model;
   MORSE_CHECK(!model.empty(), "compare: ", rom, " does not name its reduced model; give -compare_rom_model");
-  if (!io::read_doubles(fom, "/fom/snapshots/time", &snap_t, &d, &err))
-    throw Error(cat(fom, ": no full-field snapshots for e1 (run morse fom with -fom_snapshot_every K)"));
-  need(io::read_ints(fom, "/fom/snapshots/dof_node_ids", &ids, &d, &err));
-  need(io::read_ints(fom, "/fom/snapshots/dof_components", &comps, &d, &err));
   MORSE_CHECK(s.tmax <= tf.back(), "compare: t_max = ", s.tmax, " s is after the end of ", fom, " (t = ", tf.back(),
               " s); give -compare_tmax");
-  std::size_t k = 0;
-  for (std::size_t j = 1; j < snap_t.size(); ++j)
-    if (std::abs(snap_t[j] - s.tmax) < std::abs(snap_t[k] - s.tmax)) k = j;
-  *tsnap = snap_t[k];
-  need(io::read_double_row(fom, "/fom/snapshots/u", static_cast<std::int64_t>(k), &row, &err));
-  MORSE_CHECK(row.size() == ids.size(), "compare: ", fom, ": /fom/snapshots/u has ", row.size(),
-              " columns but the DOF map ", ids.size());
+  const dyn::SnapshotRow snap = dyn::read_fom_snapshot_row(fom, s.tmax);  // e1 needs one
+  *tsnap = snap.time;
   // Only the basis is needed (not the tensors): fill the reconstruction part of a StoredModel.
   nlrom::StoredModel sm;
   sm.file = model;
@@ -128,8 +117,8 @@ Indicator compare_runs(const std::string& fom, const std::string& rom, const Com
   sm.model.r = static_cast<PetscInt>(r);
   auto qt = interpolate(tr, sr.q, r, {*tsnap});
   std::vector<double> x2;
-  sm.dof_values(sm.dof_rows(ids, comps), qt.data(), &x2);
-  ind.e[0] = covariance(row, x2);
+  sm.dof_values(sm.dof_rows(snap.node_ids, snap.components), qt.data(), &x2);
+  ind.e[0] = covariance(snap.u, x2);
   return ind;
 }
 

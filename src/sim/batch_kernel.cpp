@@ -134,6 +134,13 @@ inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j
       row += n - (kb + a);
       for (int g = 0; g < NG; ++g) s[a][g] = base[g] * vld(X + (kb + a) * ld + 4 * g);
     }
+    // The hardware prefetcher does not run far enough ahead of the short rows of a triangle:
+    // ask for the lines 1 KB past this block's coefficients (measured: 4 % more lane-steps/s at
+    // r = 79 with 8 lanes; 4 KB ahead gains less).
+    for (const char *a = reinterpret_cast<const char*>(p[0] + kb) + 1024,
+                    *b = reinterpret_cast<const char*>(row) + 1024;
+         a < b; a += 64)
+      __builtin_prefetch(a);
     row_block_upto<NG, R>(rh, kb, n, p, s, acc, X, G, ld);
     for (std::size_t a = 0; a < rh; ++a) {
       const std::size_t k = kb + a;

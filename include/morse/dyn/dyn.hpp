@@ -472,6 +472,15 @@ struct SnapshotField {
 /// dof_components}). Throws naming the file if it has no snapshots, if the DOF map and the rows
 /// disagree, or if a component is not 0, 1 or 2. Serial, any rank.
 SnapshotField read_fom_snapshot(const std::string& file, double time);
+/// The same snapshot as stored: u[j] is the value of DOF (node_ids[j], components[j]). Throws as
+/// read_fom_snapshot, except on components (not checked). Serial, any rank.
+struct SnapshotRow {
+  double time = 0.0;
+  std::int64_t index = 0, n_rows = 0;
+  std::vector<std::int64_t> node_ids, components;
+  std::vector<double> u;
+};
+SnapshotRow read_fom_snapshot_row(const std::string& file, double time);
 
 /// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
 /// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
