@@ -4,6 +4,7 @@
 usage:
     /usr/bin/python3 bench/float_accuracy.py                          # coarse blade, r79, 8 speeds
     /usr/bin/python3 bench/float_accuracy.py --rom FILE.h5 --speeds 1100:1800:50 --revolutions 20
+    /usr/bin/python3 bench/float_accuracy.py --keep DIR --reuse --roundoff     # + the lane kernel in double
 
 The model is the nonlinear map's (run/contact_study.py, stage maps): CB + 15 fixed-interface modes
 + 40 modal derivatives on the 8 tip nodes (r = 79), exact tensors, every mode damped (0.05 %),
@@ -15,9 +16,10 @@ times), and for every speed the script compares what a map shows:
   - its amplitude spectrum (the largest difference, relative to the double spectrum's peak, and
     whether the dominant frequency is the same),
   - the largest total contact force and the energy at the end.
-A speed where they differ by more than the map's own resolution is where float is not safe: the
-response there depends on the path (an amplitude jump, a coexisting solution), and the 1e-8
-relative perturbation of the coefficients is enough to switch it. Writes
+With --roundoff the double sweep runs a third time with the lane kernel (the same arithmetic
+summed in another order: round-off differences only), and is compared the same way: where that
+differs as much as float does, the difference is the response's sensitivity to any perturbation
+(a chaotic or path-dependent response), not float's precision. Writes
 bench/results/float_accuracy_<UTC>.json (summary per speed, timings, git). Exit 0, or 2 if
 morse failed.
 """
@@ -61,6 +63,10 @@ def main():
     ap.add_argument("--dt", type=float, default=5e-7, help="the nonlinear map's step (run/contact_study.py)")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--keep", help="directory to keep the ROM and the sweep files in")
+    ap.add_argument("--roundoff", action="store_true",
+                    help="also run the double sweep with the lane kernel (-sweep_kernel lane: the same arithmetic "
+                         "summed in another order), to compare float's difference with that of round-off alone")
+    ap.add_argument("--reuse", action="store_true", help="with --keep: reuse the sweep files already there")
     args = ap.parse_args()
     morse = os.path.join(ROOT, "build", "morse")
     if not os.path.exists(morse):
@@ -82,54 +88,63 @@ def main():
         timings["nlrom_s"] = res.get("process_wall")
     lo, hi, step = speeds_of(args.speeds)
     files = {}
-    for prec in ("double", "float"):
+    variants = {"double": ["-sweep_kernel", "potential"], "float": ["-sweep_kernel", "potential", "-sweep_float"]}
+    if args.roundoff:
+        variants["lane"] = ["-sweep_kernel", "lane"]
+    for prec, opts in variants.items():
         out = os.path.join(work, "sweep_%s.h5" % prec)
-        res, _ = run_mpi("sweep %s" % prec, [morse, "sweep", "-rom", rom, "-sweep_omega_min", repr(lo),
-                                              "-sweep_omega_max", repr(hi), "-sweep_omega_step", repr(step),
-                                              "-sim_revolutions", repr(args.revolutions), "-sim_dt", repr(args.dt),
-                                              "-sweep_rotation", "negative", "-sweep_kernel", "potential",
-                                              "-sweep_monitor", "LE", "-sweep_restart", "-out", out] + CASING +
-                         (["-sweep_float"] if prec == "float" else []), args.ranks, work, 1)
-        if res is None:
-            return 2
-        timings["sweep_%s_s" % prec] = res.get("process_wall")
+        if not (args.reuse and os.path.exists(out)):
+            res, _ = run_mpi("sweep %s" % prec, [morse, "sweep", "-rom", rom, "-sweep_omega_min", repr(lo),
+                                                  "-sweep_omega_max", repr(hi), "-sweep_omega_step", repr(step),
+                                                  "-sim_revolutions", repr(args.revolutions), "-sim_dt",
+                                                  repr(args.dt), "-sweep_rotation", "negative",
+                                                  "-sweep_monitor", "LE", "-sweep_restart", "-out", out] + CASING +
+                             opts, args.ranks, work, 1)
+            if res is None:
+                return 2
+            timings["sweep_%s_s" % prec] = res.get("process_wall")
         files[prec] = read(out)
-    d, f = files["double"], files["float"]
+    d = files["double"]
     freqs = d["frequencies"]
-    rows = []
-    print("float_accuracy: %d speeds, %g revolutions each, dt %g s, %d rank(s)" % (
-        len(d["omega"]), args.revolutions, args.dt, args.ranks))
-    print("  %9s %10s %10s %10s %10s %10s %8s %10s" % ("|omega|", "rms [mm]", "d rms", "d mean", "d spec",
-                                                       "peak Hz", "same", "d force"))
-    for k in range(len(d["omega"])):
-        sd, sf = d["spectrum"][k], f["spectrum"][k]
-        pd = int(np.argmax(sd[1:]) + 1) if len(sd) > 1 else 0
-        pf = int(np.argmax(sf[1:]) + 1) if len(sf) > 1 else 0
-        row = {"omega": float(d["omega"][k]), "status_double": int(d["status"][k]),
-               "status_float": int(f["status"][k]),
-               "rms_double": float(d["rms"][k]), "rms_float": float(f["rms"][k]),
-               "rms_rel": float(abs(f["rms"][k] - d["rms"][k]) / max(abs(d["rms"][k]), 1e-300)),
-               "mean_rel": float(abs(f["mean"][k] - d["mean"][k]) / max(abs(d["rms"][k]), 1e-300)),
-               "spectrum_rel": float(np.max(np.abs(sf - sd)) / max(np.max(sd[1:]) if len(sd) > 1 else 0, 1e-300)),
-               "peak_hz_double": float(freqs[pd]), "peak_hz_float": float(freqs[pf]),
-               "max_force_rel": float(abs(f["max_force"][k] - d["max_force"][k]) / max(d["max_force"][k], 1e-300))}
-        row["energy_end_rel"] = float(abs(f["energy_end"][k] - d["energy_end"][k]) /
-                                      max(abs(d["energy_end"][k]), 1e-300))
-        rows.append(row)
-        print("  %9.0f %10.4f %10.2e %10.2e %10.2e %10.0f %8s %10.2e" % (
-            abs(row["omega"]), 1e3 * row["rms_double"], row["rms_rel"], row["mean_rel"], row["spectrum_rel"],
-            row["peak_hz_double"], "yes" if pd == pf else "NO", row["max_force_rel"]))
-    worst = max(rows, key=lambda x: x["rms_rel"])
-    summary = {"speeds": len(rows), "revolutions": args.revolutions, "dt": args.dt, "ranks": args.ranks,
-               "rms_rel_median": float(np.median([x["rms_rel"] for x in rows])),
-               "rms_rel_max": worst["rms_rel"], "rms_rel_max_omega": worst["omega"],
-               "spectrum_rel_max": max(x["spectrum_rel"] for x in rows),
-               "dominant_frequency_changed": sum(x["peak_hz_double"] != x["peak_hz_float"] for x in rows),
+    print("float_accuracy: %d speeds, %g revolutions each, dt %g s, %d rank(s); each variant against the double "
+          "potential kernel" % (len(d["omega"]), args.revolutions, args.dt, args.ranks))
+    summary = {"speeds": len(d["omega"]), "revolutions": args.revolutions, "dt": args.dt, "ranks": args.ranks,
                "timings": timings}
-    print("  RMS: median %.2e, largest %.2e at %.0f rad/s; spectrum: largest %.2e of the peak; dominant frequency "
-          "changed at %d of %d speeds" % (summary["rms_rel_median"], summary["rms_rel_max"],
-                                          abs(summary["rms_rel_max_omega"]), summary["spectrum_rel_max"],
-                                          summary["dominant_frequency_changed"], len(rows)))
+    rows = []
+    for name in [v for v in variants if v != "double"]:
+        f = files[name]
+        print("  %s:\n  %9s %10s %10s %10s %10s %10s %8s %10s" % (
+            {"float": "float coefficients", "lane": "the lane kernel (double, another summation order)"}[name],
+            "|omega|", "rms [mm]", "d rms", "d mean", "d spec", "peak Hz", "same", "d force"))
+        mine = []
+        for k in range(len(d["omega"])):
+            sd, sf = d["spectrum"][k], f["spectrum"][k]
+            pd = int(np.argmax(sd[1:]) + 1) if len(sd) > 1 else 0
+            pf = int(np.argmax(sf[1:]) + 1) if len(sf) > 1 else 0
+            row = {"variant": name, "omega": float(d["omega"][k]), "status_double": int(d["status"][k]),
+                   "status": int(f["status"][k]), "rms_double": float(d["rms"][k]), "rms": float(f["rms"][k]),
+                   "rms_rel": float(abs(f["rms"][k] - d["rms"][k]) / max(abs(d["rms"][k]), 1e-300)),
+                   "mean_rel": float(abs(f["mean"][k] - d["mean"][k]) / max(abs(d["rms"][k]), 1e-300)),
+                   "spectrum_rel": float(np.max(np.abs(sf - sd)) / max(np.max(sd[1:]) if len(sd) > 1 else 0, 1e-300)),
+                   "peak_hz_double": float(freqs[pd]), "peak_hz": float(freqs[pf]),
+                   "max_force_rel": float(abs(f["max_force"][k] - d["max_force"][k]) / max(d["max_force"][k], 1e-300)),
+                   "energy_end_rel": float(abs(f["energy_end"][k] - d["energy_end"][k]) /
+                                           max(abs(d["energy_end"][k]), 1e-300))}
+            mine.append(row)
+            print("  %9.0f %10.4f %10.2e %10.2e %10.2e %10.0f %8s %10.2e" % (
+                abs(row["omega"]), 1e3 * row["rms_double"], row["rms_rel"], row["mean_rel"], row["spectrum_rel"],
+                row["peak_hz_double"], "yes" if pd == pf else "NO", row["max_force_rel"]))
+        worst = max(mine, key=lambda x: x["rms_rel"])
+        summary[name] = {"rms_rel_median": float(np.median([x["rms_rel"] for x in mine])),
+                         "rms_rel_max": worst["rms_rel"], "rms_rel_max_omega": worst["omega"],
+                         "spectrum_rel_max": max(x["spectrum_rel"] for x in mine),
+                         "dominant_frequency_changed": sum(x["peak_hz_double"] != x["peak_hz"] for x in mine)}
+        print("  %s: RMS median %.2e, largest %.2e at %.0f rad/s; spectrum: largest %.2e of the peak; dominant "
+              "frequency changed at %d of %d speeds" % (
+                  name, summary[name]["rms_rel_median"], summary[name]["rms_rel_max"],
+                  abs(summary[name]["rms_rel_max_omega"]), summary[name]["spectrum_rel_max"],
+                  summary[name]["dominant_frequency_changed"], len(mine)))
+        rows += mine
     stamp = datetime.datetime.utcnow().strftime("%Y-%m-%dT%H%M%SZ")
     os.makedirs(RESULTS, exist_ok=True)
     path = os.path.join(RESULTS, "float_accuracy_%s.json" % stamp)

@@ -4,7 +4,8 @@
 # duplicated speed, an index given twice, an index outside the grid, a spectrum of another shape,
 # /sweep@n_done off) and the same sweep is run on each. Each run must fail naming the file and the
 # dataset, and leave the file byte for byte as it was. The intact file resumes with every speed
-# done. Skipped (77) without /usr/bin/python3 and h5py.
+# done. The first run's summary names the kernel and, on 2 ranks, each rank's idle share.
+# Skipped (77) without /usr/bin/python3 and h5py.
 # usage: case_sweep_checkpoint.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
 set -euo pipefail
 /usr/bin/python3 -c "import h5py, numpy" 2>/dev/null || { echo "case: skipped: no python3 with h5py"; exit 77; }
@@ -16,7 +17,14 @@ run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -n
 sweep=(sweep -rom "$d/cb.h5" -contact_set x1 -casing_clearance 2e-4 -casing_bump_height 6e-4 -casing_width 0.3
        -sim_dt 4e-6 -sim_revolutions 2 -sweep_omega_min 1000 -sweep_omega_max 2000 -sweep_omega_step 100
        -sweep_monitor tipnode -sweep_spectrum_fmax 3000 -sweep_spectrum_bins 10)
-run "${sweep[@]}" -out "$d/good.h5"
+out=$(run "${sweep[@]}" -out "$d/good.h5")
+echo "$out" | tail -3
+# The summary names the kernel (a CB model with exact tensors has a potential: the batched
+# potential kernel by default) and, on several ranks, each rank's idle share.
+grep -q "in the force kernels (potential)" <<<"$out" || { echo "case: FAIL: no potential kernel in: $out"; exit 1; }
+if [ "$np" -gt 1 ]; then
+  grep -Eq "idle per rank: 0: [0-9]+%, 1: [0-9]+%" <<<"$out" || { echo "case: FAIL: no idle share per rank"; exit 1; }
+fi
 
 # corrupt NAME PYTHON: $d/NAME.h5 is a copy of the good file, changed by the python code (f is the
 # open file, s its /sweep group).
