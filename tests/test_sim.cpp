@@ -780,8 +780,10 @@ void check_sweep(bool massless) {
     MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
     EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (kernel " << sim::kernel_name(kernel)
                        << (sp ? ", float" : "") << ")";
-    (sp ? single : kernel == sim::SweepKernel::Potential ? one : kernel == sim::SweepKernel::Folded ? folded : lane) =
-        std::move(alone);
+    (sp                                      ? single
+     : kernel == sim::SweepKernel::Potential ? one
+     : kernel == sim::SweepKernel::Folded    ? folded
+                                             : lane) = std::move(alone);
   }
   // Against sim::integrate, speed by speed (on every rank, from `one`).
   int touched = 0;

@@ -60,8 +60,7 @@ void run_sweep(MPI_Comm comm) {
          "%.4g s (critical %.4g s), "
          "r = %zu, %s, %d lanes per rank (-sweep_kernel %s) on %d rank(s)\n",
          coarse, so.omega_min, last, so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(),
-         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, sim::kernel_name(so.kernel),
-         size);
+         s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, sim::kernel_name(so.kernel), size);
   if (so.refine_step > 0)
     print0(comm,
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "

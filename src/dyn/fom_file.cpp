@@ -171,8 +171,8 @@ SnapshotRow read_fom_snapshot_row(const std::string& file, double time) {
   for (std::size_t j = 1; j < times.size(); ++j)
     if (std::abs(times[j] - time) < std::abs(times[k] - time)) k = j;
   MORSE_CHECK(io::read_double_row(file, "/fom/snapshots/u", static_cast<std::int64_t>(k), &s.u, &err), err);
-  MORSE_CHECK(s.u.size() == s.node_ids.size(), file, ": /fom/snapshots/u has ", s.u.size(),
-              " columns but the DOF map ", s.node_ids.size());
+  MORSE_CHECK(s.u.size() == s.node_ids.size(), file, ": /fom/snapshots/u has ", s.u.size(), " columns but the DOF map ",
+              s.node_ids.size());
   s.time = times[k], s.index = static_cast<std::int64_t>(k), s.n_rows = static_cast<std::int64_t>(times.size());
   return s;
 }

@@ -50,8 +50,7 @@ constexpr std::size_t kPad = 4;
 template <int NG, int RH, class T>
 inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t n, const T* const* p,
                                                      const v4 (*s_in)[NG], v4 (*acc_out)[NG],
-                                                     const double* __restrict X, double* __restrict G,
-                                                     std::size_t ld) {
+                                                     const double* __restrict X, double* __restrict G, std::size_t ld) {
   // Local copies indexed by constants only (the loops over a and g unroll), so that they live in
   // registers: acc in memory would put a store-to-load forwarding into every multiply-add chain.
   v4 acc[RH][NG], s[RH][NG];
@@ -220,8 +219,10 @@ void project(std::size_t r, std::size_t L, const std::size_t* groups, std::size_
 }  // namespace
 
 CubicKernelBatch::CubicKernelBatch(const CubicKernel& k, bool single) : r_(k.r()), single_(single) {
-  MORSE_CHECK(k.potential(), "sweep: the batched potential kernel needs a reduced force that is the gradient of a "
-                             "potential (relative asymmetry ", k.asymmetry(), "); use the per-lane kernel");
+  MORSE_CHECK(k.potential(),
+              "sweep: the batched potential kernel needs a reduced force that is the gradient of a "
+              "potential (relative asymmetry ",
+              k.asymmetry(), "); use the per-lane kernel");
   P3_ = k.P3_;
   n3_ = k.c3_.size(), n4_ = k.c4_.size();
   if (single) {

@@ -381,9 +381,9 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
                 "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
-                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel), s.single ? 1 : 0,
-                o.rotation, o.refine_step, o.refine_rms, o.refine_frequency, nlrom::fingerprint(m).c_str(),
-                o.energy_balance ? 1 : 0);
+                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel),
+                s.single ? 1 : 0, o.rotation, o.refine_step, o.refine_rms, o.refine_frequency,
+                nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0);
   return b;
 }
 
@@ -488,8 +488,8 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   MPI_Comm_size(comm, &size);
   // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
   const std::size_t per_rank = (todo.size() + static_cast<std::size_t>(size) - 1) / static_cast<std::size_t>(size);
-  const int lanes = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::max(1, s.batch)),
-                                                           std::max<std::size_t>(1, per_rank)));
+  const int lanes = static_cast<int>(
+      std::min<std::size_t>(static_cast<std::size_t>(std::max(1, s.batch)), std::max<std::size_t>(1, per_rank)));
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
   c.rate = rate / size;
@@ -517,7 +517,7 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
       });
       st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
           st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
-          st.kernel = rs.kernel;
+      st.kernel = rs.kernel;
       *n_run += todo.size();
     }
     // The next round, decided on rank 0 (which holds the results) and shared.

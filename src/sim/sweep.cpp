@@ -414,8 +414,8 @@ class Batch {
   const std::vector<ReducedLoad> no_loads_;
   std::vector<std::size_t> groups_;
   std::vector<Lane> lanes_;
-  std::unique_ptr<CubicKernel> lane_kernel_;         // SweepKernel::Lane
-  std::unique_ptr<CubicKernelBatch> potential_;      // SweepKernel::Potential
+  std::unique_ptr<CubicKernel> lane_kernel_;     // SweepKernel::Lane
+  std::unique_ptr<CubicKernelBatch> potential_;  // SweepKernel::Potential
   SweepKernel kind_ = SweepKernel::Lane;
   std::vector<double> y_;
 

@@ -83,7 +83,7 @@ struct SweepOptions {
   PetscInt bins = 500, batch = 8;
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, single = PETSC_FALSE;
   SweepKernel kernel = SweepKernel::Auto;  ///< -sweep_kernel
-  PetscBool energy_balance = PETSC_TRUE;  ///< -sim_energy_balance
+  PetscBool energy_balance = PETSC_TRUE;   ///< -sim_energy_balance
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
   int rotation = 1;
@@ -98,10 +98,9 @@ struct SweepOptions {
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
-  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation and the contact options (ContactOptions::set_from_options).
-  /// A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, or a grid of more than
-  /// kMaxSweepSpeeds speeds (the message gives the file size it would need) is recorded in
-  /// `error`. Collective.
+  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation and the contact options
+  /// (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, or a grid of more
+  /// than kMaxSweepSpeeds speeds (the message gives the file size it would need) is recorded in `error`. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
   /// Throws (alike on every rank) on options a sweep refuses: `error`, no -rom or -contact_set, a
   /// plane obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
