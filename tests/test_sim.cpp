@@ -343,8 +343,9 @@ TEST(Sim, PotentialKernelMatchesFolded) {
 // CubicForce, P3 g~(q), lane by lane, at r = 30 (every index pattern; triangles of every size, so
 // every partial row block of 1..3 rows) and r = 7: 12 lanes of different q in 3 groups, scattered
 // in a wider array. Each lane's bits do not depend on its group's partner, position or order (a
-// pair of groups, 2 rows at a time; a group alone, 4 rows at a time). Float coefficients differ
-// from double by their rounding only.
+// pair of groups, 3 rows at a time; a group alone, 4 rows at a time), and equal those of the
+// single-speed kernel (CubicKernel, scalar). Float coefficients differ from double by their
+// rounding only.
 TEST(Sim, BatchedPotentialKernelMatchesReferenceAndIsBitwisePerLane) {
   const auto [exact, step] = box_forces_r30();
   for (const nlrom::CubicForce* force : {&exact, &step}) {
@@ -414,6 +415,15 @@ TEST(Sim, BatchedPotentialKernelMatchesReferenceAndIsBitwisePerLane) {
         for (std::size_t l = 0; l < lanes; ++l)
           same = same && Y1[j * L + l] == Y[j * L + l] && Y2[j * L + l] == Y[j * L + l];
       EXPECT_TRUE(same) << "a lane's bits depend on the groups beside it (r " << r << ")";
+      // The single-speed kernel (CubicKernel, `morse simulate`) applies the same bits to each lane.
+      bool single_same = true;
+      std::vector<double> y1(r);
+      for (std::size_t l = 0; l < lanes; ++l) {
+        for (std::size_t j = 0; j < r; ++j) q[j] = Q[j * L + l];
+        pot.apply(q.data(), y1.data());
+        for (std::size_t j = 0; j < r; ++j) single_same = single_same && y1[j] == Y[j * L + l];
+      }
+      EXPECT_TRUE(single_same) << "the single-speed kernel differs from the batched one (r " << r << ")";
       // Float coefficients: |c - fl(c)| <= 2^-24 |c|, so each output moves by at most 2^-24 times
       // the sum of its terms' magnitudes (bounded here by 100 times the output scale), and it moves.
       std::vector<double> Yf(r * L, 0.0);

@@ -42,44 +42,71 @@ inline __attribute__((always_inline)) v4 bcast(const double* c) { return __built
 inline __attribute__((always_inline)) v4 bcast(const float* c) {
   return __builtin_convertvector(__builtin_shuffle(*reinterpret_cast<const f4*>(c), i4{0, 0, 0, 0}), v4);
 }
+
+// The width of a group: 4 lanes in one AVX2 register (a sweep's lanes), or 1 lane in a scalar
+// (`morse simulate`, CubicKernel). The same operations in the same order, each rounded alike (a
+// fused multiply-add in the AVX2 + FMA clone, a product then a sum in the baseline), so that a
+// lane gets the same bits at either width.
+struct Wide {
+  typedef v4 V;
+  static constexpr std::size_t W = 4;
+  static V ld(const double* p) { return vld(p); }
+  static void st(double* p, V v) { vst(p, v); }
+  template <class T>
+  static V bc(const T* c) {
+    return bcast(c);
+  }
+  static V zero() { return V{0.0, 0.0, 0.0, 0.0}; }
+};
+struct Narrow {
+  typedef double V;
+  static constexpr std::size_t W = 1;
+  static V ld(const double* p) { return *p; }
+  static void st(double* p, V v) { *p = v; }
+  template <class T>
+  static V bc(const T* c) {
+    return static_cast<double>(*c);
+  }
+  static V zero() { return 0.0; }
+};
 constexpr std::size_t kPad = 4;
 
 // Rows kb .. kb + RH - 1 of a triangle of n columns (row kb + a: its column l at p[a][l]), for NG
 // groups of 4 lanes at X and G (row stride ld). Returns acc[a][g] and adds the rows' slot-l terms
 // to G.
-template <int NG, int RH, class T>
+template <class Op, int NG, int RH, class T>
 inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t n, const T* const* p,
-                                                     const v4 (*s_in)[NG], v4 (*acc_out)[NG],
+                                                     const typename Op::V (*s_in)[NG], typename Op::V (*acc_out)[NG],
                                                      const double* __restrict X, double* __restrict G, std::size_t ld) {
   // Local copies indexed by constants only (the loops over a and g unroll), so that they live in
   // registers: acc in memory would put a store-to-load forwarding into every multiply-add chain.
-  v4 acc[RH][NG], s[RH][NG];
+  typename Op::V acc[RH][NG], s[RH][NG];
   const T* pa[RH];
 #pragma GCC unroll 4
   for (int a = 0; a < RH; ++a) {
     pa[a] = p[a];
 #pragma GCC unroll 4
-    for (int g = 0; g < NG; ++g) acc[a][g] = v4{0.0, 0.0, 0.0, 0.0}, s[a][g] = s_in[a][g];
+    for (int g = 0; g < NG; ++g) acc[a][g] = Op::zero(), s[a][g] = s_in[a][g];
   }
   // The triangle of the block: row a has the columns kb + a .. kb + RH - 1 of it.
 #pragma GCC unroll 4
   for (int a = 0; a < RH; ++a)
     for (std::size_t l = kb + static_cast<std::size_t>(a); l < kb + RH; ++l) {
-      const v4 c = bcast(pa[a] + l);
+      const typename Op::V c = Op::bc(pa[a] + l);
 #pragma GCC unroll 4
       for (int g = 0; g < NG; ++g) {
-        acc[a][g] += c * vld(X + l * ld + 4 * g);
-        vst(G + l * ld + 4 * g, vld(G + l * ld + 4 * g) + c * s[a][g]);
+        acc[a][g] += c * Op::ld(X + l * ld + Op::W * g);
+        Op::st(G + l * ld + Op::W * g, Op::ld(G + l * ld + Op::W * g) + c * s[a][g]);
       }
     }
   // The rectangle: every row of the block, columns kb + RH .. n - 1.
   for (std::size_t l = kb + RH; l < n; ++l) {
-    v4 x[NG], y[NG];
+    typename Op::V x[NG], y[NG];
 #pragma GCC unroll 4
-    for (int g = 0; g < NG; ++g) x[g] = vld(X + l * ld + 4 * g), y[g] = vld(G + l * ld + 4 * g);
+    for (int g = 0; g < NG; ++g) x[g] = Op::ld(X + l * ld + Op::W * g), y[g] = Op::ld(G + l * ld + Op::W * g);
 #pragma GCC unroll 4
     for (int a = 0; a < RH; ++a) {
-      const v4 c = bcast(pa[a] + l);
+      const typename Op::V c = Op::bc(pa[a] + l);
 #pragma GCC unroll 4
       for (int g = 0; g < NG; ++g) {
         acc[a][g] += c * x[g];
@@ -87,7 +114,7 @@ inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t
       }
     }
 #pragma GCC unroll 4
-    for (int g = 0; g < NG; ++g) vst(G + l * ld + 4 * g, y[g]);
+    for (int g = 0; g < NG; ++g) Op::st(G + l * ld + Op::W * g, y[g]);
   }
 #pragma GCC unroll 4
   for (int a = 0; a < RH; ++a)
@@ -96,16 +123,16 @@ inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t
 }
 
 // Rows kb .. kb + rh - 1 for a run-time rh <= RH: row_block with rh as a constant.
-template <int NG, int RH, class T>
+template <class Op, int NG, int RH, class T>
 inline __attribute__((always_inline)) void row_block_upto(std::size_t rh, std::size_t kb, std::size_t n,
-                                                          const T* const* p, const v4 (*s)[NG], v4 (*acc)[NG],
-                                                          const double* __restrict X, double* __restrict G,
-                                                          std::size_t ld) {
+                                                          const T* const* p, const typename Op::V (*s)[NG],
+                                                          typename Op::V (*acc)[NG], const double* __restrict X,
+                                                          double* __restrict G, std::size_t ld) {
   if constexpr (RH >= 1) {
     if (rh == RH)
-      row_block<NG, RH>(kb, n, p, s, acc, X, G, ld);
+      row_block<Op, NG, RH>(kb, n, p, s, acc, X, G, ld);
     else
-      row_block_upto<NG, RH - 1>(rh, kb, n, p, s, acc, X, G, ld);
+      row_block_upto<Op, NG, RH - 1>(rh, kb, n, p, s, acc, X, G, ld);
   }
 }
 
@@ -113,25 +140,25 @@ inline __attribute__((always_inline)) void row_block_upto(std::size_t rh, std::s
 // Quartic), for NG groups at X and G, R rows at a time. A row's slot-k term goes to G(k) when the
 // row is done; its slot-i (and slot-j) terms are summed over the triangle's rows in order, in
 // registers, and added to G(i) (and G(j)) at the end.
-template <int NG, int R, bool Quartic, class T>
+template <class Op, int NG, int R, bool Quartic, class T>
 inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j, std::size_t k0, std::size_t n,
                                                     const T* C, const double* __restrict X, double* __restrict G,
                                                     std::size_t ld) {
-  v4 base[NG], xi[NG], xj[NG], si[NG], sj[NG];
+  typename Op::V base[NG], xi[NG], xj[NG], si[NG], sj[NG];
   for (int g = 0; g < NG; ++g) {
-    xi[g] = vld(X + i * ld + 4 * g), xj[g] = vld(X + j * ld + 4 * g);
+    xi[g] = Op::ld(X + i * ld + Op::W * g), xj[g] = Op::ld(X + j * ld + Op::W * g);
     base[g] = Quartic ? xi[g] * xj[g] : xi[g];
-    si[g] = sj[g] = v4{0.0, 0.0, 0.0, 0.0};
+    si[g] = sj[g] = Op::zero();
   }
   const T* row = C;
   for (std::size_t kb = k0; kb < n; kb += R) {
     const std::size_t rh = std::min<std::size_t>(R, n - kb);
     const T* p[R];
-    v4 s[R][NG], acc[R][NG];
+    typename Op::V s[R][NG], acc[R][NG];
     for (std::size_t a = 0; a < rh; ++a) {
       p[a] = row - (kb + a);  // column l of row kb + a at p[a][l] (inside C: rows before it are longer)
       row += n - (kb + a);
-      for (int g = 0; g < NG; ++g) s[a][g] = base[g] * vld(X + (kb + a) * ld + 4 * g);
+      for (int g = 0; g < NG; ++g) s[a][g] = base[g] * Op::ld(X + (kb + a) * ld + Op::W * g);
     }
     // The hardware prefetcher does not run far enough ahead of the short rows of a triangle:
     // ask for the lines 1 KB past this block's coefficients (measured: 4 % more lane-steps/s at
@@ -140,28 +167,28 @@ inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j
                     *b = reinterpret_cast<const char*>(row) + 1024;
          a < b; a += 64)
       __builtin_prefetch(a);
-    row_block_upto<NG, R>(rh, kb, n, p, s, acc, X, G, ld);
+    row_block_upto<Op, NG, R>(rh, kb, n, p, s, acc, X, G, ld);
     for (std::size_t a = 0; a < rh; ++a) {
       const std::size_t k = kb + a;
       for (int g = 0; g < NG; ++g) {
-        const v4 xk = vld(X + k * ld + 4 * g);
+        const typename Op::V xk = Op::ld(X + k * ld + Op::W * g);
         if (Quartic) {
           si[g] += acc[a][g] * (xj[g] * xk);
           sj[g] += acc[a][g] * (xi[g] * xk);
         } else {
           si[g] += acc[a][g] * xk;
         }
-        double* gk = G + k * ld + 4 * g;
-        vst(gk, vld(gk) + acc[a][g] * base[g]);
+        double* gk = G + k * ld + Op::W * g;
+        Op::st(gk, Op::ld(gk) + acc[a][g] * base[g]);
       }
     }
   }
   for (int g = 0; g < NG; ++g) {
-    double* gi = G + i * ld + 4 * g;
-    vst(gi, vld(gi) + si[g]);
+    double* gi = G + i * ld + Op::W * g;
+    Op::st(gi, Op::ld(gi) + si[g]);
     if (Quartic) {
-      double* gj = G + j * ld + 4 * g;
-      vst(gj, vld(gj) + sj[g]);
+      double* gj = G + j * ld + Op::W * g;
+      Op::st(gj, Op::ld(gj) + sj[g]);
     }
   }
 }
@@ -169,38 +196,38 @@ inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j
 // Every triangle for the groups at X, G (ng groups, row stride 4 ng): pairs of groups 3 rows at a
 // time (16 vector registers), a last single group 4 rows at a time (11); the fastest measured on
 // the 2-core EPYC (bench/README.md, "Batched potential kernel").
-template <bool Quartic, class T>
+template <class Op, bool Quartic, class T>
 inline __attribute__((always_inline)) void triangles(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
                                                      std::size_t ng, const T* C, const double* X, double* G) {
-  const std::size_t ld = 4 * ng;
+  const std::size_t ld = Op::W * ng;
   std::size_t g = 0;
-  for (; g + 2 <= ng; g += 2) triangle<2, 3, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
-  if (g < ng) triangle<1, 4, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+  for (; g + 2 <= ng; g += 2) triangle<Op, 2, 3, Quartic>(i, j, k0, r, C, X + Op::W * g, G + Op::W * g, ld);
+  if (g < ng) triangle<Op, 1, 4, Quartic>(i, j, k0, r, C, X + Op::W * g, G + Op::W * g, ld);
 }
 
-template <class T>
+template <class Op, class T>
 inline __attribute__((always_inline)) void gradient(std::size_t r, std::size_t ng, const T* c3, const T* c4,
                                                     const double* X, double* G) {
-  std::memset(G, 0, sizeof(double) * r * 4 * ng);
+  std::memset(G, 0, sizeof(double) * r * Op::W * ng);
   for (std::size_t i = 0; i < r; ++i) {  // cubic: triangle of rows j = i .. r - 1
-    triangles<false>(i, i, i, r, ng, c3, X, G);
+    triangles<Op, false>(i, i, i, r, ng, c3, X, G);
     c3 += (r - i) * (r - i + 1) / 2;
   }
   for (std::size_t i = 0; i < r; ++i)
     for (std::size_t j = i; j < r; ++j) {  // quartic: triangle of rows k = j .. r - 1
-      triangles<true>(i, j, j, r, ng, c4, X, G);
+      triangles<Op, true>(i, j, j, r, ng, c4, X, G);
       c4 += (r - j) * (r - j + 1) / 2;
     }
 }
 
 MORSE_KERNEL_CLONES
 void gradient_double(std::size_t r, std::size_t ng, const double* c3, const double* c4, const double* X, double* G) {
-  gradient(r, ng, c3, c4, X, G);
+  gradient<Wide>(r, ng, c3, c4, X, G);
 }
 
 MORSE_KERNEL_CLONES
 void gradient_float(std::size_t r, std::size_t ng, const float* c3, const float* c4, const double* X, double* G) {
-  gradient(r, ng, c3, c4, X, G);
+  gradient<Wide>(r, ng, c3, c4, X, G);
 }
 
 // Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing.
@@ -217,6 +244,20 @@ void project(std::size_t r, std::size_t L, const std::size_t* groups, std::size_
 }
 
 }  // namespace
+
+namespace detail {
+// Not vectorized by GCC: its SLP vectorizer would pack the rows' products into vector multiplies
+// and adds, unfused, where the lanes of CubicKernelBatch fuse them (measured: 1-ulp differences).
+MORSE_KERNEL_CLONES __attribute__((optimize("no-tree-vectorize"))) void potential_force_lane(
+    std::size_t r, const double* q, const double* c3, const double* c4, const double* P3, double* g, double* y) {
+  gradient<Narrow>(r, 1, c3, c4, q, g);
+  for (std::size_t p = 0; p < r; ++p) {  // as project(), one lane
+    double v = 0.0;
+    for (std::size_t k = 0; k < r; ++k) v += P3[p * r + k] * g[k];
+    y[p] = v;
+  }
+}
+}  // namespace detail
 
 CubicKernelBatch::CubicKernelBatch(const CubicKernel& k, bool single) : r_(k.r()), single_(single) {
   MORSE_CHECK(k.potential(),

@@ -349,75 +349,12 @@ void monomials_and_product(std::size_t r, std::size_t n, const double* __restric
 }
 }  // namespace
 
-namespace {
-// g = grad of sum c3 q_i q_j q_k + sum c4 q_i q_j q_k q_l over sorted tuples, by the product
-// rule slot by slot (repeated indices come out right: each slot contributes once). Rows of c3
-// (k = j..r-1 for one (i, j)) and of c4 (l = k..r-1 for one (i, j, k)) are contiguous: one axpy
-// into g(k..) and one dot for the other slots per row.
-// One row: g(0..n) += s c, and returns c . x, with four partial sums (vectorizable without
-// reassociating the compiler's way).
-inline __attribute__((always_inline)) double row_update(std::size_t n, const double* __restrict c,
-                                                        const double* __restrict x, double s, double* __restrict g) {
-  double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
-  std::size_t t = 0;
-  for (; t + 4 <= n; t += 4) {
-    a0 += c[t] * x[t];
-    a1 += c[t + 1] * x[t + 1];
-    a2 += c[t + 2] * x[t + 2];
-    a3 += c[t + 3] * x[t + 3];
-    g[t] += c[t] * s;
-    g[t + 1] += c[t + 1] * s;
-    g[t + 2] += c[t + 2] * s;
-    g[t + 3] += c[t + 3] * s;
-  }
-  for (; t < n; ++t) {
-    a0 += c[t] * x[t];
-    g[t] += c[t] * s;
-  }
-  return (a0 + a1) + (a2 + a3);
-}
-
-MORSE_KERNEL_CLONES
-void potential_gradient(std::size_t r, const double* __restrict q, const double* __restrict c3,
-                        const double* __restrict c4, double* __restrict g) {
-  for (std::size_t p = 0; p < r; ++p) g[p] = 0.0;
-  for (std::size_t i = 0; i < r; ++i)
-    for (std::size_t j = i; j < r; ++j) {
-      const double qij = q[i] * q[j];
-      {
-        const std::size_t len = r - j;
-        const double* __restrict c = c3;
-        const double acc = row_update(len, c, q + j, qij, g + j);
-        c3 += len;
-        g[i] += acc * q[j];
-        g[j] += acc * q[i];
-      }
-      for (std::size_t k = j; k < r; ++k) {
-        const std::size_t len = r - k;
-        const double* __restrict c = c4;
-        const double p3 = qij * q[k];
-        const double acc = row_update(len, c, q + k, p3, g + k);
-        c4 += len;
-        g[i] += acc * q[j] * q[k];
-        g[j] += acc * q[i] * q[k];
-        g[k] += acc * qij;
-      }
-    }
-}
-}  // namespace
-
 void CubicKernel::apply(const double* q, double* y) const {
   if (!potential_) {
     monomials_and_product(r_, n_, q, z_.data(), W_.data(), y);
     return;
   }
-  potential_gradient(r_, q, c3_.data(), c4_.data(), z_.data());
-  for (std::size_t p = 0; p < r_; ++p) {
-    double v = 0.0;
-    const double* row = &P3_[p * r_];
-    for (std::size_t k = 0; k < r_; ++k) v += row[k] * z_[k];
-    y[p] = v;
-  }
+  detail::potential_force_lane(r_, q, c3_.data(), c4_.data(), P3_.data(), z_.data(), y);
 }
 
 double CubicKernel::flops() const {

@@ -37,6 +37,11 @@ void panel_product(std::size_t n_panels, std::size_t n_cols, std::size_t split, 
 /// rows (diagonal blocks whole). x and y have n_panels kPanel entries. Built for AVX2 + FMA and the
 /// baseline.
 void sym_panel_product(std::size_t n_panels, const double* S, const double* x, double* y);
+/// y = P3 g~(q), g~ = the gradient of the potential with the coefficients c3, c4 of CubicKernel
+/// (g: r entries of scratch, then g~): CubicKernelBatch's arithmetic for one lane, so that a speed
+/// of a sweep and `morse simulate` apply the same bits. Built for AVX2 + FMA and the baseline.
+void potential_force_lane(std::size_t r, const double* q, const double* c3, const double* c4, const double* P3,
+                          double* g, double* y);
 /// z = the r (r + 1) / 2 monomials q_i q_j, i <= j, lexicographic.
 void quadratic_monomials(std::size_t r, const double* q, double* z);
 

@@ -244,8 +244,8 @@ class CubicKernel {
 ///  - A lane's arithmetic (the order of its sums, where it fuses multiply-adds) does not depend on
 ///    the lane's group, on how many groups share the pass or which: a speed gives the same bits
 ///    whichever speeds run beside it.
-///  - The gradient is summed in another order than CubicKernel's: the two agree to round-off, not
-///    bitwise.
+///  - CubicKernel's potential layout runs the same kernel on one lane (a scalar build): a speed of
+///    a sweep and `morse simulate` apply the same bits (tested).
 ///  - Float coefficients (`single`): the coefficients rounded to float (half the bytes), the
 ///    products and sums in double. Their error is that of the rounding, about 6e-8 relative per
 ///    coefficient.
