@@ -852,6 +852,13 @@ void check_sweep(bool massless) {
            R.steps, R.rms, R.max_displacement, R.max_force, R.max_active);
   }
   EXPECT_GE(touched, 3) << "the casing should be touched at most speeds";
+  // Float coefficients exist only in the potential kernel: asked with another, the sweep is refused
+  // on every rank, naming the option, before anything runs.
+  sim::SweepSettings sf = s;
+  sf.kernel = sim::SweepKernel::Folded;
+  sf.single = true;
+  test::expect_error_parts([&] { sim::sweep(PETSC_COMM_WORLD, rm, sf, tasks, [](const sim::SpeedResult&) {}); },
+                           {"-sweep_float", "potential kernel"}, "float coefficients with the folded kernel");
 }
 }  // namespace
 
