@@ -10,10 +10,11 @@
 // feeds 2 multiply-adds per group of 4 lanes.
 //
 // A lane's arithmetic does not depend on R nor on the groups beside it: acc_k is one sum over l in
-// increasing order from zero, and g_l receives the rows' terms in increasing k, then the rows'
-// other-slot terms in the same order as row by row (a row's other slots i, j, k are never columns of
-// the later rows of its triangle). So one group (R = 4) and a pair of groups (R = 2) give the same
-// bits, lane by lane.
+// increasing order from zero; g_l receives the rows' slot-l terms in increasing k; a row's slot-k
+// term goes to g_k when the row is done, and its slot-i (and slot-j) terms are summed over the
+// triangle's rows in order, in registers, and added to g_i (g_j) at its end (a row's own slots are
+// never columns of the later rows of its triangle). So a group alone (R = 4), a pair of groups
+// (R = 3) and one lane in scalars (CubicKernel, `morse simulate`) give the same bits, lane by lane.
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
