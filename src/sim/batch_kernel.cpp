@@ -231,17 +231,24 @@ void gradient_float(std::size_t r, std::size_t ng, const float* c3, const float*
   gradient<Wide>(r, ng, c3, c4, X, G);
 }
 
-// Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing.
-MORSE_KERNEL_CLONES
-void project(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, const double* __restrict P3,
-             const double* __restrict G, double* __restrict Y) {
-  const std::size_t ld = 4 * ng;
+// Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing (G compact: row stride W ng).
+template <class Op>
+inline __attribute__((always_inline)) void project(std::size_t r, std::size_t L, const std::size_t* groups,
+                                                   std::size_t ng, const double* __restrict P3,
+                                                   const double* __restrict G, double* __restrict Y) {
+  const std::size_t ld = Op::W * ng;
   for (std::size_t p = 0; p < r; ++p)
     for (std::size_t g = 0; g < ng; ++g) {
-      v4 y = {0.0, 0.0, 0.0, 0.0};
-      for (std::size_t k = 0; k < r; ++k) y += bcast(&P3[p * r + k]) * vld(G + k * ld + 4 * g);
-      vst(Y + p * L + 4 * groups[g], y);
+      typename Op::V y = Op::zero();
+      for (std::size_t k = 0; k < r; ++k) y += Op::bc(&P3[p * r + k]) * Op::ld(G + k * ld + Op::W * g);
+      Op::st(Y + p * L + Op::W * groups[g], y);
     }
+}
+
+MORSE_KERNEL_CLONES
+void project_groups(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng,
+                    const double* __restrict P3, const double* __restrict G, double* __restrict Y) {
+  project<Wide>(r, L, groups, ng, P3, G, Y);
 }
 
 }  // namespace
@@ -251,12 +258,9 @@ namespace detail {
 // and adds, unfused, where the lanes of CubicKernelBatch fuse them (measured: 1-ulp differences).
 MORSE_KERNEL_CLONES __attribute__((optimize("no-tree-vectorize"))) void potential_force_lane(
     std::size_t r, const double* q, const double* c3, const double* c4, const double* P3, double* g, double* y) {
+  const std::size_t lane = 0;
   gradient<Narrow>(r, 1, c3, c4, q, g);
-  for (std::size_t p = 0; p < r; ++p) {  // as project(), one lane
-    double v = 0.0;
-    for (std::size_t k = 0; k < r; ++k) v += P3[p * r + k] * g[k];
-    y[p] = v;
-  }
+  project<Narrow>(r, 1, &lane, 1, P3, g, y);
 }
 }  // namespace detail
 
@@ -295,7 +299,7 @@ void CubicKernelBatch::apply(std::size_t L, const std::size_t* groups, std::size
     gradient_float(r_, ng, c3f_.data(), c4f_.data(), X, G);
   else
     gradient_double(r_, ng, c3_.data(), c4_.data(), X, G);
-  project(r_, L, groups, ng, P3_.data(), G, Y);
+  project_groups(r_, L, groups, ng, P3_.data(), G, Y);
 }
 
 double CubicKernelBatch::flops() const {

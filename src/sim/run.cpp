@@ -487,9 +487,7 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   int size = 1;
   MPI_Comm_size(comm, &size);
   // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
-  const std::size_t per_rank = (todo.size() + static_cast<std::size_t>(size) - 1) / static_cast<std::size_t>(size);
-  const int lanes = static_cast<int>(
-      std::min<std::size_t>(static_cast<std::size_t>(std::max(1, s.batch)), std::max<std::size_t>(1, per_rank)));
+  const int lanes = static_cast<int>(sweep_lanes_per_rank(s.batch, todo.size(), size));
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
   c.rate = rate / size;

@@ -206,28 +206,25 @@ class Batch {
       detail::step_operators(m, s.base.dt, &P1_, &P2_, &P3_);
     }
     const std::size_t rp = (r_ + 3) / 4 * 4;
-    SweepKernel kind = s.base.linear ? SweepKernel::Lane : s.kernel;
-    if (!s.base.linear && (kind == SweepKernel::Auto || kind == SweepKernel::Potential)) {
-      // Auto: the potential form whenever g~ has one (CubicKernel's Auto keeps the folded one for
-      // small r, where it is faster lane by lane, not batched).
+    // The kernel: Auto resolves to Potential whenever g~ has a potential (CubicKernel's Auto keeps
+    // the folded form for small r, where it is faster lane by lane, not batched), else to Lane. A
+    // linear run has none (Lane, no kernel).
+    kind_ = s.base.linear ? SweepKernel::Lane : s.kernel;
+    if (kind_ == SweepKernel::Auto || kind_ == SweepKernel::Potential) {
       auto k = std::make_unique<CubicKernel>(
-          m.g, P3_, kind == SweepKernel::Potential ? KernelLayout::Potential : KernelLayout::Auto);
+          m.g, P3_, kind_ == SweepKernel::Potential ? KernelLayout::Potential : KernelLayout::Auto);
       if (!k->potential() && k->asymmetry() <= 1e-6)
         k = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Potential);
       if (k->potential()) {
         potential_ = std::make_unique<CubicKernelBatch>(*k, s.single);
-        kind = SweepKernel::Potential;
+        kind_ = SweepKernel::Potential;
       } else {
         lane_kernel_ = std::move(k);
-        kind = SweepKernel::Lane;
+        kind_ = SweepKernel::Lane;
       }
-    }
-    MORSE_CHECK(!s.single || kind == SweepKernel::Potential,
-                "sweep: float coefficients (-sweep_float) need the potential kernel (-sweep_kernel potential or "
-                "auto with a force that is the gradient of a potential)");
-    if (!s.base.linear && kind == SweepKernel::Lane && !lane_kernel_) {
+    } else if (kind_ == SweepKernel::Lane && !s.base.linear) {
       lane_kernel_ = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Auto);
-    } else if (!s.base.linear && kind == SweepKernel::Folded) {
+    } else if (kind_ == SweepKernel::Folded) {
       CubicKernel k(m.g, P3_, KernelLayout::Folded);
       const auto& W = k.folded();
       n_ = W.size() / r_;
@@ -236,8 +233,10 @@ class Batch {
         for (std::size_t p = 0; p < r_; ++p) W_[(p / 4) * 4 * n_ + 4 * m + p % 4] = W[m * r_ + p];
       Z_.assign(n_ * L_, 0.0);
     }
+    MORSE_CHECK(!s.single || kind_ == SweepKernel::Potential,
+                "sweep: float coefficients (-sweep_float) need the potential kernel (-sweep_kernel potential or "
+                "auto with a force that is the gradient of a potential)");
     if (lane_kernel_) y_.assign(r_, 0.0);
-    kind_ = s.base.linear ? SweepKernel::Lane : kind;
     Q_.assign(r_ * L_, 0.0), Qm_.assign(r_ * L_, 0.0), Qp_.assign(r_ * L_, 0.0), Y_.assign(rp * L_, 0.0);
     lanes_.resize(want);
     col_.resize(r_), colm_.resize(r_);
@@ -298,13 +297,11 @@ class Batch {
         lane_kernel_->apply(col_.data(), y_.data());
         for (std::size_t p = 0; p < r_; ++p) Qp_[p * L_ + slot] -= y_[p];
       }
-    } else if (potential_) {
-      potential_->apply(L_, groups_.data(), groups_.size(), Q_.data(), Y_.data());
-      for (auto g : groups_)
-        for (std::size_t p = 0; p < r_; ++p)
-          for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
-    } else if (!s_.base.linear) {
-      batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), n_, Q_.data(), Y_.data(), Z_.data());
+    } else if (!s_.base.linear) {  // a batched kernel: Y for the busy groups
+      if (potential_)
+        potential_->apply(L_, groups_.data(), groups_.size(), Q_.data(), Y_.data());
+      else
+        batch_cubic(r_, L_, groups_.data(), groups_.size(), W_.data(), n_, Q_.data(), Y_.data(), Z_.data());
       for (auto g : groups_)
         for (std::size_t p = 0; p < r_; ++p)
           for (std::size_t l = 0; l < kGroup; ++l) Qp_[p * L_ + g * kGroup + l] -= Y_[p * L_ + g * kGroup + l];
@@ -476,6 +473,15 @@ double measure_step_rate(const nlrom::ReducedModel& m, const SweepSettings& s, d
   return dt > 0 ? static_cast<double>(steps) * one.batch / dt : 0.0;
 }
 
+std::size_t sweep_share(std::size_t speeds, int ranks) {
+  const std::size_t n = static_cast<std::size_t>(std::max(1, ranks));
+  return std::max<std::size_t>(1, (speeds + n - 1) / n);
+}
+
+std::size_t sweep_lanes_per_rank(int batch, std::size_t speeds, int ranks) {
+  return std::min(static_cast<std::size_t>(std::max(1, batch)), sweep_share(speeds, ranks));
+}
+
 const char* kernel_name(SweepKernel k) {
   switch (k) {
     case SweepKernel::Lane:
@@ -514,8 +520,7 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   // A rank holds at most its fair share of the speeds at once: with more lanes than that, the
   // first rank to ask would take nearly all of a short sweep (measured: 8 of 9 speeds on one of
   // 2 ranks, the other idle after its one speed). Each finished speed asks for one more.
-  const std::size_t share =
-      std::max<std::size_t>(1, (todo.size() + static_cast<std::size_t>(size) - 1) / static_cast<std::size_t>(size));
+  const std::size_t share = sweep_share(todo.size(), size);
   // Handed out longest first (a run's cost is its steps, revolutions 2 pi / |Omega| / dt): the
   // last speeds to start are the shortest, so the ranks finish together. The first lanes of the
   // ranks are filled round robin down that order (rank k the k-th, (k + size)-th, ... longest, up
@@ -525,7 +530,7 @@ SweepStats sweep(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSetting
   for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return std::abs(todo[a].omega) < std::abs(todo[b].omega); });
-  const std::size_t first_fill = std::min<std::size_t>(static_cast<std::size_t>(std::max(1, s.batch)), share);
+  const std::size_t first_fill = sweep_lanes_per_rank(s.batch, todo.size(), size);
   std::vector<SpeedResult> done;
   // Progress counts lane steps, not finished speeds (with several lanes per rank, every speed may
   // finish near the end): rank 0 counts its own, the other ranks report theirs with every message

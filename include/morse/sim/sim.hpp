@@ -409,12 +409,19 @@ struct SweepStats {
   SweepKernel kernel = SweepKernel::Lane;  ///< the cubic force kernel used (Auto resolved)
 };
 
+/// A rank's fair share of a sweep of `speeds` speeds on `ranks` ranks: ceil(speeds / ranks), at
+/// least 1.
+std::size_t sweep_share(std::size_t speeds, int ranks);
+/// The speeds a rank of sweep() starts with: min(batch, sweep_share) (batch at least 1).
+std::size_t sweep_lanes_per_rank(int batch, std::size_t speeds, int ranks);
+
 /// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
 /// speeds one at a time (longest first) to whichever rank has a free lane, and also computes.
 /// Each rank advances up to s.batch speeds together, and never more than its fair share
-/// ceil(todo.size() / ranks), so that a short sweep is not given whole to one rank (rank 0 also
-/// leaves every rank it has not heard from yet its share, for a rank that starts late); the cubic force of its
-/// speeds is one pass of s.kernel over all of them (Potential, Folded) or one per speed (Lane).
+/// (sweep_share), so that a short sweep is not given whole to one rank. The ranks' first
+/// sweep_lanes_per_rank speeds are dealt round robin down the longest-first order and kept for a
+/// rank that starts late. The cubic force of a rank's speeds is one pass of s.kernel over all of
+/// them (Potential, Folded) or one per speed (Lane).
 /// The arithmetic of a speed does not depend on which other speeds share its pass, so a speed's result is bitwise the
 /// same on any number of ranks and with any batch. A speed that fails (NaN, contact that does not settle) is returned
 /// with status 1 and does not stop the others. on_result runs on rank 0 for each finished speed, in the order they
