@@ -67,6 +67,10 @@ def main():
                     help="also run the double sweep with the lane kernel (-sweep_kernel lane: the same arithmetic "
                          "summed in another order), to compare float's difference with that of round-off alone")
     ap.add_argument("--reuse", action="store_true", help="with --keep: reuse the sweep files already there")
+    ap.add_argument("--variants", default="float",
+                    help="comma-separated variants compared with the double potential kernel: float (float "
+                         "coefficients), lane (as --roundoff), perturbed (every speed times 1 + 1e-12: a "
+                         "perturbation of round-off size at the potential kernel's speed)")
     args = ap.parse_args()
     morse = os.path.join(ROOT, "build", "morse")
     if not os.path.exists(morse):
@@ -88,14 +92,23 @@ def main():
         timings["nlrom_s"] = res.get("process_wall")
     lo, hi, step = speeds_of(args.speeds)
     files = {}
-    variants = {"double": ["-sweep_kernel", "potential"], "float": ["-sweep_kernel", "potential", "-sweep_float"]}
-    if args.roundoff:
-        variants["lane"] = ["-sweep_kernel", "lane"]
+    known = {"float": ["-sweep_kernel", "potential", "-sweep_float"], "lane": ["-sweep_kernel", "lane"],
+             "perturbed": ["-sweep_kernel", "potential"]}
+    wanted = [v for v in args.variants.split(",") if v]
+    if args.roundoff and "lane" not in wanted:
+        wanted.append("lane")
+    for v in wanted:
+        if v not in known:
+            sys.exit("float_accuracy: --variants: unknown variant '%s' (float, lane, perturbed)" % v)
+    variants = {"double": ["-sweep_kernel", "potential"]}
+    variants.update({v: known[v] for v in wanted})
     for prec, opts in variants.items():
         out = os.path.join(work, "sweep_%s.h5" % prec)
+        scale = 1.0 + 1e-12 if prec == "perturbed" else 1.0
         if not (args.reuse and os.path.exists(out)):
-            res, _ = run_mpi("sweep %s" % prec, [morse, "sweep", "-rom", rom, "-sweep_omega_min", repr(lo),
-                                                  "-sweep_omega_max", repr(hi), "-sweep_omega_step", repr(step),
+            res, _ = run_mpi("sweep %s" % prec, [morse, "sweep", "-rom", rom, "-sweep_omega_min", repr(lo * scale),
+                                                  "-sweep_omega_max", repr(hi * scale), "-sweep_omega_step",
+                                                  repr(step * scale),
                                                   "-sim_revolutions", repr(args.revolutions), "-sim_dt",
                                                   repr(args.dt), "-sweep_rotation", "negative",
                                                   "-sweep_monitor", "LE", "-sweep_restart", "-out", out] + CASING +
@@ -114,7 +127,8 @@ def main():
     for name in [v for v in variants if v != "double"]:
         f = files[name]
         print("  %s:\n  %9s %10s %10s %10s %10s %10s %8s %10s" % (
-            {"float": "float coefficients", "lane": "the lane kernel (double, another summation order)"}[name],
+            {"float": "float coefficients", "lane": "the lane kernel (double, another summation order)",
+             "perturbed": "every speed times 1 + 1e-12 (potential kernel, double)"}[name],
             "|omega|", "rms [mm]", "d rms", "d mean", "d spec", "peak Hz", "same", "d force"))
         mine = []
         for k in range(len(d["omega"])):

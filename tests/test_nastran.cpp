@@ -634,7 +634,7 @@ TEST_F(NastranTest, ErrorsGridsElementsAndFields) {
 
 TEST_F(NastranTest, ErrorsUnsupportedCards) {
   // An unsupported element is an error naming it; skipped knowingly, a WARNING lists its
-  // MISSING stiffness. RBE2 is always an error.
+  // MISSING stiffness. Rigid elements other than RBE2 and RBE3 are always errors.
   const std::string quad = write("quad.bdf", cat(kTet, "CQUAD4,10,1,1,2,3,4\nCBAR,11,1,1,2\n"));
   expect_error(quad, {"quad.bdf:8:", "card CQUAD4", "element type not supported", "stiffness and mass"});
   ::testing::internal::CaptureStderr();
@@ -643,15 +643,68 @@ TEST_F(NastranTest, ErrorsUnsupportedCards) {
   EXPECT_EQ(m.num_elements(), 1);
   EXPECT_EQ(count(log, "MISSING"), 1) << log;
   EXPECT_EQ(count(log, "1 CBAR, 1 CQUAD4"), 1) << log;
-  expect_error(write("rbe2.bdf", cat(kTet, "RBE2,10,1,123,2\n")),
-               {"rbe2.bdf:8:", "card RBE2", "rigid elements and MPCs are not supported", "-matrices_K"});
-  expect_error(write("mpc.bdf", cat(kTet, "MPC,1,1,1,1.,2,1,-1.\n")), {"mpc.bdf:8:", "card MPC", "rigid elements"});
+  expect_error(write("rbar.bdf", cat(kTet, "RBAR,10,1,2,123456\n")),
+               {"rbar.bdf:8:", "card RBAR", "not supported (morse reads RBE2, RBE3 and MPC)", "-matrices_K"});
   expect_error(write("cord1.bdf", cat(kTet, "CORD1R,5,1,2,3\n")), {"cord1.bdf:8:", "card CORD1R", "CORD2R"});
   expect_error(write("super.bdf", cat(kTet, "BEGIN SUPER=1\n")), {"super.bdf:8:", "card BEGIN", "not supported"});
   expect_error(write("qset.bdf", cat(kTet, "QSET1,123,1\n")),
                {"qset.bdf:8:", "card QSET1", "on grids (1) is not supported"});
   expect_error(write("conm2.bdf", cat(kTet, "GRID,9,,5.,5.,5.\nCONM2,5,9,,1.\n")),
-               {"conm2.bdf:9:", "card CONM2", "grid 9", "no solid element uses"});
+               {"conm2.bdf:9:", "card CONM2", "grid 9", "no solid element, rigid element or MPC uses"});
+}
+
+TEST_F(NastranTest, RigidElementsAndMpcs) {
+  // RBE2 with THRU and ALPHA; RBE3 with two weight groups, UM and ALPHA over continuations; MPC
+  // with a continuation; a CONM2 on the spider's centre.
+  const std::string deck = cat(kTet,
+                               "GRID,9,,0.3,0.3,0.3\n"
+                               "RBE2,10,9,123456,1,THRU,3,1.2-5\n"
+                               "RBE3,11,,9,123456,1.0,123,1,2\n"
+                               ",2.5,12,3,4,UM,1,1\n"
+                               ",ALPHA,1.-5\n"
+                               "MPC,7,4,3,2.,1,3,-1.\n"
+                               ",,2,1,0.5\n"
+                               "CONM2,12,9,,3.\n");
+  const Mesh m = read_nastran(write("rigid.bdf", deck), false);
+  const auto& cs = m.constraints;
+  ASSERT_EQ(cs.rigid.size(), 1u);
+  EXPECT_EQ(cs.rigid[0].id, 10);
+  EXPECT_EQ(cs.rigid[0].reference, 9);
+  EXPECT_EQ(cs.rigid[0].components, 63);
+  EXPECT_EQ(cs.rigid[0].dependent, (std::vector<std::int64_t>{1, 2, 3}));
+  EXPECT_NE(cs.rigid[0].where.find("rigid.bdf:9: RBE2 10"), std::string::npos) << cs.rigid[0].where;
+  ASSERT_EQ(cs.interpolation.size(), 1u);
+  const auto& r3 = cs.interpolation[0];
+  EXPECT_EQ(r3.reference, 9);
+  EXPECT_EQ(r3.ref_components, 63);
+  EXPECT_EQ(r3.nodes, (std::vector<std::int64_t>{1, 2, 3, 4}));
+  EXPECT_EQ(r3.weights, (std::vector<double>{1.0, 1.0, 2.5, 2.5}));
+  EXPECT_EQ(r3.node_components, (std::vector<std::uint8_t>{7, 7, 3, 3}));
+  ASSERT_EQ(cs.linear.size(), 1u);
+  const auto& t = cs.linear[0].terms;
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[0].node, 4);
+  EXPECT_EQ(t[0].component, 3);
+  EXPECT_EQ(t[0].coefficient, 2.0);
+  EXPECT_EQ(t[2].node, 2);
+  EXPECT_EQ(t[2].component, 1);
+  EXPECT_EQ(t[2].coefficient, 0.5);
+  EXPECT_EQ(m.point_mass[4], 3.0);  // grid 9 is node 4 (file order)
+
+  expect_error(write("rbe2n.bdf", cat(kTet, "RBE2,10,1,123\n")), {"rbe2n.bdf:8:", "card RBE2", "no dependent grid"});
+  expect_error(write("rbe2g.bdf", cat(kTet, "RBE2,10,1,123,77\n")), {"rbe2g.bdf:8:", "card RBE2", "undefined grid 77"});
+  expect_error(write("rbe3w.bdf", cat(kTet, "GRID,9,,0.,0.,0.\nRBE3,11,,9,123456,1,2\n")),
+               {"rbe3w.bdf:9:", "card RBE3", "a weight WT1"});
+  expect_error(write("rbe3z.bdf", cat(kTet, "GRID,9,,0.,0.,0.\nRBE3,11,,9,123456,0.,123,1,2\n")),
+               {"rbe3z.bdf:9:", "card RBE3", "must be positive"});
+  expect_error(write("rbe3f.bdf", cat(kTet, "RBE3,11,1,9,123456,1.,123,1,2\n")),
+               {"rbe3f.bdf:8:", "card RBE3", "field 3 of RBE3 must be blank"});
+  expect_error(write("mpc0.bdf", cat(kTet, "MPC,7,4,3,0.,1,3,-1.\n")),
+               {"mpc0.bdf:8:", "card MPC", "first coefficient A1", "is 0"});
+  expect_error(write("mpcc.bdf", cat(kTet, "MPC,7,4,12,1.,1,3,-1.\n")),
+               {"mpcc.bdf:8:", "card MPC", "one component 1 to 6"});
+  expect_error(write("dupe.bdf", cat(kTet, "RBE2,1,1,123,2\n")),
+               {"dupe.bdf:8:", "card RBE2", "element id 1 is used twice"});
 }
 
 TEST_F(NastranTest, ErrorsConstraintsAndSets) {

@@ -62,12 +62,21 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh)
     return md;
   }
   Model md = fe::mesh_model(comm, o.mesh);
+  // Element-by-element commands see the nodes' displacements, which dependent nodes of rigid and
+  // interpolation elements do not have as DOFs of the model.
+  collective_check(comm, needs_mesh && md.constraints
+                             ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
+                                   " are supported by modes, reduce, select and export only")
+                             : std::string());
   int size = 1;
   MPI_Comm_size(comm, &size);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements on %d rank(s)\n", o.mesh.path.c_str(),
          md.units.c_str(), (long long)md.mesh->n_global_nodes, (long long)md.mesh->n_global_elements, size);
   print0(comm, "morse: %lld free DOFs, %lld clamped; volume %.6g, mass %.6g\n", (long long)md.dofs.n_global,
          (long long)md.dofs.n_clamped_global, md.volume, md.mass);
+  if (md.constraints)
+    print0(comm, "morse: %lld DOFs eliminated by constraints; %lld DOFs of six-DOF points\n",
+           (long long)md.constraints->n_dependent, (long long)md.constraints->n_point_dofs);
   return md;
 }
 

@@ -41,7 +41,8 @@ std::vector<BoundaryNode> mesh_boundary_nodes(const mesh::LocalMesh& lm, const f
     for (int d = 0; d < 3; ++d)
       if (dofs.node_dof[3 * k + d] < 0 && err.empty())
         err = cat("node ", m.node_ids[k], " of boundary set '", set, "' has a clamped DOF (direction ", "xyz"[d],
-                  "); a boundary node cannot be clamped");
+                  "), or one made dependent by a rigid or interpolation element or an MPC; a boundary node cannot be "
+                  "clamped or dependent");
     mine.push_back({m.node_ids[k], lm.global_node[k]});
   }
   collective_check(lm.comm, err);

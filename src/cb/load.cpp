@@ -90,6 +90,9 @@ void bcast(MPI_Comm comm, std::vector<T>& v, MPI_Datatype type) {
 
 CBResult load_basis(const fe::Model& md, const std::string& path, const std::string& boundary_set, double damping) {
   MORSE_CHECK(md.mesh, "a superelement basis file (", path, ") needs a mesh model");
+  MORSE_CHECK(!md.constraints, "a superelement basis file (", path,
+              ") holds nodal shapes, which do not give the DOFs of the model's six-DOF points (rigid and interpolation "
+              "elements): compute the basis again instead");
   const auto& lm = *md.mesh;
   const auto& dofs = md.dofs;
   MPI_Comm comm = lm.comm;

@@ -9,6 +9,7 @@
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/fe/element.hpp"
 #include "morse/mesh/mesh.hpp"
 
@@ -174,6 +175,7 @@ Model mesh_model(MPI_Comm comm, const MeshInput& in) {
   md.M = std::move(ops.M);
   md.volume = ops.volume;
   md.mass = ops.mass;
+  if (!md.mesh->mesh.constraints.empty()) eliminate_constraints(&md, in.clamp);
   return md;
 }
 

@@ -785,6 +785,13 @@ void write_mesh(H5Output& out, const mesh::Mesh& m) {
   out.write("/mesh/topology", topo);
   out.attribute("/mesh/topology", "description",
                 "XDMF mixed topology: per element its XDMF type code then its nodes (VTK order)");
+  const auto& cs = m.constraints;
+  if (!cs.point_ids.empty()) {
+    out.write("/mesh/point_ids", cs.point_ids);
+    out.write("/mesh/point_coordinates", cs.point_coords, {static_cast<hsize_t>(cs.point_ids.size()), 3});
+    out.attribute("/mesh/point_ids", "description",
+                  "six-DOF points (reference nodes of rigid and interpolation elements); no solid element uses them");
+  }
 }
 
 void write_xdmf(const std::string& xdmf_path, const std::string& h5_name, const mesh::Mesh& m,

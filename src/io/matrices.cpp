@@ -629,17 +629,12 @@ void write_dof_map(const std::string& path, const DofMapFile& map) {
 
 DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
   const int rank = comm_rank(lm.comm), size = comm_size(lm.comm);
-  const auto& m = lm.mesh;
-  // Owned free DOFs: (row, node id, component) and the set memberships, sent to rank 0.
+  // Owned free DOFs: (row, node id, component) from the layout's labels (node translations, and
+  // the six-DOF points of rigid and interpolation elements), sent to rank 0 with the sets.
   std::vector<std::int64_t> mine(3 * dofs.n_owned);
-  for (std::int64_t k = 0; k < m.num_nodes(); ++k) {
-    if (lm.node_owner[k] != rank) continue;
-    for (int d = 0; d < 3; ++d) {
-      PetscInt g = dofs.node_dof[3 * k + d];
-      if (g < 0) continue;
-      auto* e = &mine[3 * (g - dofs.first)];
-      e[0] = g, e[1] = m.node_ids[k], e[2] = d + 1;
-    }
+  for (PetscInt i = 0; i < dofs.n_owned; ++i) {
+    auto* e = &mine[3 * i];
+    e[0] = dofs.first + i, e[1] = dofs.node[i], e[2] = dofs.component[i];
   }
   auto gather = [&](std::vector<std::int64_t>& v) {
     int n = static_cast<int>(v.size());
@@ -660,13 +655,8 @@ DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
       map.component[all[k]] = static_cast<int>(all[k + 2]);
     }
   }
-  for (const auto& [name, nodes] : m.node_sets) {
-    std::vector<std::int64_t> rows;
-    for (auto k : nodes) {
-      if (lm.node_owner[k] != rank) continue;
-      for (int d = 0; d < 3; ++d)
-        if (dofs.node_dof[3 * k + d] >= 0) rows.push_back(dofs.node_dof[3 * k + d]);
-    }
+  for (const auto& [name, owned] : dofs.sets) {
+    std::vector<std::int64_t> rows(owned.begin(), owned.end());
     auto set = gather(rows);
     if (rank == 0 && !set.empty()) {
       std::sort(set.begin(), set.end());

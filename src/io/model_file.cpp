@@ -8,6 +8,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/core/units.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/mesh/partition.hpp"
 
@@ -64,7 +65,9 @@ void write_modes_dataset(H5Output& out, const std::string& name, const fe::Model
   for (PetscInt j = 0; j < count; ++j) {
     Vec x;
     MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
-    auto nodal = gather_nodal(*md.mesh, md.dofs, x);
+    // The nodes' translations: u = T u_bar with rigid/interpolation elements or MPCs.
+    auto u = fe::expand(md, x);
+    auto nodal = gather_nodal(*md.mesh, fe::node_layout(md), u.get());
     MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
     out.write_row(name, static_cast<hsize_t>(j), nodal);
   }

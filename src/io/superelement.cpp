@@ -125,10 +125,27 @@ Superelement read_superelement(const std::string& file) {
                 " but /mesh/node_ids has ", ids.size(), " nodes");
     std::map<std::int64_t, std::size_t> row;
     for (std::size_t k = 0; k < ids.size(); ++k) row[ids[k]] = k;
+    // Six-DOF points (rigid and interpolation elements' reference nodes) may be boundary nodes.
+    std::vector<std::int64_t> pids;
+    std::vector<double> pxyz;
+    if (has_object(file, "/mesh/point_ids")) {
+      MORSE_CHECK(read_ints(file, "/mesh/point_ids", &pids, &di, &err), err);
+      MORSE_CHECK(read_doubles(file, "/mesh/point_coordinates", &pxyz, &dx, &err), err);
+      MORSE_CHECK(dx.size() == 2 && dx[1] == 3 && dx[0] == pids.size(), file, ": /mesh/point_coordinates is ",
+                  shape_text(dx), " but /mesh/point_ids has ", pids.size(), " points");
+    }
+    std::map<std::int64_t, std::size_t> prow;
+    for (std::size_t k = 0; k < pids.size(); ++k) prow[pids[k]] = k;
     for (std::int64_t node : se.boundary_nodes) {
       auto it = row.find(node);
-      MORSE_CHECK(it != row.end(), file, ": boundary node ", node, " of /rom/boundary_dofs is not in /mesh/node_ids");
-      for (int d = 0; d < 3; ++d) se.boundary_xyz.push_back(xyz[3 * it->second + d]);
+      if (it != row.end()) {
+        for (int d = 0; d < 3; ++d) se.boundary_xyz.push_back(xyz[3 * it->second + d]);
+        continue;
+      }
+      auto pt = prow.find(node);
+      MORSE_CHECK(pt != prow.end(), file, ": boundary node ", node,
+                  " of /rom/boundary_dofs is not in /mesh/node_ids or /mesh/point_ids");
+      for (int d = 0; d < 3; ++d) se.boundary_xyz.push_back(pxyz[3 * pt->second + d]);
     }
     se.from_mesh = true;
     se.model_node_ids = ids;

@@ -255,8 +255,8 @@ std::string component_string(std::uint8_t mask) {
 
 /// Rigid elements and MPCs: their dependent DOFs would have to be eliminated.
 const std::unordered_set<std::string>& rigid_cards() {
-  static const std::unordered_set<std::string> s = {"RBE1",   "RBE2",    "RBE3",    "RBAR",   "RBAR1",  "RROD",
-                                                    "RTRPLT", "RTRPLT1", "RSPLINE", "RSSCON", "RJOINT", "MPC"};
+  static const std::unordered_set<std::string> s = {"RBE1",    "RBAR",    "RBAR1",  "RROD",  "RTRPLT",
+                                                    "RTRPLT1", "RSPLINE", "RSSCON", "RJOINT"};
   return s;
 }
 
@@ -346,6 +346,38 @@ struct Conm2Rec {
   Loc loc;
 };
 
+/// RBE2 EID GN CM GM1 ... [ALPHA [TREF]].
+struct Rbe2Rec {
+  int64_t eid = 0;
+  int64_t gn = 0;
+  std::uint8_t cm = 0;
+  std::vector<Range> gm;
+  Loc loc;
+};
+
+/// RBE3 EID - REFGRID REFC (WT C G ...)+ [UM ...] [ALPHA a] [TREF t].
+struct Rbe3Rec {
+  int64_t eid = 0;
+  int64_t ref = 0;
+  std::uint8_t refc = 0;
+  struct Group {
+    double wt = 0;
+    std::uint8_t c = 0;
+    std::vector<int64_t> g;
+  };
+  std::vector<Group> groups;
+  Loc loc;
+};
+
+/// MPC SID (G C A)+: one equation per card.
+struct MpcRec {
+  int64_t sid = 0;
+  std::vector<int64_t> g;
+  std::vector<int> c;
+  std::vector<double> a;
+  Loc loc;
+};
+
 enum class Kind {
   kGrid,
   kGrdset,
@@ -365,6 +397,9 @@ enum class Kind {
   kQset1,
   kSpoint,
   kConm2,
+  kRbe2,
+  kRbe3,
+  kMpc,
   kRigid,
   kOther
 };
@@ -395,7 +430,10 @@ Kind kind_of(const std::string& name) {
                                                               {"QSET", Kind::kQset},
                                                               {"QSET1", Kind::kQset1},
                                                               {"SPOINT", Kind::kSpoint},
-                                                              {"CONM2", Kind::kConm2}};
+                                                              {"CONM2", Kind::kConm2},
+                                                              {"RBE2", Kind::kRbe2},
+                                                              {"RBE3", Kind::kRbe3},
+                                                              {"MPC", Kind::kMpc}};
   auto it = kinds.find(name);
   if (it != kinds.end()) return it->second;
   if (rigid_cards().count(name)) return Kind::kRigid;
@@ -852,10 +890,15 @@ class Reader {
         return;
       case Kind::kConm2:
         return read_conm2();
+      case Kind::kRbe2:
+        return read_rbe2();
+      case Kind::kRbe3:
+        return read_rbe3();
+      case Kind::kMpc:
+        return read_mpc();
       case Kind::kRigid:
-        card_fail("rigid elements and MPCs are not supported yet: their dependent DOFs must be",
-                  " eliminated (seed 000 removes them); export the assembled matrices instead",
-                  " (-matrices_K/-matrices_M)");
+        card_fail("this rigid element is not supported (morse reads RBE2, RBE3 and MPC); write it as RBE2 or MPC,",
+                  " or export the assembled matrices (-matrices_K/-matrices_M)");
       case Kind::kOther:
         return skip_card();
     }
@@ -1123,6 +1166,130 @@ class Reader {
     no_more(14);
     add_element_id(c.eid, "CONM2");
     conm2_.push_back(c);
+  }
+
+  /// True if field i holds an integer (an id), false if a real (with a decimal point or exponent).
+  bool is_integer_field(int i) const {
+    int64_t v;
+    return parse_int(fld(i), &v);
+  }
+
+  void read_rbe2() {
+    Rbe2Rec r;
+    r.loc = card_.loc;
+    r.eid = id_field(0, "EID");
+    r.gn = id_field(1, "GN");
+    bool zero = false;
+    if (blank(2)) field_fail(2, "(CM) is blank: the dependent components are required");
+    r.cm = comp_field(2, "CM", &zero);
+    if (zero) field_fail(2, "('0'): CM needs components 1 to 6");
+    // GMi (ids, THRU ranges) up to the first real: ALPHA, then TREF.
+    int i = 3;
+    for (; i < card_.n; ++i) {
+      if (blank(i)) continue;
+      if (iequals(fld(i), "THRU")) {
+        if (r.gm.empty() || i + 1 >= card_.n) field_fail(i, "('THRU') needs an id before and after it");
+        const int64_t b = id_field(i + 1, "GMi");
+        if (b < r.gm.back().lo) field_fail(i + 1, "('", b, "'): the range ", r.gm.back().lo, " THRU ", b, " is empty");
+        r.gm.back().hi = b;
+        r.gm.back().thru = true;
+        ++i;
+        continue;
+      }
+      if (!is_integer_field(i)) break;
+      const int64_t g = id_field(i, "GMi");
+      r.gm.push_back({g, g, false});
+    }
+    if (i < card_.n) real_field(i++, "ALPHA");
+    while (i < card_.n && blank(i)) ++i;
+    if (i < card_.n) real_field(i++, "TREF");
+    no_more(i);
+    if (r.gm.empty()) card_fail("rigid element ", r.eid, " has no dependent grid (GM1)");
+    add_element_id(r.eid, "RBE2");
+    rbe2_.push_back(std::move(r));
+  }
+
+  void read_rbe3() {
+    Rbe3Rec r;
+    r.loc = card_.loc;
+    r.eid = id_field(0, "EID");
+    if (!blank(1)) field_fail(1, "('", fld(1), "'): field 3 of RBE3 must be blank");
+    r.ref = id_field(2, "REFGRID");
+    bool zero = false;
+    if (blank(3)) field_fail(3, "(REFC) is blank: the reference components are required");
+    r.refc = comp_field(3, "REFC", &zero);
+    if (zero) field_fail(3, "('0'): REFC needs components 1 to 6");
+    int i = 4;
+    auto next = [&]() {
+      while (i < card_.n && blank(i)) ++i;
+      return i < card_.n;
+    };
+    while (next()) {
+      if (iequals(fld(i), "UM")) {
+        // UM names the DOFs to make dependent instead of the reference's; morse chooses them
+        // itself (the constrained motions are the same), so the pairs are read and checked only.
+        ++i;
+        while (next() && !iequals(fld(i), "ALPHA") && !iequals(fld(i), "TREF")) {
+          id_field(i++, "GMi");
+          if (!next()) card_fail("UM: grid without its components");
+          bool z = false;
+          comp_field(i++, "CMi", &z);
+        }
+        ++rbe3_um_;
+        if (!rbe3_um_loc_.line) rbe3_um_loc_ = r.loc;
+        continue;
+      }
+      if (iequals(fld(i), "ALPHA") || iequals(fld(i), "TREF")) {
+        const char* what = iequals(fld(i), "ALPHA") ? "ALPHA" : "TREF";
+        ++i;
+        if (!next()) card_fail(what, " without its value");
+        real_field(i++, what);
+        continue;
+      }
+      if (is_integer_field(i)) {
+        if (r.groups.empty()) field_fail(i, "('", fld(i), "'): a weight WT1 (a real, e.g. 1.0) must come first");
+        r.groups.back().g.push_back(id_field(i++, "Gi,j"));
+        continue;
+      }
+      Rbe3Rec::Group grp;
+      grp.wt = real_field(i, "WTi");
+      if (!(grp.wt > 0)) field_fail(i, "('", fld(i), "'): the weight WTi must be positive");
+      ++i;
+      if (!next()) card_fail("weight ", grp.wt, " without its components Ci");
+      bool z = false;
+      grp.c = comp_field(i, "Ci", &z);
+      if (z) field_fail(i, "('0'): Ci needs components 1 to 6");
+      ++i;
+      if (!r.groups.empty() && r.groups.back().g.empty()) card_fail("weight ", r.groups.back().wt, " has no grids");
+      r.groups.push_back(grp);
+    }
+    if (r.groups.empty()) card_fail("interpolation element ", r.eid, " has no weighted grids (WT1 C1 G1,1 ...)");
+    if (r.groups.back().g.empty()) card_fail("weight ", r.groups.back().wt, " has no grids");
+    add_element_id(r.eid, "RBE3");
+    rbe3_.push_back(std::move(r));
+  }
+
+  void read_mpc() {
+    MpcRec r;
+    r.loc = card_.loc;
+    r.sid = id_field(0, "SID");
+    for (int row = 0; 8 * row < card_.n; ++row) {
+      if (row > 0 && !blank(8 * row))
+        field_fail(8 * row, "('", fld(8 * row), "'): field 2 of an MPC continuation must be blank");
+      for (int j = 0; j < 2; ++j) {
+        const int b = 8 * row + 1 + 3 * j;
+        if (blank(b) && blank(b + 1) && blank(b + 2)) continue;
+        r.g.push_back(id_field(b, "Gi"));
+        const int64_t c = int_field(b + 1, "Ci", 0);
+        if (c < 1 || c > 6) field_fail(b + 1, "('", fld(b + 1), "'): Ci must be one component 1 to 6 of a grid");
+        r.c.push_back(static_cast<int>(c));
+        r.a.push_back(real_field(b + 2, "Ai"));
+      }
+      if (!blank(8 * row + 7)) field_fail(8 * row + 7, "('", fld(8 * row + 7), "'): field 9 of MPC must be blank");
+    }
+    if (r.g.empty()) card_fail("MPC ", r.sid, " has no terms");
+    if (r.a[0] == 0.0) field_fail(3, "('", fld(3), "'): the first coefficient A1 (of the dependent DOF) is 0");
+    mpc_.push_back(std::move(r));
   }
 
   // ---------------------------------------------------------------------------------------------
@@ -1444,6 +1611,62 @@ class Reader {
     }
     const auto n_modal = static_cast<int64_t>(modal.size());
 
+    // Rigid elements, interpolation elements, MPCs: by grid id (mesh/constraints.hpp).
+    std::set<int64_t> constrained;  // grids they name
+    {
+      auto grid = [&](int64_t id, const Loc& loc, const char* card) {
+        if (node_of(id) < 0)
+          fail(loc, card, is_spoint(id) ? "scalar point " : "undefined grid ", id,
+               is_spoint(id) ? " is not supported here (grids only)" : "");
+        constrained.insert(id);
+        return id;
+      };
+      auto& cs = mesh.constraints;
+      for (const Rbe2Rec& r : rbe2_) {
+        mesh::RigidElement e;
+        e.id = r.eid;
+        e.where = cat(at(r.loc), ": RBE2 ", r.eid);
+        e.reference = grid(r.gn, r.loc, "RBE2");
+        e.components = r.cm;
+        for (const Range& range : r.gm)
+          for_each_grid(range, r.loc, "RBE2", OnScalar::kError,
+                        [&](int64_t, int64_t id) { e.dependent.push_back(grid(id, r.loc, "RBE2")); });
+        cs.rigid.push_back(std::move(e));
+      }
+      for (const Rbe3Rec& r : rbe3_) {
+        mesh::InterpolationElement e;
+        e.id = r.eid;
+        e.where = cat(at(r.loc), ": RBE3 ", r.eid);
+        e.reference = grid(r.ref, r.loc, "RBE3");
+        e.ref_components = r.refc;
+        for (const auto& g : r.groups)
+          for (int64_t id : g.g) {
+            e.nodes.push_back(grid(id, r.loc, "RBE3"));
+            e.weights.push_back(g.wt);
+            e.node_components.push_back(g.c);
+          }
+        cs.interpolation.push_back(std::move(e));
+      }
+      std::set<int64_t> mpc_sids;
+      for (const MpcRec& r : mpc_) {
+        mpc_sids.insert(r.sid);
+        mesh::LinearConstraint e;
+        e.id = r.sid;
+        e.where = cat(at(r.loc), ": MPC ", r.sid);
+        for (std::size_t k = 0; k < r.g.size(); ++k) e.terms.push_back({grid(r.g[k], r.loc, "MPC"), r.c[k], r.a[k]});
+        cs.linear.push_back(std::move(e));
+      }
+      if (mpc_sids.size() > 1) {
+        std::string list;
+        for (int64_t sid : mpc_sids) list += cat(list.empty() ? "" : ", ", sid);
+        summary("MPC cards use the SIDs ", list, ": all of them are applied (the case control, which selects one,",
+                " is not read)");
+      }
+      if (rbe3_um_)
+        notice("RBE3UM", rbe3_um_loc_, rbe3_um_, " RBE3 card(s) give UM: morse chooses the dependent DOFs that make",
+               " the reference independent itself (the constrained motions are the same)");
+    }
+
     // Point masses.
     int64_t n_offset = 0;
     Loc offset_loc;
@@ -1454,10 +1677,9 @@ class Reader {
         if (k < 0)
           fail(c.loc, "CONM2", "mass element ", c.eid, " references ",
                is_spoint(c.grid) ? "scalar point " : "undefined grid ", c.grid);
-        if (!used[k])
+        if (!used[k] && !constrained.count(c.grid))
           fail(c.loc, "CONM2", "mass element ", c.eid, " is on grid ", c.grid, ", which no solid",
-               " element uses: morse drops such grids (the mass would need a rigid element,",
-               " which is not supported)");
+               " element, rigid element or MPC uses (the mass would be connected to nothing)");
         if (c.cid > 0 && !cords_.count(c.cid))
           fail(c.loc, "CONM2", "mass element ", c.eid, " references undefined coordinate system ", c.cid, " (CID)");
         bool offset = false;
@@ -1561,6 +1783,11 @@ class Reader {
   std::unordered_set<int64_t> spoint_ids_;
   std::vector<int64_t> sorted_spoints_;
   std::vector<Conm2Rec> conm2_;
+  std::vector<Rbe2Rec> rbe2_;
+  std::vector<Rbe3Rec> rbe3_;
+  std::vector<MpcRec> mpc_;
+  int64_t rbe3_um_ = 0;
+  Loc rbe3_um_loc_;
   double bulk_wtmass_ = 1.0, case_wtmass_ = 0.0;
   Loc bulk_wtmass_loc_, case_wtmass_loc_;
   std::map<std::string, int64_t> skipped_;

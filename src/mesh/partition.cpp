@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <utility>
 
 #include "core/detail/pack.hpp"
 #include "morse/core/error.hpp"
@@ -55,6 +56,13 @@ void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std:
     found[it - sorted.begin()] = 1;
     set.push_back(k);
   }
+  // Six-DOF points are known on every rank.
+  std::vector<std::int64_t> points;
+  for (std::size_t i = 0; i < sorted.size(); ++i)
+    if (lm->mesh.constraints.point_index(sorted[i]) >= 0) {
+      found[i] = 1;
+      points.push_back(sorted[i]);
+    }
   MPI_Allreduce(MPI_IN_PLACE, found.data(), static_cast<int>(found.size()), MPI_INT, MPI_MAX, lm->comm);
   std::string missing;
   int n_missing = 0;
@@ -62,10 +70,12 @@ void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std:
     if (!found[i] && ++n_missing <= 10) missing += cat(n_missing > 1 ? ", " : "", sorted[i]);
   if (n_missing) {
     lm->mesh.node_sets.erase(name);
+    points.clear();
     err = cat(role, ": node set '", name, "': ", n_missing, " id(s) are not nodes of ", lm->mesh.source, " (", missing,
               n_missing > 10 ? ", ..." : "", ")");
   }
   collective_check(lm->comm, err);
+  if (!points.empty()) lm->mesh.constraints.point_sets[name] = points;
   lm->node_set_sizes[name] = static_cast<std::int64_t>(sorted.size());
 }
 
@@ -73,10 +83,48 @@ namespace {
 
 // Removes nodes that no element uses (Gmsh files carry geometry points, decks carry spare
 // nodes); they would have no stiffness and make K singular.
+//
+// Unused nodes that a constraint names become the constraints' six-DOF points (with their
+// coordinates, point mass and set memberships); a constraint naming an id that is no node at all
+// is an error, as is a point mass on an unused node that no constraint names.
 void drop_unused_nodes(Mesh* m) {
   const std::int64_t n = m->num_nodes();
   std::vector<std::int64_t> map(n, -1);
   for (auto k : m->elem_nodes) map[k] = 0;
+  auto& cs = m->constraints;
+  cs.point_ids.clear();
+  cs.point_coords.clear();
+  cs.point_mass.clear();
+  cs.point_sets.clear();
+  if (!cs.empty()) {
+    const auto named = cs.referenced_ids();
+    std::vector<std::pair<std::int64_t, std::int64_t>> points;  // (id, node)
+    std::vector<std::int64_t> by_id(n);
+    std::iota(by_id.begin(), by_id.end(), 0);
+    std::sort(by_id.begin(), by_id.end(), [&](auto a, auto b) { return m->node_ids[a] < m->node_ids[b]; });
+    for (auto id : named) {
+      auto it = std::lower_bound(by_id.begin(), by_id.end(), id,
+                                 [&](std::int64_t k, std::int64_t v) { return m->node_ids[k] < v; });
+      MORSE_CHECK(it != by_id.end() && m->node_ids[*it] == id, m->source, ": a constraint names node ", id,
+                  ", which is not a node of the mesh");
+      if (map[*it] < 0) points.emplace_back(id, *it);
+    }
+    for (auto [id, k] : points) {
+      cs.point_ids.push_back(id);
+      cs.point_coords.insert(cs.point_coords.end(), &m->coords[3 * k], &m->coords[3 * k] + 3);
+      cs.point_mass.push_back(m->point_mass.empty() ? 0.0 : m->point_mass[k]);
+      if (!m->point_mass.empty()) m->point_mass[k] = 0.0;
+    }
+    std::vector<char> is_point(n, 0);
+    for (auto [id, k] : points) is_point[k] = 1;
+    for (const auto& [name, v] : m->node_sets)
+      for (auto k : v)
+        if (is_point[k]) cs.point_sets[name].push_back(m->node_ids[k]);
+    for (auto& [name, v] : cs.point_sets) std::sort(v.begin(), v.end());
+  }
+  for (std::int64_t k = 0; k < n; ++k)
+    MORSE_CHECK(map[k] >= 0 || m->point_mass.empty() || m->point_mass[k] == 0.0, m->source, ": node ", m->node_ids[k],
+                " carries a point mass but no solid element or constraint uses it");
   std::int64_t next = 0;
   for (std::int64_t k = 0; k < n; ++k)
     if (map[k] == 0) map[k] = next++;
@@ -133,6 +181,78 @@ std::vector<int> partition_elements(const Mesh& m, int n_parts) {
   MORSE_CHECK(status == METIS_OK, "METIS_PartMeshDual failed (status ", status, ") on ", m.source);
   for (std::int64_t e = 0; e < ne; ++e) part[e] = static_cast<int>(epart[e]);
   return part;
+}
+
+void pack_constraints(const Constraints& c, detail::Packer& p) {
+  p.put<std::uint64_t>(c.rigid.size());
+  for (const auto& r : c.rigid) {
+    p.put(r.id);
+    p.put_str(r.where);
+    p.put(r.reference);
+    p.put(r.components);
+    p.put_vec(r.dependent);
+  }
+  p.put<std::uint64_t>(c.interpolation.size());
+  for (const auto& r : c.interpolation) {
+    p.put(r.id);
+    p.put_str(r.where);
+    p.put(r.reference);
+    p.put(r.ref_components);
+    p.put_vec(r.nodes);
+    p.put_vec(r.weights);
+    p.put_vec(r.node_components);
+  }
+  p.put<std::uint64_t>(c.linear.size());
+  for (const auto& r : c.linear) {
+    p.put(r.id);
+    p.put_str(r.where);
+    p.put_vec(r.terms);
+  }
+  p.put_vec(c.point_ids);
+  p.put_vec(c.point_coords);
+  p.put_vec(c.point_mass);
+  p.put<std::uint64_t>(c.point_sets.size());
+  for (const auto& [name, v] : c.point_sets) {
+    p.put_str(name);
+    p.put_vec(v);
+  }
+}
+
+Constraints unpack_constraints(detail::Unpacker& u) {
+  Constraints c;
+  c.rigid.resize(u.get<std::uint64_t>());
+  for (auto& r : c.rigid) {
+    r.id = u.get<std::int64_t>();
+    r.where = u.get_str();
+    r.reference = u.get<std::int64_t>();
+    r.components = u.get<ComponentMask>();
+    r.dependent = u.get_vec<std::int64_t>();
+  }
+  c.interpolation.resize(u.get<std::uint64_t>());
+  for (auto& r : c.interpolation) {
+    r.id = u.get<std::int64_t>();
+    r.where = u.get_str();
+    r.reference = u.get<std::int64_t>();
+    r.ref_components = u.get<ComponentMask>();
+    r.nodes = u.get_vec<std::int64_t>();
+    r.weights = u.get_vec<double>();
+    r.node_components = u.get_vec<ComponentMask>();
+  }
+  c.linear.resize(u.get<std::uint64_t>());
+  for (auto& r : c.linear) {
+    r.id = u.get<std::int64_t>();
+    r.where = u.get_str();
+    r.terms = u.get_vec<Term>();
+  }
+  c.point_ids = u.get_vec<std::int64_t>();
+  c.point_coords = u.get_vec<double>();
+  c.point_mass = u.get_vec<double>();
+  const auto n = u.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < n; ++i) {
+    auto name = u.get_str();
+    c.point_sets[name] = u.get_vec<std::int64_t>();
+  }
+  return c;
 }
 
 void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<int>& owner, int r,
@@ -193,6 +313,7 @@ void pack_piece(const Mesh& m, const std::vector<int>& part, const std::vector<i
       p.put_vec(loc);
     }
   }
+  pack_constraints(m.constraints, p);
   for (auto k : nodes) g2l[k] = -1;
   for (auto e : elems) e2l[e] = -1;
 }
@@ -240,6 +361,10 @@ LocalMesh unpack_piece(MPI_Comm comm, const std::vector<char>& buf) {
       sets[name] = u.get_vec<std::int64_t>();
     }
   }
+  m.constraints = unpack_constraints(u);
+  // A set's size counts its points too (a boundary set may hold only points).
+  for (const auto& [name, ids] : m.constraints.point_sets)
+    lm.node_set_sizes[name] += static_cast<std::int64_t>(ids.size());
   return lm;
 }
 
@@ -258,9 +383,9 @@ LocalMesh distribute(MPI_Comm comm, Mesh* serial) {
   if (rank == 0) {
     Mesh& m = *serial;
     m.normalize_sets();
-    drop_unused_nodes(&m);
     std::vector<int> part;
     try {
+      drop_unused_nodes(&m);
       part = partition_elements(m, size);
     } catch (const std::exception& e) {  // METIS's status, or std::bad_alloc: every rank reports it
       err = message_of(e);
@@ -351,6 +476,7 @@ Mesh gather_to_rank0(const LocalMesh& lm) {
   out.units = m.units;
   out.source = m.source;
   out.materials = m.materials;
+  out.constraints = m.constraints;
   out.node_ids.resize(lm.n_global_nodes);
   out.coords.resize(3 * lm.n_global_nodes);
   std::vector<std::int64_t> eorder(lm.n_global_elements);

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -82,6 +83,19 @@ struct Operators {
 /// on a missing/invalid material. Collective.
 Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback);
 
+/// What eliminating a mesh's rigid elements, interpolation elements and linear constraints left
+/// behind (fe/constraints.hpp): u = T u_bar maps the model's DOFs u_bar (its rows) to the free
+/// translations u of the mesh's nodes (the layout `full`, which number_dofs gave).
+struct ConstraintMap {
+  UMat T;                         ///< MPIAIJ, rows as `full`, columns as the model's DOFs
+  DofLayout full;                 ///< the nodes' free translations, before elimination
+  std::int64_t n_dependent = 0;   ///< DOFs eliminated (dependent), nodes' and points'
+  std::int64_t n_point_dofs = 0;  ///< DOFs of six-DOF points kept as the model's DOFs
+  std::int64_t n_rigid = 0, n_interpolation = 0, n_linear = 0;
+  std::vector<std::int64_t> point_ids;  ///< the six-DOF points, ascending (every rank)
+  std::vector<double> point_coords;     ///< their coordinates, 3 each
+};
+
 /// A model: the layout of its free DOFs and its operators on them; a mesh model also holds its
 /// distributed mesh. Move-only (it owns K, M, C).
 struct Model {
@@ -95,6 +109,9 @@ struct Model {
   std::string units;                        ///< unit system recorded in the output ("unknown" if not known)
   std::string source;                       ///< the mesh file, or the K file of a matrix model
   double asymmetry_K = 0, asymmetry_M = 0;  ///< matrix model: measured max |A - A^T| / max |A|
+  /// Mesh model with rigid/interpolation elements or linear constraints: the elimination (its
+  /// dofs are then the independent DOFs, node translations and point DOFs); else empty.
+  std::shared_ptr<const ConstraintMap> constraints;
 };
 
 /// What a mesh model is made of (the model options of docs/user-guide.md).

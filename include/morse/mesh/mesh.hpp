@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "morse/mesh/constraints.hpp"
+
 namespace morse::mesh {
 
 /// Supported solid element types.
@@ -67,6 +69,10 @@ struct Mesh {
   /// Lumped point masses (Nastran CONM2), added to the three translational diagonal entries of
   /// M at node k. Empty when the deck has none.
   std::vector<double> point_mass;
+
+  /// Rigid and interpolation elements, linear constraints and their six-DOF points (by external
+  /// ids; mesh/constraints.hpp). Replicated on every rank of a distributed mesh.
+  Constraints constraints;
 
   /// Unit system, recorded in output files: "SI" (m, kg, s, N, Pa) or e.g. "mm-t-s".
   std::string units = "SI";

@@ -1,0 +1,369 @@
+// Rigid elements (RBE2), interpolation elements (RBE3) and linear constraints (MPC) eliminated by
+// u = T u_bar (fe/constraints.hpp), against exact references:
+//   - two boxes tied face to face by MPCs have the spectrum of the one box they make;
+//   - a free box made rigid by an RBE2 has no stiffness and the rigid-body mass matrix of a
+//     homogeneous box about the spider's centre (closed form; consistent mass is exact for it);
+//   - a force and moment on an RBE3's reference point load the structure exactly as the lever
+//     rule's nodal forces F/n + (J^-1 M) x r_i do, and the reference moves as the least-squares
+//     fit of its nodes (mean translation, J^-1 sum r_i x u_i);
+//   - the errors a deck can make (a dependent DOF clamped or dependent twice, a cycle, collinear
+//     RBE3 nodes, rotations of solid nodes) are thrown on every rank.
+#include <petscsys.h>
+#include <gtest/gtest.h>
+#include <petscblaslapack.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "morse/core/error.hpp"
+#include "morse/fe/constraints.hpp"
+#include "util.hpp"
+
+using namespace morse;
+using mesh::ElementType;
+
+namespace {
+
+int rank_of() {
+  int r = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &r);
+  return r;
+}
+
+// Distributes `serial` (significant on rank 0), clamps `clamp`, assembles (steel) and eliminates
+// its constraints if it has any. Collective.
+fe::Model build(mesh::Mesh serial, const std::vector<std::string>& clamp) {
+  fe::Model md;
+  md.mesh = mesh::distribute(PETSC_COMM_WORLD, &serial);
+  md.dofs = fe::number_dofs(*md.mesh, clamp);
+  auto ops = fe::assemble(*md.mesh, md.dofs, test::steel());
+  md.K = std::move(ops.K);
+  md.M = std::move(ops.M);
+  md.mass = ops.mass;
+  if (!md.mesh->mesh.constraints.empty()) fe::eliminate_constraints(&md, clamp);
+  return md;
+}
+
+// Lowest n eigenvalues of (K, M) by LAPACK's dense generalized solver (every rank).
+std::vector<double> lowest_eigenvalues(Mat K, Mat M, int n) {
+  auto k = test::dense_matrix(K), m = test::dense_matrix(M);
+  PetscInt N = 0;
+  MORSE_CALL(MatGetSize(K, &N, nullptr));
+  PetscBLASInt bn = static_cast<PetscBLASInt>(N), itype = 1, info = 0, lwork = 8 * bn;
+  std::vector<double> w(N), work(lwork);
+  LAPACKsygv_(&itype, "N", "U", &bn, k.data(), &bn, m.data(), &bn, w.data(), work.data(), &lwork, &info);
+  EXPECT_EQ(info, 0);
+  w.resize(n);
+  return w;
+}
+
+// Adds box b's nodes (ids + id_offset) and elements (ids + id_offset) to m; its node sets get the
+// prefix. Returns the node index offset.
+std::int64_t append_box(mesh::Mesh* m, const mesh::BoxSpec& b, std::int64_t id_offset, const std::string& prefix) {
+  const auto box = mesh::generate_box(b);
+  const auto base = m->num_nodes();
+  for (std::int64_t k = 0; k < box.num_nodes(); ++k)
+    m->add_node(box.node_ids[k] + id_offset, box.coords[3 * k], box.coords[3 * k + 1], box.coords[3 * k + 2]);
+  for (std::int64_t e = 0; e < box.num_elements(); ++e) {
+    std::vector<std::int64_t> nodes(box.elem_nodes.begin() + box.elem_offsets[e],
+                                    box.elem_nodes.begin() + box.elem_offsets[e + 1]);
+    for (auto& k : nodes) k += base;
+    m->add_element(box.elem_ids[e] + id_offset, box.elem_types[e], nodes.data());
+  }
+  for (const auto& [name, v] : box.node_sets) {
+    auto& s = m->node_sets[prefix + name];
+    for (auto k : v) s.push_back(k + base);
+  }
+  m->source = "test boxes";
+  return base;
+}
+
+std::string thrown(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
+  // [0, 0.5] and [0.5, 1] (5 + 5 cells) tied node to node on x = 0.5, against [0, 1] (10 cells).
+  const auto half = [](double x0) {
+    auto b = test::box_spec(ElementType::Hex8, 0.5, 0.1, 0.08, 5, 2, 2);
+    b.origin = {x0, 0, 0};
+    return b;
+  };
+  mesh::Mesh two;
+  std::size_t n_mpc = 0;
+  if (rank_of() == 0) {
+    append_box(&two, half(0.0), 0, "A_");
+    append_box(&two, half(0.5), 10000, "B_");
+    const auto& a = two.node_sets.at("A_x1");
+    const auto& b = two.node_sets.at("B_x0");
+    for (auto ka : a)
+      for (auto kb : b) {
+        double d = 0;
+        for (int j = 0; j < 3; ++j) d += std::abs(two.coords[3 * ka + j] - two.coords[3 * kb + j]);
+        if (d > 1e-12) continue;
+        for (int c = 1; c <= 3; ++c) {
+          mesh::LinearConstraint lc;
+          lc.id = static_cast<std::int64_t>(++n_mpc);
+          lc.where = cat("test MPC ", lc.id);
+          lc.terms = {{two.node_ids[kb], c, 2.0}, {two.node_ids[ka], c, -2.0}};  // u_B = u_A
+          two.constraints.linear.push_back(lc);
+        }
+      }
+    EXPECT_EQ(n_mpc, 27u);
+  }
+  auto tied = build(std::move(two), {"A_x0"});
+  mesh::Mesh one;
+  if (rank_of() == 0) one = mesh::generate_box(test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.08, 10, 2, 2));
+  auto ref = build(std::move(one), {"x0"});
+  ASSERT_TRUE(tied.constraints);
+  EXPECT_EQ(tied.constraints->n_dependent, 27);
+  EXPECT_EQ(tied.dofs.n_global, ref.dofs.n_global);
+  EXPECT_NEAR(tied.mass, ref.mass, 1e-12 * ref.mass);
+  const auto wt = lowest_eigenvalues(tied.K.get(), tied.M.get(), 8);
+  const auto wr = lowest_eigenvalues(ref.K.get(), ref.M.get(), 8);
+  for (int i = 0; i < 8; ++i) EXPECT_NEAR(wt[i], wr[i], 1e-9 * wr[i]) << "mode " << i + 1;
+}
+
+TEST(Constraints, RigidSpiderOverAFreeBoxGivesTheRigidBodyMassMatrix) {
+  const double L = 0.6, B = 0.2, H = 0.1, rho = test::steel().rho;
+  const double xr[3] = {0.25, 0.05, -0.03};  // the spider's centre, off the box's centre
+  mesh::Mesh m;
+  if (rank_of() == 0) {
+    m = mesh::generate_box(test::box_spec(ElementType::Hex8, L, B, H, 6, 2, 2));
+    m.add_node(9001, xr[0], xr[1], xr[2]);
+    mesh::RigidElement r;
+    r.id = 1;
+    r.where = "test RBE2 1";
+    r.reference = 9001;
+    r.components = 63;
+    for (std::int64_t k = 0; k + 1 < m.num_nodes(); ++k) r.dependent.push_back(m.node_ids[k]);
+    m.constraints.rigid.push_back(r);
+  }
+  auto md = build(std::move(m), {});
+  ASSERT_EQ(md.dofs.n_global, 6);
+  const auto K = test::dense_matrix(md.K.get()), M = test::dense_matrix(md.M.get());
+  PetscReal kfull = 0;
+  // K of a rigid motion vanishes: against the stiffness scale E * L (N/m) times lever arms.
+  const double kscale = test::steel().E * L;
+  for (double v : K) kfull = std::max(kfull, std::abs(v));
+  EXPECT_LT(kfull, 1e-9 * kscale);
+  // Closed form about x_R: [[m I, -m [d]x], [m [d]x, J_c + m (|d|^2 I - d d^T)]], d = centre - x_R.
+  const double mass = rho * L * B * H;
+  const double d[3] = {L / 2 - xr[0], B / 2 - xr[1], H / 2 - xr[2]};
+  const double S[3][3] = {{0, -d[2], d[1]}, {d[2], 0, -d[0]}, {-d[1], d[0], 0}};
+  const double Jc[3] = {mass * (B * B + H * H) / 12, mass * (L * L + H * H) / 12, mass * (L * L + B * B) / 12};
+  double E[6][6] = {};
+  for (int i = 0; i < 3; ++i) {
+    E[i][i] = mass;
+    for (int j = 0; j < 3; ++j) {
+      E[i][3 + j] = -mass * S[i][j];
+      E[3 + i][j] = mass * S[i][j];
+      E[3 + i][3 + j] = mass * ((i == j ? d[0] * d[0] + d[1] * d[1] + d[2] * d[2] : 0) - d[i] * d[j]);
+    }
+    E[3 + i][3 + i] += Jc[i];
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) EXPECT_NEAR(M[6 * i + j], E[i][j], 1e-12 * mass) << i << "," << j;
+}
+
+TEST(Constraints, InterpolationElementLoadsLikeTheLeverRuleAndMovesAsTheFit) {
+  // Cantilever clamped at x = 0; an RBE3 on the 9 nodes of the tip face, equal weights, its
+  // reference at the face's centroid. A load (F, M) on the reference point against the same box
+  // without the RBE3 under the lever rule's nodal forces.
+  const double L = 1.0, B = 0.1, H = 0.1;
+  const double xr[3] = {L, B / 2, H / 2};
+  const double load[6] = {100, 200, -50, 7, -3, 5};
+  const auto spec = test::box_spec(ElementType::Hex8, L, B, H, 8, 2, 2);
+  mesh::Mesh m;
+  if (rank_of() == 0) {
+    m = mesh::generate_box(spec);
+    m.add_node(9001, xr[0], xr[1], xr[2]);
+    mesh::InterpolationElement r;
+    r.id = 7;
+    r.where = "test RBE3 7";
+    r.reference = 9001;
+    r.ref_components = 63;
+    for (auto k : m.node_sets.at("x1")) {
+      r.nodes.push_back(m.node_ids[k]);
+      r.weights.push_back(2.5);
+      r.node_components.push_back(7);
+    }
+    m.constraints.interpolation.push_back(r);
+    m.node_sets["ref"] = {m.num_nodes() - 1};
+  }
+  auto md = build(std::move(m), {"x0"});
+  ASSERT_TRUE(md.constraints);
+  EXPECT_EQ(md.constraints->n_point_dofs, 6);
+  EXPECT_EQ(md.constraints->n_dependent, 6);
+  // The reference point's rows, in component order (set "ref").
+  const auto rows = fe::set_rows(md.dofs, "ref", "test");
+  ASSERT_EQ(rows.size(), 6u);
+  UVec f, ub;
+  MORSE_CALL(MatCreateVecs(md.K.get(), ub.ptr(), f.ptr()));
+  for (const auto& r : rows)
+    if (r.row >= md.dofs.first && r.row < md.dofs.first + md.dofs.n_owned)
+      MORSE_CALL(VecSetValue(f.get(), r.row, load[r.component - 1], INSERT_VALUES));
+  MORSE_CALL(VecAssemblyBegin(f.get()));
+  MORSE_CALL(VecAssemblyEnd(f.get()));
+  test::direct_solve(md.K.get(), f.get(), ub.get());
+  auto u = fe::expand(md, ub.get());
+  double ref_motion[6] = {0, 0, 0, 0, 0, 0};
+  {
+    std::vector<double> all(6, 0.0);
+    const PetscScalar* a;
+    MORSE_CALL(VecGetArrayRead(ub.get(), &a));
+    for (const auto& r : rows)
+      if (r.row >= md.dofs.first && r.row < md.dofs.first + md.dofs.n_owned)
+        all[r.component - 1] = a[r.row - md.dofs.first];
+    MORSE_CALL(VecRestoreArrayRead(ub.get(), &a));
+    MPI_Allreduce(MPI_IN_PLACE, all.data(), 6, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+    std::copy(all.begin(), all.end(), ref_motion);
+  }
+
+  // The reference: the plain box, nodal forces F/n + (J^-1 M) x r_i on the tip face.
+  auto box = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0"});
+  const auto& lm = box.lm;
+  const auto& tip = lm.mesh.node_sets.at("x1");
+  std::int64_t n_tip = lm.node_set_sizes.at("x1");
+  double J[3] = {0, 0, 0};  // diagonal of sum (|r|^2 I - r r^T) (the face is symmetric: no products)
+  const double ry[3] = {-B / 2, 0, B / 2}, rz[3] = {-H / 2, 0, H / 2};
+  for (double y : ry)
+    for (double z : rz) J[0] += y * y + z * z, J[1] += z * z, J[2] += y * y;
+  const double th[3] = {load[3] / J[0], load[4] / J[1], load[5] / J[2]};
+  UVec fr, ur;
+  MORSE_CALL(MatCreateVecs(box.ops.K.get(), ur.ptr(), fr.ptr()));
+  int rank = rank_of();
+  for (auto k : tip) {
+    if (lm.node_owner[k] != rank) continue;
+    const double r[3] = {lm.mesh.coords[3 * k] - xr[0], lm.mesh.coords[3 * k + 1] - xr[1],
+                         lm.mesh.coords[3 * k + 2] - xr[2]};
+    const double cr[3] = {th[1] * r[2] - th[2] * r[1], th[2] * r[0] - th[0] * r[2], th[0] * r[1] - th[1] * r[0]};
+    for (int dd = 0; dd < 3; ++dd)
+      MORSE_CALL(VecSetValue(fr.get(), box.dofs.node_dof[3 * k + dd], load[dd] / static_cast<double>(n_tip) + cr[dd],
+                             ADD_VALUES));
+  }
+  MORSE_CALL(VecAssemblyBegin(fr.get()));
+  MORSE_CALL(VecAssemblyEnd(fr.get()));
+  test::direct_solve(box.ops.K.get(), fr.get(), ur.get());
+  // Same node DOF numbering (the same box, distributed alike), so the vectors compare directly.
+  PetscReal nref = 0, ndiff = 0;
+  MORSE_CALL(VecNorm(ur.get(), NORM_INFINITY, &nref));
+  MORSE_CALL(VecAXPY(ur.get(), -1.0, u.get()));
+  MORSE_CALL(VecNorm(ur.get(), NORM_INFINITY, &ndiff));
+  EXPECT_GT(nref, 0);
+  EXPECT_LT(ndiff, 1e-9 * nref);
+
+  // The reference point moves as the fit: mean translation, theta = J^-1 sum r_i x u_i.
+  double mean[3] = {0, 0, 0}, mom[3] = {0, 0, 0};
+  {
+    const PetscScalar* a;
+    MORSE_CALL(VecGetArrayRead(u.get(), &a));
+    const auto& full = md.constraints->full;
+    const auto& mlm = *md.mesh;
+    for (auto k : mlm.mesh.node_sets.at("x1")) {
+      if (mlm.node_owner[k] != rank) continue;
+      double uk[3], r[3];
+      for (int dd = 0; dd < 3; ++dd) {
+        uk[dd] = a[full.node_dof[3 * k + dd] - full.first];
+        r[dd] = mlm.mesh.coords[3 * k + dd] - xr[dd];
+        mean[dd] += uk[dd] / static_cast<double>(n_tip);
+      }
+      mom[0] += r[1] * uk[2] - r[2] * uk[1];
+      mom[1] += r[2] * uk[0] - r[0] * uk[2];
+      mom[2] += r[0] * uk[1] - r[1] * uk[0];
+    }
+    MORSE_CALL(VecRestoreArrayRead(u.get(), &a));
+    MPI_Allreduce(MPI_IN_PLACE, mean, 3, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, mom, 3, MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
+  }
+  double scale = 0;
+  for (double v : mean) scale = std::max(scale, std::abs(v));
+  for (int dd = 0; dd < 3; ++dd) {
+    EXPECT_NEAR(ref_motion[dd], mean[dd], 1e-9 * scale) << "translation " << dd;
+    EXPECT_NEAR(ref_motion[3 + dd], mom[dd] / J[dd], 1e-9 * scale / B) << "rotation " << dd;
+  }
+}
+
+TEST(Constraints, DeckErrorsAreThrownOnEveryRank) {
+  const auto spec = test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.1, 4, 1, 1);
+  // f adds constraints to a box (node ids 1..20: x = 0 face 1, 6, 11, 16) with a point 9001.
+  auto run = [&](const std::function<void(mesh::Mesh*)>& f, const std::vector<std::string>& clamp) {
+    mesh::Mesh m;
+    if (rank_of() == 0) {
+      m = mesh::generate_box(spec);
+      m.add_node(9001, 1.0, 0.05, 0.05);
+      f(&m);
+    }
+    return thrown([&] { build(std::move(m), clamp); });
+  };
+  auto rbe2 = [](std::int64_t id, std::int64_t ref, std::vector<std::int64_t> dep) {
+    mesh::RigidElement r;
+    r.id = id;
+    r.where = cat("deck.bdf:", id, ": RBE2 ", id);
+    r.reference = ref;
+    r.components = 63;
+    r.dependent = std::move(dep);
+    return r;
+  };
+  auto mpc = [](std::int64_t id, std::int64_t a, int ca, std::int64_t b, int cb) {
+    mesh::LinearConstraint l;
+    l.id = id;
+    l.where = cat("deck.bdf:", id, ": MPC ", id);
+    l.terms = {{a, ca, 1.0}, {b, cb, -1.0}};
+    return l;
+  };
+  // A dependent node of the clamped face.
+  auto msg = run([&](mesh::Mesh* m) { m->constraints.rigid.push_back(rbe2(3, 9001, {5, 1})); }, {"x0"});
+  EXPECT_NE(msg.find("deck.bdf:3: RBE2 3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("node 1 component 1 (x) is dependent but also fixed"), std::string::npos) << msg;
+  // Dependent in two elements.
+  msg = run(
+      [&](mesh::Mesh* m) {
+        m->constraints.rigid.push_back(rbe2(3, 9001, {5, 10}));
+        m->constraints.linear.push_back(mpc(4, 10, 2, 9, 2));
+      },
+      {"x0"});
+  EXPECT_NE(msg.find("node 10 component 2 (y) is dependent here and in deck.bdf:3: RBE2 3"), std::string::npos) << msg;
+  // A cycle.
+  msg = run(
+      [&](mesh::Mesh* m) {
+        m->constraints.linear.push_back(mpc(4, 10, 1, 9, 1));
+        m->constraints.linear.push_back(mpc(5, 9, 1, 10, 1));
+      },
+      {"x0"});
+  EXPECT_NE(msg.find("circular dependency"), std::string::npos) << msg;
+  // The independent node of an RBE2 is a solid node.
+  msg = run([&](mesh::Mesh* m) { m->constraints.rigid.push_back(rbe2(3, 5, {10})); }, {"x0"});
+  EXPECT_NE(msg.find("independent node 5 is a node of solid elements"), std::string::npos) << msg;
+  // A rotation of a solid node in an MPC.
+  msg = run([&](mesh::Mesh* m) { m->constraints.linear.push_back(mpc(4, 10, 5, 9, 1)); }, {"x0"});
+  EXPECT_NE(msg.find("component 5 of node 10"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("no rotations"), std::string::npos) << msg;
+  // RBE3 on three collinear nodes (an edge along x): rotation about x undetermined.
+  msg = run(
+      [&](mesh::Mesh* m) {
+        mesh::InterpolationElement r;
+        r.id = 8;
+        r.where = "deck.bdf:8: RBE3 8";
+        r.reference = 9001;
+        r.ref_components = 63;
+        r.nodes = {3, 4, 5};
+        r.weights = {1, 1, 1};
+        r.node_components = {7, 7, 7};
+        m->constraints.interpolation.push_back(r);
+      },
+      {"x0"});
+  EXPECT_NE(msg.find("deck.bdf:8: RBE3 8"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("do not determine the reference's motion"), std::string::npos) << msg;
+  // A constraint naming an id that is no node.
+  msg = run([&](mesh::Mesh* m) { m->constraints.linear.push_back(mpc(4, 10, 1, 777, 1)); }, {"x0"});
+  EXPECT_NE(msg.find("names node 777, which is not a node of the mesh"), std::string::npos) << msg;
+}
