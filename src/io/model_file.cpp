@@ -29,6 +29,9 @@ void write_node_sets(H5Output& out, const mesh::LocalMesh& lm, const std::string
     for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
     std::vector<std::int64_t> all(rank == 0 ? displs[size - 1] + counts[size - 1] : 0);
     MPI_Gatherv(mine.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, lm.comm);
+    // The set's six-DOF points (rigid and interpolation elements), known on every rank.
+    if (auto it = lm.mesh.constraints.point_sets.find(name); rank == 0 && it != lm.mesh.constraints.point_sets.end())
+      all.insert(all.end(), it->second.begin(), it->second.end());
     std::sort(all.begin(), all.end());
     out.write(group + "/" + name, all);
   }
