@@ -1,6 +1,9 @@
 // Tests of the Abaqus / CalculiX deck reader (mesh/abaqus.hpp). Every rank runs the same serial
-// tests on its own temporary files.
+// tests on its own temporary files; the cantilever with a rigid body is read, distributed and
+// solved on all ranks together.
+#include <petscsys.h>
 #include <gtest/gtest.h>
+#include <petscblaslapack.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,8 +23,12 @@
 #include "morse/core/error.hpp"
 #include "morse/core/session.hpp"
 #include "morse/fe/element.hpp"
+#include "morse/fe/model.hpp"
 #include "morse/mesh/abaqus.hpp"
+#include "morse/mesh/generator.hpp"
+#include "morse/mesh/nastran.hpp"
 #include "scratch.hpp"
+#include "util.hpp"
 
 namespace {
 
@@ -428,6 +436,318 @@ TEST_F(AbaqusTest, ErrorUndefinedSetsAndMaterials) {
   // An error inside an included file names that file.
   write("inc/bad.inp", "*BOUNDARY\n\n1, 1, 2, 1.0\n");
   expect_error(write("inc.inp", cat(base, "*INCLUDE, INPUT=inc/bad.inp\n")), {"inc/bad.inp:3:"});
+}
+
+// ------------------------------------------------------------------------------------------------
+// Constraints: *EQUATION, *RIGID BODY, *COUPLING with *KINEMATIC / *DISTRIBUTING, *SURFACE
+
+// A unit cube (nodes 1-8, element 1 in set BRICK) and a node 100 that no element uses: lines 1-13.
+const char* const kCube =
+    "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n5, 0, 0, 1\n6, 1, 0, 1\n7, 1, 1, 1\n8, 0, 1, 1\n"
+    "*ELEMENT, TYPE=C3D8, ELSET=BRICK\n1, 1, 2, 3, 4, 5, 6, 7, 8\n*NODE\n100, 0.5, 0.5, 2.0\n";
+
+using morse::mesh::Term;
+
+void expect_terms(const morse::mesh::LinearConstraint& c, const std::vector<Term>& terms) {
+  ASSERT_EQ(c.terms.size(), terms.size()) << c.where;
+  for (std::size_t k = 0; k < terms.size(); ++k) {
+    EXPECT_EQ(c.terms[k].node, terms[k].node) << c.where << " term " << k;
+    EXPECT_EQ(c.terms[k].component, terms[k].component) << c.where << " term " << k;
+    EXPECT_EQ(c.terms[k].coefficient, terms[k].coefficient) << c.where << " term " << k;
+  }
+}
+
+TEST_F(AbaqusTest, Equations) {
+  // Three terms over two lines (a trailing comma); two equations in one block; node-set terms
+  // (sets defined further down) matched in ascending order, a single node in every equation.
+  const std::string path = write("deck.inp", cat(kCube,
+                                                 "*EQUATION\n"                // 14
+                                                 "3\n"                        // 15
+                                                 "5, 3, 2.0, 6, 3, -1.0,\n"   // 16
+                                                 "7, 1, 0.5\n"                // 17
+                                                 "2\n"                        // 18
+                                                 "8, 2, 1., 100, 4, -0.25\n"  // 19
+                                                 "*Equation\n"                // 20
+                                                 "3\n"                        // 21
+                                                 "A, 1, 1.0, b, 1, -1.0\n"    // 22
+                                                 "100, 1, -1.5D0\n"           // 23
+                                                 "*NSET, NSET=A\n6, 5\n*NSET, NSET=B\n8\n7\n"));
+  const Mesh m = read_abaqus(path, false);
+  const auto& cs = m.constraints;
+  EXPECT_TRUE(cs.rigid.empty());
+  EXPECT_TRUE(cs.interpolation.empty());
+  ASSERT_EQ(cs.linear.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(cs.linear[i].id, static_cast<std::int64_t>(i) + 1);
+  EXPECT_EQ(cs.linear[0].where, path + ":15: *EQUATION");
+  expect_terms(cs.linear[0], {{5, 3, 2.0}, {6, 3, -1.0}, {7, 1, 0.5}});
+  EXPECT_EQ(cs.linear[1].where, path + ":18: *EQUATION");
+  expect_terms(cs.linear[1], {{8, 2, 1.0}, {100, 4, -0.25}});
+  EXPECT_EQ(cs.linear[2].where, path + ":21: *EQUATION");
+  expect_terms(cs.linear[2], {{5, 1, 1.0}, {7, 1, -1.0}, {100, 1, -1.5}});
+  EXPECT_EQ(cs.linear[3].where, path + ":21: *EQUATION");
+  expect_terms(cs.linear[3], {{6, 1, 1.0}, {8, 1, -1.0}, {100, 1, -1.5}});
+  // The reference node stays an ordinary node of the serial mesh.
+  EXPECT_EQ(m.num_nodes(), 9);
+  EXPECT_EQ(index_of(m, 100), 8);
+}
+
+TEST_F(AbaqusTest, RigidBodies) {
+  const std::string path = write("deck.inp", cat(kCube,
+                                                 "*RIGID BODY, NSET=Top, REF NODE=100\n"  // 14
+                                                 "*NSET, NSET=TOP\n8, 7, 6, 5, 7\n"
+                                                 "*NODE, NSET=REF2\n101, 0.5, 0.5, -1.0\n"  // 17-18
+                                                 "*Rigid Body, ref node=REF2, tie nset=Bottom, pin nset=Pins\n"  // 19
+                                                 "*NSET, NSET=Bottom\n2, 1\n*NSET, NSET=Pins\n3, 4\n"
+                                                 "*NODE\n102, 2, 2, 2\n"
+                                                 "*RIGID BODY, ELSET=brick, REF NODE=102, ISOTHERMAL=YES\n"));  // 26
+  const Mesh m = read_abaqus(path, false);
+  const auto& rs = m.constraints.rigid;
+  ASSERT_EQ(rs.size(), 4u);
+  const std::vector<std::int64_t> ids{1, 2, 3, 4}, refs{100, 101, 101, 102};
+  const std::vector<int> masks{63, 63, 7, 63};
+  const std::vector<std::string> wheres{":14: *RIGID BODY", ":19: *RIGID BODY", ":19: *RIGID BODY (PIN NSET)",
+                                        ":26: *RIGID BODY"};
+  const std::vector<std::vector<std::int64_t>> dependent{{5, 6, 7, 8}, {1, 2}, {3, 4}, {1, 2, 3, 4, 5, 6, 7, 8}};
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    EXPECT_EQ(rs[i].id, ids[i]);
+    EXPECT_EQ(rs[i].where, path + wheres[i]);
+    EXPECT_EQ(rs[i].reference, refs[i]);
+    EXPECT_EQ(rs[i].components, masks[i]);
+    EXPECT_EQ(rs[i].dependent, dependent[i]);
+  }
+  EXPECT_TRUE(m.constraints.linear.empty());
+  EXPECT_TRUE(m.constraints.interpolation.empty());
+}
+
+TEST_F(AbaqusTest, Couplings) {
+  const std::string path = write("deck.inp", cat(kCube,
+                                                 "*NODE\n101, 0.5, 0.5, -1.0\n102, 2, 0.5, 0.5\n"  // 14-16
+                                                 "*SURFACE, NAME=TopSurf, TYPE=NODE\n"             // 17
+                                                 "TOP\n"                                           // 18
+                                                 "*COUPLING, CONSTRAINT NAME=C1, REF NODE=100, SURFACE=topsurf\n"  // 19
+                                                 "*KINEMATIC\n"                                                    // 20
+                                                 "1, 3\n"                                                          // 21
+                                                 "*Coupling, ref node=101, surface=BOT, constraint name=C2\n"      // 22
+                                                 "*Distributing, weighting method=UNIFORM\n"                       // 23
+                                                 "*Surface, name=Bot, type=node\n"                                 // 24
+                                                 "1, 2.5\n"
+                                                 "2\n"
+                                                 "BOTH, 0.5\n"
+                                                 "*NSET, NSET=TOP\n5, 6, 7, 8\n"
+                                                 "*NSET, NSET=BOTH\n3, 4\n"
+                                                 "*SURFACE, NAME=Faces\nBRICK, S1\n"       // 32-33
+                                                 "*COUPLING, REF NODE=102, SURFACE=Bot\n"  // 34
+                                                 "*DISTRIBUTING\n"                         // 35
+                                                 "4, 6\n"
+                                                 "1\n"));
+  ::testing::internal::CaptureStderr();
+  const Mesh m = read_abaqus(path);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(count(log, "TYPE=ELEMENT"), 1) << log;  // the element surface is skipped, with a notice
+  const auto& cs = m.constraints;
+  ASSERT_EQ(cs.rigid.size(), 1u);
+  EXPECT_EQ(cs.rigid[0].id, 1);
+  EXPECT_EQ(cs.rigid[0].where, path + ":19: *COUPLING C1");
+  EXPECT_EQ(cs.rigid[0].reference, 100);
+  EXPECT_EQ(cs.rigid[0].components, 7);
+  EXPECT_EQ(cs.rigid[0].dependent, (std::vector<std::int64_t>{5, 6, 7, 8}));
+  ASSERT_EQ(cs.interpolation.size(), 2u);
+  const auto& d = cs.interpolation[0];
+  EXPECT_EQ(d.id, 1);
+  EXPECT_EQ(d.where, path + ":22: *COUPLING C2");
+  EXPECT_EQ(d.reference, 101);
+  EXPECT_EQ(d.ref_components, 63);
+  EXPECT_EQ(d.nodes, (std::vector<std::int64_t>{1, 2, 3, 4}));
+  EXPECT_EQ(d.weights, (std::vector<double>{2.5, 1.0, 0.5, 0.5}));
+  EXPECT_EQ(d.node_components, (std::vector<std::uint8_t>{7, 7, 7, 7}));
+  const auto& d2 = cs.interpolation[1];
+  EXPECT_EQ(d2.id, 2);
+  EXPECT_EQ(d2.where, path + ":34: *COUPLING");
+  EXPECT_EQ(d2.reference, 102);
+  EXPECT_EQ(d2.ref_components, 1 | 8 | 16 | 32);
+  EXPECT_EQ(d2.nodes, d.nodes);
+  EXPECT_EQ(d2.weights, d.weights);
+  EXPECT_TRUE(cs.linear.empty());
+  EXPECT_TRUE(m.node_sets.count("TopSurf") == 0 && m.node_sets.count("Bot") == 0);  // surfaces are no node sets
+}
+
+TEST_F(AbaqusTest, ErrorsInConstraints) {
+  // *EQUATION (lines 14-16).
+  expect_error(write("zero.inp", cat(kCube, "*EQUATION\n2\n5, 3, 0., 6, 3, 1.\n")),
+               {"zero.inp:16:", "first coefficient", "node 5 DOF 3", "is 0"});
+  expect_error(write("node.inp", cat(kCube, "*EQUATION\n2\n5, 3, 1., 66, 3, 1.\n")),
+               {"node.inp:16:", "*EQUATION references undefined node 66"});
+  expect_error(write("set.inp", cat(kCube, "*EQUATION\n2\n5, 3, 1.\nNOPE, 3, 1.\n")),
+               {"set.inp:17:", "*EQUATION references undefined node set 'NOPE'"});
+  expect_error(write("short.inp", cat(kCube, "*EQUATION\n3\n5, 3, 1., 6, 3, 1.\n*NSET, NSET=A\n1\n")),
+               {"short.inp:15:", "2 of its 3 terms", "short.inp:17)"});
+  expect_error(write("long.inp", cat(kCube, "*EQUATION\n1\n5, 3, 1., 6, 3, 1.\n")),
+               {"long.inp:16:", "more terms than the 1"});
+  expect_error(write("dof.inp", cat(kCube, "*EQUATION\n2\n5, 11, 1., 6, 3, 1.\n")), {"dof.inp:16:", "DOF 11"});
+  expect_error(
+      write("sizes.inp", cat(kCube, "*NSET, NSET=A\n1, 2\n*NSET, NSET=B\n3\n*EQUATION\n2\nA, 1, 1., B, 1, -1.\n")),
+      {"sizes.inp:20:", "node set 'B' has 1 nodes and 'A' has 2"});
+  // *RIGID BODY (line 14).
+  expect_error(write("rot.inp", cat(kCube, "*RIGID BODY, NSET=BRICK, REF NODE=100, ROT NODE=101\n")),
+               {"rot.inp:14:", "ROT NODE=101 is not supported"});
+  expect_error(write("ref.inp", cat(kCube, "*NSET, NSET=S\n1\n*RIGID BODY, NSET=S, REF NODE=77\n")),
+               {"ref.inp:16:", "*RIGID BODY references undefined node 77"});
+  expect_error(write("rset.inp", cat(kCube, "*RIGID BODY, NSET=Nope, REF NODE=100\n")),
+               {"rset.inp:14:", "undefined node set 'Nope'"});
+  expect_error(write("refset.inp", cat(kCube, "*NSET, NSET=R\n1, 2\n*RIGID BODY, NSET=R, REF NODE=R\n")),
+               {"refset.inp:16:", "node set of 2 nodes"});
+  expect_error(
+      write("pos.inp", cat(kCube, "*NSET, NSET=S\n1\n*RIGID BODY, NSET=S, REF NODE=100, POSITION=CENTER OF MASS\n")),
+      {"pos.inp:16:", "POSITION is not supported"});
+  expect_error(
+      write("both.inp", cat(kCube, "*NSET, NSET=S\n1, 2\n*RIGID BODY, TIE NSET=S, PIN NSET=S, REF NODE=100\n")),
+      {"both.inp:16:", "node 1 is both tied"});
+  expect_error(write("rdata.inp", cat(kCube, "*NSET, NSET=S\n1\n*RIGID BODY, NSET=S, REF NODE=100\n1, 2\n")),
+               {"rdata.inp:17:", "*RIGID BODY takes no data lines"});
+  // *COUPLING and *SURFACE (lines 14-).
+  const std::string surf = cat(kCube, "*SURFACE, NAME=S, TYPE=NODE\n1\n2\n");  // 14-16
+  expect_error(write("elsurf.inp",
+                     cat(kCube, "*SURFACE, NAME=S\nBRICK, S1\n*COUPLING, REF NODE=100, SURFACE=s\n", "*KINEMATIC\n")),
+               {"elsurf.inp:16:", "surface 'S' (", "elsurf.inp:14) is not node-based (TYPE=ELEMENT)", "TYPE=NODE"});
+  expect_error(
+      write("weight.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S\n*DISTRIBUTING, WEIGHTING METHOD=CUBIC\n")),
+      {"weight.inp:18:", "WEIGHTING METHOD=CUBIC is not supported"});
+  expect_error(write("nosurf.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=T\n*KINEMATIC\n")),
+               {"nosurf.inp:17:", "undefined surface 'T'"});
+  expect_error(
+      write("snode.inp",
+            cat(kCube, "*SURFACE, NAME=S, TYPE=NODE\n1\n55, 2.\n*COUPLING, REF NODE=100, SURFACE=S\n", "*KINEMATIC\n")),
+      {"snode.inp:16:", "*SURFACE S references undefined node 55"});
+  expect_error(write("alone.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S\n*NSET, NSET=A\n1\n")),
+               {"alone.inp:17:", "must be followed by *KINEMATIC or *DISTRIBUTING", "alone.inp:18)"});
+  expect_error(write("eof.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S\n")),
+               {"eof.inp:17:", "must be followed by *KINEMATIC or *DISTRIBUTING", "end of the deck"});
+  expect_error(write("kin.inp", cat(surf, "*KINEMATIC\n")), {"kin.inp:17:", "must directly follow a *COUPLING"});
+  expect_error(write("kdof.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S\n*KINEMATIC\n3, 7\n")),
+               {"kdof.inp:19:", "invalid DOF range 3..7"});
+  expect_error(write("orient.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S, ORIENTATION=OR1\n*KINEMATIC\n")),
+               {"orient.inp:17:", "ORIENTATION=OR1 is not supported"});
+  expect_error(
+      write("struct.inp", cat(surf, "*COUPLING, REF NODE=100, SURFACE=S\n*DISTRIBUTING, COUPLING=STRUCTURAL\n")),
+      {"struct.inp:18:", "COUPLING=STRUCTURAL is not supported"});
+  expect_error(write("twice.inp", cat(surf, "*NSET, NSET=NS\n1, 2\n*SURFACE, NAME=T, TYPE=NODE\n1, 2.\nNS\n",
+                                      "*COUPLING, REF NODE=100, SURFACE=T\n*DISTRIBUTING\n")),
+               {"twice.inp:21:", "*SURFACE T: node 1 has the weight 1 here and 2 at", "twice.inp:20"});
+  // Unused surfaces are not resolved; a used one is, wherever its members are.
+  EXPECT_NO_THROW(read_abaqus(write("unused.inp", cat(kCube, "*SURFACE, NAME=S, TYPE=NODE\n55\n")), false));
+}
+
+// ------------------------------------------------------------------------------------------------
+// End to end: a cantilever with a rigid body at its tip, from .inp and from .bdf (RBE2)
+
+class AbaqusModelTest : public morse::test::SharedScratchDirTest {
+ protected:
+  AbaqusModelTest() : SharedScratchDirTest("abaqus_model") {}
+};
+
+// Lowest n eigenvalues of (K, M) by LAPACK's dense generalized solver (every rank).
+std::vector<double> lowest_eigenvalues(Mat K, Mat M, int n) {
+  auto k = morse::test::dense_matrix(K), m = morse::test::dense_matrix(M);
+  PetscInt N = 0;
+  MORSE_CALL(MatGetSize(K, &N, nullptr));
+  PetscBLASInt bn = static_cast<PetscBLASInt>(N), itype = 1, info = 0, lwork = 8 * bn;
+  std::vector<double> w(N), work(lwork);
+  LAPACKsygv_(&itype, "N", "U", &bn, k.data(), &bn, m.data(), &bn, w.data(), work.data(), &lwork, &info);
+  EXPECT_EQ(info, 0);
+  w.resize(n);
+  return w;
+}
+
+TEST_F(AbaqusModelTest, RigidBodyCantileverMatchesNastranRbe2) {
+  // Hex8 box 1 x 0.1 x 0.1 (8 x 2 x 2), clamped at x = 0; node 9001 beyond the tip, tied to the
+  // 9 tip-face nodes: *RIGID BODY, and *COUPLING + *KINEMATIC, against RBE2 123456.
+  Mesh box = morse::mesh::generate_box(morse::test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.1, 8, 2, 2));
+  const double xr[3] = {1.05, 0.05, 0.05};
+  const auto steel = morse::test::steel();
+  std::vector<std::int64_t> root, tip;
+  for (auto k : box.node_sets.at("x0")) root.push_back(box.node_ids[k]);
+  for (auto k : box.node_sets.at("x1")) tip.push_back(box.node_ids[k]);
+  ASSERT_EQ(tip.size(), 9u);
+
+  std::string inp = "*NODE\n";
+  for (std::int64_t k = 0; k < box.num_nodes(); ++k)
+    inp += cat(box.node_ids[k], ", ", full(box.coords[3 * k]), ", ", full(box.coords[3 * k + 1]), ", ",
+               full(box.coords[3 * k + 2]), "\n");
+  inp += cat("9001, ", full(xr[0]), ", ", full(xr[1]), ", ", full(xr[2]), "\n*ELEMENT, TYPE=C3D8, ELSET=EALL\n");
+  for (std::int64_t e = 0; e < box.num_elements(); ++e) {
+    inp += cat(box.elem_ids[e]);
+    for (auto k = box.elem_offsets[e]; k < box.elem_offsets[e + 1]; ++k)
+      inp += cat(", ", box.node_ids[box.elem_nodes[k]]);
+    inp += "\n";
+  }
+  inp += cat("*MATERIAL, NAME=STEEL\n*ELASTIC\n", full(steel.E), ", ", full(steel.nu), "\n*DENSITY\n", full(steel.rho),
+             "\n*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n*NSET, NSET=ROOT\n");
+  for (auto id : root) inp += cat(id, "\n");
+  inp += "*NSET, NSET=TIP\n";
+  for (auto id : tip) inp += cat(id, ",\n");
+  inp += "*BOUNDARY\nROOT, 1, 3\n";
+  const std::string rigid_inp = write("rigid.inp", inp + "*RIGID BODY, NSET=TIP, REF NODE=9001\n");
+  const std::string kinematic_inp = write("kinematic.inp", inp +
+                                                               "*SURFACE, NAME=TIPS, TYPE=NODE\nTIP\n"
+                                                               "*COUPLING, CONSTRAINT NAME=TIE, REF NODE=9001, "
+                                                               "SURFACE=TIPS\n*KINEMATIC\n");
+
+  // The Nastran deck: write_nastran (free field, exact) plus an RBE2 before ENDDATA.
+  box.add_node(9001, xr[0], xr[1], xr[2]);
+  box.materials = {steel};
+  box.elem_material.assign(static_cast<std::size_t>(box.num_elements()), 0);
+  box.fixed_dofs.assign(static_cast<std::size_t>(box.num_nodes()), 0);
+  for (auto k : box.node_sets.at("x0")) box.fixed_dofs[k] = 7;
+  box.node_sets.clear();
+  std::string bdf;
+  if (morse::world_rank() == 0) {
+    morse::mesh::NastranWriteOptions o;
+    o.format = morse::mesh::NastranWriteOptions::Format::Free;
+    const std::string plain = path("plain.bdf");
+    morse::mesh::write_nastran(box, plain, o);
+    std::ifstream in(plain);
+    bdf.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    std::string rbe2 = "RBE2,9999,9001,123456";
+    for (std::size_t i = 0; i < tip.size(); ++i) rbe2 += cat(i == 5 ? "\n," : ",", tip[i]);
+    const auto at = bdf.find("ENDDATA");
+    EXPECT_NE(at, std::string::npos);
+    if (at != std::string::npos) bdf.insert(at, rbe2 + "\n");
+  }
+  const std::string rbe2_bdf = write("rbe2.bdf", bdf);
+
+  auto model = [&](const std::string& file) {
+    morse::fe::MeshInput in;
+    in.path = file;
+    in.clamp = {"*BOUNDARY"};
+    in.material = steel;
+    return morse::fe::mesh_model(PETSC_COMM_WORLD, in);
+  };
+  auto ref = model(rbe2_bdf);
+  ASSERT_TRUE(ref.constraints);
+  const auto wr = lowest_eigenvalues(ref.K.get(), ref.M.get(), 6);
+  {
+    // The rigid tip face matters: without it the box is softer.
+    auto plain = model(path("plain.bdf"));
+    EXPECT_FALSE(plain.constraints);
+    const auto wp = lowest_eigenvalues(plain.K.get(), plain.M.get(), 6);
+    for (int i = 0; i < 6; ++i) std::printf("DEBUG %d plain %.10g rigid %.10g\n", i, wp[i], wr[i]);
+    std::printf("DEBUG mass %.10g %.10g n %d %d\n", plain.mass, ref.mass, (int)plain.dofs.n_global, (int)ref.dofs.n_global);
+    EXPECT_LT(wp[0], (1 - 1e-4) * wr[0]);
+  }
+  for (const std::string& file : {rigid_inp, kinematic_inp}) {
+    SCOPED_TRACE(file);
+    auto md = model(file);
+    ASSERT_TRUE(md.constraints);
+    EXPECT_EQ(md.constraints->n_point_dofs, 6);
+    EXPECT_EQ(md.constraints->n_dependent, ref.constraints->n_dependent);
+    EXPECT_EQ(md.dofs.n_global, ref.dofs.n_global);
+    EXPECT_NEAR(md.mass, ref.mass, 1e-14 * ref.mass);
+    const auto w = lowest_eigenvalues(md.K.get(), md.M.get(), 6);
+    for (int i = 0; i < 6; ++i) {
+      EXPECT_GT(wr[i], 0.0);
+      EXPECT_NEAR(w[i], wr[i], 1e-10 * wr[i]) << "mode " << i + 1;
+    }
+  }
 }
 
 // ------------------------------------------------------------------------------------------------

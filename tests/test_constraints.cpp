@@ -133,19 +133,29 @@ TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
 }
 
 TEST(Constraints, RigidSpiderOverAFreeBoxGivesTheRigidBodyMassMatrix) {
+  // The spider also carries a second point 9002, dependent with all six components, holding a
+  // rigid mass (CONM2 with offset and inertia): it adds that body's mass matrix moved to x_R.
   const double L = 0.6, B = 0.2, H = 0.1, rho = test::steel().rho;
   const double xr[3] = {0.25, 0.05, -0.03};  // the spider's centre, off the box's centre
+  const double xp[3] = {0.7, -0.1, 0.2}, off[3] = {0.05, 0.02, -0.04}, m2 = 3.5;
+  const double J2[9] = {0.4, 0.01, -0.02, 0.01, 0.3, 0.03, -0.02, 0.03, 0.2};
   mesh::Mesh m;
   if (rank_of() == 0) {
     m = mesh::generate_box(test::box_spec(ElementType::Hex8, L, B, H, 6, 2, 2));
+    const auto n_box = m.num_nodes();
     m.add_node(9001, xr[0], xr[1], xr[2]);
+    m.add_node(9002, xp[0], xp[1], xp[2]);
     mesh::RigidElement r;
     r.id = 1;
     r.where = "test RBE2 1";
     r.reference = 9001;
     r.components = 63;
-    for (std::int64_t k = 0; k + 1 < m.num_nodes(); ++k) r.dependent.push_back(m.node_ids[k]);
+    for (std::int64_t k = 0; k < n_box; ++k) r.dependent.push_back(m.node_ids[k]);
+    r.dependent.push_back(9002);
     m.constraints.rigid.push_back(r);
+    m.constraints.mass_ids.push_back(9002);
+    const auto M6 = mesh::rigid_mass_matrix(m2, off, J2);
+    m.constraints.mass_matrices.assign(M6.begin(), M6.end());
   }
   auto md = build(std::move(m), {});
   ASSERT_EQ(md.dofs.n_global, 6);
@@ -170,8 +180,21 @@ TEST(Constraints, RigidSpiderOverAFreeBoxGivesTheRigidBodyMassMatrix) {
     }
     E[3 + i][3 + i] += Jc[i];
   }
+  // The second body, moved to x_R: centre of gravity at d2 = x_p + offset - x_R.
+  const double d2[3] = {xp[0] + off[0] - xr[0], xp[1] + off[1] - xr[1], xp[2] + off[2] - xr[2]};
+  const double S2[3][3] = {{0, -d2[2], d2[1]}, {d2[2], 0, -d2[0]}, {-d2[1], d2[0], 0}};
+  for (int i = 0; i < 3; ++i) {
+    E[i][i] += m2;
+    for (int j = 0; j < 3; ++j) {
+      E[i][3 + j] -= m2 * S2[i][j];
+      E[3 + i][j] += m2 * S2[i][j];
+      E[3 + i][3 + j] +=
+          J2[3 * i + j] + m2 * ((i == j ? d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2] : 0) - d2[i] * d2[j]);
+    }
+  }
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) EXPECT_NEAR(M[6 * i + j], E[i][j], 1e-12 * mass) << i << "," << j;
+  EXPECT_NEAR(md.mass, mass + m2, 1e-12 * mass);
 }
 
 TEST(Constraints, InterpolationElementLoadsLikeTheLeverRuleAndMovesAsTheFit) {

@@ -664,7 +664,9 @@ TEST_F(NastranTest, RigidElementsAndMpcs) {
                                ",ALPHA,1.-5\n"
                                "MPC,7,4,3,2.,1,3,-1.\n"
                                ",,2,1,0.5\n"
-                               "CONM2,12,9,,3.\n");
+                               "CONM2,12,9,,3.\n"
+                               "CONM2,13,9,0,2.,0.1,0.,0.\n"
+                               ",1.,0.,2.,0.,0.,3.\n");
   const Mesh m = read_nastran(write("rigid.bdf", deck), false);
   const auto& cs = m.constraints;
   ASSERT_EQ(cs.rigid.size(), 1u);
@@ -690,6 +692,19 @@ TEST_F(NastranTest, RigidElementsAndMpcs) {
   EXPECT_EQ(t[2].component, 1);
   EXPECT_EQ(t[2].coefficient, 0.5);
   EXPECT_EQ(m.point_mass[4], 3.0);  // grid 9 is node 4 (file order)
+  // CONM2 13: m = 2 at offset (0.1, 0, 0), inertia diag(1, 2, 3) about its centre of gravity:
+  // [[m I, -m [d]x], [m [d]x, J + m (|d|^2 I - d d^T)]] about grid 9.
+  ASSERT_EQ(cs.mass_ids, (std::vector<std::int64_t>{9}));
+  ASSERT_EQ(cs.mass_matrices.size(), 36u);
+  const auto& M6 = cs.mass_matrices;
+  EXPECT_EQ(M6[0], 2.0);
+  EXPECT_DOUBLE_EQ(M6[6 * 1 + 5], 0.2);   // y-force of a rotation about z
+  EXPECT_DOUBLE_EQ(M6[6 * 2 + 4], -0.2);  // z-force of a rotation about y
+  EXPECT_DOUBLE_EQ(M6[6 * 5 + 1], 0.2);
+  EXPECT_DOUBLE_EQ(M6[6 * 3 + 3], 1.0);
+  EXPECT_DOUBLE_EQ(M6[6 * 4 + 4], 2.02);
+  EXPECT_DOUBLE_EQ(M6[6 * 5 + 5], 3.02);
+  EXPECT_EQ(M6[6 * 0 + 4], 0.0);
 
   expect_error(write("rbe2n.bdf", cat(kTet, "RBE2,10,1,123\n")), {"rbe2n.bdf:8:", "card RBE2", "no dependent grid"});
   expect_error(write("rbe2g.bdf", cat(kTet, "RBE2,10,1,123,77\n")), {"rbe2g.bdf:8:", "card RBE2", "undefined grid 77"});

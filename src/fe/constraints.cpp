@@ -576,31 +576,56 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
   MORSE_CALL(MatPtAP(md->M.get(), cm->T.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, Mr.ptr()));
   symmetrize(Kr.get());
   symmetrize(Mr.get());
-  // Points' lumped masses: m r r^T for each translation, r its row of the reduced DOFs.
+  // Points' masses: a 6 x 6 matrix M6 about each point (a lumped mass m on the translations, and
+  // rigid masses with offsets and inertias) adds sum_ab M6_ab t_a t_b^T, t_a the point's row a of
+  // T (a dependent DOF's equation, or a unit row, or nothing if clamped).
   double point_mass = 0;
   MORSE_CALL(MatSetOption(Mr.get(), MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
-  for (std::size_t p = 0; p < cs.point_ids.size(); ++p) {
-    const double m = cs.point_mass[p];
-    if (m == 0.0) continue;
-    point_mass += m;
-    if (rank != 0) continue;
-    const auto id = cs.point_ids[p];
-    for (int c = 1; c <= 3; ++c) {
-      const Key k{id, c};
-      if (nodes.index(id) < 0 || nodes.clamped(k)) continue;
-      std::vector<PetscInt> cols;
-      std::vector<double> v;
-      if (auto it = dep.find(k); it != dep.end()) {
-        for (const auto& [t, a] : it->second) cols.push_back(col.at(t)), v.push_back(a);
-      } else if (auto jt = col.find(k); jt != col.end()) {
-        cols.push_back(jt->second), v.push_back(1.0);
+  {
+    std::map<std::int64_t, std::vector<double>> m6;  // by point id
+    for (std::size_t p = 0; p < cs.point_ids.size(); ++p)
+      if (cs.point_mass[p] != 0.0) {
+        auto& M = m6[cs.point_ids[p]];
+        M.assign(36, 0.0);
+        for (int c = 0; c < 3; ++c) M[7 * c] = cs.point_mass[p];
+        point_mass += cs.point_mass[p];
       }
-      std::vector<double> block(cols.size() * cols.size());
-      for (std::size_t i = 0; i < cols.size(); ++i)
-        for (std::size_t j = 0; j < cols.size(); ++j) block[i * cols.size() + j] = m * v[i] * v[j];
-      const auto n = static_cast<PetscInt>(cols.size());
-      if (n) MORSE_CALL(MatSetValues(Mr.get(), n, cols.data(), n, cols.data(), block.data(), ADD_VALUES));
+    for (std::size_t q = 0; q < cs.mass_ids.size(); ++q) {
+      auto& M = m6[cs.mass_ids[q]];
+      M.resize(36, 0.0);
+      for (int k = 0; k < 36; ++k) M[k] += cs.mass_matrices[36 * q + k];
+      point_mass += cs.mass_matrices[36 * q];
     }
+    if (rank == 0)
+      for (const auto& [id, M] : m6) {
+        if (nodes.index(id) < 0) continue;
+        std::map<PetscInt, std::array<double, 6>> t;  // column -> its coefficient in rows a = 0..5
+        for (int a = 0; a < 6; ++a) {
+          const Key k{id, a + 1};
+          if (nodes.clamped(k)) continue;
+          if (auto it = dep.find(k); it != dep.end()) {
+            for (const auto& [u, c] : it->second) t[col.at(u)][a] += c;
+          } else if (auto jt = col.find(k); jt != col.end()) {
+            t[jt->second][a] += 1.0;
+          }
+        }
+        std::vector<PetscInt> cols;
+        for (const auto& [c, v] : t) cols.push_back(c);
+        const auto n = static_cast<PetscInt>(cols.size());
+        std::vector<double> block(cols.size() * cols.size(), 0.0);
+        std::size_t i = 0;
+        for (const auto& [ci, vi] : t) {
+          std::size_t j = 0;
+          for (const auto& [cj, vj] : t) {
+            double s = 0;
+            for (int a = 0; a < 6; ++a)
+              for (int b = 0; b < 6; ++b) s += vi[a] * M[6 * a + b] * vj[b];
+            block[i * cols.size() + j++] = s;
+          }
+          ++i;
+        }
+        if (n) MORSE_CALL(MatSetValues(Mr.get(), n, cols.data(), n, cols.data(), block.data(), ADD_VALUES));
+      }
   }
   MORSE_CALL(MatAssemblyBegin(Mr.get(), MAT_FINAL_ASSEMBLY));
   MORSE_CALL(MatAssemblyEnd(Mr.get(), MAT_FINAL_ASSEMBLY));

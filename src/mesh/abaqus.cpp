@@ -17,7 +17,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <iostream>
+#include <map>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -179,7 +181,68 @@ struct MaterialData {
   bool has_density = false;
 };
 
-enum class Block { kNone, kSkip, kNode, kElement, kNset, kElset, kBoundary, kElastic, kDensity };
+/// One term of an *EQUATION: a node label or a node set name, a DOF and its coefficient.
+struct EquationTerm {
+  std::int64_t label = 0;
+  std::string set;  // non-empty: a node set name instead of a label
+  int dof = 0;
+  double coefficient = 0;
+  Loc loc;
+};
+
+struct EquationEntry {
+  Loc loc;  // the line giving the number of terms
+  std::size_t n_terms = 0;
+  std::vector<EquationTerm> terms;
+};
+
+/// *RIGID BODY: the reference node (a label or a one-node set) and the sets that follow it.
+struct RigidBodyEntry {
+  Loc loc;
+  std::string ref;
+  std::string nset, tie_nset, pin_nset, elset;
+};
+
+/// *COUPLING with its *KINEMATIC or *DISTRIBUTING.
+struct CouplingEntry {
+  Loc loc;
+  std::string name;  // CONSTRAINT NAME, may be empty
+  std::string ref;
+  std::string surface;
+  bool distributing = false;
+  std::uint8_t dofs = 0;  // from the data lines of *KINEMATIC / *DISTRIBUTING; 0: all six
+};
+
+/// A line of a node-based *SURFACE: a node label or a node set, and its weight (0: not given).
+struct SurfaceEntry {
+  std::int64_t label = 0;
+  std::string set;
+  double weight = 0;
+  Loc loc;
+};
+
+struct SurfaceData {
+  std::string name;
+  std::string type;  // upper case: NODE, ELEMENT, ...
+  Loc loc;           // first definition
+  std::vector<SurfaceEntry> entries;
+};
+
+enum class Block {
+  kNone,
+  kSkip,
+  kNoData,
+  kNode,
+  kElement,
+  kNset,
+  kElset,
+  kBoundary,
+  kElastic,
+  kDensity,
+  kEquation,
+  kSurface,
+  kCouplingDofs
+};
 
 class Reader {
  public:
@@ -187,6 +250,7 @@ class Reader {
 
   Mesh read(const std::string& path) {
     parse_file(path, nullptr, 0);
+    check_open_blocks(nullptr, nullptr);
     return finish(path);
   }
 
@@ -347,11 +411,14 @@ class Reader {
     Params ps;
     split_keyword(b, e, &kw, &display, &ps);
     if (kw.empty()) fail(loc, "empty keyword");
+    // *INCLUDE is textual: an equation's terms or a *COUPLING's *KINEMATIC may follow in the file.
+    if (kw != "INCLUDE") check_open_blocks(&kw, &loc);
 
     // A material definition ends at the next model or step keyword; unknown keywords (*EXPANSION,
     // *DAMPING, ...) may be material options and keep it open.
     static const std::set<std::string> kEndsMaterial = {"NODE",     "ELEMENT",  "NSET",         "ELSET",
-                                                        "BOUNDARY", "MATERIAL", "SOLIDSECTION", "STEP"};
+                                                        "BOUNDARY", "MATERIAL", "SOLIDSECTION", "STEP",
+                                                        "EQUATION", "SURFACE",  "RIGIDBODY",    "COUPLING"};
     if (kEndsMaterial.count(kw) || ignored(kw)) material_ = -1;
     const std::string* input = nullptr;
     if (kw == "NODE") {
@@ -419,6 +486,79 @@ class Reader {
     } else if (kw == "SOLIDSECTION") {
       sections_.push_back({required(ps, "ELSET", display, loc), required(ps, "MATERIAL", display, loc), loc});
       block_ = Block::kSkip;
+    } else if (kw == "EQUATION") {
+      check_params(ps, {"INPUT"}, display, loc);
+      block_ = Block::kEquation;
+      input = param(ps, "INPUT");
+    } else if (kw == "RIGIDBODY") {
+      if (const std::string* r = param(ps, "ROTNODE"))
+        fail(loc, "*RIGID BODY, ROT NODE=", *r, " is not supported: the reference node (REF NODE) carries the",
+             " rotations itself (a six-DOF point); remove ROT NODE");
+      check_params(ps, {"REF NODE", "NSET", "TIE NSET", "PIN NSET", "ELSET", "ISOTHERMAL"}, display, loc);
+      RigidBodyEntry rb;
+      rb.loc = loc;
+      rb.ref = nonempty_param(ps, "REFNODE", "REF NODE", display, loc);
+      rb.nset = nonempty_param(ps, "NSET", "NSET", display, loc);
+      rb.tie_nset = nonempty_param(ps, "TIENSET", "TIE NSET", display, loc);
+      rb.pin_nset = nonempty_param(ps, "PINNSET", "PIN NSET", display, loc);
+      rb.elset = nonempty_param(ps, "ELSET", "ELSET", display, loc);
+      if (rb.ref.empty()) fail(loc, "*RIGID BODY needs REF NODE= (the reference node)");
+      if (rb.nset.empty() && rb.tie_nset.empty() && rb.pin_nset.empty() && rb.elset.empty())
+        fail(loc, "*RIGID BODY needs NSET=, TIE NSET=, PIN NSET= or ELSET= (the nodes that follow REF NODE)");
+      rigid_bodies_.push_back(std::move(rb));
+      block_ = Block::kNoData;
+    } else if (kw == "COUPLING") {
+      if (const std::string* o = param(ps, "ORIENTATION"))
+        fail(loc, "*COUPLING, ORIENTATION=", *o, " is not supported (the coupled DOFs are the global ones)");
+      if (param(ps, "INFLUENCERADIUS"))
+        fail(loc, "*COUPLING, INFLUENCE RADIUS= is not supported: list the coupled nodes in the surface");
+      check_params(ps, {"CONSTRAINT NAME", "REF NODE", "SURFACE"}, display, loc);
+      CouplingEntry c;
+      c.loc = loc;
+      c.name = nonempty_param(ps, "CONSTRAINTNAME", "CONSTRAINT NAME", display, loc);
+      c.ref = nonempty_param(ps, "REFNODE", "REF NODE", display, loc);
+      c.surface = nonempty_param(ps, "SURFACE", "SURFACE", display, loc);
+      if (c.ref.empty()) fail(loc, "*COUPLING needs REF NODE= (the reference node)");
+      if (c.surface.empty()) fail(loc, "*COUPLING needs SURFACE= (a node-based surface: *SURFACE, TYPE=NODE)");
+      couplings_.push_back(std::move(c));
+      coupling_open_ = true;
+      block_ = Block::kNoData;
+    } else if (kw == "KINEMATIC" || kw == "DISTRIBUTING") {
+      if (!coupling_open_) fail(loc, display, " must directly follow a *COUPLING keyword line");
+      coupling_open_ = false;
+      if (kw == "DISTRIBUTING") {
+        if (const std::string* w = param(ps, "WEIGHTINGMETHOD");
+            w && compact_upper(w->data(), w->data() + w->size()) != "UNIFORM")
+          fail(loc, "*DISTRIBUTING, WEIGHTING METHOD=", *w, " is not supported (only UNIFORM: the weights are",
+               " those of the surface's nodes, 1 where none is given)");
+        if (const std::string* c = param(ps, "COUPLING"); c && to_upper(*c) != "CONTINUUM")
+          fail(loc, "*DISTRIBUTING, COUPLING=", *c, " is not supported (only CONTINUUM)");
+        check_params(ps, {"WEIGHTING METHOD", "COUPLING"}, display, loc);
+        couplings_.back().distributing = true;
+      } else {
+        check_params(ps, {}, display, loc);
+      }
+      block_ = Block::kCouplingDofs;
+    } else if (kw == "SURFACE") {
+      const std::string& name = required(ps, "NAME", display, loc);
+      const std::string* t = param(ps, "TYPE");
+      const std::string type = t ? compact_upper(t->data(), t->data() + t->size()) : "ELEMENT";
+      auto [it, inserted] = surface_lookup_.emplace(to_upper(name), static_cast<int>(surfaces_.size()));
+      if (inserted) surfaces_.push_back({name, type, loc, {}});
+      SurfaceData& sd = surfaces_[it->second];
+      if (sd.type != type)
+        fail(loc, "surface '", name, "' is defined again with TYPE=", type, " (TYPE=", sd.type, " at ",
+             files_[sd.loc.file], ":", sd.loc.line, ")");
+      if (type == "NODE") {
+        if (param(ps, "COMBINE") || param(ps, "CROP"))
+          fail(loc, "*SURFACE, TYPE=NODE with COMBINE= or CROP= is not supported: list the nodes or node sets");
+        surface_ = it->second;
+        block_ = Block::kSurface;
+      } else {
+        notice("SURFACE-" + type, loc, "*SURFACE, TYPE=", type, " (element-based) is not read: morse reads",
+               " node-based surfaces (TYPE=NODE) for *COUPLING");
+        block_ = Block::kSkip;
+      }
     } else {
       if (kw == "STEP") in_step_ = true;
       if (kw == "ENDSTEP") in_step_ = false;
@@ -435,6 +575,45 @@ class Reader {
       parse_file(path, &loc, depth + 1);
       depth_ = depth;
     }
+  }
+
+  /// Fails unless every parameter is one of `allowed` (written with blanks: "REF NODE").
+  void check_params(const Params& ps, std::initializer_list<const char*> allowed, const std::string& kw,
+                    const Loc& loc) const {
+    for (const auto& [k, v] : ps) {
+      std::string list;
+      bool ok = false;
+      for (const char* a : allowed) {
+        ok = ok || compact_upper(a, a + std::strlen(a)) == k;
+        list += cat(list.empty() ? "" : ", ", a, "=");
+      }
+      if (!ok)
+        fail(loc, kw, ": the parameter ", k, " is not supported (", list.empty() ? "it takes none" : "it takes " + list,
+             ")");
+    }
+  }
+
+  /// The value of parameter key ("" if absent); present with an empty value is an error.
+  const std::string& nonempty_param(const Params& ps, const char* key, const char* name, const std::string& kw,
+                                    const Loc& loc) const {
+    static const std::string kNone;
+    const std::string* v = param(ps, key);
+    if (!v) return kNone;
+    if (v->empty()) fail(loc, kw, ": ", name, "= has no value");
+    return *v;
+  }
+
+  /// Errors for an *EQUATION with missing terms or a *COUPLING without its *KINEMATIC or
+  /// *DISTRIBUTING, when keyword kw (at *at) or, if kw is null, the end of the deck comes.
+  void check_open_blocks(const std::string* kw, const Loc* at) const {
+    const std::string next =
+        at ? cat("the next keyword (", files_[at->file], ":", at->line, ")") : "the end of the deck";
+    if (!equations_.empty() && equations_.back().terms.size() < equations_.back().n_terms) {
+      const EquationEntry& eq = equations_.back();
+      fail(eq.loc, "*EQUATION has ", eq.terms.size(), " of its ", eq.n_terms, " terms before ", next);
+    }
+    if (coupling_open_ && (!kw || (*kw != "KINEMATIC" && *kw != "DISTRIBUTING")))
+      fail(couplings_.back().loc, "*COUPLING must be followed by *KINEMATIC or *DISTRIBUTING, not by ", next);
   }
 
   int get_set(std::vector<SetData>* sets, std::unordered_map<std::string, int>* names, const std::string& name) {
@@ -473,6 +652,8 @@ class Reader {
         fail(loc, "data line before the first keyword");
       case Block::kSkip:
         return;
+      case Block::kNoData:
+        fail(loc, block_keyword_, " takes no data lines");
       case Block::kNode:
         return node_line(b, e, loc);
       case Block::kElement:
@@ -485,6 +666,12 @@ class Reader {
       case Block::kElastic:
       case Block::kDensity:
         return material_line(b, e, loc);
+      case Block::kEquation:
+        return equation_line(b, e, loc);
+      case Block::kSurface:
+        return surface_line(b, e, loc);
+      case Block::kCouplingDofs:
+        return coupling_dofs_line(b, e, loc);
     }
   }
 
@@ -634,6 +821,64 @@ class Reader {
     }
   }
 
+  void equation_line(const char* b, const char* e, const Loc& loc) {
+    split_fields(b, e, &fields_);
+    if (equations_.empty() || equations_.back().terms.size() == equations_.back().n_terms) {
+      if (fields_.size() != 1)
+        fail(loc, "*EQUATION: the first data line of an equation gives its number of terms N alone (", fields_.size(),
+             " fields found)");
+      const std::int64_t n = int_field(fields_[0], loc, "number of terms");
+      if (n < 1 || n > 1000000) fail(loc, "*EQUATION: invalid number of terms ", n);
+      equations_.push_back({loc, static_cast<std::size_t>(n), {}});
+      return;
+    }
+    EquationEntry& eq = equations_.back();
+    if (fields_.empty() || fields_.size() % 3 != 0 || fields_.size() > 12)
+      fail(loc, "*EQUATION data line needs one to four terms 'node or node set, DOF, coefficient' (", fields_.size(),
+           " fields found)");
+    if (eq.terms.size() + fields_.size() / 3 > eq.n_terms)
+      fail(loc, "*EQUATION has more terms than the ", eq.n_terms, " given at line ", eq.loc.line);
+    for (std::size_t j = 0; j < fields_.size(); j += 3) {
+      EquationTerm t;
+      t.loc = loc;
+      if (fields_[j].empty()) fail(loc, "missing node or node set in *EQUATION data line");
+      if (!parse_int(fields_[j], &t.label)) t.set = fields_[j].str();
+      const std::int64_t dof = int_field(fields_[j + 1], loc, "DOF");
+      if (dof < 1 || dof > 6) fail(loc, "*EQUATION: DOF ", dof, " is not one of 1 to 6 (displacements, rotations)");
+      t.dof = static_cast<int>(dof);
+      t.coefficient = real_field(fields_[j + 2], loc, "coefficient");
+      if (eq.terms.empty() && t.coefficient == 0.0)
+        fail(loc, "*EQUATION: the first coefficient (of ", t.set.empty() ? cat("node ", t.label) : "node set " + t.set,
+             " DOF ", t.dof, ", the dependent DOF) is 0");
+      eq.terms.push_back(std::move(t));
+    }
+  }
+
+  void surface_line(const char* b, const char* e, const Loc& loc) {
+    split_fields(b, e, &fields_);
+    if (fields_.empty() || fields_.size() > 2 || fields_[0].empty())
+      fail(loc, "*SURFACE, TYPE=NODE data line needs 'node or node set[, weight]'");
+    SurfaceEntry se;
+    se.loc = loc;
+    if (!parse_int(fields_[0], &se.label)) se.set = fields_[0].str();
+    if (fields_.size() == 2 && !fields_[1].empty()) {
+      se.weight = real_field(fields_[1], loc, "weight");
+      if (se.weight < 0) fail(loc, "*SURFACE: negative weight ", fields_[1].str());
+    }
+    surfaces_[surface_].entries.push_back(std::move(se));
+  }
+
+  void coupling_dofs_line(const char* b, const char* e, const Loc& loc) {
+    split_fields(b, e, &fields_);
+    if (fields_.empty() || fields_.size() > 2) fail(loc, block_keyword_, " data line needs 'first DOF[, last DOF]'");
+    const std::int64_t first = int_field(fields_[0], loc, "first DOF");
+    const std::int64_t last =
+        fields_.size() == 2 && !fields_[1].empty() ? int_field(fields_[1], loc, "last DOF") : first;
+    if (first < 1 || last < first || last > 6)
+      fail(loc, "invalid DOF range ", first, "..", last, " in ", block_keyword_, " (DOFs 1 to 6)");
+    for (std::int64_t d = first; d <= last; ++d) couplings_.back().dofs |= static_cast<std::uint8_t>(1u << (d - 1));
+  }
+
   // --- resolution
   std::int64_t lookup(const std::unordered_map<std::int64_t, std::int64_t>& index, std::int64_t label) const {
     auto it = index.find(label);
@@ -725,8 +970,171 @@ class Reader {
                   << " element(s) have no *SOLID SECTION; their material comes from the options\n";
     }
 
+    resolve_constraints(&mesh);
     mesh.normalize_sets();
     return mesh;
+  }
+
+  // --- constraints (by node label: mesh/constraints.hpp)
+  std::int64_t node_label(std::int64_t label, const Loc& loc, const std::string& who) const {
+    if (lookup(node_index_, label) < 0) fail(loc, who, " references undefined node ", label);
+    return label;
+  }
+
+  /// The labels of node set `name`, ascending and unique (its members are defined: resolve_set
+  /// checked them).
+  std::vector<std::int64_t> set_labels(const std::string& name, const Loc& loc, const std::string& who) const {
+    auto it = nset_lookup_.find(to_upper(name));
+    if (it == nset_lookup_.end()) fail(loc, who, " references undefined node set '", name, "'");
+    std::vector<std::int64_t> v = nsets_[it->second].labels;
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+    return v;
+  }
+
+  /// REF NODE=: a node label, or a node set holding exactly one node.
+  std::int64_t ref_node(const std::string& ref, const Loc& loc, const std::string& who) const {
+    std::int64_t label = 0;
+    if (parse_int(Field{ref.data(), ref.data() + ref.size()}, &label)) return node_label(label, loc, who);
+    const auto v = set_labels(ref, loc, who);
+    if (v.size() != 1)
+      fail(loc, who, ": REF NODE=", ref, " is a node set of ", v.size(), " nodes; it must hold exactly one node");
+    return v[0];
+  }
+
+  /// The nodes of node-based surface s, ascending, with their weights (1 where none or 0 is given).
+  std::vector<std::pair<std::int64_t, double>> surface_nodes(const SurfaceData& s) const {
+    const std::string who = "*SURFACE " + s.name;
+    std::map<std::int64_t, std::pair<double, Loc>> nodes;
+    for (const SurfaceEntry& se : s.entries) {
+      const double w = se.weight > 0 ? se.weight : 1.0;
+      const std::vector<std::int64_t> ids = se.set.empty()
+                                                ? std::vector<std::int64_t>{node_label(se.label, se.loc, who)}
+                                                : set_labels(se.set, se.loc, who);
+      for (std::int64_t id : ids) {
+        auto [it, inserted] = nodes.emplace(id, std::make_pair(w, se.loc));
+        if (!inserted && it->second.first != w)
+          fail(se.loc, who, ": node ", id, " has the weight ", w, " here and ", it->second.first, " at ",
+               files_[it->second.second.file], ":", it->second.second.line);
+      }
+    }
+    std::vector<std::pair<std::int64_t, double>> out;
+    for (const auto& [id, wl] : nodes) out.emplace_back(id, wl.first);
+    return out;
+  }
+
+  void resolve_constraints(Mesh* mesh) const {
+    Constraints& cs = mesh->constraints;
+
+    // *EQUATION: a node-set term gives one equation per node of the set; the sets of an equation
+    // are matched in ascending order of their labels, a single node is in every equation.
+    for (const EquationEntry& eq : equations_) {
+      std::vector<std::vector<std::int64_t>> ids(eq.terms.size());
+      const EquationTerm* first_set = nullptr;
+      std::size_t n_eq = 1;
+      for (std::size_t k = 0; k < eq.terms.size(); ++k) {
+        const EquationTerm& t = eq.terms[k];
+        if (t.set.empty()) {
+          ids[k] = {node_label(t.label, t.loc, "*EQUATION")};
+          continue;
+        }
+        ids[k] = set_labels(t.set, t.loc, "*EQUATION");
+        if (ids[k].empty()) fail(t.loc, "*EQUATION: node set '", t.set, "' is empty");
+        if (!first_set) {
+          first_set = &t;
+          n_eq = ids[k].size();
+        } else if (ids[k].size() != n_eq) {
+          fail(t.loc, "*EQUATION: node set '", t.set, "' has ", ids[k].size(), " nodes and '", first_set->set, "' has ",
+               n_eq, "; the node sets of an equation must have as many nodes (matched in ascending order); give a",
+               " node that every equation shares by its number");
+        }
+      }
+      for (std::size_t i = 0; i < n_eq; ++i) {
+        LinearConstraint lc;
+        lc.id = static_cast<std::int64_t>(cs.linear.size()) + 1;
+        lc.where = where(eq.loc) + "*EQUATION";
+        for (std::size_t k = 0; k < eq.terms.size(); ++k)
+          lc.terms.push_back(
+              {eq.terms[k].set.empty() ? ids[k][0] : ids[k][i], eq.terms[k].dof, eq.terms[k].coefficient});
+        cs.linear.push_back(std::move(lc));
+      }
+    }
+
+    auto add_rigid = [&](const std::string& where_, std::int64_t ref, ComponentMask mask,
+                         std::vector<std::int64_t> dependent) {
+      RigidElement r;
+      r.id = static_cast<std::int64_t>(cs.rigid.size()) + 1;
+      r.where = where_;
+      r.reference = ref;
+      r.components = mask;
+      r.dependent = std::move(dependent);
+      cs.rigid.push_back(std::move(r));
+    };
+
+    // *RIGID BODY: NSET, TIE NSET and the nodes of ELSET follow in all six components, PIN NSET
+    // in the translations.
+    for (const RigidBodyEntry& rb : rigid_bodies_) {
+      const std::string who = "*RIGID BODY";
+      const std::int64_t ref = ref_node(rb.ref, rb.loc, who);
+      std::vector<std::int64_t> tied;
+      for (const std::string* s : {&rb.nset, &rb.tie_nset}) {
+        if (s->empty()) continue;
+        const auto v = set_labels(*s, rb.loc, who);
+        tied.insert(tied.end(), v.begin(), v.end());
+      }
+      if (!rb.elset.empty()) {
+        auto it = eset_lookup_.find(to_upper(rb.elset));
+        if (it == eset_lookup_.end()) fail(rb.loc, who, " references undefined element set '", rb.elset, "'");
+        for (std::int64_t el : mesh->elem_sets.at(esets_[it->second].name))
+          for (auto k = mesh->elem_offsets[el]; k < mesh->elem_offsets[el + 1]; ++k)
+            tied.push_back(mesh->node_ids[mesh->elem_nodes[k]]);
+      }
+      std::sort(tied.begin(), tied.end());
+      tied.erase(std::unique(tied.begin(), tied.end()), tied.end());
+      const std::vector<std::int64_t> pinned =
+          rb.pin_nset.empty() ? std::vector<std::int64_t>{} : set_labels(rb.pin_nset, rb.loc, who);
+      for (std::int64_t id : pinned)
+        if (std::binary_search(tied.begin(), tied.end(), id))
+          fail(rb.loc, who, ": node ", id, " is both tied (all components) and pinned (translations)");
+      if (tied.empty() && pinned.empty()) fail(rb.loc, who, ": its node sets are empty");
+      if (!tied.empty()) add_rigid(where(rb.loc) + who, ref, 63, std::move(tied));
+      if (!pinned.empty()) add_rigid(where(rb.loc) + who + " (PIN NSET)", ref, 7, pinned);
+    }
+
+    // *COUPLING: the nodes of a node-based surface; *KINEMATIC -> rigid, *DISTRIBUTING ->
+    // interpolation with the surface's weights.
+    for (const CouplingEntry& c : couplings_) {
+      const std::string who = c.name.empty() ? "*COUPLING" : "*COUPLING " + c.name;
+      const std::int64_t ref = ref_node(c.ref, c.loc, who);
+      auto it = surface_lookup_.find(to_upper(c.surface));
+      if (it == surface_lookup_.end()) fail(c.loc, who, " references undefined surface '", c.surface, "'");
+      const SurfaceData& s = surfaces_[it->second];
+      if (s.type != "NODE")
+        fail(c.loc, who, ": surface '", s.name, "' (", files_[s.loc.file], ":", s.loc.line,
+             ") is not node-based (TYPE=", s.type,
+             "); morse couples the nodes of a node-based surface: define it with *SURFACE, NAME=", s.name,
+             ", TYPE=NODE and its nodes or node sets");
+      const auto nodes = surface_nodes(s);
+      if (nodes.empty()) fail(c.loc, who, ": surface '", s.name, "' has no nodes");
+      const ComponentMask dofs = c.dofs ? c.dofs : 63;
+      if (!c.distributing) {
+        std::vector<std::int64_t> dependent;
+        for (const auto& [id, w] : nodes) dependent.push_back(id);
+        add_rigid(where(c.loc) + who, ref, dofs, std::move(dependent));
+        continue;
+      }
+      InterpolationElement r;
+      r.id = static_cast<std::int64_t>(cs.interpolation.size()) + 1;
+      r.where = where(c.loc) + who;
+      r.reference = ref;
+      r.ref_components = dofs;
+      for (const auto& [id, w] : nodes) {
+        r.nodes.push_back(id);
+        r.weights.push_back(w);
+        r.node_components.push_back(7);
+      }
+      cs.interpolation.push_back(std::move(r));
+    }
   }
 
   // --- state
@@ -770,6 +1178,14 @@ class Reader {
   std::unordered_map<std::string, int> material_lookup_;
   std::vector<BoundaryEntry> boundaries_;
   std::vector<SectionEntry> sections_;
+
+  std::vector<EquationEntry> equations_;
+  std::vector<RigidBodyEntry> rigid_bodies_;
+  std::vector<CouplingEntry> couplings_;
+  bool coupling_open_ = false;  // a *COUPLING waits for its *KINEMATIC or *DISTRIBUTING
+  std::vector<SurfaceData> surfaces_;
+  std::unordered_map<std::string, int> surface_lookup_;
+  int surface_ = -1;  // node-based *SURFACE being filled
 };
 
 }  // namespace

@@ -34,6 +34,21 @@ std::string Constraints::summary() const {
              n(linear.size(), "linear constraint"), ", ", n(point_ids.size(), "six-DOF point"));
 }
 
+std::vector<double> rigid_mass_matrix(double m, const double d[3], const double J[9]) {
+  std::vector<double> M(36, 0.0);
+  const double S[3][3] = {{0, -d[2], d[1]}, {d[2], 0, -d[0]}, {-d[1], d[0], 0}};  // [d]x
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  for (int i = 0; i < 3; ++i) {
+    M[6 * i + i] = m;
+    for (int j = 0; j < 3; ++j) {
+      M[6 * i + 3 + j] = -m * S[i][j];
+      M[6 * (3 + i) + j] = m * S[i][j];
+      M[6 * (3 + i) + 3 + j] = J[3 * i + j] + m * ((i == j ? dd : 0.0) - d[i] * d[j]);
+    }
+  }
+  return M;
+}
+
 bool parse_component_mask(const std::string& s, ComponentMask* mask) {
   ComponentMask m = 0;
   for (char c : s) {

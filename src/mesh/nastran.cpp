@@ -1685,6 +1685,40 @@ class Reader {
         bool offset = false;
         for (int j = 0; j < 3; ++j) offset = offset || (c.cid == -1 ? c.x[j] != mesh.coords[3 * k + j] : c.x[j] != 0.0);
         for (double i : c.inertia) offset = offset || i != 0.0;
+        if (offset && !used[k]) {
+          // A six-DOF point: the rigid mass with its offset and inertia, in the basic system.
+          // CID = -1: X is the centre of gravity in basic; 0: the offset in basic; > 0: the
+          // offset and the inertia in that (rectangular) system.
+          double d[3], J[9];
+          const double Jl[9] = {c.inertia[0],  -c.inertia[1], -c.inertia[3], -c.inertia[1], c.inertia[2],
+                                -c.inertia[4], -c.inertia[3], -c.inertia[4], c.inertia[5]};
+          double R[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  // columns: the system's axes in basic
+          if (c.cid > 0) {
+            const CordRec& cs = cords_.at(c.cid);
+            if (cs.type != 'R')
+              fail(c.loc, "CONM2", "mass element ", c.eid, " on six-DOF point ", c.grid, " gives its offset and ",
+                   "inertia in the ", cs.type == 'C' ? "cylindrical" : "spherical", " system ", c.cid,
+                   "; use a rectangular system (CORD2R) or CID 0");
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j) R[i][j] = cs.axes[j][i];
+          }
+          for (int i = 0; i < 3; ++i) {
+            d[i] = 0;
+            for (int j = 0; j < 3; ++j) d[i] += R[i][j] * c.x[j];
+            if (c.cid == -1) d[i] = c.x[i] - mesh.coords[3 * k + i];
+          }
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+              J[3 * i + j] = 0;
+              for (int a = 0; a < 3; ++a)
+                for (int b = 0; b < 3; ++b) J[3 * i + j] += R[i][a] * Jl[3 * a + b] * R[j][b];
+              J[3 * i + j] *= wtmass;
+            }
+          const auto M6 = mesh::rigid_mass_matrix(c.m * wtmass, d, J);
+          mesh.constraints.mass_ids.push_back(c.grid);
+          mesh.constraints.mass_matrices.insert(mesh.constraints.mass_matrices.end(), M6.begin(), M6.end());
+          continue;
+        }
         if (offset && n_offset++ == 0) offset_loc = c.loc;
         mesh.point_mass[k] += c.m * wtmass;
       }
@@ -1717,8 +1751,9 @@ class Reader {
       notice("QSET", qset_loc, "QSET/QSET1 define ", n_modal, " modal coordinates: use", " -cb_num_fixed_modes ",
              n_modal);
     if (n_offset)
-      notice("CONM2", offset_loc, n_offset, " CONM2 card(s) have offsets or inertias; they act",
-             " on rotations, which solid grids lack, and are ignored (only M is used)");
+      notice("CONM2", offset_loc, n_offset, " CONM2 card(s) on grids of solid elements have offsets or inertias;",
+             " they act on rotations, which solid grids lack, and are ignored (only M is used). On a grid of its",
+             " own tied by an RBE2 or RBE3 (a six-DOF point) they are kept");
     if (verbose_ && !skipped_.empty()) {
       std::string structural, other;
       for (const auto& [name, count] : skipped_) {

@@ -211,6 +211,8 @@ void pack_constraints(const Constraints& c, detail::Packer& p) {
   p.put_vec(c.point_ids);
   p.put_vec(c.point_coords);
   p.put_vec(c.point_mass);
+  p.put_vec(c.mass_ids);
+  p.put_vec(c.mass_matrices);
   p.put<std::uint64_t>(c.point_sets.size());
   for (const auto& [name, v] : c.point_sets) {
     p.put_str(name);
@@ -247,6 +249,8 @@ Constraints unpack_constraints(detail::Unpacker& u) {
   c.point_ids = u.get_vec<std::int64_t>();
   c.point_coords = u.get_vec<double>();
   c.point_mass = u.get_vec<double>();
+  c.mass_ids = u.get_vec<std::int64_t>();
+  c.mass_matrices = u.get_vec<double>();
   const auto n = u.get<std::uint64_t>();
   for (std::uint64_t i = 0; i < n; ++i) {
     auto name = u.get_str();

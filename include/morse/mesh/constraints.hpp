@@ -72,6 +72,10 @@ struct Constraints {
   std::vector<std::int64_t> point_ids;
   std::vector<double> point_coords;
   std::vector<double> point_mass;
+  /// Rigid masses on points (Nastran CONM2 with offsets or inertias): point id and its 6 x 6 mass
+  /// matrix about the point in the basic system (36 values, row-major, DOFs x y z rx ry rz).
+  std::vector<std::int64_t> mass_ids;
+  std::vector<double> mass_matrices;
   /// The points of each node set (ids, ascending): a set may hold solid nodes and points.
   std::map<std::string, std::vector<std::int64_t>> point_sets;
 
@@ -83,6 +87,12 @@ struct Constraints {
   /// "2 rigid elements, 1 interpolation element, 4 linear constraints, 3 points".
   std::string summary() const;
 };
+
+/// The 6 x 6 mass matrix about a point of a rigid body of mass m whose centre of gravity is at
+/// offset d from the point and whose inertia tensor about the centre of gravity is J (3 x 3,
+/// row-major): [[m I, -m [d]x], [m [d]x, J + m (|d|^2 I - d d^T)]], for the DOFs (u, theta) of
+/// the point (the body moves as u + theta x r). Row-major, 36 values.
+std::vector<double> rigid_mass_matrix(double m, const double d[3], const double J[9]);
 
 /// Parses a component string of digits 1-6 ("123456", "123"); false if it is empty, has another
 /// character or repeats a digit.
