@@ -390,3 +390,53 @@ TEST(Constraints, DeckErrorsAreThrownOnEveryRank) {
   msg = run([&](mesh::Mesh* m) { m->constraints.linear.push_back(mpc(4, 10, 1, 777, 1)); }, {"x0"});
   EXPECT_NE(msg.find("names node 777, which is not a node of the mesh"), std::string::npos) << msg;
 }
+
+TEST(Constraints, SpidersOnANodeSet) {
+  // Spiders on two opposite corners of the tip face (8x2x2 hex8 cantilever, node spacing 0.05 in
+  // y and z): each joins its corner and the corner's two face neighbours within 0.06. RBE3
+  // spiders add no stiffness: the spectrum is the plain box's; RBE2 spiders stiffen it. Overlapping
+  // RBE3s (every node of the tip face) keep some references dependent: nothing changes either.
+  const auto spec = test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.1, 8, 2, 2);
+  auto model = [&](mesh::SpiderType type, const std::string& set, double radius) {
+    fe::Model md;
+    md.mesh = test::box_mesh(PETSC_COMM_WORLD, spec);
+    mesh::add_node_set(&*md.mesh, "corners", {9, 81}, "test");
+    mesh::add_spiders(&*md.mesh, {set}, radius, type);
+    md.dofs = fe::number_dofs(*md.mesh, {"x0"});
+    auto ops = fe::assemble(*md.mesh, md.dofs, test::steel());
+    md.K = std::move(ops.K);
+    md.M = std::move(ops.M);
+    fe::eliminate_constraints(&md, {"x0"});
+    return md;
+  };
+  auto plain = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0"});
+  const auto w0 = lowest_eigenvalues(plain.ops.K.get(), plain.ops.M.get(), 6);
+  auto rbe3 = model(mesh::SpiderType::Interpolation, "corners", 0.06);
+  const auto& cs = rbe3.mesh->mesh.constraints;
+  ASSERT_EQ(cs.interpolation.size(), 2u);
+  EXPECT_EQ(cs.interpolation[0].nodes, (std::vector<std::int64_t>{9, 18, 36}));  // (8,0,0), (8,1,0), (8,0,1)
+  EXPECT_EQ(cs.point_ids, (std::vector<std::int64_t>{82, 83}));
+  EXPECT_EQ(rbe3.mesh->node_set_sizes.at("corners_spiders"), 2);
+  EXPECT_EQ(fe::set_rows(rbe3.dofs, "corners_spiders", "test").size(), 12u);
+  const auto w3 = lowest_eigenvalues(rbe3.K.get(), rbe3.M.get(), 6);
+  auto rbe2 = model(mesh::SpiderType::Rigid, "corners", 0.06);
+  const auto w2 = lowest_eigenvalues(rbe2.K.get(), rbe2.M.get(), 6);
+  auto all = model(mesh::SpiderType::Interpolation, "x1", 0.06);
+  EXPECT_LT(all.constraints->n_point_dofs, 9 * 6);  // some references stay dependent
+  const auto wa = lowest_eigenvalues(all.K.get(), all.M.get(), 6);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_NEAR(w3[i], w0[i], 1e-9 * w0[i]) << "mode " << i + 1;
+    EXPECT_NEAR(wa[i], w0[i], 1e-9 * w0[i]) << "mode " << i + 1;
+    EXPECT_GE(w2[i], w0[i] * (1 - 1e-12)) << "mode " << i + 1;
+  }
+  EXPECT_GT(w2[5], w0[5] * (1 + 1e-6));  // torsion feels the rigid corners
+  // Bad input, on every rank.
+  auto msg = thrown([&] { model(mesh::SpiderType::Interpolation, "nowhere", 0.06); });
+  EXPECT_NE(msg.find("-mesh_spiders: node set 'nowhere' not found"), std::string::npos) << msg;
+  msg = thrown([&] { model(mesh::SpiderType::Interpolation, "corners", -1); });
+  EXPECT_NE(msg.find("-mesh_spider_radius -1 must be positive"), std::string::npos) << msg;
+  msg = thrown([&] { model(mesh::SpiderType::Interpolation, "corners", 0.01); });  // one node each
+  EXPECT_NE(msg.find("-mesh_spiders corners: the spider at node 9 (point 82, 1 nodes within 0.01)"), std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("do not determine the reference's motion"), std::string::npos) << msg;
+}

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <set>
 #include <utility>
 
 #include "morse/core/error.hpp"
@@ -232,26 +233,30 @@ class Equations {
         G[a * m + k] = s * w[k];
       }
     }
-    // Columns that may become dependent: not clamped (their u = 0 drops out) and not dependent
-    // in another element.
+    // Columns that may become dependent: not clamped (their u = 0 drops out), not dependent in
+    // another element and not a term of another element's equations (overlapping elements: a
+    // DOF made dependent here that an earlier equation uses could close a cycle).
     std::vector<char> ok(m);
-    for (std::size_t k = 0; k < m; ++k) ok[k] = !nodes_.clamped(cols[k]) && !dep_.count(cols[k]);
+    for (std::size_t k = 0; k < m; ++k)
+      ok[k] = !nodes_.clamped(cols[k]) && !dep_.count(cols[k]) && !used_.count(cols[k]);
     // Complete pivoting on G over the allowed columns: the pivot columns S.
     std::vector<double> R(G);
     std::vector<char> row_done(nr, 0), col_done(m, 0);
     std::vector<std::size_t> S(nr);
     double gmax = 0;
     for (double v : G) gmax = std::max(gmax, std::abs(v));
-    for (std::size_t step = 0; step < nr; ++step) {
+    bool flip = true;
+    for (std::size_t step = 0; step < nr && flip; ++step) {
       double best = -1;
       std::size_t br = 0, bc = 0;
       for (std::size_t a = 0; a < nr; ++a)
         if (!row_done[a])
           for (std::size_t k = 0; k < m; ++k)
             if (ok[k] && !col_done[k] && std::abs(R[a * m + k]) > best) best = std::abs(R[a * m + k]), br = a, bc = k;
-      MORSE_CHECK(best > 1e-10 * gmax, r.where, ": the reference node ", r.reference, " cannot be made independent: ",
-                  "its nodes' free DOFs (not clamped, not dependent elsewhere) do not determine component ",
-                  ref[br] + 1, " of its motion");
+      if (!(best > 1e-10 * gmax)) {
+        flip = false;
+        break;
+      }
       row_done[br] = col_done[bc] = 1;
       S[br] = bc;
       for (std::size_t a = 0; a < nr; ++a) {
@@ -259,6 +264,19 @@ class Equations {
         const double f = R[a * m + bc] / R[br * m + bc];
         for (std::size_t k = 0; k < m; ++k) R[a * m + k] -= f * R[br * m + k];
       }
+    }
+    if (!flip) {
+      // Its nodes' free DOFs (not clamped, not dependent elsewhere: overlapping elements) cannot
+      // carry the reference's components: the reference stays dependent (Nastran's default), so
+      // it is no DOF of the model (it cannot be a boundary node or carry a mass of its own).
+      for (std::size_t a = 0; a < nr; ++a) {
+        Expr e;
+        const double s = ref[a] >= 3 ? L : 1.0;
+        for (std::size_t k = 0; k < m; ++k) e.push_back({cols[k], G[a * m + k] / s});
+        add({r.reference, ref[a] + 1}, std::move(e), r.where);
+      }
+      dependent_references_.push_back(r.where);
+      return;
     }
     // u_ref = G_S u_S + G_N u_N  =>  u_S = G_S^-1 (u_ref - G_N u_N). Solve G_S X = [I, -G_N].
     std::vector<double> GS(nr * nr), rhs(nr * (nr + m), 0.0);
@@ -302,6 +320,8 @@ class Equations {
   }
 
   const std::map<Key, Expr>& resolved() const { return done_; }
+  /// Interpolation elements whose reference stayed dependent.
+  const std::vector<std::string>& dependent_references() const { return dependent_references_; }
   bool dependent(const Key& k) const { return dep_.count(k) != 0; }
 
  private:
@@ -325,6 +345,7 @@ class Equations {
     MORSE_CHECK(it == dep_.end(), where, ": node ", k.id, " component ", kComp[k.c], " is dependent here and in ",
                 it == dep_.end() ? "" : it->second.where, "; a DOF can be dependent in one element only");
     compact(&e);
+    for (const auto& [t, a] : e) used_.insert(t);
     dep_.emplace(k, Eq{std::move(e), where});
   }
 
@@ -354,7 +375,9 @@ class Equations {
   }
 
   const Nodes& nodes_;
+  std::vector<std::string> dependent_references_;
   std::map<Key, Eq> dep_;
+  std::set<Key> used_;  // terms of the equations so far
   std::map<Key, Expr> done_;
 };
 
@@ -416,6 +439,11 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
   collective_check(comm, err);
   const auto& dep = eq.resolved();
 
+  if (rank == 0 && !eq.dependent_references().empty())
+    PetscPrintf(comm,
+                "morse: notice: %zu interpolation element(s) keep their reference dependent (their nodes' free DOFs, "
+                "shared with other elements, cannot carry it): it is no DOF of the model (first: %s)\n",
+                eq.dependent_references().size(), eq.dependent_references()[0].c_str());
   // Points' DOFs kept: independent, not clamped, used by some equation.
   std::vector<Key> point_dofs;
   {
@@ -530,12 +558,12 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
     for (auto g : rows)
       if (to_red[g - full.first] >= 0) out.push_back(to_red[g - full.first]);
   }
-  if (rank == 0)
-    for (const auto& [name, ids] : cs.point_sets) {
-      auto& out = red.sets[name];
+  for (const auto& [name, ids] : cs.point_sets) {
+    auto& out = red.sets[name];  // every rank knows every set name
+    if (rank == 0)
       for (std::size_t i = 0; i < point_dofs.size(); ++i)
         if (std::binary_search(ids.begin(), ids.end(), point_dofs[i].id)) out.push_back(point_base + i);
-    }
+  }
   for (auto& [name, rows] : red.sets) std::sort(rows.begin(), rows.end());
 
   // T: rows as full, columns as red.

@@ -164,6 +164,7 @@ Model mesh_model(MPI_Comm comm, const MeshInput& in) {
     if (!in.units.empty()) md.mesh->mesh.units = in.units;
     for (const auto& sm : in.set_materials) mesh::assign_set_material(&md.mesh->mesh, sm);
     for (const auto& [name, ids] : in.node_sets) mesh::add_node_set(&*md.mesh, name, ids, "-mesh_node_set_" + name);
+    if (!in.spider_sets.empty()) mesh::add_spiders(&*md.mesh, in.spider_sets, in.spider_radius, in.spider_type);
   }
   md.units = md.mesh->mesh.units;
   {

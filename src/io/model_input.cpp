@@ -138,6 +138,33 @@ PetscErrorCode ModelInput::set_from_options(MPI_Comm comm, const char* default_o
       mesh.node_sets.emplace_back(name, std::move(ids));
     }
   matrices.node_sets = mesh.node_sets;
+  n_sets = 16;
+  PetscCall(MorseOptionsStringArray(
+      "-mesh_spiders",
+      "Node sets whose every node gets a spider: a six-DOF point at the node joined to the nodes within "
+      "-mesh_spider_radius (set <name>_spiders holds the points)",
+      "", sets, &n_sets, &set));
+  if (set)
+    for (PetscInt i = 0; i < n_sets; ++i) {
+      mesh.spider_sets.emplace_back(sets[i]);
+      PetscCall(PetscFree(sets[i]));
+    }
+  PetscBool has_radius = PETSC_FALSE;
+  PetscCall(MorseOptionsReal("-mesh_spider_radius", "Reach of the spiders [mesh length unit]", "", mesh.spider_radius,
+                             &mesh.spider_radius, &has_radius));
+  {
+    const char* types[] = {"rbe2", "rbe3", "SpiderType", "", nullptr};
+    PetscEnum t =
+        mesh.spider_type == morse::mesh::SpiderType::Rigid ? static_cast<PetscEnum>(0) : static_cast<PetscEnum>(1);
+    PetscCall(MorseOptionsEnum("-mesh_spider_type",
+                               "rbe3: the point moves as the least-squares fit of its nodes (no stiffness added); "
+                               "rbe2: the nodes follow the point rigidly",
+                               "", types, t, &t, nullptr));
+    mesh.spider_type =
+        t == static_cast<PetscEnum>(0) ? morse::mesh::SpiderType::Rigid : morse::mesh::SpiderType::Interpolation;
+  }
+  if (!mesh.spider_sets.empty() && !has_radius && error.empty())
+    error = "-mesh_spiders needs -mesh_spider_radius R (the nodes within R of each node are joined to its point)";
   struct {
     const char* name;
     const char* help;

@@ -3,6 +3,7 @@
 #include <metis.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <utility>
 
@@ -77,6 +78,104 @@ void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std:
   collective_check(lm->comm, err);
   if (!points.empty()) lm->mesh.constraints.point_sets[name] = points;
   lm->node_set_sizes[name] = static_cast<std::int64_t>(sorted.size());
+}
+
+void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double radius, SpiderType type) {
+  auto& cs = lm->mesh.constraints;
+  const auto& m = lm->mesh;
+  int rank = 0;
+  MPI_Comm_rank(lm->comm, &rank);
+  std::string err;
+  if (!(radius > 0) || !std::isfinite(radius))
+    err = cat("-mesh_spider_radius ", radius, " must be positive (the spiders' reach)");
+  for (const auto& name : sets) {
+    if (!err.empty()) break;
+    err = check_node_set(*lm, name, "-mesh_spiders: node set");
+    if (err.empty() && cs.point_sets.count(name))
+      err = cat("-mesh_spiders: node set '", name, "' holds six-DOF points; spiders go on solid nodes");
+    if (err.empty() && lm->node_set_sizes.count(name + "_spiders"))
+      err = cat("-mesh_spiders: node set '", name, "_spiders' exists already in ", m.source);
+  }
+  collective_check(lm->comm, err);
+  // The largest id in use, for the new points' ids.
+  std::int64_t top = 0;
+  for (auto id : m.node_ids) top = std::max(top, id);
+  for (auto id : cs.point_ids) top = std::max(top, id);
+  MPI_Allreduce(MPI_IN_PLACE, &top, 1, MPI_INT64_T, MPI_MAX, lm->comm);
+  // Allgather of (id, x, y, z) records, as doubles (ids below 2^53).
+  auto allgather = [&](const std::vector<double>& mine) {
+    int size = 1;
+    MPI_Comm_size(lm->comm, &size);
+    int n = static_cast<int>(mine.size());
+    std::vector<int> counts(size), displs(size, 0);
+    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, lm->comm);
+    for (int r = 1; r < size; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+    std::vector<double> all(displs[size - 1] + counts[size - 1]);
+    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), displs.data(), MPI_DOUBLE, lm->comm);
+    return all;
+  };
+  std::int64_t next = top;
+  for (const auto& name : sets) {
+    // The set's nodes (owned), on every rank, by id.
+    std::vector<double> mine;
+    for (auto k : m.node_sets.at(name))
+      if (lm->node_owner[k] == rank)
+        mine.insert(mine.end(),
+                    {static_cast<double>(m.node_ids[k]), m.coords[3 * k], m.coords[3 * k + 1], m.coords[3 * k + 2]});
+    auto centres = allgather(mine);
+    const std::size_t nc = centres.size() / 4;
+    std::vector<std::size_t> order(nc);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](auto a, auto b) { return centres[4 * a] < centres[4 * b]; });
+    // The owned nodes within the radius of each centre: (centre, node id) pairs.
+    std::vector<double> near;
+    for (std::size_t c = 0; c < nc; ++c)
+      for (std::int64_t k = 0; k < m.num_nodes(); ++k) {
+        if (lm->node_owner[k] != rank) continue;
+        double d2 = 0;
+        for (int j = 0; j < 3; ++j) d2 += std::pow(m.coords[3 * k + j] - centres[4 * c + 1 + j], 2);
+        if (d2 <= radius * radius)
+          near.insert(near.end(), {static_cast<double>(c), static_cast<double>(m.node_ids[k])});
+      }
+    const auto all = allgather(near);
+    std::vector<std::vector<std::int64_t>> members(nc);
+    for (std::size_t i = 0; i < all.size(); i += 2)
+      members[static_cast<std::size_t>(all[i])].push_back(static_cast<std::int64_t>(all[i + 1]));
+    auto& points = cs.point_sets[name + "_spiders"];
+    for (auto c : order) {
+      auto& nodes = members[c];
+      std::sort(nodes.begin(), nodes.end());
+      const std::int64_t pid = ++next;
+      const auto centre = static_cast<std::int64_t>(centres[4 * c]);
+      cs.point_ids.push_back(pid);
+      cs.point_coords.insert(cs.point_coords.end(), &centres[4 * c + 1], &centres[4 * c + 4]);
+      cs.point_mass.push_back(0.0);
+      points.push_back(pid);
+      const std::string where = cat("-mesh_spiders ", name, ": the spider at node ", centre, " (point ", pid, ", ",
+                                    nodes.size(), " nodes within ", radius, ")");
+      if (type == SpiderType::Rigid) {
+        RigidElement r;
+        r.id = pid;
+        r.where = where;
+        r.reference = pid;
+        r.components = 63;
+        r.dependent = nodes;
+        cs.rigid.push_back(std::move(r));
+      } else {
+        InterpolationElement r;
+        r.id = pid;
+        r.where = where;
+        r.reference = pid;
+        r.ref_components = 63;
+        r.nodes = nodes;
+        r.weights.assign(nodes.size(), 1.0);
+        r.node_components.assign(nodes.size(), 7);
+        cs.interpolation.push_back(std::move(r));
+      }
+    }
+    lm->mesh.node_sets[name + "_spiders"];  // every rank knows the name (no solid node in it)
+    lm->node_set_sizes[name + "_spiders"] = static_cast<std::int64_t>(points.size());
+  }
 }
 
 namespace {

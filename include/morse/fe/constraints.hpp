@@ -11,6 +11,9 @@
 //                  load): as Nastran's UM option, as many node DOFs as the reference has
 //                  components become dependent instead, chosen by complete pivoting on G, and
 //                  u_S = G_S^-1 (u_R - G_N u_N). The constrained motions are the same set.
+//                  When its nodes' free DOFs cannot carry the reference (overlapping elements
+//                  that already made them dependent), the reference stays dependent (Nastran's
+//                  default) and is no DOF of the model (notice).
 //   linear         a_1 u_1 + sum a_k u_k = 0: u_1 = -sum (a_k / a_1) u_k.
 // Chains (a dependent DOF in another equation) are substituted; a cycle is an error. The model's
 // DOFs are then the nodes' free translations that are not dependent, rank by rank as before,

@@ -124,6 +124,10 @@ struct MeshInput {
   std::vector<mesh::Material> set_materials;  ///< per element set (name = set), overriding the mesh's
   /// Node sets added to the mesh (-mesh_node_set_NAME): name, external node ids.
   std::vector<std::pair<std::string, std::vector<std::int64_t>>> node_sets;
+  /// Spiders (mesh::add_spiders) on these node sets (-mesh_spiders), of this type and radius.
+  std::vector<std::string> spider_sets;
+  double spider_radius = 0;
+  mesh::SpiderType spider_type = mesh::SpiderType::Interpolation;
 };
 
 /// Reads and distributes the mesh, applies the set materials and the added node sets, numbers

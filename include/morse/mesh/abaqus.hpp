@@ -16,8 +16,9 @@
 //   *BOUNDARY                               node label or node set, first DOF[, last DOF[, value]]
 //                                           or node/set, ENCASTRE|PINNED|XSYMM|...: DOFs 1..3 set
 //                                           bits of Mesh::fixed_dofs; rotational DOFs (4..6) are
-//                                           ignored; a nonzero prescribed value is an error. A
-//                                           *BOUNDARY inside a *STEP is applied like the others.
+//                                           ignored (with a notice, also on a reference node); a
+//                                           nonzero prescribed value is an error. A *BOUNDARY
+//                                           inside a *STEP is applied like the others.
 //   *MATERIAL, NAME=name
 //   *ELASTIC [, TYPE=ISO]                   E, nu[, temperature]: first line used
 //   *DENSITY                                rho[, temperature]: first line used
@@ -66,11 +67,13 @@
 // them in node_ids / elem_ids and stores indices elsewhere. Element connectivity is converted from
 // Abaqus to morse (Gmsh) node ordering. Set names are stored as first written; references to sets
 // and materials inside the deck are case-insensitive. Sets, *BOUNDARY and *SOLID SECTION are
-// resolved once the whole deck is read, as are the constraints and the surfaces a *COUPLING uses,
-// so they may refer to nodes, sets, surfaces and materials defined further down; a set name listed inside *NSET /
-// *ELSET must be defined above (its members at that point are copied). *INCLUDE is textual: data lines of the keyword
-// in force may continue in the included file. Elements not covered by a *SOLID SECTION get elem_material = -1.
-// Mesh::units is "unknown" (decks carry no unit system); Mesh::source is the path.
+// resolved once the whole deck is read, as are the constraints and the surfaces a *COUPLING uses
+// (a surface no *COUPLING uses is not checked), so they may refer to nodes, sets, surfaces and
+// materials defined further down; a set name listed inside *NSET / *ELSET must be defined above
+// (its members at that point are copied). *INCLUDE is textual: data lines of the keyword in force
+// may continue in the included file. Elements not covered by a *SOLID SECTION get
+// elem_material = -1. Mesh::units is "unknown" (decks carry no unit system); Mesh::source is the
+// path.
 //
 // Errors (morse::Error, message "file:line: what") are raised for: missing deck or included file,
 // unsupported element type, undefined node / element / set / surface / material, duplicate

@@ -55,6 +55,19 @@ std::string check_node_set(const LocalMesh& lm, const std::string& name, const s
 void add_node_set(LocalMesh* lm, const std::string& name, const std::vector<std::int64_t>& ids,
                   const std::string& role);
 
+/// How add_spiders joins a point to the nodes around it.
+enum class SpiderType { Rigid, Interpolation };
+
+/// Adds a spider at every node of each node set in `sets`: a six-DOF point at the node's
+/// position (new ids above every node id of the mesh, in set order then node id order) joined
+/// to every node within `radius` of it (the node included) by a rigid element (RBE2, all six
+/// components) or an interpolation element (RBE3, weights 1, translations, reference 123456). The
+/// points of set S form the new node set "S_spiders". For meshes that cannot carry rigid elements
+/// (Gmsh) and decks whose interface nodes are bare solid nodes. Throws (collectively) for an
+/// unknown or empty set, a set holding points, a radius that is not positive and finite, or a
+/// set name S_spiders that exists. Collective.
+void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double radius, SpiderType type);
+
 /// Partitions *serial (significant on rank 0 only; emptied on return) and scatters it over comm.
 /// Collective. Throws morse::Error (on every rank) if the mesh has no solid element.
 LocalMesh distribute(MPI_Comm comm, Mesh* serial);
