@@ -311,7 +311,8 @@ TEST_F(AbaqusTest, KeywordsSetsIncludesBoundaryMaterials) {
   ASSERT_EQ(m.fixed_dofs.size(), 10u);
   const std::vector<std::pair<std::int64_t, int>> fixed = {{1, 7}, {2, 7}, {3, 7}, {4, 7},  {5, 3},
                                                            {6, 3}, {7, 5}, {8, 1}, {20, 7}, {99, 0}};
-  for (const auto& [id, mask] : fixed) EXPECT_EQ(m.fixed_dofs[index_of(m, id)], mask) << id;
+  // (bits 3-5, the rotations of XSYMM and friends, count for six-DOF points only)
+  for (const auto& [id, mask] : fixed) EXPECT_EQ(m.fixed_dofs[index_of(m, id)] & 7, mask) << id;
 
   // Materials: in order of definition; first temperature line; sections resolved afterwards.
   ASSERT_EQ(m.materials.size(), 2u);
@@ -333,7 +334,7 @@ TEST_F(AbaqusTest, KeywordsSetsIncludesBoundaryMaterials) {
   EXPECT_EQ(count(log, "*FREQUENCY"), 1) << log;
   EXPECT_EQ(count(log, "*EXPANSION"), 1) << log;
   EXPECT_EQ(count(log, "temperature"), 1) << log;
-  EXPECT_EQ(count(log, "DOFs above 3"), 1) << log;
+  EXPECT_EQ(count(log, "DOFs 4-6 (rotations) act on six-DOF points only"), 1) << log;
 
   // verbose = false: silent.
   ::testing::internal::CaptureStderr();
@@ -360,16 +361,18 @@ TEST_F(AbaqusTest, InputParameterAndTextualInclude) {
   ASSERT_EQ(m.num_elements(), 1);
   EXPECT_EQ(m.elem_ids[0], 10);
   EXPECT_EQ(m.elem_sets.at("EALL"), (std::vector<std::int64_t>{0}));
-  EXPECT_EQ(m.fixed_dofs, (std::vector<std::uint8_t>{7, 7, 4, 0}));
+  // Translations (ENCASTRE and ZSYMM also set the rotation bits 3-5, which only points use).
+  EXPECT_EQ(m.fixed_dofs, (std::vector<std::uint8_t>{63, 7, 28, 0}));
 }
 
-TEST_F(AbaqusTest, NoBoundaryGivesEmptyFixedDofs) {
+TEST_F(AbaqusTest, RotationsOnlyBoundaryFixesNoTranslation) {
   const std::string path = write("deck.inp",
                                  "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n"
                                  "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n"
                                  "*BOUNDARY\n1, 4, 6");  // rotations only; no final newline
   const Mesh m = read_abaqus(path, false);
-  EXPECT_TRUE(m.fixed_dofs.empty());
+  // No translation is fixed (rotation bits count for six-DOF points only).
+  EXPECT_TRUE(std::all_of(m.fixed_dofs.begin(), m.fixed_dofs.end(), [](std::uint8_t f) { return (f & 7) == 0; }));
   EXPECT_TRUE(m.node_sets.empty());
   EXPECT_TRUE(m.elem_sets.empty());
   EXPECT_TRUE(m.materials.empty());

@@ -440,3 +440,40 @@ TEST(Constraints, SpidersOnANodeSet) {
       << msg;
   EXPECT_NE(msg.find("do not determine the reference's motion"), std::string::npos) << msg;
 }
+
+TEST(Constraints, ASpiderCentreFixedByTheDeckClampsItsNodes) {
+  // *BOUNDARY / SPC 123456 on the centre of an RBE2 over the tip face: the tip face is clamped,
+  // so the model is the box clamped at both ends. Without the rotations fixed (123) the tip face
+  // may still rotate about the centre: softer than that.
+  const auto spec = test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.1, 8, 2, 2);
+  auto model = [&](std::uint8_t fixed) {
+    mesh::Mesh m;
+    if (rank_of() == 0) {
+      m = mesh::generate_box(spec);
+      m.fixed_dofs.assign(m.num_nodes() + 1, 0);
+      for (auto k : m.node_sets.at("x0")) m.fixed_dofs[k] = 7;
+      m.add_node(9001, 1.0, 0.05, 0.05);
+      m.fixed_dofs.back() = fixed;
+      mesh::RigidElement r;
+      r.id = 1;
+      r.where = "test RBE2 1";
+      r.reference = 9001;
+      r.components = 63;
+      for (auto k : m.node_sets.at("x1")) r.dependent.push_back(m.node_ids[k]);
+      m.constraints.rigid.push_back(r);
+    }
+    return build(std::move(m), {mesh::kDeckBoundarySet});
+  };
+  auto both = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0", "x1"});
+  const auto wb = lowest_eigenvalues(both.ops.K.get(), both.ops.M.get(), 4);
+  auto all6 = model(63);
+  EXPECT_EQ(all6.constraints->n_point_dofs, 0);
+  const auto w6 = lowest_eigenvalues(all6.K.get(), all6.M.get(), 4);
+  auto pin = model(7);
+  EXPECT_EQ(pin.constraints->n_point_dofs, 3);
+  const auto w3 = lowest_eigenvalues(pin.K.get(), pin.M.get(), 4);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(w6[i], wb[i], 1e-9 * wb[i]) << "mode " << i + 1;
+    EXPECT_LT(w3[i], wb[i] * (1 - 1e-3)) << "mode " << i + 1;
+  }
+}

@@ -70,7 +70,8 @@ class Nodes {
         for (const auto& name : clamp_sets) {
           auto it = cs.point_sets.find(name);
           if (it != cs.point_sets.end() && std::binary_search(it->second.begin(), it->second.end(), ids_[i]))
-            clamped_point_[i] = 1;
+            clamped_point_[i] = 63;
+          if (name == mesh::kDeckBoundarySet && !cs.point_fixed.empty()) clamped_point_[i] |= cs.point_fixed[p] & 63;
         }
         continue;
       }
@@ -95,7 +96,7 @@ class Nodes {
   PetscInt row(std::int64_t id, int c) const { return rows_[3 * index(id) + c - 1]; }
   bool clamped(const Key& k) const {
     const auto i = index(k.id);
-    return is_point_[i] ? clamped_point_[i] != 0 : rows_[3 * i + k.c - 1] < 0;
+    return is_point_[i] ? (clamped_point_[i] >> (k.c - 1)) & 1 : rows_[3 * i + k.c - 1] < 0;
   }
   const std::vector<std::int64_t>& ids() const { return ids_; }
 
@@ -493,7 +494,8 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
   MPI_Bcast(&point_base, 1, MPIU_INT, 0, comm);
   std::int64_t clamped_points = 0;
   for (auto id : cs.point_ids)
-    if (nodes.index(id) >= 0 && nodes.clamped({id, 1})) clamped_points += 6;
+    if (nodes.index(id) >= 0)
+      for (int c = 1; c <= 6; ++c) clamped_points += nodes.clamped({id, c}) ? 1 : 0;
   red.n_clamped_global = full.n_clamped_global + clamped_points;
 
   // full row -> reduced row (-1 dependent), as a distributed vector for remote lookups.

@@ -56,7 +56,9 @@ DofLayout number_dofs(const mesh::LocalMesh& lm, const std::vector<std::string>&
   // fixed node (or no node at all: fewer elements than ranks) has an empty fixed_dofs.
   const bool deck_fixes =
       std::find(clamp_sets.begin(), clamp_sets.end(), mesh::kDeckBoundarySet) != clamp_sets.end() &&
-      any_rank(lm.comm, std::any_of(m.fixed_dofs.begin(), m.fixed_dofs.end(), [](std::uint8_t f) { return f & 7; }));
+      (any_rank(lm.comm, std::any_of(m.fixed_dofs.begin(), m.fixed_dofs.end(), [](std::uint8_t f) { return f & 7; })) ||
+       std::any_of(m.constraints.point_fixed.begin(), m.constraints.point_fixed.end(),
+                   [](std::uint8_t f) { return f != 0; }));
   std::string err;
   for (const auto& name : clamp_sets) {
     if (name == mesh::kDeckBoundarySet) {
@@ -418,7 +420,7 @@ MeshQuality mesh_quality(MPI_Comm comm, const mesh::LocalMesh& lm) {
   q.min_jacobian = out.v;
   MPI_Bcast(&q.worst_element, 1, MPI_INT64_T, out.r, comm);
   for (std::int64_t k = 0; k < m.num_nodes(); ++k)
-    if (lm.node_owner[k] == rank && !m.fixed_dofs.empty() && m.fixed_dofs[k]) ++q.n_fixed_nodes;
+    if (lm.node_owner[k] == rank && !m.fixed_dofs.empty() && (m.fixed_dofs[k] & 7)) ++q.n_fixed_nodes;
   MPI_Allreduce(MPI_IN_PLACE, &q.n_fixed_nodes, 1, MPI_INT64_T, MPI_SUM, comm);
   return q;
 }

@@ -771,15 +771,19 @@ class Reader {
           fail(loc, "nonzero prescribed displacement (", fields_[3].str(), ") in *BOUNDARY is not supported");
       }
       if (fields_.size() > 4) fail(loc, "too many fields in *BOUNDARY data line");
-      for (std::int64_t d = first; d <= std::min<std::int64_t>(last, 3); ++d)
+      for (std::int64_t d = first; d <= std::min<std::int64_t>(last, 6); ++d)
         be.mask |= static_cast<std::uint8_t>(1u << (d - 1));
-      if (last > 3) notice("BOUNDARY-DOF", loc, "*BOUNDARY: DOFs above 3 are not displacements and are ignored");
+      if (last > 3)
+        notice("BOUNDARY-DOF", loc,
+               "*BOUNDARY: DOFs 4-6 (rotations) act on six-DOF points only (reference nodes of rigid bodies and "
+               "couplings) and are ignored on solid nodes; DOFs above 6 are ignored");
     } else {
       const std::string type = compact_upper(fields_[1].b, fields_[1].e);
-      // Abaqus boundary types: translations they fix (rotations are ignored).
-      static const std::pair<const char*, std::uint8_t> kTypes[] = {{"ENCASTRE", 7}, {"PINNED", 7}, {"XSYMM", 1},
-                                                                    {"YSYMM", 2},    {"ZSYMM", 4},  {"XASYMM", 6},
-                                                                    {"YASYMM", 5},   {"ZASYMM", 3}};
+      // Abaqus boundary types: the DOFs they fix (bits 0-2 translations, 3-5 rotations, which
+      // only six-DOF points have).
+      static const std::pair<const char*, std::uint8_t> kTypes[] = {{"ENCASTRE", 63}, {"PINNED", 7}, {"XSYMM", 49},
+                                                                    {"YSYMM", 42},    {"ZSYMM", 28}, {"XASYMM", 14},
+                                                                    {"YASYMM", 21},   {"ZASYMM", 35}};
       bool known = false;
       for (const auto& [name, mask] : kTypes)
         if (type == name) be.mask = mask, known = true;

@@ -1557,13 +1557,13 @@ class Reader {
     int64_t n_rotational = 0, n_scalar_spc = 0;
     auto constrain = [&](int64_t k, std::uint8_t mask, const Loc& loc, const char* card) {
       const std::uint8_t translations = mask & 7;
-      if (mask >> 3) ++n_rotational;
+      if ((mask >> 3) && used[k]) ++n_rotational;
       if (translations && translations != 7 && cd[k] != 0)
         fail(loc, card, "grid ", mesh.node_ids[k], " has its displacement coordinate system CD = ", cd[k],
              ", and components '", component_string(mask), "' fix only part of its",
              " translations, which would act along skewed directions in the basic system that",
              " morse works in: fix all of 1, 2, 3 or none");
-      fixed[k] |= translations;
+      fixed[k] |= used[k] ? translations : static_cast<std::uint8_t>(mask & 63);  // six-DOF points keep 4-6
     };
     for (std::size_t k = 0; k < nn; ++k)
       if (ps[k]) constrain(static_cast<int64_t>(k), ps[k], grids_[k].loc, "GRID");

@@ -150,6 +150,7 @@ void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double rad
       cs.point_ids.push_back(pid);
       cs.point_coords.insert(cs.point_coords.end(), &centres[4 * c + 1], &centres[4 * c + 4]);
       cs.point_mass.push_back(0.0);
+      cs.point_fixed.push_back(0);
       points.push_back(pid);
       const std::string where = cat("-mesh_spiders ", name, ": the spider at node ", centre, " (point ", pid, ", ",
                                     nodes.size(), " nodes within ", radius, ")");
@@ -194,6 +195,7 @@ void drop_unused_nodes(Mesh* m) {
   cs.point_ids.clear();
   cs.point_coords.clear();
   cs.point_mass.clear();
+  cs.point_fixed.clear();
   cs.point_sets.clear();
   if (!cs.empty()) {
     const auto named = cs.referenced_ids();
@@ -212,6 +214,7 @@ void drop_unused_nodes(Mesh* m) {
       cs.point_ids.push_back(id);
       cs.point_coords.insert(cs.point_coords.end(), &m->coords[3 * k], &m->coords[3 * k] + 3);
       cs.point_mass.push_back(m->point_mass.empty() ? 0.0 : m->point_mass[k]);
+      cs.point_fixed.push_back(m->fixed_dofs.empty() ? 0 : m->fixed_dofs[k]);
       if (!m->point_mass.empty()) m->point_mass[k] = 0.0;
     }
     std::vector<char> is_point(n, 0);
@@ -310,6 +313,7 @@ void pack_constraints(const Constraints& c, detail::Packer& p) {
   p.put_vec(c.point_ids);
   p.put_vec(c.point_coords);
   p.put_vec(c.point_mass);
+  p.put_vec(c.point_fixed);
   p.put_vec(c.mass_ids);
   p.put_vec(c.mass_matrices);
   p.put<std::uint64_t>(c.point_sets.size());
@@ -348,6 +352,7 @@ Constraints unpack_constraints(detail::Unpacker& u) {
   c.point_ids = u.get_vec<std::int64_t>();
   c.point_coords = u.get_vec<double>();
   c.point_mass = u.get_vec<double>();
+  c.point_fixed = u.get_vec<std::uint8_t>();
   c.mass_ids = u.get_vec<std::int64_t>();
   c.mass_matrices = u.get_vec<double>();
   const auto n = u.get<std::uint64_t>();

@@ -72,6 +72,8 @@ struct Constraints {
   std::vector<std::int64_t> point_ids;
   std::vector<double> point_coords;
   std::vector<double> point_mass;
+  /// The DOFs the deck fixes (*BOUNDARY, SPC) on each point, bits 0-5 for components 1-6.
+  std::vector<std::uint8_t> point_fixed;
   /// Rigid masses on points (Nastran CONM2 with offsets or inertias): point id and its 6 x 6 mass
   /// matrix about the point in the basic system (36 values, row-major, DOFs x y z rx ry rz).
   std::vector<std::int64_t> mass_ids;

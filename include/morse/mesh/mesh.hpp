@@ -62,8 +62,9 @@ struct Mesh {
   std::map<std::string, std::vector<std::int64_t>> node_sets;
   std::map<std::string, std::vector<std::int64_t>> elem_sets;
 
-  /// DOFs fixed by the deck (*BOUNDARY): bit d (0=x,1=y,2=z) of fixed_dofs[k] set if fixed.
-  /// Empty when the deck fixes nothing.
+  /// DOFs fixed by the deck (*BOUNDARY): bit d (0=x,1=y,2=z) of fixed_dofs[k] set if fixed;
+  /// bits 3-5 (rotations) count only for six-DOF points (Constraints::point_fixed). Empty when
+  /// the deck fixes nothing.
   std::vector<std::uint8_t> fixed_dofs;
 
   /// Lumped point masses (Nastran CONM2), added to the three translational diagonal entries of
