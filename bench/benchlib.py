@@ -7,6 +7,7 @@ Running morse under mpirun with per-rank /usr/bin/time, parsing morse's stage ta
 
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -177,3 +178,21 @@ def git_info():
 
 def fmt(x, w=9, p=3):
     return ("%*.*f" % (w, p, x)) if x is not None else " " * (w - 1) + "-"
+
+
+def ensure_ccx(install=True):
+    """CalculiX (Debian's calculix-ccx): its executable, installed with apt-get if missing and
+    install is true; None if it is missing and cannot be installed. Benchmarks only: morse never
+    installs it."""
+    exe = shutil.which("ccx") or shutil.which("ccx_2.20")
+    if exe or not install:
+        return exe
+    print("installing calculix-ccx (Debian) for the peer comparison ...", flush=True)
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    sudo = [] if os.geteuid() == 0 else ["sudo"]
+    subprocess.run(sudo + ["apt-get", "update", "-qq"], env=env, check=False)
+    p = subprocess.run(sudo + ["apt-get", "install", "-y", "-qq", "--no-install-recommends", "calculix-ccx"],
+                       env=env)
+    if p.returncode != 0:
+        return None
+    return shutil.which("ccx") or shutil.which("ccx_2.20")

@@ -39,7 +39,6 @@ import glob
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -47,7 +46,7 @@ import time
 import h5py
 import numpy as np
 
-from benchlib import (RESULTS, ROOT, blas_info, git_info, med, mpi_env, parse_stage_table, run_mpi,
+from benchlib import (RESULTS, ROOT, blas_info, ensure_ccx, git_info, med, mpi_env, parse_stage_table, run_mpi,
                       wait_idle)
 
 SHARED_R37 = os.path.normpath(os.path.join(ROOT, "..", "shared", "meshes", "rotor37-nlstep"))
@@ -99,21 +98,6 @@ def summary_lines(stdout):
         if re.search(r"residual|Sylvester|block Krylov|restart|slicing|slices|inertia", line):
             keep.append(line.strip())
     return keep
-
-
-def ensure_ccx():
-    exe = shutil.which("ccx") or shutil.which("ccx_2.20")
-    if exe:
-        return exe
-    print("installing calculix-ccx (Debian) for the peer comparison ...", flush=True)
-    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-    sudo = [] if os.geteuid() == 0 else ["sudo"]
-    subprocess.run(sudo + ["apt-get", "update", "-qq"], env=env, check=False)
-    p = subprocess.run(sudo + ["apt-get", "install", "-y", "-qq", "--no-install-recommends", "calculix-ccx"],
-                       env=env)
-    if p.returncode != 0:
-        return None
-    return shutil.which("ccx") or shutil.which("ccx_2.20")
 
 
 def ccx_deck(nev):

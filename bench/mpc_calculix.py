@@ -59,7 +59,7 @@ import time
 import h5py
 import numpy as np
 
-from benchlib import RESULTS, ROOT, git_info, run_mpi
+from benchlib import RESULTS, ROOT, ensure_ccx, git_info, run_mpi
 
 MORSE = os.path.join(ROOT, "build", "morse")
 
@@ -298,21 +298,6 @@ def write_ccx(m, path, case, rbe3="auto"):
 
 # ---------------------------------------------------------------------------------------------
 # The tools
-
-def ensure_ccx(install):
-    exe = shutil.which("ccx") or shutil.which("ccx_2.20")
-    if exe or not install:
-        return exe
-    print("installing calculix-ccx (Debian) ...", flush=True)
-    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-    sudo = [] if os.geteuid() == 0 else ["sudo"]
-    subprocess.run(sudo + ["apt-get", "update", "-qq"], env=env, check=False)
-    p = subprocess.run(sudo + ["apt-get", "install", "-y", "-qq", "--no-install-recommends", "calculix-ccx"],
-                       env=env)
-    if p.returncode != 0:
-        return None
-    return shutil.which("ccx") or shutil.which("ccx_2.20")
-
 
 def ccx_version(exe):
     try:

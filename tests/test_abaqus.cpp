@@ -648,19 +648,6 @@ class AbaqusModelTest : public morse::test::SharedScratchDirTest {
   AbaqusModelTest() : SharedScratchDirTest("abaqus_model") {}
 };
 
-// Lowest n eigenvalues of (K, M) by LAPACK's dense generalized solver (every rank).
-std::vector<double> lowest_eigenvalues(Mat K, Mat M, int n) {
-  auto k = morse::test::dense_matrix(K), m = morse::test::dense_matrix(M);
-  PetscInt N = 0;
-  MORSE_CALL(MatGetSize(K, &N, nullptr));
-  PetscBLASInt bn = static_cast<PetscBLASInt>(N), itype = 1, info = 0, lwork = 8 * bn;
-  std::vector<double> w(N), work(lwork);
-  LAPACKsygv_(&itype, "N", "U", &bn, k.data(), &bn, m.data(), &bn, w.data(), work.data(), &lwork, &info);
-  EXPECT_EQ(info, 0);
-  w.resize(n);
-  return w;
-}
-
 TEST_F(AbaqusModelTest, RigidBodyCantileverMatchesNastranRbe2) {
   // Hex8 box 1 x 0.1 x 0.1 (8 x 2 x 2), clamped at x = 0; node 9001 beyond the tip, tied to the
   // 9 tip-face nodes: *RIGID BODY, and *COUPLING + *KINEMATIC, against RBE2 123456.
@@ -727,12 +714,12 @@ TEST_F(AbaqusModelTest, RigidBodyCantileverMatchesNastranRbe2) {
   };
   auto ref = model(rbe2_bdf);
   ASSERT_TRUE(ref.constraints);
-  const auto wr = lowest_eigenvalues(ref.K.get(), ref.M.get(), 6);
+  const auto wr = morse::test::lowest_eigenvalues(ref.K.get(), ref.M.get(), 6);
   {
     // Without the rigid tip face the box is softer.
     auto plain = model(path("plain.bdf"));
     EXPECT_FALSE(plain.constraints);
-    const auto wp = lowest_eigenvalues(plain.K.get(), plain.M.get(), 6);
+    const auto wp = morse::test::lowest_eigenvalues(plain.K.get(), plain.M.get(), 6);
     // The rigid tip face matters (1e-6 in bending, 1e-4 in the sixth mode), far above the
     // tolerance of the comparison below.
     EXPECT_GT(wr[0] - wp[0], 1e-7 * wr[0]);
@@ -746,7 +733,7 @@ TEST_F(AbaqusModelTest, RigidBodyCantileverMatchesNastranRbe2) {
     EXPECT_EQ(md.constraints->n_dependent, ref.constraints->n_dependent);
     EXPECT_EQ(md.dofs.n_global, ref.dofs.n_global);
     EXPECT_NEAR(md.mass, ref.mass, 1e-14 * ref.mass);
-    const auto w = lowest_eigenvalues(md.K.get(), md.M.get(), 6);
+    const auto w = morse::test::lowest_eigenvalues(md.K.get(), md.M.get(), 6);
     for (int i = 0; i < 6; ++i) {
       EXPECT_GT(wr[i], 0.0);
       EXPECT_NEAR(w[i], wr[i], 1e-10 * wr[i]) << "mode " << i + 1;

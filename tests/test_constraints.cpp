@@ -45,19 +45,6 @@ fe::Model build(mesh::Mesh serial, const std::vector<std::string>& clamp) {
   return md;
 }
 
-// Lowest n eigenvalues of (K, M) by LAPACK's dense generalized solver (every rank).
-std::vector<double> lowest_eigenvalues(Mat K, Mat M, int n) {
-  auto k = test::dense_matrix(K), m = test::dense_matrix(M);
-  PetscInt N = 0;
-  MORSE_CALL(MatGetSize(K, &N, nullptr));
-  PetscBLASInt bn = static_cast<PetscBLASInt>(N), itype = 1, info = 0, lwork = 8 * bn;
-  std::vector<double> w(N), work(lwork);
-  LAPACKsygv_(&itype, "N", "U", &bn, k.data(), &bn, m.data(), &bn, w.data(), work.data(), &lwork, &info);
-  EXPECT_EQ(info, 0);
-  w.resize(n);
-  return w;
-}
-
 // Adds box b's nodes (ids + id_offset) and elements (ids + id_offset) to m; its node sets get the
 // prefix. Returns the node index offset.
 std::int64_t append_box(mesh::Mesh* m, const mesh::BoxSpec& b, std::int64_t id_offset, const std::string& prefix) {
@@ -127,8 +114,8 @@ TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
   EXPECT_EQ(tied.constraints->n_dependent, 27);
   EXPECT_EQ(tied.dofs.n_global, ref.dofs.n_global);
   EXPECT_NEAR(tied.mass, ref.mass, 1e-12 * ref.mass);
-  const auto wt = lowest_eigenvalues(tied.K.get(), tied.M.get(), 8);
-  const auto wr = lowest_eigenvalues(ref.K.get(), ref.M.get(), 8);
+  const auto wt = test::lowest_eigenvalues(tied.K.get(), tied.M.get(), 8);
+  const auto wr = test::lowest_eigenvalues(ref.K.get(), ref.M.get(), 8);
   for (int i = 0; i < 8; ++i) EXPECT_NEAR(wt[i], wr[i], 1e-9 * wr[i]) << "mode " << i + 1;
 }
 
@@ -165,33 +152,28 @@ TEST(Constraints, RigidSpiderOverAFreeBoxGivesTheRigidBodyMassMatrix) {
   const double kscale = test::steel().E * L;
   for (double v : K) kfull = std::max(kfull, std::abs(v));
   EXPECT_LT(kfull, 1e-9 * kscale);
-  // Closed form about x_R: [[m I, -m [d]x], [m [d]x, J_c + m (|d|^2 I - d d^T)]], d = centre - x_R.
+  // Closed form about x_R, body by body: [[m I, -m [d]x], [m [d]x, J_c + m (|d|^2 I - d d^T)]],
+  // d = its centre of gravity - x_R, J_c its inertia about its centre of gravity.
+  double E[6][6] = {};
+  auto add_body = [&](double m, const double d[3], const double Jc[9]) {
+    const double S[3][3] = {{0, -d[2], d[1]}, {d[2], 0, -d[0]}, {-d[1], d[0], 0}};
+    for (int i = 0; i < 3; ++i) {
+      E[i][i] += m;
+      for (int j = 0; j < 3; ++j) {
+        E[i][3 + j] -= m * S[i][j];
+        E[3 + i][j] += m * S[i][j];
+        E[3 + i][3 + j] += Jc[3 * i + j] + m * ((i == j ? d[0] * d[0] + d[1] * d[1] + d[2] * d[2] : 0) - d[i] * d[j]);
+      }
+    }
+  };
   const double mass = rho * L * B * H;
   const double d[3] = {L / 2 - xr[0], B / 2 - xr[1], H / 2 - xr[2]};
-  const double S[3][3] = {{0, -d[2], d[1]}, {d[2], 0, -d[0]}, {-d[1], d[0], 0}};
-  const double Jc[3] = {mass * (B * B + H * H) / 12, mass * (L * L + H * H) / 12, mass * (L * L + B * B) / 12};
-  double E[6][6] = {};
-  for (int i = 0; i < 3; ++i) {
-    E[i][i] = mass;
-    for (int j = 0; j < 3; ++j) {
-      E[i][3 + j] = -mass * S[i][j];
-      E[3 + i][j] = mass * S[i][j];
-      E[3 + i][3 + j] = mass * ((i == j ? d[0] * d[0] + d[1] * d[1] + d[2] * d[2] : 0) - d[i] * d[j]);
-    }
-    E[3 + i][3 + i] += Jc[i];
-  }
-  // The second body, moved to x_R: centre of gravity at d2 = x_p + offset - x_R.
+  const double Jbox[9] = {mass * (B * B + H * H) / 12, 0, 0, 0, mass * (L * L + H * H) / 12, 0, 0, 0,
+                          mass * (L * L + B * B) / 12};
+  add_body(mass, d, Jbox);
+  // The second body: its centre of gravity at x_p + offset.
   const double d2[3] = {xp[0] + off[0] - xr[0], xp[1] + off[1] - xr[1], xp[2] + off[2] - xr[2]};
-  const double S2[3][3] = {{0, -d2[2], d2[1]}, {d2[2], 0, -d2[0]}, {-d2[1], d2[0], 0}};
-  for (int i = 0; i < 3; ++i) {
-    E[i][i] += m2;
-    for (int j = 0; j < 3; ++j) {
-      E[i][3 + j] -= m2 * S2[i][j];
-      E[3 + i][j] += m2 * S2[i][j];
-      E[3 + i][3 + j] +=
-          J2[3 * i + j] + m2 * ((i == j ? d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2] : 0) - d2[i] * d2[j]);
-    }
-  }
+  add_body(m2, d2, J2);
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) EXPECT_NEAR(M[6 * i + j], E[i][j], 1e-12 * mass) << i << "," << j;
   EXPECT_NEAR(md.mass, mass + m2, 1e-12 * mass);
@@ -410,7 +392,7 @@ TEST(Constraints, SpidersOnANodeSet) {
     return md;
   };
   auto plain = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0"});
-  const auto w0 = lowest_eigenvalues(plain.ops.K.get(), plain.ops.M.get(), 6);
+  const auto w0 = test::lowest_eigenvalues(plain.ops.K.get(), plain.ops.M.get(), 6);
   auto rbe3 = model(mesh::SpiderType::Interpolation, "corners", 0.06);
   const auto& cs = rbe3.mesh->mesh.constraints;
   ASSERT_EQ(cs.interpolation.size(), 2u);
@@ -418,12 +400,12 @@ TEST(Constraints, SpidersOnANodeSet) {
   EXPECT_EQ(cs.point_ids, (std::vector<std::int64_t>{82, 83}));
   EXPECT_EQ(rbe3.mesh->node_set_sizes.at("corners_spiders"), 2);
   EXPECT_EQ(fe::set_rows(rbe3.dofs, "corners_spiders", "test").size(), 12u);
-  const auto w3 = lowest_eigenvalues(rbe3.K.get(), rbe3.M.get(), 6);
+  const auto w3 = test::lowest_eigenvalues(rbe3.K.get(), rbe3.M.get(), 6);
   auto rbe2 = model(mesh::SpiderType::Rigid, "corners", 0.06);
-  const auto w2 = lowest_eigenvalues(rbe2.K.get(), rbe2.M.get(), 6);
+  const auto w2 = test::lowest_eigenvalues(rbe2.K.get(), rbe2.M.get(), 6);
   auto all = model(mesh::SpiderType::Interpolation, "x1", 0.06);
   EXPECT_LT(all.constraints->n_point_dofs, 9 * 6);  // some references stay dependent
-  const auto wa = lowest_eigenvalues(all.K.get(), all.M.get(), 6);
+  const auto wa = test::lowest_eigenvalues(all.K.get(), all.M.get(), 6);
   for (int i = 0; i < 6; ++i) {
     EXPECT_NEAR(w3[i], w0[i], 1e-9 * w0[i]) << "mode " << i + 1;
     EXPECT_NEAR(wa[i], w0[i], 1e-9 * w0[i]) << "mode " << i + 1;
@@ -465,13 +447,13 @@ TEST(Constraints, ASpiderCentreFixedByTheDeckClampsItsNodes) {
     return build(std::move(m), {mesh::kDeckBoundarySet});
   };
   auto both = test::assembled_box(PETSC_COMM_WORLD, spec, {"x0", "x1"});
-  const auto wb = lowest_eigenvalues(both.ops.K.get(), both.ops.M.get(), 4);
+  const auto wb = test::lowest_eigenvalues(both.ops.K.get(), both.ops.M.get(), 4);
   auto all6 = model(63);
   EXPECT_EQ(all6.constraints->n_point_dofs, 0);
-  const auto w6 = lowest_eigenvalues(all6.K.get(), all6.M.get(), 4);
+  const auto w6 = test::lowest_eigenvalues(all6.K.get(), all6.M.get(), 4);
   auto pin = model(7);
   EXPECT_EQ(pin.constraints->n_point_dofs, 3);
-  const auto w3 = lowest_eigenvalues(pin.K.get(), pin.M.get(), 4);
+  const auto w3 = test::lowest_eigenvalues(pin.K.get(), pin.M.get(), 4);
   for (int i = 0; i < 4; ++i) {
     EXPECT_NEAR(w6[i], wb[i], 1e-9 * wb[i]) << "mode " << i + 1;
     EXPECT_LT(w3[i], wb[i] * (1 - 1e-3)) << "mode " << i + 1;

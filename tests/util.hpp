@@ -3,6 +3,7 @@
 
 #include <petscsys.h>
 #include <mpi.h>
+#include <petscblaslapack.h>
 
 #include <algorithm>
 #include <cmath>
@@ -147,6 +148,20 @@ inline std::vector<double> dense_matrix(Mat A) {
   }
   MPI_Allreduce(MPI_IN_PLACE, d.data(), static_cast<int>(d.size()), MPI_DOUBLE, MPI_SUM, PETSC_COMM_WORLD);
   return d;
+}
+
+/// The lowest n eigenvalues of (K, M) by LAPACK's dense generalized solver (sygv), on every
+/// rank; 0 entries if LAPACK fails (info != 0). For small models. Collective.
+inline std::vector<double> lowest_eigenvalues(Mat K, Mat M, int n) {
+  auto k = dense_matrix(K), m = dense_matrix(M);
+  PetscInt N = 0;
+  MORSE_CALL(MatGetSize(K, &N, nullptr));
+  PetscBLASInt bn = static_cast<PetscBLASInt>(N), itype = 1, info = 0, lwork = 8 * bn;
+  std::vector<double> w(N), work(lwork);
+  LAPACKsygv_(&itype, "N", "U", &bn, k.data(), &bn, m.data(), &bn, w.data(), work.data(), &lwork, &info);
+  if (info != 0) w.assign(N, 0.0);
+  w.resize(n);
+  return w;
 }
 
 /// Solves A x = b with a MUMPS LU/Cholesky (KSPPREONLY). Collective.
