@@ -824,6 +824,38 @@ TEST(RampupErrors, FeatureErrorIsSeedEquation24) {
   EXPECT_TRUE(std::isinf(feature_error(y.data(), c.data(), 3, 1)));
 }
 
+TEST(RampupErrors, ErrorsAgainstTheLargestBearingRange) {
+  // Two bearings: bearing 1 carries +-200 N (range 400 in x, 100 in y), bearing 2 +-0.01 N (range
+  // 0.02). A deviation of 0.01 N on bearing 2 is eq. 24's 50 % but 0.0025 % of the largest range;
+  // 4 N on bearing 1 x is 1 % of both.
+  History ref, h;
+  ref.n_bearings = h.n_bearings = 2;
+  for (int i = 0; i < 5; ++i) {
+    const double s = std::sin(1.3 * i);
+    ref.t.push_back(0.1 * i);
+    ref.omega.push_back(0);
+    for (double v : {200 * s, 50 * s, 0.01 * s, 0.01 * s}) ref.force.push_back(v), ref.rotor_disp.push_back(1e-3 * v);
+  }
+  ref.stator_disp = ref.rotor_disp;
+  h = ref;
+  h.force[4 * 2 + 0] += 4.0;   // bearing 1 x at sample 2
+  h.force[4 * 3 + 2] += 0.01;  // bearing 2 x at sample 3
+  const auto e = compare(h, ref);
+  double lo = 0, hi = 0;  // range of bearing 1 x over the samples
+  for (int i = 0; i < 5; ++i) lo = std::min(lo, ref.force[4 * i]), hi = std::max(hi, ref.force[4 * i]);
+  double lo2 = 0, hi2 = 0;
+  for (int i = 0; i < 5; ++i) lo2 = std::min(lo2, ref.force[4 * i + 2]), hi2 = std::max(hi2, ref.force[4 * i + 2]);
+  EXPECT_NEAR(e.force[0], 4.0 / (hi - lo), 1e-14);
+  EXPECT_NEAR(e.force[2], 0.01 / (hi2 - lo2), 1e-12);
+  EXPECT_EQ(e.force_dominant, 2);  // bearing 2 x sets eq. 24's worst
+  EXPECT_NEAR(e.force_scale, hi - lo, 1e-12);
+  EXPECT_NEAR(e.force_global[0], 4.0 / (hi - lo), 1e-14);
+  EXPECT_NEAR(e.force_global[2], 0.01 / (hi - lo), 1e-14);
+  EXPECT_NEAR(e.force_global_worst, 4.0 / (hi - lo), 1e-14);
+  EXPECT_NEAR(e.force_global_mean, (4.0 + 0.01) / (hi - lo) / 4, 1e-14);
+  EXPECT_EQ(e.displacement_global_worst, 0.0);
+}
+
 TEST(RampupErrors, ScoreReproducesSeedTable1) {
   // Seed 000 Table 1: (time t/t_ref, mean load error %, printed score /20), every row.
   const double rows[][3] = {{1.01, 1.1, 8.9},  {0.45, 10.2, 5.5}, {0.66, 1.5, 11.9}, {0.37, 2.6, 13.7},

@@ -83,6 +83,12 @@ void run_rampup(MPI_Comm comm) {
            "displacements worst %.3g %%, best %.3g %%, mean %.3g %%\n",
            o.reference.c_str(), 100 * he.force_worst, 100 * he.force_best, 100 * he.force_mean,
            100 * he.displacement_worst, 100 * he.displacement_best, 100 * he.displacement_mean);
+    print0(comm,
+           "  against the largest range of any bearing (%.4g N, %.4g m): bearing loads worst %.3g %%, mean %.3g %%; "
+           "displacements worst %.3g %%, mean %.3g %%; eq. 24's worst load is bearing %d %c\n",
+           he.force_scale, he.displacement_scale, 100 * he.force_global_worst, 100 * he.force_global_mean,
+           100 * he.displacement_global_worst, 100 * he.displacement_global_mean, he.force_dominant / 2 + 1,
+           he.force_dominant % 2 ? 'y' : 'x');
   }
 
   StageTimer tw(comm, "Write");

@@ -105,6 +105,30 @@ HistoryErrors compare(const History& h, const History& ref) {
   }
   summary(e.force, &e.force_worst, &e.force_best, &e.force_mean);
   summary(e.displacement, &e.displacement_worst, &e.displacement_best, &e.displacement_mean);
+  // Against the largest range of any bearing and direction.
+  auto global = [&](const std::vector<double>& x, const std::vector<double>& xr, const std::vector<double>& own,
+                    std::vector<double>* out, double* scale, double* worst, double* mean, int* dominant) {
+    *scale = 0;
+    std::vector<double> dev(nf, 0.0);
+    for (std::size_t f = 0; f < nf; ++f) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (std::size_t i = 0; i < h.n_out(); ++i) {
+        lo = std::min(lo, xr[i * nf + f]), hi = std::max(hi, xr[i * nf + f]);
+        dev[f] = std::max(dev[f], std::abs(x[i * nf + f] - xr[i * nf + f]));
+      }
+      *scale = std::max(*scale, hi - lo);
+    }
+    out->clear();
+    for (std::size_t f = 0; f < nf; ++f)
+      out->push_back(*scale > 0 ? dev[f] / *scale : (dev[f] > 0 ? std::numeric_limits<double>::infinity() : 0.0));
+    double best = 0;
+    summary(*out, worst, &best, mean);
+    *dominant = static_cast<int>(std::max_element(own.begin(), own.end()) - own.begin());
+  };
+  global(h.force, ref.force, e.force, &e.force_global, &e.force_scale, &e.force_global_worst, &e.force_global_mean,
+         &e.force_dominant);
+  global(h.rotor_disp, ref.rotor_disp, e.displacement, &e.displacement_global, &e.displacement_scale,
+         &e.displacement_global_worst, &e.displacement_global_mean, &e.displacement_dominant);
   return e;
 }
 
@@ -131,6 +155,19 @@ void write_errors(io::H5Output& out, const std::string& group, const HistoryErro
                                                  {"displacement_best", he.displacement_best},
                                                  {"displacement_mean", he.displacement_mean}};
   for (const auto& [k, v] : sums) out.attribute(g, k, v);
+  out.write(g + "/bearing_force_global", he.force_global, {nb, 2});
+  out.write(g + "/displacement_global", he.displacement_global, {nb, 2});
+  out.attribute(g + "/bearing_force_global", "description",
+                "max over the run of |x - x_ref| / (the largest max x_ref - min x_ref of any bearing and direction)");
+  const std::pair<const char*, double> global[] = {{"force_global_worst", he.force_global_worst},
+                                                   {"force_global_mean", he.force_global_mean},
+                                                   {"force_scale", he.force_scale},
+                                                   {"displacement_global_worst", he.displacement_global_worst},
+                                                   {"displacement_global_mean", he.displacement_global_mean},
+                                                   {"displacement_scale", he.displacement_scale}};
+  for (const auto& [k, v] : global) out.attribute(g, k, v);
+  out.attribute(g, "force_dominant", static_cast<std::int64_t>(he.force_dominant));
+  out.attribute(g, "displacement_dominant", static_cast<std::int64_t>(he.displacement_dominant));
 }
 
 void write_stator(io::H5Output& out, const std::string& group, const StatorModes& sm, const std::string& file,

@@ -385,10 +385,21 @@ History read_history(const std::string& file, const std::string& group = "/rampu
 /// in bearing order) and each displacement feature (x, y of the rotor at each bearing), and
 /// their worst, best and mean. Throws unless both histories have the same bearings and the same
 /// output times (same dt and output interval).
+///
+/// Beside eq. 24 (each feature against its own range), the same deviations against the largest
+/// range of any bearing (force_global, displacement_global: max |x - x_ref| / max over every
+/// bearing and direction of (max x_ref - min x_ref)), so that a lightly loaded bearing, whose own
+/// range is tiny, cannot set the verdict alone; *_scale is that largest range, *_dominant the
+/// feature (2 bearing + direction) of the worst eq. 24 error.
 struct HistoryErrors {
   std::vector<double> force, displacement;  ///< 2 per bearing
   double force_worst = 0, force_best = 0, force_mean = 0;
   double displacement_worst = 0, displacement_best = 0, displacement_mean = 0;
+  std::vector<double> force_global, displacement_global;  ///< 2 per bearing
+  double force_global_worst = 0, force_global_mean = 0;
+  double displacement_global_worst = 0, displacement_global_mean = 0;
+  double force_scale = 0, displacement_scale = 0;
+  int force_dominant = -1, displacement_dominant = -1;
 };
 HistoryErrors compare(const History& h, const History& ref);
 
