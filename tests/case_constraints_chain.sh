@@ -2,6 +2,7 @@
 # Case chain of a Nastran deck with a rigid spider (tests/data/spider_beam.bdf: a 4x1x1 CHEXA
 # cantilever, RBE2 100 from grid 9001 at the tip centre to the four tip grids, a 1.5 kg CONM2 on
 # 9001, ASET1 123456 9001):
+#  - mesh info reports the constraints;
 #  - modes: the constraints are eliminated (4 grids x 3 translations), the model's mass is the
 #    steel's 7.8 kg plus the CONM2's 1.5 kg;
 #  - reduce with the point as the boundary (-boundary ASET): six boundary DOFs, node 9001
@@ -20,6 +21,9 @@ deck=$(dirname "$0")/data/spider_beam.bdf
 out=$(run modes -mesh "$deck" -clamp '*BOUNDARY' -modes_nev 4 -out "$d/modes.h5" 2>&1)
 grep -q "constraints: 1 rigid element, 0 interpolation elements, 0 linear constraints, 1 six-DOF point; 12 DOF(s) eliminated, 6 point DOF(s) kept" <<<"$out" || { echo "$out"; exit 1; }
 grep -q "mass 9.3$" <<<"$out" || { echo "mass: $out"; exit 1; }
+info=$(run mesh info -mesh "$deck" 2>&1)
+grep -q "constraints: 1 rigid element, 0 interpolation elements, 0 linear constraints, 1 six-DOF point" <<<"$info" ||
+  { echo "mesh info: $info"; exit 1; }
 cb=(-clamp '*BOUNDARY' -boundary ASET -cb_num_fixed_modes 4)
 run reduce -mesh "$deck" "${cb[@]}" -matrices_write "$d/spider" -out "$d/se.h5"
 run reduce -matrices_K "$d/spider_K.mtx" -matrices_M "$d/spider_M.mtx" -matrices_dofmap "$d/spider_dofmap.txt" \

@@ -77,6 +77,20 @@ void run_mesh_info(MPI_Comm comm) {
   for (const auto& mat : m.materials)
     print0(comm, "  material %-20s E %.6g nu %.6g rho %.6g\n", mat.name.c_str(), mat.E, mat.nu, mat.rho);
   if (q.n_fixed_nodes) print0(comm, "  *BOUNDARY fixes DOFs of %lld nodes\n", (long long)q.n_fixed_nodes);
+  const auto& cs = m.constraints;
+  if (!cs.empty()) {
+    print0(comm, "  constraints: %s\n", cs.summary().c_str());
+    std::size_t n_dep = 0, n_terms = 0;
+    for (const auto& r : cs.rigid) n_dep += r.dependent.size();
+    for (const auto& r : cs.interpolation) n_terms += r.nodes.size();
+    print0(comm, "    rigid elements tie %zu dependent nodes; interpolation elements hold %zu nodes in all\n", n_dep,
+           n_terms);
+    for (std::size_t p = 0; p < cs.point_ids.size() && p < 20; ++p)
+      print0(comm, "    point %lld at (%.6g, %.6g, %.6g)%s\n", (long long)cs.point_ids[p], cs.point_coords[3 * p],
+             cs.point_coords[3 * p + 1], cs.point_coords[3 * p + 2],
+             cs.point_mass.size() > p && cs.point_mass[p] != 0 ? cat(", mass ", cs.point_mass[p]).c_str() : "");
+    if (cs.point_ids.size() > 20) print0(comm, "    ... (%zu points)\n", cs.point_ids.size());
+  }
 }
 
 }  // namespace
