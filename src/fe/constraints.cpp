@@ -1,5 +1,7 @@
 #include "morse/fe/constraints.hpp"
 
+#include <petscblaslapack.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -43,6 +45,31 @@ void compact(Expr* e) {
 }
 
 const char* kComp[7] = {"", "1 (x)", "2 (y)", "3 (z)", "4 (rx)", "5 (ry)", "6 (rz)"};
+
+// The coefficients of theta_x, theta_y, theta_z in component c (1..3) of theta x r: the rigid
+// rotation's share of a point at offset r.
+std::array<double, 3> rotation_row(int c, const double r[3]) {
+  if (c == 1) return {0.0, r[2], -r[1]};
+  if (c == 2) return {-r[2], 0.0, r[0]};
+  return {r[1], -r[0], 0.0};
+}
+
+// LU factorization (LAPACK getrf, partial pivoting) of the n x n column-major A; returns the
+// first column whose pivot |u_cc| is at most tol, or -1.
+int lu_factor(int n, double* A, std::vector<PetscBLASInt>* piv, double tol) {
+  PetscBLASInt bn = n, info = 0;
+  piv->resize(n);
+  LAPACKgetrf_(&bn, &bn, A, &bn, piv->data(), &info);
+  for (int c = 0; c < n; ++c)
+    if (!(std::abs(A[c + static_cast<std::size_t>(n) * c]) > tol)) return c;
+  return -1;
+}
+
+// Solves A X = B for nrhs columns (column-major B, n rows) with lu_factor's factors.
+void lu_solve(int n, const double* LU, const std::vector<PetscBLASInt>& piv, double* B, int nrhs) {
+  PetscBLASInt bn = n, bnrhs = nrhs, info = 0;
+  LAPACKgetrs_("N", &bn, &bnrhs, LU, &bn, piv.data(), B, &bn, &info);
+}
 
 // The nodes a constraint names: whether each is a point, its coordinates and (solid nodes) its
 // three rows in the full layout (-1: clamped). Replicated on every rank.
@@ -121,7 +148,7 @@ class Equations {
     for (auto d : r.dependent) {
       MORSE_CHECK(d != r.reference, r.where, ": node ", d, " is both the independent and a dependent node");
       const double* xd = nodes_.xyz(d);
-      const double rx = xd[0] - xr[0], ry = xd[1] - xr[1], rz = xd[2] - xr[2];
+      const double rd[3] = {xd[0] - xr[0], xd[1] - xr[1], xd[2] - xr[2]};
       const bool point = nodes_.is_point(d);
       const ComponentMask mask = point ? r.components : static_cast<ComponentMask>(r.components & 7);
       MORSE_CHECK(mask, r.where, ": dependent node ", d, " is a node of solid elements, and the components ",
@@ -129,10 +156,11 @@ class Equations {
       for (int c = 1; c <= 6; ++c) {
         if (!(mask & (1u << (c - 1)))) continue;
         Expr e{{{r.reference, c}, 1.0}};
-        if (c == 1) e.insert(e.end(), {{{r.reference, 5}, rz}, {{r.reference, 6}, -ry}});
-        if (c == 2) e.insert(e.end(), {{{r.reference, 6}, rx}, {{r.reference, 4}, -rz}});
-        if (c == 3) e.insert(e.end(), {{{r.reference, 4}, ry}, {{r.reference, 5}, -rx}});
-        add({d, c}, std::move(e), r.where);
+        if (c <= 3) {
+          const auto rot = rotation_row(c, rd);
+          for (int j = 0; j < 3; ++j) e.push_back({{r.reference, 4 + j}, rot[j]});
+        }
+        add({d, c}, std::move(e), r.where);  // compact() drops the zero coefficients
       }
     }
   }
@@ -179,10 +207,8 @@ class Equations {
         if (!(r.node_components[i] & (1u << (c - 1)))) continue;
         std::array<double, 6> a{};
         a[c - 1] = 1.0;
-        // (theta x p)_c
-        if (c == 1) a[4] = p[2], a[5] = -p[1];
-        if (c == 2) a[5] = p[0], a[3] = -p[2];
-        if (c == 3) a[3] = p[1], a[4] = -p[0];
+        const auto rot = rotation_row(c, p);  // (theta x p)_c
+        std::copy(rot.begin(), rot.end(), a.begin() + 3);
         cols.push_back({id, c});
         rows.push_back(a);
         w.push_back(r.weights[i]);
@@ -191,49 +217,33 @@ class Equations {
     // Normal equations in scaled unknowns (rotations times L, a characteristic length), so that
     // the singularity test compares like with like.
     const double L = std::sqrt(l2 / wsum) > 0 ? std::sqrt(l2 / wsum) : 1.0;
-    double N[6][6] = {};
+    std::vector<double> N(36, 0.0);  // column-major (symmetric)
     for (std::size_t k = 0; k < rows.size(); ++k)
       for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < 6; ++j) N[i][j] += w[k] * rows[k][i] * rows[k][j] / ((i >= 3 ? L : 1) * (j >= 3 ? L : 1));
-    // Inverse by Gauss-Jordan with partial pivoting; a pivot below 1e-10 of the largest diagonal
-    // entry means the nodes do not determine the fit.
+        for (int j = 0; j < 6; ++j)
+          N[i + 6 * j] += w[k] * rows[k][i] * rows[k][j] / ((i >= 3 ? L : 1) * (j >= 3 ? L : 1));
+    // A pivot below 1e-10 of the largest diagonal entry means the nodes do not determine the fit.
     double scale = 0;
-    for (int i = 0; i < 6; ++i) scale = std::max(scale, N[i][i]);
-    double inv[6][6] = {};
-    for (int i = 0; i < 6; ++i) inv[i][i] = 1;
-    for (int c = 0; c < 6; ++c) {
-      int piv = c;
-      for (int i = c + 1; i < 6; ++i)
-        if (std::abs(N[i][c]) > std::abs(N[piv][c])) piv = i;
-      MORSE_CHECK(std::abs(N[piv][c]) > 1e-10 * scale, r.where, ": its ", r.nodes.size(),
-                  " nodes and weights do not determine the reference's motion (", c < 3 ? "translation" : "rotation",
-                  " ", "xyz"[c % 3], " is free: collinear or too few nodes, or too few components)");
-      std::swap(N[c], N[piv]);
-      std::swap(inv[c], inv[piv]);
-      const double d = N[c][c];
-      for (int j = 0; j < 6; ++j) N[c][j] /= d, inv[c][j] /= d;
-      for (int i = 0; i < 6; ++i) {
-        if (i == c || N[i][c] == 0) continue;
-        const double f = N[i][c];
-        for (int j = 0; j < 6; ++j) N[i][j] -= f * N[c][j], inv[i][j] -= f * inv[c][j];
-      }
-    }
-    // G (6 x m) = N^-1 A^T W in unscaled unknowns: row i of x = (u_R, theta_R).
+    for (int i = 0; i < 6; ++i) scale = std::max(scale, N[7 * i]);
+    std::vector<PetscBLASInt> piv;
+    const int bad = lu_factor(6, N.data(), &piv, 1e-10 * scale);
+    MORSE_CHECK(bad < 0, r.where, ": its ", r.nodes.size(),
+                " nodes and weights do not determine the reference's motion (", bad < 3 ? "translation" : "rotation",
+                " ", "xyz"[bad < 0 ? 0 : bad % 3], " is free: collinear or too few nodes, or too few components)");
+    // G = N^-1 A_s^T W (6 x m) in the scaled unknowns (rotations times L): X = N^-1 B.
     const std::size_t m = cols.size();
+    std::vector<double> X(6 * m);
+    for (std::size_t k = 0; k < m; ++k)
+      for (int j = 0; j < 6; ++j) X[j + 6 * k] = rows[k][j] / (j >= 3 ? L : 1) * w[k];
+    lu_solve(6, N.data(), piv, X.data(), static_cast<int>(m));
     std::vector<int> ref;  // reference components (0..5) made independent
     for (int c = 0; c < 6; ++c)
       if (r.ref_components & (1u << c)) ref.push_back(c);
     MORSE_CHECK(!ref.empty(), r.where, ": no reference components");
     const std::size_t nr = ref.size();
-    std::vector<double> G(nr * m, 0.0);  // rows scaled: rotations times L (units of length)
-    for (std::size_t a = 0; a < nr; ++a) {
-      const int i = ref[a];
-      for (std::size_t k = 0; k < m; ++k) {
-        double s = 0;
-        for (int j = 0; j < 6; ++j) s += inv[i][j] * rows[k][j] / (j >= 3 ? L : 1);
-        G[a * m + k] = s * w[k];
-      }
-    }
+    std::vector<double> G(nr * m, 0.0);  // row-major; rows scaled: rotations times L (units of length)
+    for (std::size_t a = 0; a < nr; ++a)
+      for (std::size_t k = 0; k < m; ++k) G[a * m + k] = X[ref[a] + 6 * k];
     // Columns that may become dependent: not clamped (their u = 0 drops out), not dependent in
     // another element and not a term of another element's equations (overlapping elements: a
     // DOF made dependent here that an earlier equation uses could close a cycle).
@@ -279,38 +289,24 @@ class Equations {
       dependent_references_.push_back(r.where);
       return;
     }
-    // u_ref = G_S u_S + G_N u_N  =>  u_S = G_S^-1 (u_ref - G_N u_N). Solve G_S X = [I, -G_N].
-    std::vector<double> GS(nr * nr), rhs(nr * (nr + m), 0.0);
-    for (std::size_t a = 0; a < nr; ++a) {
-      for (std::size_t b = 0; b < nr; ++b) GS[a * nr + b] = G[a * m + S[b]];
-      rhs[a * (nr + m) + a] = (ref[a] >= 3 ? L : 1);  // u_ref scaled like the row
-      for (std::size_t k = 0; k < m; ++k) {
-        const bool in_s = std::find(S.begin(), S.end(), k) != S.end();
-        if (!in_s) rhs[a * (nr + m) + nr + k] = -G[a * m + k];
-      }
-    }
+    // u_ref = G_S u_S + G_N u_N  =>  u_S = G_S^-1 (u_ref - G_N u_N). Solve G_S Y = [I, -G_N]
+    // (column-major; G_S is invertible: its pivots passed above).
     const std::size_t nc = nr + m;
-    for (std::size_t c = 0; c < nr; ++c) {
-      std::size_t piv = c;
-      for (std::size_t i = c + 1; i < nr; ++i)
-        if (std::abs(GS[i * nr + c]) > std::abs(GS[piv * nr + c])) piv = i;
-      for (std::size_t j = 0; j < nr; ++j) std::swap(GS[c * nr + j], GS[piv * nr + j]);
-      for (std::size_t j = 0; j < nc; ++j) std::swap(rhs[c * nc + j], rhs[piv * nc + j]);
-      const double d = GS[c * nr + c];
-      for (std::size_t j = 0; j < nr; ++j) GS[c * nr + j] /= d;
-      for (std::size_t j = 0; j < nc; ++j) rhs[c * nc + j] /= d;
-      for (std::size_t i = 0; i < nr; ++i) {
-        if (i == c || GS[i * nr + c] == 0) continue;
-        const double f = GS[i * nr + c];
-        for (std::size_t j = 0; j < nr; ++j) GS[i * nr + j] -= f * GS[c * nr + j];
-        for (std::size_t j = 0; j < nc; ++j) rhs[i * nc + j] -= f * rhs[c * nc + j];
-      }
+    std::vector<double> GS(nr * nr), Y(nr * nc, 0.0);
+    for (std::size_t a = 0; a < nr; ++a) {
+      for (std::size_t b = 0; b < nr; ++b) GS[a + nr * b] = G[a * m + S[b]];
+      Y[a + nr * a] = (ref[a] >= 3 ? L : 1);  // u_ref scaled like the row
+      for (std::size_t k = 0; k < m; ++k)
+        if (std::find(S.begin(), S.end(), k) == S.end()) Y[a + nr * (nr + k)] = -G[a * m + k];
     }
+    std::vector<PetscBLASInt> pivs;
+    lu_factor(static_cast<int>(nr), GS.data(), &pivs, 0.0);
+    lu_solve(static_cast<int>(nr), GS.data(), pivs, Y.data(), static_cast<int>(nc));
     for (std::size_t b = 0; b < nr; ++b) {
       Expr e;
-      for (std::size_t a = 0; a < nr; ++a) e.push_back({{r.reference, ref[a] + 1}, rhs[b * nc + a]});
+      for (std::size_t a = 0; a < nr; ++a) e.push_back({{r.reference, ref[a] + 1}, Y[b + nr * a]});
       for (std::size_t k = 0; k < m; ++k)
-        if (rhs[b * nc + nr + k] != 0) e.push_back({cols[k], rhs[b * nc + nr + k]});
+        if (Y[b + nr * (nr + k)] != 0) e.push_back({cols[k], Y[b + nr * (nr + k)]});
       add(cols[S[b]], std::move(e), r.where);
     }
   }
