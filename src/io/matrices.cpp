@@ -629,13 +629,12 @@ void write_dof_map(const std::string& path, const DofMapFile& map) {
 
 DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
   const int rank = comm_rank(lm.comm), size = comm_size(lm.comm);
-  // Owned free DOFs: (row, node id, component) from the layout's labels (node translations, and
-  // the six-DOF points of rigid and interpolation elements), sent to rank 0 with the sets.
-  std::vector<std::int64_t> mine(3 * dofs.n_owned);
-  for (PetscInt i = 0; i < dofs.n_owned; ++i) {
-    auto* e = &mine[3 * i];
-    e[0] = dofs.first + i, e[1] = dofs.node[i], e[2] = dofs.component[i];
-  }
+  // The rows' labels (node translations, and the six-DOF points of rigid and interpolation
+  // elements) and the row sets, on rank 0.
+  DofMapFile map;
+  std::vector<std::int64_t> component;
+  fe::gather_labels(dofs, &map.node, &component);
+  map.component.assign(component.begin(), component.end());
   auto gather = [&](std::vector<std::int64_t>& v) {
     int n = static_cast<int>(v.size());
     std::vector<int> counts(size), displs(size, 0);
@@ -645,16 +644,6 @@ DofMapFile mesh_dof_map(const mesh::LocalMesh& lm, const fe::DofLayout& dofs) {
     MPI_Gatherv(v.data(), n, MPI_INT64_T, all.data(), counts.data(), displs.data(), MPI_INT64_T, 0, lm.comm);
     return all;
   };
-  DofMapFile map;
-  auto all = gather(mine);
-  if (rank == 0) {
-    map.node.resize(dofs.n_global);
-    map.component.resize(dofs.n_global);
-    for (std::size_t k = 0; k < all.size(); k += 3) {
-      map.node[all[k]] = all[k + 1];
-      map.component[all[k]] = static_cast<int>(all[k + 2]);
-    }
-  }
   for (const auto& [name, owned] : dofs.sets) {
     std::vector<std::int64_t> rows(owned.begin(), owned.end());
     auto set = gather(rows);
