@@ -863,3 +863,240 @@ TEST(RampupErrors, ScoreReproducesSeedTable1) {
                             {0.51, 1.8, 13.1}, {0.12, 24.9, 8.8}, {0.58, 4.0, 10.2}, {0.45, 9.3, 6.2}};
   for (const auto& r : rows) EXPECT_NEAR(score(r[1] / 100, r[0], 1.0), r[2], 0.051) << "row t = " << r[0];
 }
+
+// ------------------------------------------------------------------------------------------
+// Intershaft bearings and torsion (docs/rampup-theory.md §7)
+
+namespace {
+
+// A rigid rotor: one station, one disk (diametral inertia half the polar one, at least 0.01).
+RotorSpec rigid_rotor(const std::string& name, double m, double Ip, double ratio) {
+  RotorSpec r;
+  r.name = name;
+  r.z = {0.0};
+  r.disks = {{name + "_disk", 0, m, Ip, std::max(0.01, 0.5 * Ip)}};
+  r.speed_ratio = ratio;
+  return r;
+}
+
+}  // namespace
+
+TEST(RampupAssembly, IntershaftBearingCouplesTwoRotors) {
+  // Two rigid disks on ground springs k1, k2, joined by an intershaft spring k12; no spin
+  // coupling (Ip = 0): the lateral frequencies are those of the 2-DOF chain, twice (x and y).
+  const double m1 = 4, m2 = 9, k1 = 2e6, k2 = 5e6, k12 = 3e6;
+  RotorSpec a = rigid_rotor("lp", m1, 0.0, 1.0), b = rigid_rotor("hp", m2, 0.0, 2.0);
+  Bearing g1{"g1", 0, 0, -1, -1, k1, k1, 0, 0, {}};
+  Bearing g2{"g2", 1, 0, -1, -1, k2, k2, 0, 0, {}};
+  Bearing is{"inter", 0, 0, -1, -1, k12, k12, 0, 0, {}, 1, 0};
+  const Assembly as({a, b}, {}, {g1, g2, is});
+  const double p = (k1 + k12) / m1 + (k2 + k12) / m2, q = ((k1 + k12) * (k2 + k12) - k12 * k12) / (m1 * m2);
+  const double w1 = std::sqrt(0.5 * (p - std::sqrt(p * p - 4 * q))),
+               w2 = std::sqrt(0.5 * (p + std::sqrt(p * p - 4 * q)));
+  // (The disks' tilts have no stiffness: their zero eigenvalues are left out.)
+  std::vector<std::complex<double>> lam;
+  for (const auto& l : whirl_eigenvalues(as, 100.0))
+    if (l.imag() > 1.0) lam.push_back(l);
+  ASSERT_EQ(lam.size(), 4u);
+  EXPECT_NEAR(lam[0].imag(), w1, 1e-10 * w1);
+  EXPECT_NEAR(lam[1].imag(), w1, 1e-10 * w1);
+  EXPECT_NEAR(lam[2].imag(), w2, 1e-10 * w2);
+  EXPECT_NEAR(lam[3].imag(), w2, 1e-10 * w2);
+  // The force of the intershaft bearing is k12 (x_lp - x_hp); its "housing" is the hp station.
+  std::vector<double> x(as.n(), 0.0), F(6), ur(6), uh(6);
+  x[as.rotor_dof(0, 0, 0)] = 1e-3;
+  x[as.rotor_dof(1, 0, 0)] = 4e-4;
+  x[as.rotor_dof(1, 0, 1)] = -2e-4;
+  as.bearing_state(x.data(), nullptr, F.data(), ur.data(), uh.data());
+  EXPECT_NEAR(F[4], k12 * (1e-3 - 4e-4), 1e-9);
+  EXPECT_NEAR(F[5], k12 * 2e-4, 1e-9);
+  EXPECT_EQ(uh[4], 4e-4);
+  // The condensed step equals the dense one with an intershaft bearing beside a stator (the
+  // chain rotor's bearings) and a ground bearing: a second rotor hung on the first.
+  const Assembly chain = rotor_on_chain();
+  RotorSpec hp = rigid_rotor("core", 3.0, 0.01, 2.2);
+  hp.unbalances = {{"core_disk", 5e-5, 1.0}};
+  std::vector<Bearing> bs = chain.bearings();
+  bs.push_back({"core_rear", 1, 0, -1, -1, 1e6, 1e6, 100, 100, {}});
+  bs.push_back({"core_inter", 1, 0, -1, -1, 4e6, 3e6, 200, 150, {}, 0, 2});
+  const Assembly two(std::vector<RotorSpec>{chain.rotors()[0], hp}, chain.stators(), bs);
+  LoadCase lc;
+  lc.omega_max = 600;
+  lc.ramp_time = 0.05;
+  IntegratorSettings s;
+  s.dt = 2e-5;
+  s.alpha = -0.05;
+  std::vector<double> fc, fd;
+  integrate(two, lc, s, [&](const StepOutput& o) { fc.insert(fc.end(), o.force, o.force + 8); });
+  s.dense = true;
+  integrate(two, lc, s, [&](const StepOutput& o) { fd.insert(fd.end(), o.force, o.force + 8); });
+  ASSERT_EQ(fc.size(), fd.size());
+  double fmax = 0, diff = 0, inter = 0;
+  for (std::size_t i = 0; i < fc.size(); ++i) {
+    fmax = std::max(fmax, std::fabs(fd[i]));
+    diff = std::max(diff, std::fabs(fc[i] - fd[i]));
+    if (i % 8 >= 6) inter = std::max(inter, std::fabs(fd[i]));
+  }
+  EXPECT_GT(inter, 0.0);
+  EXPECT_LT(diff, 1e-9 * fmax);
+  expect_same_on_ranks(diff, "intershaft condensed vs dense");
+  // Bad intershaft bearings.
+  using test::expect_error_parts;
+  Bearing same{"same", 0, 0, -1, -1, 1e6, 1e6, 0, 0, {}, 0, 0};
+  expect_error_parts([&] { Assembly({a, b}, {}, {same}); }, {"bearing 'same'", "two different rotors"}, "same rotor");
+  Bearing far{"far", 0, 0, -1, -1, 1e6, 1e6, 0, 0, {}, 1, 3};
+  expect_error_parts(
+      [&] {
+        Assembly({a, b}, {}, {far});
+      },
+      {"bearing 'far'", "station 3", "does not exist"}, "station out of range");
+}
+
+TEST(RampupTorsion, ShaftWithAnEndDiskConvergesToTheExactFrequency) {
+  // A uniform shaft driven at z = 0 with a disk of polar inertia Id at z = L: the first torsional
+  // frequency w = beta c / L, beta tan beta = rho J L / Id, c = sqrt(G / rho). Linear elements
+  // with consistent mass converge from above at O(h^2).
+  const double L = 0.8, d = 0.06, di = 0.03, Id = 0.05;
+  const Material mat;
+  const double J = M_PI * (std::pow(d, 4) - std::pow(di, 4)) / 32, G = mat.E / (2 * (1 + mat.nu)),
+               c = std::sqrt(G / mat.rho), ratio = mat.rho * J * L / Id;
+  double beta = 0.5;  // Newton on beta tan beta = ratio in (0, pi/2)
+  for (int it = 0; it < 50; ++it) {
+    const double f = beta * std::tan(beta) - ratio, df = std::tan(beta) + beta / std::pow(std::cos(beta), 2);
+    beta -= f / df;
+  }
+  const double exact = beta * c / L;
+  std::vector<double> err;
+  for (int ne : {4, 8, 16, 32}) {
+    RotorSpec r;
+    r.name = "shaft";
+    for (int k = 0; k <= ne; ++k) r.z.push_back(L * k / ne);
+    r.sections = {{d, di, mat}};
+    r.disks = {{"end", ne, 1.0, Id, 0.5 * Id}};
+    Torsion t;
+    t.drives = {{"motor", 0, 0}};
+    const Assembly a({r}, {}, {}, t);
+    ASSERT_EQ(a.n_torsion(), ne + 1);
+    ASSERT_EQ(a.free_twists().size(), static_cast<std::size_t>(ne));
+    const double w = a.torsion_frequencies().at(0);
+    EXPECT_GT(w, exact);
+    err.push_back((w - exact) / exact);
+  }
+  for (std::size_t k = 1; k < err.size(); ++k) EXPECT_NEAR(err[k - 1] / err[k], 4.0, 0.1) << "refinement " << k;
+  EXPECT_LT(err.back(), 1e-4);
+  if (world_rank() == 0)
+    std::printf("[ rampup ] torsion of a shaft with an end disk: %.6f Hz exact, errors %.2e %.2e %.2e %.2e\n",
+                exact / (2 * M_PI), err[0], err[1], err[2], err[3]);
+  expect_same_on_ranks(err.back(), "torsion frequency");
+}
+
+TEST(RampupTorsion, GearedRampMatchesTheClosedFormAtSecondOrder) {
+  // The LP disk J1 is driven (its speed is the ramp Omega = Omega' t); a gear stage of ratio n
+  // turns the fan disk J2 at Omega / n against the aerodynamic torque -cT (Omega / n)^2. The fan's
+  // twist obeys J2 phi'' + n^2 k phi = -J2 Omega' / n - cT (Omega' t / n)^2 from rest, whose
+  // exact solution is phi = p0 + p2 t^2 - p0 cos(w t), w^2 = n^2 k / J2, p2 = B / (n^2 k),
+  // p0 = (A - 2 J2 p2) / (n^2 k); the mesh torque is T = -n k phi and the drive's torque
+  // J1 Omega' + T. Newmark converges to it at second order.
+  const double J1 = 0.8, J2 = 6.0, n = 3.0, k = 4e5, cT = 0.02, wdot = 400.0;
+  Torsion t;
+  t.drives = {{"turbine", 0, 0}};
+  t.gearboxes = {{"pgb", 0, 0, 1, 0, n, k, 0.0}};
+  t.torques = {{"fan_aero", 1, 0, cT}};
+  const Assembly a({rigid_rotor("lp", 10, J1, 1.0), rigid_rotor("fan", 40, J2, 1.0 / n)}, {}, {}, t);
+  ASSERT_EQ(a.n_torsion(), 2);
+  const double kk = n * n * k, w = std::sqrt(kk / J2), A = -J2 * wdot / n, B = -cT * wdot * wdot / (n * n), p2 = B / kk,
+               p0 = (A - 2 * J2 * p2) / kk;
+  ASSERT_NEAR(a.torsion_frequencies().at(0), w, 1e-12 * w);
+  LoadCase lc;
+  lc.omega_max = wdot * 0.5;
+  lc.ramp_time = 0.5;
+  std::vector<double> err_T, err_D;
+  for (double dt : {1e-4, 5e-5, 2.5e-5}) {
+    IntegratorSettings s;
+    s.dt = dt;
+    s.t_final = 0.1;
+    double eT = 0, eD = 0, scale = 0;
+    integrate(a, lc, s, [&](const StepOutput& o) {
+      ASSERT_NE(o.gearbox_torque, nullptr);
+      const double phi = p0 + p2 * o.t * o.t - p0 * std::cos(w * o.t), T = -n * k * phi;
+      scale = std::max(scale, std::fabs(T));
+      eT = std::max(eT, std::fabs(o.gearbox_torque[0] - T));
+      eD = std::max(eD, std::fabs(o.drive_torque[0] - (J1 * wdot + T)));
+    });
+    err_T.push_back(eT / scale);
+    err_D.push_back(eD / scale);
+  }
+  for (std::size_t i = 1; i < err_T.size(); ++i) {
+    EXPECT_NEAR(err_T[i - 1] / err_T[i], 4.0, 0.3) << "mesh torque, refinement " << i;
+    EXPECT_NEAR(err_D[i - 1] / err_D[i], 4.0, 0.3) << "drive torque, refinement " << i;
+  }
+  EXPECT_LT(err_T.back(), 1e-2);
+  if (world_rank() == 0)
+    std::printf("[ rampup ] geared ramp: mesh torque errors %.2e %.2e %.2e, drive %.2e %.2e %.2e\n", err_T[0], err_T[1],
+                err_T[2], err_D[0], err_D[1], err_D[2]);
+  expect_same_on_ranks(err_T.back(), "geared ramp");
+  // Torsion is uncoupled from the lateral model: the bearing loads are bitwise the same with it.
+  const Assembly chain = rotor_on_chain();
+  Torsion tc;
+  tc.drives = {{"d", 0, 0}};
+  tc.torques = {{"aero", 0, 3, 1e-3}};
+  const Assembly twisted(chain.rotors(), chain.stators(), chain.bearings(), tc);
+  IntegratorSettings s;
+  s.dt = 5e-5;
+  LoadCase lr;
+  lr.omega_max = 600;
+  lr.ramp_time = 0.02;
+  std::vector<double> f0, f1, dr;
+  integrate(chain, lr, s, [&](const StepOutput& o) { f0.insert(f0.end(), o.force, o.force + 4); });
+  integrate(twisted, lr, s, [&](const StepOutput& o) {
+    f1.insert(f1.end(), o.force, o.force + 4);
+    dr.push_back(o.drive_torque[0]);
+  });
+  EXPECT_EQ(f0, f1);
+  EXPECT_GT(std::fabs(dr.back()), 0.0);
+}
+
+TEST(RampupTorsion, BadTorsionGivesClearErrors) {
+  using test::expect_error_parts;
+  const RotorSpec lp = rigid_rotor("lp", 10, 0.8, 1.0), fan = rigid_rotor("fan", 40, 6.0, 1.0 / 3.0);
+  Torsion t;
+  t.torques = {{"aero", 1, 0, 0.02}};
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"rotor 'lp'", "not driven"}, "no drive");
+  t.drives = {{"turbine", 0, 0}};
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"rotor 'fan'", "not driven"}, "fan not geared");
+  t.gearboxes = {{"pgb", 0, 0, 1, 0, 2.5, 1e5, 0.0}};
+  expect_error_parts(
+      [&] {
+        Assembly({lp, fan}, {}, {}, t);
+      },
+      {"gearbox 'pgb'", "ratio 2.5", "speed ratios agree"}, "ratio mismatch");
+  t.gearboxes[0].ratio = 3.0;
+  t.gearboxes[0].k = 0.0;
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"gearbox 'pgb'", "mesh stiffness", "> 0"}, "k = 0");
+  t.gearboxes[0].k = 1e5;
+  t.drives.push_back({"again", 0, 0});
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"drive 'again'", "driven twice"}, "drive twice");
+  t.drives.pop_back();
+  t.torques[0].coefficient = -1;
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"torque 'aero'", ">= 0"}, "negative torque");
+  t.torques[0].coefficient = 0.02;
+  t.torques[0].station = 2;
+  expect_error_parts([&] { Assembly({lp, fan}, {}, {}, t); }, {"torque 'aero'", "station 2"}, "torque station");
+  t.torques[0].station = 0;
+  // A massless free twist DOF: a shaft without density and no disk at its far end.
+  RotorSpec ml;
+  ml.name = "ml";
+  ml.z = {0.0, 0.5};
+  ml.sections = {{0.05, 0.0, Material{2.1e11, 0.3, 0.0}}};
+  ml.disks = {{"d", 0, 1.0, 0.1, 0.05}};
+  Torsion tm;
+  tm.drives = {{"m", 0, 0}};
+  const Assembly am({ml}, {}, {Bearing{"b", 0, 1, -1, -1, 1e6, 1e6, 0, 0, {}}}, tm);
+  LoadCase lc;
+  lc.omega_max = 100;
+  lc.ramp_time = 1;
+  IntegratorSettings s;
+  s.dt = 1e-3;
+  s.t_final = 0.01;
+  expect_error_parts([&] { integrate(am, lc, s, nullptr); }, {"torsional mass matrix is singular"}, "massless twist");
+}

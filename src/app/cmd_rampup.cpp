@@ -4,6 +4,7 @@
 // reads and checks them and builds the model (small), rank 0 integrates and writes /rampup.
 #include <petscsys.h>
 
+#include <cstdio>
 #include <string>
 
 #include "app/common.hpp"
@@ -33,7 +34,7 @@ void run_rampup(MPI_Comm comm) {
   rampup::Engine e = rampup::build_engine(comm, o, lc.omega_max);
   const rampup::Assembly a = [&] {
     StageTimer t(comm, "Assembly");
-    return rampup::Assembly(e.rotors, e.stators, e.bearings);
+    return rampup::Assembly(e.rotors, e.stators, e.bearings, e.torsion);
   }();
   print0(comm,
          "morse rampup: %zu rotor(s), %zu stator(s), %zu bearing(s); %d DOFs (%d stator modes + %d "
@@ -46,6 +47,12 @@ void run_rampup(MPI_Comm comm) {
            "DOFs)%s\n",
            sm.name.c_str(), sm.n_modes, sm.f_cut_hz, sm.n_total, sm.clamped_nodes.size(), sm.dof_node.size(),
            sm.n_modes ? cat(", ", sm.omega.front() / kTwoPi, "..", sm.omega.back() / kTwoPi, " Hz").c_str() : "");
+  }
+  if (a.n_torsion() > 0) {
+    const std::vector<double> wt = a.torsion_frequencies();
+    print0(comm, "  torsion: %zu drive(s), %zu gearbox(es), %zu torque(s); %zu free twists, lowest %s Hz\n",
+           e.torsion.drives.size(), e.torsion.gearboxes.size(), e.torsion.torques.size(), a.free_twists().size(),
+           wt.empty() ? "-" : cat(wt.front() / kTwoPi).c_str());
   }
   print0(comm, "  %s to %.1f rpm in %g s, dt = %g s (%s%s)\n", o.constant ? "constant speed" : "ramp", o.rpm_max,
          o.constant ? o.t_final : o.ramp_time, o.dt, o.alpha == 0 ? "Newmark average acceleration" : "HHT-alpha",
@@ -69,6 +76,17 @@ void run_rampup(MPI_Comm comm) {
   for (const auto& w : st.warnings) print0(comm, "morse: warning: %s\n", w.c_str());
   print0(comm, "  %ld steps in %.3f s (%.2f us per step)\n", st.steps, st.seconds,
          st.steps ? 1e6 * st.seconds / st.steps : 0.0);
+  if (rank == 0 && h.n_out() > 0) {
+    const std::size_t last = h.n_out() - 1;
+    for (int k = 0; k < h.n_drives; ++k)
+      std::printf("  drive %s: torque %.6g N m at the end (%.6g kW)\n", e.torsion.drives[k].name.c_str(),
+                  h.drive_torque[last * h.n_drives + k],
+                  1e-3 * h.drive_torque[last * h.n_drives + k] * h.omega[last] *
+                      e.rotors[e.torsion.drives[k].rotor].speed_ratio);
+    for (int k = 0; k < h.n_gearboxes; ++k)
+      std::printf("  gearbox %s: mesh torque %.6g N m at the end\n", e.torsion.gearboxes[k].name.c_str(),
+                  h.gearbox_torque[last * h.n_gearboxes + k]);
+  }
 
   rampup::HistoryErrors he;
   if (!o.reference.empty()) {

@@ -132,8 +132,12 @@ double default_cut_hz(const std::vector<RotorSpec>& rotors, double omega_max, do
 
 // ------------------------------------------------------------------------------------------
 
-Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings)
-    : rotors_(std::move(rotors)), stators_(std::move(stators)), bearings_(std::move(bearings)) {
+Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings,
+                   Torsion torsion)
+    : rotors_(std::move(rotors)),
+      stators_(std::move(stators)),
+      bearings_(std::move(bearings)),
+      torsion_(std::move(torsion)) {
   for (const StatorModes& s : stators_) {
     MORSE_CHECK(s.omega.size() == static_cast<std::size_t>(s.n_modes) && s.damping.size() == s.omega.size() &&
                     s.phi.size() == s.dof_node.size() * s.omega.size() && s.dof_component.size() == s.dof_node.size(),
@@ -151,7 +155,8 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
     rotor_offset_.push_back(n_rotor_);
     n_rotor_ += rm.back().n;
   }
-  // Band of the rotor block (rotors are block-diagonal; bearings add to the diagonal only).
+  // Band of the rotor block (rotors are block-diagonal; bearings to a stator or the ground add to
+  // the diagonal only, intershaft bearings couple two rotors' stations).
   bw_ = 0;
   for (const RotorMatrices& m : rm)
     for (int i = 0; i < m.n; ++i)
@@ -159,6 +164,22 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
         const std::size_t g = static_cast<std::size_t>(i) * m.n + j;
         if (m.M[g] != 0.0 || m.K[g] != 0.0 || m.G[g] != 0.0 || m.C[g] != 0.0) bw_ = std::max(bw_, std::abs(i - j));
       }
+  auto station_ok = [&](int rotor, int station) {
+    return rotor >= 0 && rotor < static_cast<int>(rotors_.size()) && station >= 0 &&
+           station < static_cast<int>(rotors_[rotor].z.size());
+  };
+  for (const Bearing& b : bearings_) {
+    if (b.rotor2 < 0) continue;
+    const std::string who = cat("bearing '", b.name, "': ");
+    MORSE_CHECK(station_ok(b.rotor, b.station), who, "rotor ", b.rotor, " station ", b.station, " does not exist");
+    MORSE_CHECK(station_ok(b.rotor2, b.station2), who, "intershaft: rotor ", b.rotor2, " station ", b.station2,
+                " does not exist");
+    MORSE_CHECK(b.rotor2 != b.rotor, who, "an intershaft bearing joins two different rotors (both are '",
+                rotors_[b.rotor].name, "')");
+    MORSE_CHECK(b.stator == -1 && b.nodes.empty() && b.node == -1, who,
+                "an intershaft bearing has no stator and no housing nodes");
+    bw_ = std::max(bw_, std::abs(rotor_offset_[b.rotor] + 4 * b.station - rotor_offset_[b.rotor2] - 4 * b.station2));
+  }
   const std::size_t ld = 2 * static_cast<std::size_t>(bw_) + 1;
   for (auto* b : {&bM_, &bC_, &bK_, &bG_}) b->assign(ld * n_rotor_, 0.0);
   for (std::size_t r = 0; r < rm.size(); ++r) {
@@ -197,7 +218,17 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
       c.rotor_index = rotor_offset_[b.rotor] + 4 * b.station + d;
       c.k = d == 0 ? b.kxx : b.kyy;
       c.c = d == 0 ? b.cxx : b.cyy;
-      if (b.stator >= 0) {
+      if (b.rotor2 >= 0) {
+        // Intershaft: the spring and damper join two rotor DOFs, inside the band.
+        c.rotor_index2 = rotor_offset_[b.rotor2] + 4 * b.station2 + d;
+        const int i = c.rotor_index, j = c.rotor_index2;
+        for (auto [band, v] : {std::pair<std::vector<double>*, double>{&bK_, c.k}, {&bC_, c.c}}) {
+          (*band)[static_cast<std::size_t>(bw_) + ld * i] += v;
+          (*band)[static_cast<std::size_t>(bw_) + ld * j] += v;
+          (*band)[static_cast<std::size_t>(bw_ + i - j) + ld * j] -= v;
+          (*band)[static_cast<std::size_t>(bw_ + j - i) + ld * i] -= v;
+        }
+      } else if (b.stator >= 0) {
         const StatorModes& s = stators_[b.stator];
         const std::vector<std::int64_t> nodes = b.nodes.empty() ? std::vector<std::int64_t>{b.node} : b.nodes;
         c.stator_offset = stator_offset_[b.stator];
@@ -222,6 +253,138 @@ Assembly::Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stato
       couplings_.push_back(std::move(c));
     }
   }
+  build_torsion();
+}
+
+void Assembly::build_torsion() {
+  if (torsion_.empty()) return;
+  const int nr = static_cast<int>(rotors_.size());
+  for (int r = 0; r < nr; ++r) {
+    twist_offset_.push_back(n_twist_);
+    n_twist_ += static_cast<int>(rotors_[r].z.size());
+    twist_rotor_.insert(twist_rotor_.end(), rotors_[r].z.size(), r);
+  }
+  const std::size_t n = static_cast<std::size_t>(n_twist_);
+  for (auto* m : {&tM_, &tC_, &tK_}) m->assign(n * n, 0.0);
+  for (int r = 0; r < nr; ++r) {
+    const RotorMatrices t = torsion_matrices(rotors_[r]);
+    const std::size_t o = static_cast<std::size_t>(twist_offset_[r]), m = static_cast<std::size_t>(t.n);
+    for (std::size_t i = 0; i < m; ++i)
+      for (std::size_t j = 0; j < m; ++j) {
+        tM_[(o + i) * n + o + j] = t.M[i * m + j];
+        tC_[(o + i) * n + o + j] = t.C[i * m + j];
+        tK_[(o + i) * n + o + j] = t.K[i * m + j];
+      }
+  }
+  auto check_station = [&](const std::string& who, int rotor, int station) {
+    MORSE_CHECK(rotor >= 0 && rotor < nr, who, "rotor index ", rotor, " is not in 0..", nr - 1);
+    const int ns = static_cast<int>(rotors_[rotor].z.size());
+    MORSE_CHECK(station >= 0 && station < ns, who, "station ", station, " is not in 0..", ns - 1, " of rotor '",
+                rotors_[rotor].name, "'");
+  };
+  // Rotors joined by gearboxes form groups; each group needs a drive.
+  std::vector<int> group(nr);
+  for (int r = 0; r < nr; ++r) group[r] = r;
+  auto root = [&](int r) {
+    while (group[r] != r) r = group[r];
+    return r;
+  };
+  for (const Gearbox& g : torsion_.gearboxes) {
+    const std::string who = cat("gearbox '", g.name, "': ");
+    check_station(who + "input: ", g.input, g.input_station);
+    check_station(who + "output: ", g.output, g.output_station);
+    MORSE_CHECK(g.input != g.output, who, "input and output are both on rotor '", rotors_[g.input].name, "'");
+    MORSE_CHECK(std::isfinite(g.ratio) && g.ratio != 0.0, who, "the ratio must be finite and nonzero, got ", g.ratio);
+    MORSE_CHECK(std::isfinite(g.k) && g.k > 0.0 && std::isfinite(g.c) && g.c >= 0.0, who,
+                "the mesh stiffness must be > 0 and the damping >= 0 (k ", g.k, " N m/rad, c ", g.c, " N m s/rad)");
+    const double si = rotors_[g.input].speed_ratio, so = rotors_[g.output].speed_ratio;
+    MORSE_CHECK(std::fabs(si - g.ratio * so) <= 1e-9 * std::max(std::fabs(si), std::fabs(g.ratio * so)), who, "ratio ",
+                g.ratio, ", but rotor '", rotors_[g.input].name, "' turns at ", si, " and '", rotors_[g.output].name,
+                "' at ", so, " times the driving speed (their ratio is ", si / so,
+                "): make the speed ratios agree with the gearbox");
+    const std::size_t i = static_cast<std::size_t>(twist_dof(g.input, g.input_station)),
+                      j = static_cast<std::size_t>(twist_dof(g.output, g.output_station));
+    for (auto [m, v] : {std::pair<std::vector<double>*, double>{&tK_, g.k}, {&tC_, g.c}}) {
+      (*m)[i * n + i] += v;
+      (*m)[j * n + j] += g.ratio * g.ratio * v;
+      (*m)[i * n + j] -= g.ratio * v;
+      (*m)[j * n + i] -= g.ratio * v;
+    }
+    group[root(g.input)] = root(g.output);
+  }
+  for (const Drive& d : torsion_.drives) {
+    const std::string who = cat("drive '", d.name, "': ");
+    check_station(who, d.rotor, d.station);
+    const int dof = twist_dof(d.rotor, d.station);
+    MORSE_CHECK(std::find(driven_.begin(), driven_.end(), dof) == driven_.end(), who, "station ", d.station,
+                " of rotor '", rotors_[d.rotor].name, "' is driven twice");
+    driven_.push_back(dof);
+  }
+  std::sort(driven_.begin(), driven_.end());
+  for (const Torque& t : torsion_.torques) {
+    const std::string who = cat("torque '", t.name, "': ");
+    check_station(who, t.rotor, t.station);
+    MORSE_CHECK(std::isfinite(t.coefficient) && t.coefficient >= 0.0, who, "the coefficient must be >= 0, got ",
+                t.coefficient, " N m s^2");
+  }
+  for (int r = 0; r < nr; ++r) {
+    bool driven = false;
+    for (const Drive& d : torsion_.drives) driven = driven || root(d.rotor) == root(r);
+    MORSE_CHECK(driven, "rotor '", rotors_[r].name,
+                "' is not driven: with torsion (drives, gearboxes or torques) every rotor needs a drive, on itself "
+                "or through gearboxes (-rampup_drives, -rampup_gearboxes), or its rigid rotation would be free");
+  }
+  for (int i = 0; i < n_twist_; ++i)
+    if (!std::binary_search(driven_.begin(), driven_.end(), i)) free_.push_back(i);
+}
+
+void Assembly::torsion_load(double omega, double omega_dot, double* f) const {
+  const std::size_t n = static_cast<std::size_t>(n_twist_);
+  for (std::size_t i = 0; i < n; ++i) {
+    double s = 0.0;
+    for (std::size_t j = 0; j < n; ++j) s += tM_[i * n + j] * rotors_[twist_rotor_[j]].speed_ratio;
+    f[i] = -s * omega_dot;
+  }
+  for (const Torque& t : torsion_.torques) {
+    const double w = rotors_[t.rotor].speed_ratio * omega;
+    f[twist_dof(t.rotor, t.station)] -= t.coefficient * w * std::fabs(w);
+  }
+}
+
+void Assembly::torsion_state(const double* phi, const double* dphi, const double* ddphi, double omega, double omega_dot,
+                             double* drive_torque, double* gearbox_torque) const {
+  const std::size_t n = static_cast<std::size_t>(n_twist_);
+  if (drive_torque) {
+    std::vector<double> f(n);
+    torsion_load(omega, omega_dot, f.data());
+    for (std::size_t k = 0; k < torsion_.drives.size(); ++k) {
+      const std::size_t i = static_cast<std::size_t>(twist_dof(torsion_.drives[k].rotor, torsion_.drives[k].station));
+      double s = -f[i];
+      for (std::size_t j = 0; j < n; ++j)
+        s += tM_[i * n + j] * ddphi[j] + tC_[i * n + j] * dphi[j] + tK_[i * n + j] * phi[j];
+      drive_torque[k] = s;
+    }
+  }
+  if (gearbox_torque)
+    for (std::size_t k = 0; k < torsion_.gearboxes.size(); ++k) {
+      const Gearbox& g = torsion_.gearboxes[k];
+      const int i = twist_dof(g.input, g.input_station), j = twist_dof(g.output, g.output_station);
+      gearbox_torque[k] = g.k * (phi[i] - g.ratio * phi[j]) + g.c * (dphi[i] - g.ratio * dphi[j]);
+    }
+}
+
+std::vector<double> Assembly::torsion_frequencies() const {
+  const std::size_t nf = free_.size(), n = static_cast<std::size_t>(n_twist_);
+  if (nf == 0) return {};
+  std::vector<double> K(nf * nf), M(nf * nf);
+  for (std::size_t a = 0; a < nf; ++a)
+    for (std::size_t b = 0; b < nf; ++b) {
+      K[a * nf + b] = tK_[free_[a] * n + free_[b]];
+      M[a * nf + b] = tM_[free_[a] * n + free_[b]];
+    }
+  std::vector<double> w = eigen::dense_eigenvalues(static_cast<int>(nf), K, M);
+  for (double& v : w) v = std::sqrt(std::max(v, 0.0));
+  return w;
 }
 
 void Assembly::apply(double cM, double cD, double cK, double omega, const double* x, double* y) const {
@@ -242,7 +405,7 @@ void Assembly::apply(double cM, double cD, double cK, double omega, const double
   }
   for (const Coupling& c : couplings_) {
     const double a = cK * c.k + cD * c.c;
-    if (a == 0.0) continue;
+    if (a == 0.0 || c.rotor_index2 >= 0) continue;  // intershaft: in the band
     double d = xr[c.rotor_index];
     const double* xs = c.stator_offset >= 0 ? x + c.stator_offset : nullptr;
     for (int m = 0; m < c.n_modes; ++m) d -= c.phi[m] * xs[m];
@@ -282,6 +445,7 @@ AssembledMatrices Assembly::dense() const {
       A.G[g] = bG_[b];
     }
   for (const Coupling& c : couplings_) {
+    if (c.rotor_index2 >= 0) continue;  // intershaft: in the band
     const std::size_t r = o + c.rotor_index;
     for (auto [mat, a] : {std::pair<std::vector<double>*, double>{&A.K, c.k}, {&A.C, c.c}}) {
       std::vector<double>& X = *mat;
@@ -312,6 +476,11 @@ void Assembly::bearing_state(const double* x, const double* v, double* force, do
     const Coupling& c = couplings_[j];
     const std::size_t r = static_cast<std::size_t>(n_stator_ + c.rotor_index);
     double us = 0.0, vs = 0.0;
+    if (c.rotor_index2 >= 0) {
+      const std::size_t r2 = static_cast<std::size_t>(n_stator_ + c.rotor_index2);
+      us = x[r2];
+      vs = v ? v[r2] : 0.0;
+    }
     for (int m = 0; m < c.n_modes; ++m) {
       us += c.phi[m] * x[c.stator_offset + m];
       if (v) vs += c.phi[m] * v[c.stator_offset + m];

@@ -67,7 +67,7 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
   auto fail = [&](const std::string& msg) {
     if (o->error.empty()) o->error = msg;
   };
-  std::vector<std::string> stators, rotors, bearings;
+  std::vector<std::string> stators, rotors, bearings, drives, gearboxes, torques;
   PetscOptionsBegin(comm, nullptr, "morse rampup options (run/engine.opts documents every one)", "");
   PetscCall(get_string(PetscOptionsObject, "-out", "Output HDF5 file", &o->out, &set));
   PetscCall(get_list(PetscOptionsObject, "-rampup_stators",
@@ -75,6 +75,14 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
   PetscCall(get_list(PetscOptionsObject, "-rampup_rotors", "Rotors, by name (each: -rampup_rotor_<name>_*)", &rotors));
   PetscCall(get_list(PetscOptionsObject, "-rampup_bearings", "Bearings, by name (each: -rampup_bearing_<name>_*)",
                      &bearings));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_drives",
+                     "Stations where the speed law is imposed, by name (each: -rampup_drive_<name>_*); with "
+                     "drives, gearboxes or torques the rotors' torsion is modelled",
+                     &drives));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_gearboxes", "Gear stages, by name (each: -rampup_gearbox_<name>_*)",
+                     &gearboxes));
+  PetscCall(get_list(PetscOptionsObject, "-rampup_torques",
+                     "Resistive torques -c Omega_r |Omega_r|, by name (each: -rampup_torque_<name>_*)", &torques));
   for (const auto& s : stators) {
     StatorOptions so;
     so.name = s;
@@ -159,6 +167,13 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
         MorseOptionsReal((p + "z").c_str(), "Axial position [m] (a station of the rotor)", "", bo.z, &bo.z, &set));
     if (!set) fail(cat("bearing ", b, ": give its position with ", p, "z"));
     PetscCall(get_string(PetscOptionsObject, p + "stator", "Stator it sits in, or ground", &bo.stator, &set));
+    const bool stator_set = set;
+    PetscCall(get_string(PetscOptionsObject, p + "rotor2", "Intershaft bearing: the other rotor", &bo.rotor2, &set));
+    if (set && stator_set) fail(cat("bearing ", b, ": give ", p, "stator or ", p, "rotor2 (intershaft), not both"));
+    PetscCall(MorseOptionsReal((p + "z2").c_str(), "Intershaft bearing: axial position on the other rotor [m]", "",
+                               bo.z2, &bo.z2, &set));
+    if (set != !bo.rotor2.empty())
+      fail(cat("bearing ", b, ": an intershaft bearing needs both ", p, "rotor2 and ", p, "z2"));
     PetscCall(get_list(PetscOptionsObject, p + "nodes",
                        "Housing nodes of the stator (ids or node sets; several: their mean)", &bo.nodes));
     PetscCall(get_reals(PetscOptionsObject, p + "k", "Stiffness kxx[,kyy] [N/m]", &bo.k, &set));
@@ -166,6 +181,55 @@ PetscErrorCode RampupOptions::set_from_options(MPI_Comm comm) {
     PetscCall(get_reals(PetscOptionsObject, p + "c", "Damping cxx[,cyy] [N s/m]", &bo.c, &set));
     if (bo.k.size() > 2 || bo.c.size() > 2) fail(cat("bearing ", b, ": ", p, "k and ", p, "c take 1 or 2 values"));
     o->bearings.push_back(bo);
+  }
+  for (const auto& d : drives) {
+    DriveOptions dr;
+    dr.name = d;
+    const std::string p = "-rampup_drive_" + d + "_";
+    PetscCall(get_string(PetscOptionsObject, p + "rotor", "Rotor whose station is driven", &dr.rotor, &set));
+    if (!set) fail(cat("drive ", d, ": give its rotor with ", p, "rotor"));
+    PetscCall(MorseOptionsReal((p + "z").c_str(), "Driven station [m]", "", dr.z, &dr.z, &set));
+    if (!set) fail(cat("drive ", d, ": give its station with ", p, "z"));
+    o->drives.push_back(dr);
+  }
+  for (const auto& g : gearboxes) {
+    GearboxOptions go;
+    go.name = g;
+    const std::string p = "-rampup_gearbox_" + g + "_";
+    const char* need[] = {"input", "input_z", "output", "output_z", "ratio", "k"};
+    bool have[6] = {};
+    PetscCall(get_string(PetscOptionsObject, p + "input", "Input rotor (the faster side: the sun)", &go.input, &set));
+    have[0] = set;
+    PetscCall(MorseOptionsReal((p + "input_z").c_str(), "Input station [m]", "", go.input_z, &go.input_z, &set));
+    have[1] = set;
+    PetscCall(get_string(PetscOptionsObject, p + "output", "Output rotor (the carrier)", &go.output, &set));
+    have[2] = set;
+    PetscCall(MorseOptionsReal((p + "output_z").c_str(), "Output station [m]", "", go.output_z, &go.output_z, &set));
+    have[3] = set;
+    PetscCall(MorseOptionsReal((p + "ratio").c_str(), "Speed ratio input / output", "", go.ratio, &go.ratio, &set));
+    have[4] = set;
+    PetscCall(MorseOptionsReal((p + "k").c_str(), "Mesh torsional stiffness at the input, output held [N m/rad]", "",
+                               go.k, &go.k, &set));
+    have[5] = set;
+    PetscCall(MorseOptionsReal((p + "c").c_str(), "Mesh torsional damping at the input [N m s/rad]", "", go.c, &go.c,
+                               nullptr));
+    for (int k = 0; k < 6; ++k)
+      if (!have[k]) fail(cat("gearbox ", g, ": give ", p, need[k]));
+    o->gearboxes.push_back(go);
+  }
+  for (const auto& t : torques) {
+    TorqueOptions to;
+    to.name = t;
+    const std::string p = "-rampup_torque_" + t + "_";
+    PetscCall(get_string(PetscOptionsObject, p + "rotor", "Rotor it acts on", &to.rotor, &set));
+    if (!set) fail(cat("torque ", t, ": give its rotor with ", p, "rotor"));
+    PetscCall(MorseOptionsReal((p + "z").c_str(), "Station [m]", "", to.z, &to.z, &set));
+    if (!set) fail(cat("torque ", t, ": give its station with ", p, "z"));
+    PetscCall(MorseOptionsReal((p + "coefficient").c_str(),
+                               "c of the resistive torque -c Omega_r |Omega_r| [N m s^2] (Omega_r: the rotor's spin)",
+                               "", to.coefficient, &to.coefficient, &set));
+    if (!set) fail(cat("torque ", t, ": give its coefficient with ", p, "coefficient"));
+    o->torques.push_back(to);
   }
   PetscCall(MorseOptionsReal("-rampup_rpm_max", "Top driving speed [rpm]", "", o->rpm_max, &o->rpm_max, nullptr));
   PetscCall(MorseOptionsReal("-rampup_ramp_time", "Ramp duration 0 -> top speed [s]", "", o->ramp_time, &o->ramp_time,
@@ -289,6 +353,11 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
       e.stator_n_b.push_back(se.n_b);
     }
   }
+  auto rotor_index = [&](const std::string& name, const std::string& who) {
+    auto it = std::find_if(e.rotors.begin(), e.rotors.end(), [&](const auto& r) { return r.name == name; });
+    MORSE_CHECK(it != e.rotors.end(), who, " ", name, ": no such rotor (-rampup_rotors)");
+    return static_cast<int>(it - e.rotors.begin());
+  };
   for (const auto& bo : o.bearings) {
     Bearing b;
     b.name = bo.name;
@@ -297,7 +366,13 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
     MORSE_CHECK(rit != e.rotors.end(), p, "rotor ", bo.rotor, ": no such rotor (-rampup_rotors)");
     b.rotor = static_cast<int>(rit - e.rotors.begin());
     b.station = station_of(*rit, bo.z, p + "z:");
-    if (bo.stator == "ground") {
+    if (!bo.rotor2.empty()) {
+      const int r2 = rotor_index(bo.rotor2, p + "rotor2");
+      MORSE_CHECK(r2 != b.rotor, p, "rotor2 ", bo.rotor2, ": an intershaft bearing joins two different rotors");
+      MORSE_CHECK(bo.nodes.empty(), p, "nodes: an intershaft bearing has no housing nodes");
+      b.rotor2 = r2;
+      b.station2 = station_of(e.rotors[r2], bo.z2, p + "z2:");
+    } else if (bo.stator == "ground") {
       b.stator = -1;
       MORSE_CHECK(bo.nodes.empty(), p, "nodes: a bearing on the ground has no housing nodes");
     } else {
@@ -312,6 +387,29 @@ Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max) {
     b.cxx = bo.c.empty() ? 0.0 : bo.c[0];
     b.cyy = bo.c.size() > 1 ? bo.c[1] : b.cxx;
     e.bearings.push_back(std::move(b));
+  }
+  for (const auto& d : o.drives) {
+    const std::string p = "-rampup_drive_" + d.name + "_";
+    const int r = rotor_index(d.rotor, p + "rotor");
+    e.torsion.drives.push_back({d.name, r, station_of(e.rotors[r], d.z, p + "z:")});
+  }
+  for (const auto& g : o.gearboxes) {
+    const std::string p = "-rampup_gearbox_" + g.name + "_";
+    Gearbox gb;
+    gb.name = g.name;
+    gb.input = rotor_index(g.input, p + "input");
+    gb.input_station = station_of(e.rotors[gb.input], g.input_z, p + "input_z:");
+    gb.output = rotor_index(g.output, p + "output");
+    gb.output_station = station_of(e.rotors[gb.output], g.output_z, p + "output_z:");
+    gb.ratio = g.ratio;
+    gb.k = g.k;
+    gb.c = g.c;
+    e.torsion.gearboxes.push_back(gb);
+  }
+  for (const auto& t : o.torques) {
+    const std::string p = "-rampup_torque_" + t.name + "_";
+    const int r = rotor_index(t.rotor, p + "rotor");
+    e.torsion.torques.push_back({t.name, r, station_of(e.rotors[r], t.z, p + "z:"), t.coefficient});
   }
   return e;
 }
@@ -332,6 +430,21 @@ void write_run(io::H5Output& out, const std::string& group, const RampupOptions&
   out.attribute_int(group, "n_dofs", a.n());
   out.attribute_int(group, "n_stator_modes", a.n_stator());
   out.attribute_int(group, "n_rotor_dofs", a.n_rotor());
+  if (a.n_torsion() > 0) {
+    auto names_of = [](const auto& v) {
+      std::string s;
+      for (const auto& x : v) s += (s.empty() ? "" : ",") + x.name;
+      return s;
+    };
+    out.attribute(group, "drives", names_of(e.torsion.drives));
+    out.attribute(group, "gearboxes", names_of(e.torsion.gearboxes));
+    out.attribute(group, "torques", names_of(e.torsion.torques));
+    std::vector<double> f = a.torsion_frequencies();
+    for (double& v : f) v /= 2.0 * M_PI;
+    out.write(group + "/torsion_frequencies", f);
+    out.attribute(group + "/torsion_frequencies", "description",
+                  "natural frequencies of the torsion with the drives held [Hz]");
+  }
   for (std::size_t s = 0; s < e.stators.size(); ++s)
     write_stator(out, group, e.stators[s], o.stators[s].file, e.stator_n_b[s]);
   if (o.write_matrices) write_matrices(out, group, a.dense());

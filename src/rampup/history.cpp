@@ -14,6 +14,10 @@ History record(const Assembly& a, const LoadCase& load, const IntegratorSettings
                const std::function<void(double)>& progress) {
   History h;
   h.n_bearings = static_cast<int>(a.bearings().size());
+  if (a.n_torsion() > 0) {
+    h.n_drives = static_cast<int>(a.torsion().drives.size());
+    h.n_gearboxes = static_cast<int>(a.torsion().gearboxes.size());
+  }
   const std::size_t nb2 = 2 * a.bearings().size();
   const double t_end = end_time(load, s);
   auto cb = [&](const StepOutput& o) {
@@ -22,6 +26,9 @@ History record(const Assembly& a, const LoadCase& load, const IntegratorSettings
     h.force.insert(h.force.end(), o.force, o.force + nb2);
     h.rotor_disp.insert(h.rotor_disp.end(), o.rotor_disp, o.rotor_disp + nb2);
     h.stator_disp.insert(h.stator_disp.end(), o.stator_disp, o.stator_disp + nb2);
+    if (o.drive_torque) h.drive_torque.insert(h.drive_torque.end(), o.drive_torque, o.drive_torque + h.n_drives);
+    if (o.gearbox_torque)
+      h.gearbox_torque.insert(h.gearbox_torque.end(), o.gearbox_torque, o.gearbox_torque + h.n_gearboxes);
     if (progress && t_end > 0.0) progress(std::min(1.0, o.t / t_end));
   };
   IntegratorStats st = integrate(a, load, s, cb);
@@ -59,6 +66,17 @@ void write_history(io::H5Output& out, const std::string& group, const History& h
     out.write(group + "/" + sets[k].first, *sets[k].second, {nt, nb, 2});
     out.attribute(group + "/" + sets[k].first, "description", what[k]);
   }
+  if (h.n_drives > 0) {
+    out.write(group + "/drive_torque", h.drive_torque, {nt, static_cast<hsize_t>(h.n_drives)});
+    out.attribute(group + "/drive_torque", "description",
+                  "[time][drive] torque the drive applies about +z to hold its imposed speed [N m]");
+  }
+  if (h.n_gearboxes > 0) {
+    out.write(group + "/gearbox_torque", h.gearbox_torque, {nt, static_cast<hsize_t>(h.n_gearboxes)});
+    out.attribute(group + "/gearbox_torque", "description",
+                  "[time][gearbox] mesh torque T = k (phi_in - ratio phi_out) + c (...)' at the input [N m] "
+                  "(the input gets -T, the output +ratio T)");
+  }
 }
 
 History read_history(const std::string& file, const std::string& group) {
@@ -76,6 +94,16 @@ History read_history(const std::string& file, const std::string& group) {
                 " must be [time][bearing][2]");
     if (k == 0) h.n_bearings = static_cast<int>(d[1]);
     MORSE_CHECK(static_cast<int>(d[1]) == h.n_bearings, file, ": ", group, ": the bearing datasets disagree in size");
+  }
+  const std::pair<std::vector<double>*, int*> torques[] = {{&h.drive_torque, &h.n_drives},
+                                                           {&h.gearbox_torque, &h.n_gearboxes}};
+  const char* tnames[] = {"drive_torque", "gearbox_torque"};
+  for (int k = 0; k < 2; ++k) {
+    if (!io::has_object(file, group + "/" + tnames[k])) continue;
+    MORSE_CHECK(io::read_doubles(file, group + "/" + tnames[k], torques[k].first, &d, &err), err);
+    MORSE_CHECK(d.size() == 2 && d[0] == h.t.size(), file, ": ", group, "/", tnames[k], " must be [time][",
+                k == 0 ? "drive" : "gearbox", "]");
+    *torques[k].second = static_cast<int>(d[1]);
   }
   return h;
 }

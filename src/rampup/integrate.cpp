@@ -94,7 +94,8 @@ class CondensedSolver : public StepSolver {
         MORSE_CHECK(d != 0.0, "rampup: stator mode ", i, " has a zero effective stiffness");
         dinv_[i] = 1.0 / d;
       }
-      for (int j = 0; j < m_; ++j) kb_[j] = cK * cp[j].k + cD * cp[j].c;
+      // Intershaft bearings are in the rotor band: no condensed coupling.
+      for (int j = 0; j < m_; ++j) kb_[j] = cp[j].rotor_index2 >= 0 ? 0.0 : cK * cp[j].k + cD * cp[j].c;
       for (int j = 0; j < m_; ++j)
         for (int l = 0; l < m_; ++l) {
           double s = 0.0;
@@ -191,6 +192,106 @@ class CondensedSolver : public StepSolver {
   std::vector<PetscBLASInt> piv_, pivy_;
 };
 
+// The twist of the free stations (docs/rampup-theory.md §7): M phi'' + C phi' + K phi = f(t) on
+// the free DOFs (the driven ones are held at 0), by the lateral step's scheme; the effective
+// matrix is constant, so it is factored once.
+class TorsionStepper {
+ public:
+  TorsionStepper(const Assembly& a, double a0, double a1, double al)
+      : a_(a), n_(a.n_torsion()), free_(a.free_twists()), nf_(static_cast<int>(free_.size())) {
+    const std::size_t n = static_cast<std::size_t>(n_), nf = static_cast<std::size_t>(nf_);
+    for (auto* v : {&phi_, &dphi_, &ddphi_, &f0_, &f1_}) v->assign(n, 0.0);
+    M_.resize(nf * nf);
+    C_.resize(nf * nf);
+    K_.resize(nf * nf);
+    for (std::size_t p = 0; p < nf; ++p)
+      for (std::size_t q = 0; q < nf; ++q) {
+        const std::size_t g = static_cast<std::size_t>(free_[p]) * n + static_cast<std::size_t>(free_[q]);
+        M_[p * nf + q] = a.torsion_M()[g];
+        C_[p * nf + q] = a.torsion_C()[g];
+        K_[p * nf + q] = a.torsion_K()[g];
+      }
+    S_.resize(nf * nf);
+    piv_.resize(nf);
+    Sm_ = M_;
+    pivm_.resize(nf);
+    for (std::size_t g = 0; g < nf * nf; ++g) S_[g] = a0 * M_[g] + (1.0 + al) * (a1 * C_[g] + K_[g]);
+    PetscBLASInt m = nf_, info = 0;
+    if (nf_ == 0) return;
+    LAPACKgetrf_(&m, &m, Sm_.data(), &m, pivm_.data(), &info);
+    MORSE_CHECK(info == 0,
+                "rampup: the torsional mass matrix is singular (a twist DOF without inertia: a massless "
+                "shaft station with no disk; LAPACK getrf info = ",
+                info, ")");
+    LAPACKgetrf_(&m, &m, S_.data(), &m, piv_.data(), &info);
+    MORSE_CHECK(info == 0, "rampup: the torsional effective matrix is singular (LAPACK getrf info = ", info, ")");
+  }
+  // Initial acceleration at rest: M phi'' = f(0).
+  void start(double omega, double omega_dot) {
+    a_.torsion_load(omega, omega_dot, f0_.data());
+    std::vector<double> b = gather(f0_);
+    solve(Sm_, pivm_, b);
+    scatter(b, &ddphi_);
+  }
+  // One step to omega1, omega_dot1 with the scheme's coefficients.
+  void step(double omega1, double omega_dot1, double h, double a0, double a1, double a2, double a3, double a4,
+            double a5, double gam, double al) {
+    a_.torsion_load(omega1, omega_dot1, f1_.data());
+    const std::size_t nf = static_cast<std::size_t>(nf_);
+    const std::vector<double> x = gather(phi_), v = gather(dphi_), acc = gather(ddphi_), f0 = gather(f0_),
+                              f1 = gather(f1_);
+    std::vector<double> rhs(nf), wm(nf), wc(nf);
+    for (std::size_t p = 0; p < nf; ++p) {
+      wm[p] = a0 * x[p] + a2 * v[p] + a3 * acc[p];
+      wc[p] = a1 * x[p] + a4 * v[p] + a5 * acc[p];
+    }
+    for (std::size_t p = 0; p < nf; ++p) {
+      double s = (1.0 + al) * f1[p] - al * f0[p];
+      for (std::size_t q = 0; q < nf; ++q) {
+        s += M_[p * nf + q] * wm[q] + (1.0 + al) * C_[p * nf + q] * wc[q];
+        if (al != 0.0) s += al * (C_[p * nf + q] * v[q] + K_[p * nf + q] * x[q]);
+      }
+      rhs[p] = s;
+    }
+    solve(S_, piv_, rhs);
+    for (std::size_t p = 0; p < nf; ++p) {
+      const std::size_t i = static_cast<std::size_t>(free_[p]);
+      const double an = a0 * (rhs[p] - x[p]) - a2 * v[p] - a3 * acc[p];
+      dphi_[i] += h * ((1.0 - gam) * acc[p] + gam * an);
+      ddphi_[i] = an;
+      phi_[i] = rhs[p];
+      MORSE_CHECK(std::isfinite(rhs[p]), "rampup: the torsional state is not finite");
+    }
+    f0_.swap(f1_);
+  }
+  void torques(double omega, double omega_dot, double* drive, double* gearbox) const {
+    a_.torsion_state(phi_.data(), dphi_.data(), ddphi_.data(), omega, omega_dot, drive, gearbox);
+  }
+
+ private:
+  std::vector<double> gather(const std::vector<double>& full) const {
+    std::vector<double> out(static_cast<std::size_t>(nf_));
+    for (int p = 0; p < nf_; ++p) out[p] = full[free_[p]];
+    return out;
+  }
+  void scatter(const std::vector<double>& part, std::vector<double>* full) const {
+    for (int p = 0; p < nf_; ++p) (*full)[free_[p]] = part[p];
+  }
+  void solve(const std::vector<double>& lu, const std::vector<PetscBLASInt>& piv, std::vector<double>& b) const {
+    if (nf_ == 0) return;
+    PetscBLASInt m = nf_, one = 1, info = 0;
+    // Row-major A is column-major A^T: solve with "T".
+    LAPACKgetrs_("T", &m, &one, const_cast<double*>(lu.data()), &m, const_cast<PetscBLASInt*>(piv.data()), b.data(), &m,
+                 &info);
+  }
+  const Assembly& a_;
+  int n_;
+  std::vector<int> free_;
+  int nf_;
+  std::vector<double> M_, C_, K_, S_, Sm_, phi_, dphi_, ddphi_, f0_, f1_;
+  std::vector<PetscBLASInt> piv_, pivm_;
+};
+
 }  // namespace
 
 IntegratorStats integrate(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
@@ -228,6 +329,10 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
     solver = std::make_unique<DenseSolver>(a);
   else
     solver = std::make_unique<CondensedSolver>(a);
+  std::unique_ptr<TorsionStepper> twist;
+  const std::size_t ndr = a.torsion().drives.size(), ngb = a.torsion().gearboxes.size();
+  std::vector<double> drive_torque(ndr), gearbox_torque(ngb);
+  if (a.n_torsion() > 0) twist = std::make_unique<TorsionStepper>(a, a0, a1, al);
   const auto start = std::chrono::steady_clock::now();
   // Initial acceleration: M a = f - (C + Omega G) v - K x.
   a.add_unbalance(load.speed(0.0), load.acceleration(0.0), load.angle(0.0), f0.data());
@@ -236,9 +341,15 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
   for (std::size_t i = 0; i < nn; ++i) rhs[i] = f0[i] - tmp[i] - w[i];
   solver->factor(1.0, 0.0, 0.0, 0.0);
   solver->solve(rhs.data(), acc.data());
+  if (twist) twist->start(load.speed(0.0), load.acceleration(0.0));
   auto emit = [&](long k, double t) {
     a.bearing_state(x.data(), v.data(), force.data(), rdisp.data(), sdisp.data());
     StepOutput o;
+    if (twist) {
+      twist->torques(load.speed(t), load.acceleration(t), drive_torque.data(), gearbox_torque.data());
+      o.drive_torque = drive_torque.data();
+      o.gearbox_torque = gearbox_torque.data();
+    }
     o.step = k;
     o.t = t;
     o.speed = load.speed(t);
@@ -281,6 +392,7 @@ IntegratorStats integrate(const Assembly& a, const LoadCase& load, const Integra
       finite = finite && std::isfinite(xn[i]);
     }
     MORSE_CHECK(finite, "rampup: the state is not finite at t = ", t1, " s (step ", k + 1, ")");
+    if (twist) twist->step(om1, load.acceleration(t1), h, a0, a1, a2, a3, a4, a5, gam, al);
     f0.swap(f1);
     ++st.steps;
     if ((k + 1) % s.output_every == 0 || k + 1 == steps) emit(k + 1, t1);

@@ -183,4 +183,30 @@ RotorMatrices rotor_matrices(const RotorSpec& r) {
   return m;
 }
 
+RotorMatrices torsion_matrices(const RotorSpec& r) {
+  rotor_matrices(r);  // validates the spec (stations, sections, disks, damping)
+  const int ns = static_cast<int>(r.z.size());
+  RotorMatrices m;
+  m.n = ns;
+  const std::size_t n = static_cast<std::size_t>(ns);
+  m.M.assign(n * n, 0.0);
+  m.K.assign(n * n, 0.0);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const ShaftSection& s = r.sections.size() == 1 ? r.sections[0] : r.sections[k];
+    const double L = r.z[k + 1] - r.z[k];
+    const double J = M_PI * (std::pow(s.d_outer, 4) - std::pow(s.d_inner, 4)) / 32.0;
+    const double kt = s.material.E / (2.0 * (1.0 + s.material.nu)) * J / L, mt = s.material.rho * J * L / 6.0;
+    const std::size_t a = k * n + k, b = k * n + k + 1, c = (k + 1) * n + k, d = (k + 1) * n + k + 1;
+    m.K[a] += kt, m.K[d] += kt, m.K[b] -= kt, m.K[c] -= kt;
+    m.M[a] += 2 * mt, m.M[d] += 2 * mt, m.M[b] += mt, m.M[c] += mt;
+  }
+  for (const Disk& d : r.disks) {
+    const std::size_t i = static_cast<std::size_t>(d.station);
+    m.M[i * n + i] += d.Ip;
+  }
+  m.C.resize(n * n);
+  for (std::size_t i = 0; i < n * n; ++i) m.C[i] = r.rayleigh_alpha * m.M[i] + r.rayleigh_beta * m.K[i];
+  return m;
+}
+
 }  // namespace morse::rampup

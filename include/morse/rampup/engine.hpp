@@ -38,10 +38,22 @@ struct RotorOptions {
   std::vector<std::string> disks;
 };
 struct BearingOptions {
-  std::string name, rotor, stator = "ground";
-  double z = 0;
+  std::string name, rotor, stator = "ground", rotor2;  ///< rotor2: intershaft bearing
+  double z = 0, z2 = 0;
   std::vector<std::string> nodes;
   std::vector<double> k, c;
+};
+struct DriveOptions {
+  std::string name, rotor;
+  double z = 0;
+};
+struct GearboxOptions {
+  std::string name, input, output;
+  double input_z = 0, output_z = 0, ratio = 0, k = 0, c = 0;
+};
+struct TorqueOptions {
+  std::string name, rotor;
+  double z = 0, coefficient = 0;
 };
 struct RampupOptions {
   std::string out = "rampup.h5", reference;
@@ -49,6 +61,9 @@ struct RampupOptions {
   std::vector<RotorOptions> rotors;
   std::map<std::string, DiskOptions> disks;
   std::vector<BearingOptions> bearings;
+  std::vector<DriveOptions> drives;
+  std::vector<GearboxOptions> gearboxes;
+  std::vector<TorqueOptions> torques;
   std::vector<std::string> unbalance_disks;
   std::vector<double> unbalance_me, unbalance_phase_deg;
   double rpm_max = 0, ramp_time = 0, dt = 0, t_final = 0, alpha = 0, cut_factor = 2.5;
@@ -57,10 +72,11 @@ struct RampupOptions {
   PetscBool constant = PETSC_FALSE, dense = PETSC_FALSE, write_matrices = PETSC_TRUE;
   std::string error;  ///< first bad value, naming the option
 
-  /// Reads -out, -rampup_stators, -rampup_rotors, -rampup_bearings and, per name, the
-  /// -rampup_stator_<name>_*, -rampup_rotor_<name>_*, -rampup_disk_<name>_* and
-  /// -rampup_bearing_<name>_* options, -rampup_unbalance, -rampup_unbalance_me,
-  /// -rampup_unbalance_phase_deg, -rampup_rpm_max, -rampup_ramp_time, -rampup_constant_speed,
+  /// Reads -out, -rampup_stators, -rampup_rotors, -rampup_bearings, -rampup_drives,
+  /// -rampup_gearboxes, -rampup_torques and, per name, the -rampup_stator_<name>_*,
+  /// -rampup_rotor_<name>_*, -rampup_disk_<name>_*, -rampup_bearing_<name>_*,
+  /// -rampup_drive_<name>_*, -rampup_gearbox_<name>_* and -rampup_torque_<name>_* options, -rampup_unbalance,
+  /// -rampup_unbalance_me, -rampup_unbalance_phase_deg, -rampup_rpm_max, -rampup_ramp_time, -rampup_constant_speed,
   /// -rampup_dt, -rampup_t_final, -rampup_alpha, -rampup_output_every, -rampup_cut_factor,
   /// -rampup_dense, -rampup_write_matrices and -rampup_reference (run/engine.opts documents every
   /// one). A missing or bad value of a named part is recorded in `error`. Collective.
@@ -83,13 +99,15 @@ struct Engine {
   std::vector<RotorSpec> rotors;
   std::vector<StatorModes> stators;
   std::vector<Bearing> bearings;
+  Torsion torsion;              ///< drives, gearboxes, torques (empty: no torsion)
   std::vector<int> stator_n_b;  ///< boundary DOFs of each superelement
 };
 
 /// Resolves the options into the engine: each rotor's sections, disks and unbalances (checked),
 /// each stator's modal basis (its superelement file read, clamped nodes resolved, cut at its
 /// -rampup_stator_<name>_cut_hz or the default cut of omega_max [rad/s]) and each bearing's
-/// rotor station and stator nodes. Throws naming the option on bad input; every rank builds the
+/// rotor station and stator nodes (or the other rotor's station for an intershaft bearing), each
+/// drive's, gearbox's and torque's stations. Throws naming the option on bad input; every rank builds the
 /// same (small) model from the same options and files, so every rank throws alike. Collective
 /// only through its stage timer (StatorModes).
 Engine build_engine(MPI_Comm comm, const RampupOptions& o, double omega_max);

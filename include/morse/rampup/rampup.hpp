@@ -137,6 +137,13 @@ struct RotorMatrices {
 /// Assembles one rotor (validates the spec; throws naming the rotor and the bad entry).
 RotorMatrices rotor_matrices(const RotorSpec& r);
 
+/// The torsion of one rotor (docs/rampup-theory.md §7): one DOF per station, the twist phi [rad]
+/// of the section about +z relative to the rigid rotation s int_0^t Omega dt. Shaft element of
+/// length L: stiffness G J / L [1 -1; -1 1] (G = E / 2 (1 + nu), J = pi (d_o^4 - d_i^4) / 32) and
+/// consistent mass rho J L / 6 [2 1; 1 2]; a disk adds Ip at its station; C = alpha M + beta K
+/// (the rotor's Rayleigh damping, on the twist only). n = stations, row-major n x n; G empty.
+RotorMatrices torsion_matrices(const RotorSpec& r);
+
 // ------------------------------------------------------------------------------------------
 // Stator superelements and their modal bases
 
@@ -191,8 +198,9 @@ double default_cut_hz(const std::vector<RotorSpec>& rotors, double omega_max, do
 
 /// A bearing: springs and dampers in x and y between station `station` of rotor `rotor` (its u_x,
 /// u_y) and the x, y translations (components 1, 2) of the housing point of stator `stator` (an
-/// index into the assembly's stators; -1 = the ground). Its force on the rotor is -F, on the
-/// housing +F:
+/// index into the assembly's stators; -1 = the ground), or, for an intershaft bearing
+/// (rotor2 >= 0), station `station2` of rotor `rotor2` (then stator must be -1 and nodes empty;
+/// the "housing" is that station). Its force on the rotor is -F, on the housing +F:
 ///   F_x = kxx (u_x,rotor - u_x,housing) + cxx (v_x,rotor - v_x,housing), F_y likewise.
 /// The housing point is node `node`, or, if `nodes` is not empty, the mean of the x, y
 /// translations of those nodes with equal weights (a bearing seat spread over several interface
@@ -205,6 +213,47 @@ struct Bearing {
   std::int64_t node = -1;
   double kxx = 0.0, kyy = 0.0, cxx = 0.0, cyy = 0.0;  ///< [N/m], [N s/m], >= 0
   std::vector<std::int64_t> nodes;                    ///< several housing nodes (overrides node)
+  int rotor2 = -1, station2 = -1;                     ///< intershaft bearing: the other rotor's station
+};
+
+// ------------------------------------------------------------------------------------------
+// Torsion: drives, gearboxes and resistive torques (docs/rampup-theory.md §7)
+
+/// The imposed speed law acts at station `station` of rotor `rotor`: its absolute angle is
+/// s int_0^t Omega dt exactly (twist 0); the torque the drive applies is an output.
+struct Drive {
+  std::string name;
+  int rotor = 0, station = 0;
+};
+/// A linearized gear stage (a planetary gearbox with its ring fixed, sun on the input shaft,
+/// carrier on the output shaft, or any gear train of fixed ratio): the input station turns `ratio`
+/// times as fast as the output station (ratio = s_input / s_output, checked against the rotors'
+/// speed ratios), and the mesh stiffness k [N m/rad] at the input (the input's torsional stiffness
+/// with the output held) and damping c [N m s/rad] act on the twist mismatch: potential
+/// (k / 2) (phi_in - ratio phi_out)^2. The mesh torque on the input is -T, on the output
+/// +ratio T, T = k (phi_in - ratio phi_out) + c (phi_in' - ratio phi_out'). Its lateral stiffness
+/// is not here: give it as an intershaft bearing between the two stations (Bearing::rotor2).
+struct Gearbox {
+  std::string name;
+  int input = 0, input_station = 0, output = 0, output_station = 0;
+  double ratio = 1.0, k = 0.0, c = 0.0;
+};
+/// A resistive torque at a station, aerodynamic: T = -coefficient Omega_r |Omega_r| [N m] about
+/// +z, Omega_r = s Omega the rotor's spin speed (it opposes the rotation, in proportion to its
+/// square). coefficient [N m s^2] >= 0.
+struct Torque {
+  std::string name;
+  int rotor = 0, station = 0;
+  double coefficient = 0.0;
+};
+/// The torsional model of an assembly. Empty (no drive, gearbox or torque): no torsion is
+/// modelled, as before. Otherwise every rotor has a twist DOF per station and every rotor must be
+/// driven, directly or through gearboxes (else its rigid rotation would be free).
+struct Torsion {
+  std::vector<Drive> drives;
+  std::vector<Gearbox> gearboxes;
+  std::vector<Torque> torques;
+  bool empty() const { return drives.empty() && gearboxes.empty() && torques.empty(); }
 };
 
 /// Dense assembled matrices of the model (for checks and the frequency-domain solution).
@@ -218,7 +267,12 @@ class Assembly {
   /// Validates and assembles: every rotor (rotor_matrices()), every bearing (rotor, station,
   /// stator index, node: the node must carry free boundary DOFs x and y in that stator's modes;
   /// stiffness and damping >= 0). Keeps copies of everything. Throws naming the bad entry.
-  Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings);
+  /// The torsional model (drives, gearboxes, torques) is checked here too: every rotor driven
+  /// (through gearboxes or directly), gearbox ratios equal to the rotors' speed ratios, stations
+  /// in range, k, c, coefficients finite and >= 0. Torsion is uncoupled from the lateral model
+  /// (docs/rampup-theory.md §7), so it changes no bearing load.
+  Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings,
+           Torsion torsion = {});
 
   const std::vector<RotorSpec>& rotors() const { return rotors_; }
   const std::vector<StatorModes>& stators() const { return stators_; }
@@ -249,10 +303,37 @@ class Assembly {
   /// v^T M v / 2 + x^T K x / 2.
   double energy(const double* x, const double* v) const;
 
+  // Torsion (empty when torsion().empty()): twist DOFs, one per station of every rotor in order.
+  const Torsion& torsion() const { return torsion_; }
+  int n_torsion() const { return n_twist_; }
+  /// Index of the twist DOF of a rotor station.
+  int twist_dof(int rotor, int station) const { return twist_offset_[rotor] + station; }
+  /// Dense torsional matrices (n_torsion()^2, row-major): shafts, disks, gear meshes; no drive
+  /// condition applied.
+  const std::vector<double>& torsion_M() const { return tM_; }
+  const std::vector<double>& torsion_C() const { return tC_; }
+  const std::vector<double>& torsion_K() const { return tK_; }
+  /// Twist DOFs held by the drives (ascending) and the free ones.
+  const std::vector<int>& driven_twists() const { return driven_; }
+  const std::vector<int>& free_twists() const { return free_; }
+  /// Torsional load at driving speed omega and acceleration omega_dot (n_torsion()):
+  /// the resistive torques minus M (s Omega') (the inertia of the imposed rigid rotation,
+  /// s the speed ratio of each DOF's rotor).
+  void torsion_load(double omega, double omega_dot, double* f) const;
+  /// Torques of a torsional state (twist, its rate and acceleration): per drive the torque it
+  /// applies [N m] (the residual of its held DOF's equation), per gearbox its mesh torque T.
+  /// Either output may be null.
+  void torsion_state(const double* phi, const double* dphi, const double* ddphi, double omega, double omega_dot,
+                     double* drive_torque, double* gearbox_torque) const;
+  /// Natural angular frequencies [rad/s] of the torsion with the drives held (ascending; the
+  /// undamped problem on the free twists). Empty without torsion.
+  std::vector<double> torsion_frequencies() const;
+
   // Internal data used by the integrator (documented in docs/rampup-theory.md §4).
   struct Coupling {          // one bearing direction
     int rotor_index = 0;     // into the rotor block (0..n_rotor - 1)
-    int stator_offset = -1;  // first modal coordinate of the stator, -1 = ground
+    int rotor_index2 = -1;   // intershaft: the other rotor DOF (its k, c are in the band matrices)
+    int stator_offset = -1;  // first modal coordinate of the stator, -1 = ground or intershaft
     int n_modes = 0;
     std::vector<double> phi;  // row of the stator's basis at the bearing DOF (n_modes)
     double k = 0.0, c = 0.0;
@@ -276,6 +357,11 @@ class Assembly {
   std::vector<int> stator_offset_, rotor_offset_;
   std::vector<double> bM_, bC_, bK_, bG_, om2_, cs_;
   std::vector<Coupling> couplings_;
+  Torsion torsion_;
+  int n_twist_ = 0;
+  std::vector<int> twist_offset_, twist_rotor_, driven_, free_;
+  std::vector<double> tM_, tC_, tK_;
+  void build_torsion();
   struct Force {
     int dof_x;
     double ratio, me, phase;
@@ -331,11 +417,13 @@ inline double end_time(const LoadCase& load, const IntegratorSettings& s) {
 struct StepOutput {
   long step = 0;
   double t = 0.0, speed = 0.0;
-  const double* x = nullptr;            ///< n
-  const double* v = nullptr;            ///< n
-  const double* force = nullptr;        ///< 2 per bearing: F_x, F_y [N]
-  const double* rotor_disp = nullptr;   ///< 2 per bearing [m]
-  const double* stator_disp = nullptr;  ///< 2 per bearing [m]
+  const double* drive_torque = nullptr;    ///< one per drive [N m] (null without torsion)
+  const double* gearbox_torque = nullptr;  ///< one per gearbox [N m] (null without torsion)
+  const double* x = nullptr;               ///< n
+  const double* v = nullptr;               ///< n
+  const double* force = nullptr;           ///< 2 per bearing: F_x, F_y [N]
+  const double* rotor_disp = nullptr;      ///< 2 per bearing [m]
+  const double* stator_disp = nullptr;     ///< 2 per bearing [m]
 };
 
 struct IntegratorStats {
@@ -353,7 +441,10 @@ struct IntegratorStats {
 /// bandwidth, i.e. linear in N (docs/rampup-theory.md §5 has the derivation and the
 /// measurements). Throws if dt <= 0, alpha is outside [-1/3, 0], the initial mass matrix is
 /// singular, or the state becomes non-finite (naming the time). Warns (stats.warnings) if dt
-/// gives fewer than 20 steps per revolution at the top spin speed. Serial; not collective.
+/// gives fewer than 20 steps per revolution at the top spin speed. With torsion, the twist of the
+/// free stations is integrated beside it by the same scheme (its effective matrix is constant:
+/// one LU), loaded by torsion_load(), and the drive and gearbox torques are passed to the
+/// callback. Serial; not collective.
 IntegratorStats integrate(const Assembly& a, const LoadCase& load, const IntegratorSettings& s,
                           const std::function<void(const StepOutput&)>& callback);
 
@@ -364,6 +455,8 @@ struct History {
   std::vector<double> t, omega;                        ///< n_out: time [s], driving speed [rad/s]
   std::vector<double> force, rotor_disp, stator_disp;  ///< n_out x bearings x 2, row-major
   int n_bearings = 0;
+  std::vector<double> drive_torque, gearbox_torque;  ///< n_out x drives, n_out x gearboxes (torsion)
+  int n_drives = 0, n_gearboxes = 0;
   std::size_t n_out() const { return t.size(); }
 };
 /// Integrates (integrate()) and records the history. `progress`, if given, is called after every
