@@ -78,3 +78,44 @@ run rampup "${engine[@]}" -rampup_stator_box_file "$d/basis.h5" -rampup_dt 1e-3 
   tee "$d/coarse.log"
 grep -q "morse: warning: dt = 0.001 s gives" "$d/coarse.log"
 test -s "$d/coarse.h5"
+# Model A's pieces (docs/rampup-theory.md §7): a second rotor g geared at ratio 2 to r's free end,
+# hung on r by an intershaft bearing, r driven at z = 0, an aerodynamic torque on g; constant speed
+# with a damped mesh: the twist settles to the static one, where the drive's torque carries the fan's
+# c w_g^2 through the ratio, c w_g^2 / 2 (power balance), and the mesh torque equals it.
+geared=(-rampup_rotors r,g -rampup_rotor_g_z 0 -rampup_rotor_g_speed_ratio 0.5 -rampup_rotor_g_disks gd
+        -rampup_disk_gd_z 0 -rampup_disk_gd_mass 5 -rampup_disk_gd_Ip 0.5 -rampup_disk_gd_Id 0.25
+        -rampup_bearings front,rear,gi -rampup_bearing_gi_rotor g -rampup_bearing_gi_z 0
+        -rampup_bearing_gi_rotor2 r -rampup_bearing_gi_z2 0.75 -rampup_bearing_gi_k 1e7
+        -rampup_drives m -rampup_drive_m_rotor r -rampup_drive_m_z 0
+        -rampup_gearboxes gb -rampup_gearbox_gb_input r -rampup_gearbox_gb_input_z 0.75 -rampup_gearbox_gb_output g
+        -rampup_gearbox_gb_output_z 0 -rampup_gearbox_gb_ratio 2 -rampup_gearbox_gb_k 1e5 -rampup_gearbox_gb_c 45
+        -rampup_torques aero -rampup_torque_aero_rotor g -rampup_torque_aero_z 0
+        -rampup_torque_aero_coefficient 1e-3 -rampup_rotor_r_rayleigh 0,1e-3 -rampup_constant_speed
+        -rampup_t_final 0.5)
+run rampup "${engine[@]}" "${geared[@]}" -rampup_stator_box_file "$d/basis.h5" -out "$d/geared.h5" | tee "$d/geared.log"
+grep -q "torsion: 1 drive(s), 1 gearbox(es), 1 torque(s)" "$d/geared.log"
+/usr/bin/python3 - "$d" <<'PY'
+import sys, math, h5py
+f = h5py.File(sys.argv[1] + "/geared.h5", "r")["/rampup"]
+w_g = 0.5 * 6000 * 2 * math.pi / 60
+T = 1e-3 * w_g ** 2 / 2
+drive, mesh = f["drive_torque"][-1, 0], f["gearbox_torque"][-1, 0]
+print("geared: drive torque %.6f, mesh torque %.6f, static c w_g^2 / 2 = %.6f N m" % (drive, mesh, T))
+assert abs(drive - T) < 1e-6 * T and abs(mesh - T) < 1e-6 * T, (drive, mesh, T)
+assert f["bearing_force"].shape[1] == 3 and abs(f["bearing_force"][:, 2, :]).max() > 0
+drives = f.attrs["drives"]
+drives = drives.decode() if isinstance(drives, bytes) else str(drives)
+assert drives == "m" and f["torsion_frequencies"].shape[0] == 4, (drives, f["torsion_frequencies"].shape)
+PY
+expect_error "gearbox 'gb': ratio 3, but rotor 'r' turns at 1 and 'g' at 0.5" "$d/bad_ratio.h5" rampup "${engine[@]}" \
+  "${geared[@]}" -rampup_stator_box_file "$d/basis.h5" -rampup_gearbox_gb_ratio 3
+expect_error "rotor 'h' is not driven" "$d/undriven.h5" rampup "${engine[@]}" "${geared[@]}" \
+  -rampup_stator_box_file "$d/basis.h5" -rampup_rotors r,g,h -rampup_rotor_h_z 0
+expect_error "give -rampup_bearing_gi_stator or -rampup_bearing_gi_rotor2 (intershaft), not both" "$d/bad_gi.h5" \
+  rampup "${engine[@]}" "${geared[@]}" -rampup_stator_box_file "$d/basis.h5" -rampup_bearing_gi_stator box
+expect_error "gearbox gb: give -rampup_gearbox_gb_k" "$d/no_k.h5" rampup "${engine[@]}" -rampup_rotors r,g \
+  -rampup_rotor_g_z 0 -rampup_gearboxes gb -rampup_gearbox_gb_input r -rampup_gearbox_gb_input_z 0.75 \
+  -rampup_gearbox_gb_output g -rampup_gearbox_gb_output_z 0 -rampup_gearbox_gb_ratio 2 \
+  -rampup_stator_box_file "$d/basis.h5"
+expect_error "\-rampup_drive_m_rotor x: no such rotor" "$d/bad_drive.h5" rampup "${engine[@]}" "${geared[@]}" \
+  -rampup_stator_box_file "$d/basis.h5" -rampup_drive_m_rotor x
