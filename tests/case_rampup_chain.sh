@@ -78,7 +78,7 @@ run rampup "${engine[@]}" -rampup_stator_box_file "$d/basis.h5" -rampup_dt 1e-3 
   tee "$d/coarse.log"
 grep -q "morse: warning: dt = 0.001 s gives" "$d/coarse.log"
 test -s "$d/coarse.h5"
-# Model A's pieces (docs/rampup-theory.md §7): a second rotor g geared at ratio 2 to r's free end,
+# Model A's pieces (docs/rampup-theory.md §4.3): a second rotor g geared at ratio 2 to r's free end,
 # hung on r by an intershaft bearing, r driven at z = 0, an aerodynamic torque on g; constant speed
 # with a damped mesh: the twist settles to the static one, where the drive's torque carries the fan's
 # c w_g^2 through the ratio, c w_g^2 / 2 (power balance), and the mesh torque equals it.

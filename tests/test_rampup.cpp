@@ -3,7 +3,8 @@
 // Euler–Bernoulli frequencies, h^4 convergence), the Campbell diagram of a disk on a massless
 // shaft, the Jeffcott unbalance response, Newmark's second order and energy conservation, the
 // clamped modal basis of a spring-chain superelement, the condensed step against the dense one,
-// the frequency-domain steady state of a rotor on a stator, and the errors. Every rank runs the
+// the frequency-domain steady state of a rotor on a stator, the errors, intershaft bearings (2-DOF
+// closed form) and the torsion (a shaft with an end disk, a geared ramp's closed form). Every rank runs the
 // same serial computation; the numbers are checked to be identical on every rank.
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -865,7 +866,7 @@ TEST(RampupErrors, ScoreReproducesSeedTable1) {
 }
 
 // ------------------------------------------------------------------------------------------
-// Intershaft bearings and torsion (docs/rampup-theory.md §7)
+// Intershaft bearings and torsion (docs/rampup-theory.md §4.2–4.3)
 
 namespace {
 

@@ -192,7 +192,7 @@ class CondensedSolver : public StepSolver {
   std::vector<PetscBLASInt> piv_, pivy_;
 };
 
-// The twist of the free stations (docs/rampup-theory.md §7): M phi'' + C phi' + K phi = f(t) on
+// The twist of the free stations (docs/rampup-theory.md §4.3): M phi'' + C phi' + K phi = f(t) on
 // the free DOFs (the driven ones are held at 0), by the lateral step's scheme; the effective
 // matrix is constant, so it is factored once.
 class TorsionStepper {

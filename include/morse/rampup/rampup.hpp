@@ -137,7 +137,7 @@ struct RotorMatrices {
 /// Assembles one rotor (validates the spec; throws naming the rotor and the bad entry).
 RotorMatrices rotor_matrices(const RotorSpec& r);
 
-/// The torsion of one rotor (docs/rampup-theory.md §7): one DOF per station, the twist phi [rad]
+/// The torsion of one rotor (docs/rampup-theory.md §4.3): one DOF per station, the twist phi [rad]
 /// of the section about +z relative to the rigid rotation s int_0^t Omega dt. Shaft element of
 /// length L: stiffness G J / L [1 -1; -1 1] (G = E / 2 (1 + nu), J = pi (d_o^4 - d_i^4) / 32) and
 /// consistent mass rho J L / 6 [2 1; 1 2]; a disk adds Ip at its station; C = alpha M + beta K
@@ -217,7 +217,7 @@ struct Bearing {
 };
 
 // ------------------------------------------------------------------------------------------
-// Torsion: drives, gearboxes and resistive torques (docs/rampup-theory.md §7)
+// Torsion: drives, gearboxes and resistive torques (docs/rampup-theory.md §4.3)
 
 /// The imposed speed law acts at station `station` of rotor `rotor`: its absolute angle is
 /// s int_0^t Omega dt exactly (twist 0); the torque the drive applies is an output.
@@ -270,7 +270,7 @@ class Assembly {
   /// The torsional model (drives, gearboxes, torques) is checked here too: every rotor driven
   /// (through gearboxes or directly), gearbox ratios equal to the rotors' speed ratios, stations
   /// in range, k, c, coefficients finite and >= 0. Torsion is uncoupled from the lateral model
-  /// (docs/rampup-theory.md §7), so it changes no bearing load.
+  /// (docs/rampup-theory.md §4.3), so it changes no bearing load.
   Assembly(std::vector<RotorSpec> rotors, std::vector<StatorModes> stators, std::vector<Bearing> bearings,
            Torsion torsion = {});
 
