@@ -399,6 +399,11 @@ TEST(Constraints, SpidersOnANodeSet) {
   EXPECT_EQ(cs.interpolation[0].nodes, (std::vector<std::int64_t>{9, 18, 36}));  // (8,0,0), (8,1,0), (8,0,1)
   EXPECT_EQ(cs.point_ids, (std::vector<std::int64_t>{82, 83}));
   EXPECT_EQ(rbe3.mesh->node_set_sizes.at("corners_spiders"), 2);
+  // The points join the other sets of their centres: both corners are tip (x1) nodes, no root one.
+  EXPECT_EQ(rbe3.mesh->node_set_sizes.at("x1_spiders"), 2);
+  EXPECT_EQ(cs.point_sets.at("x1_spiders"), (std::vector<std::int64_t>{82, 83}));
+  EXPECT_EQ(rbe3.mesh->node_set_sizes.count("x0_spiders"), 0u);
+  EXPECT_EQ(fe::set_rows(rbe3.dofs, "x1_spiders", "test").size(), 12u);
   EXPECT_EQ(fe::set_rows(rbe3.dofs, "corners_spiders", "test").size(), 12u);
   const auto w3 = test::lowest_eigenvalues(rbe3.K.get(), rbe3.M.get(), 6);
   auto rbe2 = model(mesh::SpiderType::Rigid, "corners", 0.06);

@@ -1,5 +1,6 @@
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -90,9 +91,6 @@ void bcast(MPI_Comm comm, std::vector<T>& v, MPI_Datatype type) {
 
 CBResult load_basis(const fe::Model& md, const std::string& path, const std::string& boundary_set, double damping) {
   MORSE_CHECK(md.mesh, "a superelement basis file (", path, ") needs a mesh model");
-  MORSE_CHECK(!md.constraints, "a superelement basis file (", path,
-              ") holds nodal shapes, which do not give the DOFs of the model's six-DOF points (rigid and interpolation "
-              "elements): compute the basis again instead");
   const auto& lm = *md.mesh;
   const auto& dofs = md.dofs;
   MPI_Comm comm = lm.comm;
@@ -105,17 +103,36 @@ CBResult load_basis(const fe::Model& md, const std::string& path, const std::str
   std::vector<std::int64_t> ids, bnodes;
   std::vector<double> lambda;
   std::string err;
+  // Six-DOF points (rigid and interpolation elements): their DOFs are in <dataset>_points
+  // (io::write_modes_dataset), points as /mesh/point_ids.
+  const std::vector<std::int64_t>& pids = lm.mesh.constraints.point_ids;
+  const bool points = md.constraints && !pids.empty();
   if (rank == 0) try {
       rd = std::make_unique<Reader>(path);
-      for (const char* d : {"/cb/constraint_modes", "/cb/fixed_interface/mode_shapes"})
+      for (const char* d : {"/cb/constraint_modes", "/cb/fixed_interface/mode_shapes"}) {
         MORSE_CHECK(rd->has(d), path, " has no ", d, ": write it with `morse reduce -cb_write_basis`");
+        MORSE_CHECK(!points || rd->has(cat(d, "_points")), path, " has no ", d,
+                    "_points (the six-DOF points' DOFs of the basis): make it again with this version of `morse "
+                    "reduce -cb_write_basis`");
+      }
       ids = rd->read<std::int64_t>("/mesh/node_ids", H5T_NATIVE_INT64);
       bnodes = rd->read<std::int64_t>("/rom/boundary_nodes", H5T_NATIVE_INT64);
       lambda = rd->read<double>("/cb/fixed_interface/eigenvalues", H5T_NATIVE_DOUBLE);
       auto dc = rd->dims("/cb/constraint_modes"), dp = rd->dims("/cb/fixed_interface/mode_shapes");
       MORSE_CHECK(dc.size() == 3 && dp.size() == 3 && dc[1] == ids.size() && dp[1] == ids.size() &&
-                      dp[0] == lambda.size() && dc[0] == 3 * bnodes.size(),
-                  path, ": inconsistent basis dataset shapes");
+                      dp[0] == lambda.size() && dc[0] == static_cast<hsize_t>(out.n_b),
+                  path, ": inconsistent basis dataset shapes (", dc[0], " constraint modes for ", out.n_b,
+                  " boundary DOFs of node set '", boundary_set, "')");
+      if (points) {
+        MORSE_CHECK(rd->has("/mesh/point_ids") && rd->read<std::int64_t>("/mesh/point_ids", H5T_NATIVE_INT64) == pids,
+                    path, " was made with other six-DOF points (/mesh/point_ids)");
+        for (const auto& [d, modes] : {std::pair<const char*, hsize_t>{"/cb/constraint_modes_points", dc[0]},
+                                       {"/cb/fixed_interface/mode_shapes_points", dp[0]}}) {
+          auto dq = rd->dims(d);
+          MORSE_CHECK(dq.size() == 3 && dq[0] == modes && dq[1] == pids.size() && dq[2] == 6, path, ": ", d,
+                      " must be [", modes, " modes][", pids.size(), " points][6]");
+        }
+      }
     } catch (const Error& e) {
       err = e.what();
     }
@@ -154,6 +171,18 @@ CBResult load_basis(const fe::Model& md, const std::string& path, const std::str
       for (int d = 0; d < 3; ++d) {
         PetscInt g = dofs.node_dof[3 * k + d];
         if (g >= 0) tt[(g - dofs.first) + static_cast<std::size_t>(ldt) * j] = field[3 * lm.global_node[k] + d];
+      }
+    }
+    // The points' DOFs: rank 0's rows labelled with a point id (independent node DOFs are the
+    // expanded field's values there, u = T u_bar being the identity on them).
+    if (points && rank == 0) {
+      const auto pv = j < out.n_b ? rd->slab("/cb/constraint_modes_points", j)
+                                  : rd->slab("/cb/fixed_interface/mode_shapes_points", j - out.n_b);
+      for (PetscInt i = 0; i < dofs.n_owned; ++i) {
+        const auto it = std::find(pids.begin(), pids.end(), dofs.node[i]);
+        if (it != pids.end())
+          tt[i + static_cast<std::size_t>(ldt) * j] =
+              pv[6 * static_cast<std::size_t>(it - pids.begin()) + static_cast<std::size_t>(dofs.component[i] - 1)];
       }
     }
     progress.update(static_cast<double>(j + 1));

@@ -65,12 +65,38 @@ void write_modes_dataset(H5Output& out, const std::string& name, const fe::Model
     return;
   }
   out.create_rows(name, {static_cast<hsize_t>(count), static_cast<hsize_t>(md.mesh->n_global_nodes), 3});
+  // The six-DOF points' DOFs (rigid and interpolation elements): rank 0's last rows, written
+  // beside the nodal field as name_points [mode][point][1..6], points as /mesh/point_ids (0 for
+  // a DOF that is not the model's: dropped or dependent), so that the vector can be read back.
+  const std::vector<std::int64_t>& pids = md.mesh->mesh.constraints.point_ids;
+  std::vector<std::int64_t> point_row;  // owned row -> 6 p + c - 1, or -1
+  if (md.constraints && !pids.empty()) {
+    out.create_rows(name + "_points", {static_cast<hsize_t>(count), static_cast<hsize_t>(pids.size()), 6});
+    out.attribute(name + "_points", "description",
+                  "[mode][point][components 1..6] of the six-DOF points, points as /mesh/point_ids; 0 where the "
+                  "DOF is not one of the model's");
+    point_row.assign(static_cast<std::size_t>(md.dofs.n_owned), -1);
+    for (PetscInt i = 0; i < md.dofs.n_owned; ++i) {
+      const auto it = std::find(pids.begin(), pids.end(), md.dofs.node[i]);
+      if (it != pids.end()) point_row[i] = 6 * (it - pids.begin()) + md.dofs.component[i] - 1;
+    }
+  }
   for (PetscInt j = 0; j < count; ++j) {
     Vec x;
     MORSE_CALL(MatDenseGetColumnVecRead(V, first + j, &x));
     // The nodes' translations: u = T u_bar with rigid/interpolation elements or MPCs.
     auto u = fe::expand(md, x);
     auto nodal = gather_nodal(*md.mesh, fe::node_layout(md), u.get());
+    if (!point_row.empty()) {
+      // Points' rows are owned by rank 0 (fe/constraints.hpp), so rank 0 alone has them.
+      std::vector<double> pv(6 * pids.size(), 0.0);
+      const PetscScalar* a;
+      MORSE_CALL(VecGetArrayRead(x, &a));
+      for (std::size_t i = 0; i < point_row.size(); ++i)
+        if (point_row[i] >= 0) pv[static_cast<std::size_t>(point_row[i])] = a[i];
+      MORSE_CALL(VecRestoreArrayRead(x, &a));
+      out.write_row(name + "_points", static_cast<hsize_t>(j), pv);
+    }
     MORSE_CALL(MatDenseRestoreColumnVecRead(V, first + j, &x));
     out.write_row(name, static_cast<hsize_t>(j), nodal);
   }

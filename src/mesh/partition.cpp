@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <set>
 #include <utility>
 
 #include "core/detail/pack.hpp"
@@ -115,6 +116,18 @@ void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double rad
     return all;
   };
   std::int64_t next = top;
+  // The other node sets (not given to -mesh_spiders): a spider's point joins T_spiders for every
+  // such set T that holds its centre node, so that sets naming interface nodes name their points.
+  std::vector<std::string> others;
+  for (const auto& kv : m.node_sets)
+    if (std::find(sets.begin(), sets.end(), kv.first) == sets.end() && !cs.point_sets.count(kv.first))
+      others.push_back(kv.first);
+  std::vector<std::vector<std::int64_t>> other_nodes;  // sorted local node indices of each
+  for (const auto& t : others) {
+    other_nodes.push_back(m.node_sets.at(t));
+    std::sort(other_nodes.back().begin(), other_nodes.back().end());
+  }
+  std::set<std::string> inherited;
   for (const auto& name : sets) {
     // The set's nodes (owned), on every rank, by id.
     std::vector<double> mine;
@@ -124,6 +137,14 @@ void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double rad
                     {static_cast<double>(m.node_ids[k]), m.coords[3 * k], m.coords[3 * k + 1], m.coords[3 * k + 2]});
     auto centres = allgather(mine);
     const std::size_t nc = centres.size() / 4;
+    // (centre id, other set) pairs of the owned centres, on every rank.
+    std::vector<double> member;
+    for (auto k : m.node_sets.at(name))
+      if (lm->node_owner[k] == rank)
+        for (std::size_t t = 0; t < others.size(); ++t)
+          if (std::binary_search(other_nodes[t].begin(), other_nodes[t].end(), k))
+            member.insert(member.end(), {static_cast<double>(m.node_ids[k]), static_cast<double>(t)});
+    const auto memberships = allgather(member);
     std::vector<std::size_t> order(nc);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](auto a, auto b) { return centres[4 * a] < centres[4 * b]; });
@@ -152,6 +173,12 @@ void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double rad
       cs.point_mass.push_back(0.0);
       cs.point_fixed.push_back(0);
       points.push_back(pid);
+      for (std::size_t i = 0; i < memberships.size(); i += 2)
+        if (static_cast<std::int64_t>(memberships[i]) == centre) {
+          const std::string t = others[static_cast<std::size_t>(memberships[i + 1])] + "_spiders";
+          cs.point_sets[t].push_back(pid);
+          inherited.insert(t);
+        }
       const std::string where = cat("-mesh_spiders ", name, ": the spider at node ", centre, " (point ", pid, ", ",
                                     nodes.size(), " nodes within ", radius, ")");
       if (type == SpiderType::Rigid) {
@@ -177,6 +204,16 @@ void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double rad
     lm->mesh.node_sets[name + "_spiders"];  // every rank knows the name (no solid node in it)
     lm->node_set_sizes[name + "_spiders"] = static_cast<std::int64_t>(points.size());
   }
+  std::string clash;
+  for (const auto& t : inherited) {
+    if (lm->node_set_sizes.count(t) && clash.empty()) clash = t;
+    lm->mesh.node_sets[t];
+    lm->node_set_sizes[t] = static_cast<std::int64_t>(cs.point_sets[t].size());
+  }
+  collective_check(lm->comm, clash.empty() ? ""
+                                           : cat("-mesh_spiders: node set '", clash, "' exists already in ", m.source,
+                                                 " (the spiders' points of set '", clash.substr(0, clash.size() - 8),
+                                                 "' would take its name)"));
 }
 
 namespace {

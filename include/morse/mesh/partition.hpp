@@ -62,10 +62,12 @@ enum class SpiderType { Rigid, Interpolation };
 /// position (new ids above every node id of the mesh, in set order then node id order) joined
 /// to every node within `radius` of it (the node included) by a rigid element (RBE2, all six
 /// components) or an interpolation element (RBE3, weights 1, translations, reference 123456). The
-/// points of set S form the new node set "S_spiders". For meshes that cannot carry rigid elements
+/// points of set S form the new node set "S_spiders"; a point also joins "T_spiders" for every
+/// other node set T (not in `sets`) that holds its centre node, so that the sets naming interface
+/// nodes (a bearing seat, a lug) name their points. For meshes that cannot carry rigid elements
 /// (Gmsh) and decks whose interface nodes are bare solid nodes. Throws (collectively) for an
 /// unknown or empty set, a set holding points, a radius that is not positive and finite, or a
-/// set name S_spiders that exists. Collective.
+/// set name S_spiders or T_spiders that exists. Collective.
 void add_spiders(LocalMesh* lm, const std::vector<std::string>& sets, double radius, SpiderType type);
 
 /// Partitions *serial (significant on rank 0 only; emptied on return) and scatters it over comm.
