@@ -37,6 +37,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from plot_select import clusters  # noqa: E402  (groups of near-repeated modes)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MODEL = ["-mesh", "meshes/stator.msh", "-clamp", "mount", "-boundary", "interface"]
 OUT = "out/fig5"
@@ -126,19 +129,6 @@ def main():
                    "wide_hz": F_WIDE, "mac_threshold": THRESHOLD, "criteria": summary}, f, indent=1)
     plot(res, n_cand)
     print("selection_fig5: wrote %s and %s/summary.json" % (IMG, OUT))
-
-
-def clusters(freq, rel=0.01):
-    """Groups of consecutive modes within rel (relative) of the group's first (run/plot_select.py)."""
-    groups, cur = [], [0]
-    for j in range(1, len(freq)):
-        if freq[j] <= freq[cur[0]] * (1 + rel):
-            cur.append(j)
-        else:
-            groups.append(cur)
-            cur = [j]
-    groups.append(cur)
-    return groups
 
 
 def report(res):

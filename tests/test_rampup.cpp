@@ -209,6 +209,21 @@ Assembly rotor_on_chain(double f_cut_hz = 1e4) {
   return Assembly({r}, {sm}, {b1, b2});
 }
 
+// The bearing forces of a 0.05 s ramp to 600 rad/s (HHT alpha = -0.05, 2e-5 s) with the condensed
+// step and with the dense one.
+void condensed_and_dense_forces(const Assembly& a, std::vector<double>* fc, std::vector<double>* fd) {
+  const std::size_t nf = 2 * a.bearings().size();
+  LoadCase lc;
+  lc.omega_max = 600;
+  lc.ramp_time = 0.05;
+  IntegratorSettings s;
+  s.dt = 2e-5;
+  s.alpha = -0.05;
+  integrate(a, lc, s, [&](const StepOutput& o) { fc->insert(fc->end(), o.force, o.force + nf); });
+  s.dense = true;
+  integrate(a, lc, s, [&](const StepOutput& o) { fd->insert(fd->end(), o.force, o.force + nf); });
+}
+
 class Rampup : public test::ScratchDirTest {
  protected:
   Rampup() : ScratchDirTest("rampup") {}
@@ -559,16 +574,8 @@ TEST_F(Rampup, StatorModalBasisOfTheClampedSuperelement) {
 
 TEST(RampupIntegrate, CondensedStepEqualsTheDenseStep) {
   const Assembly a = rotor_on_chain();
-  LoadCase lc;
-  lc.omega_max = 600;
-  lc.ramp_time = 0.05;
-  IntegratorSettings s;
-  s.dt = 2e-5;
-  s.alpha = -0.05;
   std::vector<double> fc, fd;
-  integrate(a, lc, s, [&](const StepOutput& o) { fc.insert(fc.end(), o.force, o.force + 4); });
-  s.dense = true;
-  integrate(a, lc, s, [&](const StepOutput& o) { fd.insert(fd.end(), o.force, o.force + 4); });
+  condensed_and_dense_forces(a, &fc, &fd);
   ASSERT_EQ(fc.size(), fd.size());
   double fmax = 0, diff = 0;
   for (std::size_t i = 0; i < fc.size(); ++i) {
@@ -921,16 +928,8 @@ TEST(RampupAssembly, IntershaftBearingCouplesTwoRotors) {
   bs.push_back({"core_rear", 1, 0, -1, -1, 1e6, 1e6, 100, 100, {}});
   bs.push_back({"core_inter", 1, 0, -1, -1, 4e6, 3e6, 200, 150, {}, 0, 2});
   const Assembly two(std::vector<RotorSpec>{chain.rotors()[0], hp}, chain.stators(), bs);
-  LoadCase lc;
-  lc.omega_max = 600;
-  lc.ramp_time = 0.05;
-  IntegratorSettings s;
-  s.dt = 2e-5;
-  s.alpha = -0.05;
   std::vector<double> fc, fd;
-  integrate(two, lc, s, [&](const StepOutput& o) { fc.insert(fc.end(), o.force, o.force + 8); });
-  s.dense = true;
-  integrate(two, lc, s, [&](const StepOutput& o) { fd.insert(fd.end(), o.force, o.force + 8); });
+  condensed_and_dense_forces(two, &fc, &fd);
   ASSERT_EQ(fc.size(), fd.size());
   double fmax = 0, diff = 0, inter = 0;
   for (std::size_t i = 0; i < fc.size(); ++i) {

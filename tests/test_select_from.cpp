@@ -16,11 +16,10 @@
 
 using namespace morse;
 
-TEST(SelectFrom, BasisFileRoundTrip) {
-  MPI_Comm comm = PETSC_COMM_WORLD;
-  int rank = world_rank();
-  const test::SharedScratchDir scratch("select_from");
-  const std::string base = scratch.path("box");
+namespace {
+
+// The beam both tests reduce: 8 x 2 x 1 hex20, 1 m x 0.08 m x 0.05 m.
+mesh::BoxSpec beam() {
   mesh::BoxSpec b;
   b.type = mesh::ElementType::Hex20;
   b.lx = 1.0;
@@ -29,13 +28,28 @@ TEST(SelectFrom, BasisFileRoundTrip) {
   b.nx = 8;
   b.ny = 2;
   b.nz = 1;
-  if (rank == 0) {
+  return b;
+}
+
+// Writes it (steel) as a Gmsh file on rank 0; collective.
+void write_beam(MPI_Comm comm, const mesh::BoxSpec& b, const std::string& path) {
+  if (world_rank() == 0) {
     auto m = mesh::generate_box(b);
     m.materials.push_back(test::steel());
     std::fill(m.elem_material.begin(), m.elem_material.end(), 0);
-    mesh::write_gmsh(m, base + ".msh");
+    mesh::write_gmsh(m, path);
   }
   MPI_Barrier(comm);
+}
+
+}  // namespace
+
+TEST(SelectFrom, BasisFileRoundTrip) {
+  MPI_Comm comm = PETSC_COMM_WORLD;
+  const test::SharedScratchDir scratch("select_from");
+  const std::string base = scratch.path("box");
+  const mesh::BoxSpec b = beam();
+  write_beam(comm, b, base + ".msh");
   const std::vector<std::pair<std::string, std::string>> opts = {
       {"-mesh", base + ".msh"},    {"-clamp", "x0"},      {"-boundary", "x1"},   {"-cb_num_fixed_modes", "6"},
       {"-cb_write_basis", "true"}, {"-cb_xdmf", "false"}, {"-out", base + ".h5"}};
@@ -77,17 +91,9 @@ TEST(SelectFrom, BasisFileRoundTrip) {
 
 TEST(SelectFrom, BasisFileRoundTripWithASixDofPoint) {
   MPI_Comm comm = PETSC_COMM_WORLD;
-  int rank = world_rank();
   const test::SharedScratchDir scratch("select_from_point");
   const std::string base = scratch.path("box");
-  mesh::BoxSpec b;
-  b.type = mesh::ElementType::Hex20;
-  b.lx = 1.0;
-  b.ly = 0.08;
-  b.lz = 0.05;
-  b.nx = 8;
-  b.ny = 2;
-  b.nz = 1;
+  const mesh::BoxSpec b = beam();
   // The tip face's centre node (a mid-edge node at y = 0.04, z = 0.025) carries the spider.
   std::int64_t centre = -1;
   {
@@ -98,13 +104,7 @@ TEST(SelectFrom, BasisFileRoundTripWithASixDofPoint) {
         centre = m.node_ids[k];
   }
   ASSERT_GT(centre, 0);
-  if (rank == 0) {
-    auto m = mesh::generate_box(b);
-    m.materials.push_back(test::steel());
-    std::fill(m.elem_material.begin(), m.elem_material.end(), 0);
-    mesh::write_gmsh(m, base + ".msh");
-  }
-  MPI_Barrier(comm);
+  write_beam(comm, b, base + ".msh");
   const std::vector<std::pair<std::string, std::string>> opts = {
       {"-mesh", base + ".msh"},      {"-clamp", "x0"},
       {"-mesh_node_sets", "tipc"},   {"-mesh_node_set_tipc", std::to_string(centre)},

@@ -1,12 +1,12 @@
 #include <hdf5.h>
 
-#include <algorithm>
 #include <cmath>
 #include <memory>
 
 #include "morse/cb/craig_bampton.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/log.hpp"
+#include "morse/fe/constraints.hpp"
 
 namespace morse::cb {
 
@@ -159,6 +159,7 @@ CBResult load_basis(const fe::Model& md, const std::string& path, const std::str
   PetscInt ldt;
   MORSE_CALL(MatDenseGetLDA(out.T.get(), &ldt));
   MORSE_CALL(MatDenseGetArrayWrite(out.T.get(), &tt));
+  const std::vector<std::int64_t> point_slot = fe::point_dof_slots(md);  // owned row -> 6 p + c - 1, or -1
   Progress progress(comm, "loading the basis", static_cast<double>(nr));
   for (PetscInt j = 0; j < nr; ++j) {
     std::vector<double> field;
@@ -178,12 +179,8 @@ CBResult load_basis(const fe::Model& md, const std::string& path, const std::str
     if (points && rank == 0) {
       const auto pv = j < out.n_b ? rd->slab("/cb/constraint_modes_points", j)
                                   : rd->slab("/cb/fixed_interface/mode_shapes_points", j - out.n_b);
-      for (PetscInt i = 0; i < dofs.n_owned; ++i) {
-        const auto it = std::find(pids.begin(), pids.end(), dofs.node[i]);
-        if (it != pids.end())
-          tt[i + static_cast<std::size_t>(ldt) * j] =
-              pv[6 * static_cast<std::size_t>(it - pids.begin()) + static_cast<std::size_t>(dofs.component[i] - 1)];
-      }
+      for (std::size_t i = 0; i < point_slot.size(); ++i)
+        if (point_slot[i] >= 0) tt[i + static_cast<std::size_t>(ldt) * j] = pv[static_cast<std::size_t>(point_slot[i])];
     }
     progress.update(static_cast<double>(j + 1));
   }

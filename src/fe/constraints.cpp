@@ -693,4 +693,15 @@ UVec expand(const Model& md, Vec u_bar) {
 
 const DofLayout& node_layout(const Model& md) { return md.constraints ? md.constraints->full : md.dofs; }
 
+std::vector<std::int64_t> point_dof_slots(const Model& md) {
+  if (!md.constraints || !md.mesh || md.mesh->mesh.constraints.point_ids.empty()) return {};
+  const auto& pids = md.mesh->mesh.constraints.point_ids;
+  std::vector<std::int64_t> slot(static_cast<std::size_t>(md.dofs.n_owned), -1);
+  for (PetscInt i = 0; i < md.dofs.n_owned; ++i) {
+    const auto it = std::find(pids.begin(), pids.end(), md.dofs.node[i]);
+    if (it != pids.end()) slot[i] = 6 * (it - pids.begin()) + md.dofs.component[i] - 1;
+  }
+  return slot;
+}
+
 }  // namespace morse::fe

@@ -69,17 +69,12 @@ void write_modes_dataset(H5Output& out, const std::string& name, const fe::Model
   // beside the nodal field as name_points [mode][point][1..6], points as /mesh/point_ids (0 for
   // a DOF that is not the model's: dropped or dependent), so that the vector can be read back.
   const std::vector<std::int64_t>& pids = md.mesh->mesh.constraints.point_ids;
-  std::vector<std::int64_t> point_row;  // owned row -> 6 p + c - 1, or -1
-  if (md.constraints && !pids.empty()) {
+  const std::vector<std::int64_t> point_row = fe::point_dof_slots(md);  // owned row -> 6 p + c - 1, or -1
+  if (!point_row.empty()) {
     out.create_rows(name + "_points", {static_cast<hsize_t>(count), static_cast<hsize_t>(pids.size()), 6});
     out.attribute(name + "_points", "description",
                   "[mode][point][components 1..6] of the six-DOF points, points as /mesh/point_ids; 0 where the "
                   "DOF is not one of the model's");
-    point_row.assign(static_cast<std::size_t>(md.dofs.n_owned), -1);
-    for (PetscInt i = 0; i < md.dofs.n_owned; ++i) {
-      const auto it = std::find(pids.begin(), pids.end(), md.dofs.node[i]);
-      if (it != pids.end()) point_row[i] = 6 * (it - pids.begin()) + md.dofs.component[i] - 1;
-    }
   }
   for (PetscInt j = 0; j < count; ++j) {
     Vec x;

@@ -336,15 +336,13 @@ void Assembly::build_torsion() {
   }
   for (int i = 0; i < n_twist_; ++i)
     if (!std::binary_search(driven_.begin(), driven_.end(), i)) free_.push_back(i);
+  tMs_.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) tMs_[i] += tM_[i * n + j] * rotors_[twist_rotor_[j]].speed_ratio;
 }
 
 void Assembly::torsion_load(double omega, double omega_dot, double* f) const {
-  const std::size_t n = static_cast<std::size_t>(n_twist_);
-  for (std::size_t i = 0; i < n; ++i) {
-    double s = 0.0;
-    for (std::size_t j = 0; j < n; ++j) s += tM_[i * n + j] * rotors_[twist_rotor_[j]].speed_ratio;
-    f[i] = -s * omega_dot;
-  }
+  for (std::size_t i = 0; i < tMs_.size(); ++i) f[i] = -tMs_[i] * omega_dot;
   for (const Torque& t : torsion_.torques) {
     const double w = rotors_[t.rotor].speed_ratio * omega;
     f[twist_dof(t.rotor, t.station)] -= t.coefficient * w * std::fabs(w);

@@ -198,8 +198,8 @@ class CondensedSolver : public StepSolver {
 class TorsionStepper {
  public:
   TorsionStepper(const Assembly& a, double a0, double a1, double al)
-      : a_(a), n_(a.n_torsion()), free_(a.free_twists()), nf_(static_cast<int>(free_.size())) {
-    const std::size_t n = static_cast<std::size_t>(n_), nf = static_cast<std::size_t>(nf_);
+      : a_(a), free_(a.free_twists()), nf_(static_cast<int>(free_.size())) {
+    const std::size_t n = static_cast<std::size_t>(a.n_torsion()), nf = static_cast<std::size_t>(nf_);
     for (auto* v : {&phi_, &dphi_, &ddphi_, &f0_, &f1_}) v->assign(n, 0.0);
     M_.resize(nf * nf);
     C_.resize(nf * nf);
@@ -285,7 +285,6 @@ class TorsionStepper {
                  &info);
   }
   const Assembly& a_;
-  int n_;
   std::vector<int> free_;
   int nf_;
   std::vector<double> M_, C_, K_, S_, Sm_, phi_, dphi_, ddphi_, f0_, f1_;

@@ -50,4 +50,9 @@ UVec expand(const Model& md, Vec u_bar);
 /// The layout of the nodes' free translations: md.constraints->full, or md.dofs. Not collective.
 const DofLayout& node_layout(const Model& md);
 
+/// For each owned row of md.dofs: 6 p + c - 1 if it is component c of six-DOF point p
+/// (p indexing md.mesh->mesh.constraints.point_ids), else -1. Empty without points. The points'
+/// rows are rank 0's, so other ranks get only -1. Not collective.
+std::vector<std::int64_t> point_dof_slots(const Model& md);
+
 }  // namespace morse::fe

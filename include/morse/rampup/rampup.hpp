@@ -361,6 +361,7 @@ class Assembly {
   int n_twist_ = 0;
   std::vector<int> twist_offset_, twist_rotor_, driven_, free_;
   std::vector<double> tM_, tC_, tK_;
+  std::vector<double> tMs_;  // M_t s: the torsional inertia of the rigid rotation, per unit Theta''
   void build_torsion();
   struct Force {
     int dof_x;
