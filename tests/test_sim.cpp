@@ -1049,6 +1049,159 @@ TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
   EXPECT_LT(runs, so.n_speeds()) << "the refinement ran the whole fine grid";
 }
 
+// A tip that the casing kicks, on a hardening spring: r = 3, M = I, K = w_n^2 I, g = k3 |q|^2 q (the
+// gradient of k3 |q|^4 / 4), 1 % damping. The tangent stiffness w_n^2 + 3 k3 |q|^2 grows with the
+// amplitude, so the critical step of central differences shrinks during the run: with the casing's
+// kick at amplitude a the step must stay below 2 / sqrt(w_n^2 + 3 k3 a^2) (a linearization), which
+// no step set before the run can guarantee.
+namespace {
+nlrom::ReducedModel hardening_tip(double wn, double k3) {
+  nlrom::ReducedModel m;
+  m.r = 3;
+  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
+  for (int i = 0; i < 3; ++i) m.K[4 * i] = wn * wn, m.M[4 * i] = 1.0, m.C[4 * i] = 2.0 * 0.01 * wn;
+  m.damping_omega = {wn, wn, wn};
+  m.g.r = 3;
+  m.g.A.assign(6 * 3, 0.0);
+  m.g.B.assign(10 * 3, 0.0);
+  std::size_t mono = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j)
+      for (int k = j; k < 3; ++k, ++mono)
+        for (int p = 0; p < 3; ++p) {  // q_i q_j q_k = q_a^2 q_p for some a: the other two are equal
+          if (i == p)
+            m.g.B[mono * 3 + p] = j == k ? k3 : 0.0;
+          else if (j == p)
+            m.g.B[mono * 3 + p] = i == k ? k3 : 0.0;
+          else if (k == p)
+            m.g.B[mono * 3 + p] = i == j ? k3 : 0.0;
+        }
+  return m;
+}
+}  // namespace
+
+// A sweep retries a failed speed at half its step (-sweep_retries), and only that speed: the tip
+// on a hardening spring with k3 = 1e15 at 0.9 of the critical step of the linear model diverges at
+// most speeds once the casing has kicked it (the tangent stiffness at the kick's amplitude is above
+// the step's), and runs at half the step at every speed. The retried results are bitwise those of
+// the same speed run at half the step alone; the others are untouched. A resumed sweep runs the
+// retries its file still owes, and nothing else. With k3 = 1e16 and two retries, the speeds that
+// still fail at a quarter of the step stop there.
+TEST(Sim, SweepRetriesAFailedSpeedAtHalfTheStep) {
+  const double wn = 2 * M_PI * 1000.0, c0 = 2e-4, hb = 6e-4;
+  sim::SweepSettings s;
+  s.base.contact.obstacle = sim::Obstacle::Casing;
+  s.base.contact.casing = {c0, hb, 2, 0.3, 0.0, 0.0};
+  s.base.contact.mu = 0.15;
+  sim::ContactNode node;
+  node.x[0] = 0.25 * std::cos(0.3), node.x[1] = 0.25 * std::sin(0.3);
+  s.base.contact.nodes.push_back(node);
+  s.revolutions = 5.0;
+  s.monitor = {std::cos(0.3), std::sin(0.3), 0.0};
+  s.spectrum_fmax = 5000.0;
+  s.spectrum_bins = 50;
+  s.divergence_limit = 0.25;  // the tip radius
+  s.batch = 4;
+  sim::SweepOptions so;
+  so.omega_min = 1000, so.omega_max = 5000, so.omega_step = 500;
+  const auto tasks = so.todo({});
+  ASSERT_EQ(tasks.size(), 9u);
+  const auto freqs = s.frequencies();
+  const bool root = world_rank() == 0;
+  // Each speed alone at the step h / 2^k, on every rank (the references).
+  auto alone = [&](const nlrom::ReducedModel& rm, double h) {
+    sim::SweepSettings sh = s;
+    sh.base.dt = h;
+    std::vector<sim::SpeedResult> out(tasks.size());
+    sim::sweep(PETSC_COMM_SELF, rm, sh, tasks,
+               [&](const sim::SpeedResult& R) { out[static_cast<std::size_t>(R.index)] = R; });
+    return out;
+  };
+  auto rounds = [&](const nlrom::ReducedModel& rm, int retries, std::vector<sim::SpeedTask> todo,
+                    std::vector<sim::SpeedResult> done, std::size_t* n_run) {
+    so.retries = retries;
+    sim::sweep_rounds(
+        PETSC_COMM_WORLD, rm, s, so, std::move(todo), &done, freqs, [](const sim::SpeedResult&) {}, n_run);
+    std::sort(done.begin(), done.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+    return done;  // on rank 0
+  };
+  auto same = [](const sim::SpeedResult& a, const sim::SpeedResult& b) {
+    return a.status == b.status && a.dt == b.dt && a.steps == b.steps && a.rms == b.rms &&
+           a.max_displacement == b.max_displacement && a.spectrum == b.spectrum && a.max_force == b.max_force;
+  };
+  {
+    const auto rm = hardening_tip(wn, 1e15);
+    s.base.dt = 0.9 * sim::critical_step(rm);
+    const auto at_h = alone(rm, s.base.dt), at_h2 = alone(rm, 0.5 * s.base.dt);
+    std::size_t n_run = 0;
+    const auto none = rounds(rm, 0, tasks, {}, &n_run);
+    const auto once = rounds(rm, 1, tasks, {}, &n_run);
+    const long runs_once = static_cast<long>(n_run);
+    // A resumed file: the sweep without retries, whose failures are owed one retry.
+    const auto resumed = rounds(rm, 1, {}, none, &n_run);
+    const long runs_resumed = static_cast<long>(n_run);
+    int failures = 0, ok_none = 1, ok_once = 1, ok_resumed = 1, ok_file = 1;
+    double umax = 0;
+    if (root) {
+      ok_none = ok_once = ok_resumed = none.size() == 9 && once.size() == 9 && resumed.size() == 9;
+      for (std::size_t i = 0; ok_none && i < 9; ++i) {
+        failures += at_h[i].status != 0;
+        ok_none &= same(none[i], at_h[i]) && none[i].halvings == 0;
+        const bool retried = at_h[i].status != 0;
+        ok_once &= same(once[i], retried ? at_h2[i] : at_h[i]) && once[i].halvings == (retried ? 1 : 0) &&
+                   once[i].status == 0 && once[i].dt == (retried ? 0.5 : 1.0) * s.base.dt;
+        ok_resumed &= same(resumed[i], once[i]) && resumed[i].halvings == once[i].halvings;
+        if (retried) umax = std::max(umax, once[i].max_displacement);
+        if (retried)
+          print0(PETSC_COMM_SELF, "  retry: omega %.0f rad/s failed at dt %.3e s (%s); at dt / 2: max |u_r| %.3e m\n",
+                 at_h[i].omega, s.base.dt, at_h[i].error.c_str(), once[i].max_displacement);
+      }
+      // The step and the halvings survive the sweep file.
+      sim::SweepRecord rec, back;
+      rec.settings = "k=v\n", rec.n_speeds = 9, rec.frequencies = freqs, rec.results = once;
+      const test::ScratchDir dir("retry");
+      const std::string path = dir.path("sweep.h5");
+      sim::write_sweep(path, rec);
+      std::string why;
+      ok_file = sim::read_sweep(path, &back, &why) && back.results.size() == 9;
+      for (std::size_t i = 0; ok_file && i < 9; ++i)
+        ok_file &= back.results[i].dt == once[i].dt && back.results[i].halvings == once[i].halvings;
+    }
+    for (int* v : {&failures, &ok_none, &ok_once, &ok_resumed, &ok_file}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+    MPI_Bcast(&umax, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
+    EXPECT_GE(failures, 5) << "the step should fail at most speeds (the case does not test retries)";
+    EXPECT_LT(failures, 9) << "some speeds should run at the full step";
+    EXPECT_EQ(ok_none, 1) << "without retries, a sweep is its speeds run alone";
+    EXPECT_EQ(ok_once, 1) << "a retried speed is not the speed run alone at half the step, or another changed";
+    EXPECT_EQ(runs_once, 9 + failures) << "speed runs with one retry";
+    EXPECT_EQ(ok_resumed, 1) << "a resumed file's owed retries differ from the sweep's own";
+    EXPECT_EQ(runs_resumed, failures) << "a resume runs the owed retries only";
+    EXPECT_EQ(ok_file, 1) << "dt and halvings do not survive the sweep file";
+    // The casing pushes the tip in by at most h_b - c0; the retried runs stay on that scale.
+    EXPECT_LT(umax, 1.1 * (hb - c0)) << "a retried run is not physical";
+  }
+  {  // At most so.retries halvings.
+    const auto rm = hardening_tip(wn, 1e16);
+    s.base.dt = 0.9 * sim::critical_step(rm);
+    const auto at_h4 = alone(rm, 0.25 * s.base.dt);
+    std::size_t n_run = 0;
+    const auto twice = rounds(rm, 2, tasks, {}, &n_run);
+    int ok = 1, still = 0;
+    if (root) {
+      ok = twice.size() == 9;
+      for (std::size_t i = 0; ok && i < 9; ++i) {
+        ok &= same(twice[i], at_h4[i]) && twice[i].halvings == 2;
+        still += twice[i].status != 0;
+      }
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+    MPI_Bcast(&still, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+    EXPECT_EQ(ok, 1) << "two retries: every speed should end at a quarter of the step";
+    EXPECT_GT(still, 0) << "some speeds should still fail at a quarter of the step (the cap is not tested)";
+    EXPECT_EQ(static_cast<long>(n_run), 27) << "every speed failed at h and h/2";
+  }
+}
+
 // The energy balance of central differences (sim::EnergyWork): the discrete energy E_{n+1/2}
 // changes by the works of the load, the normal contact forces and friction, less the damping
 // dissipation. The clamped box with a harmonic load on its free face, modal damping on every
@@ -1515,6 +1668,31 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
         read({{"-sweep_rotation", "sideways"}});
       },
       {"-sweep_rotation", "sideways"}, "an unknown sense of rotation");
+  // Retries and the divergence limit: their ranges, and keys of the settings.
+  so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}});
+  EXPECT_EQ(so.retries, 1);
+  EXPECT_LT(so.divergence_limit, 0.0) << "default: the tip radius";
+  for (const char* bad : {"-1", "21"}) {
+    so = read({{"-sweep_omega_min", "800"},
+               {"-sweep_omega_max", "900"},
+               {"-sweep_omega_step", "100"},
+               {"-sweep_retries", bad}});
+    EXPECT_NE(so.error.find(cat("-sweep_retries must be in 0..20 (got ", bad)), std::string::npos) << so.error;
+  }
+  refused({{"-sweep_omega_min", "800"},
+           {"-sweep_omega_max", "900"},
+           {"-sweep_omega_step", "100"},
+           {"-sweep_divergence_limit", "nan"}},
+          "-sweep_divergence_limit nan: expected a finite number");
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "900"},
+             {"-sweep_omega_step", "100"},
+             {"-sweep_retries", "3"}});
+  sim::SweepSettings limited;
+  limited.divergence_limit = 0.25;
+  const auto keyed = sim::settings_text(so, limited, model);
+  EXPECT_NE(keyed.find("\nretries=3\n"), std::string::npos) << keyed;
+  EXPECT_NE(keyed.find("\ndivergence_limit=0.25\n"), std::string::npos) << keyed;
 }
 
 // simulate's options refuse non-finite initial states and steps, a case given twice and a case

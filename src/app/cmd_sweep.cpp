@@ -61,6 +61,9 @@ void run_sweep(MPI_Comm comm) {
          "r = %zu, %s, %d lanes per rank (-sweep_kernel %s) on %d rank(s)\n",
          coarse, so.omega_min, last, so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(),
          s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, sim::kernel_name(so.kernel), size);
+  if (so.retries > 0)
+    print0(comm, "morse sweep: a speed that fails runs again at half its step, up to %d time(s) (-sweep_retries)\n",
+           so.retries);
   if (so.refine_step > 0)
     print0(comm,
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "
@@ -115,9 +118,14 @@ void run_sweep(MPI_Comm comm) {
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)
-      if (R.status != 0) failed += cat(failed.empty() ? "" : "; ", "omega ", R.omega, ": ", R.error);
+      if (R.status != 0) failed += cat(failed.empty() ? "" : "; ", "omega ", R.omega, " at dt ", R.dt, " s: ", R.error);
   print0(comm, "morse: wrote %s\n", so.out.c_str());
-  collective_check(comm, failed.empty() ? "" : cat("morse sweep: speeds failed (recorded with status 1): ", failed));
+  collective_check(
+      comm, failed.empty() ? ""
+                           : cat("morse sweep: speeds failed (recorded with status 1",
+                                 so.retries > 0 ? cat(" after ", so.retries, " halving(s) of the step; -sweep_retries")
+                                                : std::string(),
+                                 "): ", failed));
   check_options(comm, false);
 }
 

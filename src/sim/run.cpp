@@ -260,6 +260,7 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   SweepOptions* o = this;
   char buf[PETSC_MAX_PATH_LEN] = "";
   PetscBool set = PETSC_FALSE;
+  PetscInt retries = o->retries;  // read as a PetscInt, range-checked below
   PetscOptionsBegin(comm, nullptr, "morse sweep options", "");
   PetscCall(MorseOptionsString("-rom", "Reduced model: a morse nlrom file whose boundary set holds the contact set", "",
                                buf, buf, sizeof buf, &set));
@@ -321,6 +322,13 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                              "and friction acts along -e_theta); negative: at -omega",
                              "", senses, sense, &sense, nullptr));
   o->rotation = sense == static_cast<PetscEnum>(1) ? 1 : -1;
+  PetscCall(MorseOptionsInt("-sweep_retries",
+                            "A speed that fails (non-finite state) runs again at half its step, up to this many times",
+                            "", retries, &retries, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_divergence_limit",
+                             "A speed whose monitored displacement exceeds this [m] has diverged (default: the largest "
+                             "radius of the contact nodes; 0: no limit)",
+                             "", o->divergence_limit, &o->divergence_limit, nullptr));
   PetscOptionsEnd();
   auto bad = [&](const std::string& e) {
     if (o->error.empty()) o->error = e;
@@ -332,8 +340,13 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                                 {"-sweep_refine_rms", o->refine_rms},
                                 {"-sweep_refine_frequency", o->refine_frequency},
                                 {"-sim_dt", o->dt},
+                                {"-sweep_divergence_limit", o->divergence_limit},
                                 {"-sweep_spectrum_fmax", o->fmax}})
     if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (!(retries >= 0 && retries <= 20))
+    bad(cat("-sweep_retries must be in 0..20 (got ", retries, "; each retry halves the step of a failed speed)"));
+  else
+    o->retries = static_cast<int>(retries);
   if (o->error.empty() && o->refine_step != 0) {
     // The coarse step must be 2^k fine steps (k >= 1), so that bisection lands on the fine grid.
     const double ratio = o->omega_step / o->refine_step;
@@ -378,12 +391,12 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
                 "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
                 "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nkernel=%s\nfloat=%d\n"
                 "spectrum_decimation=block_mean\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
-                "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\n",
+                "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\nretries=%d\ndivergence_limit=%.17g\n",
                 files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
                 s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
                 c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel),
                 s.single ? 1 : 0, o.rotation, o.refine_step, o.refine_rms, o.refine_frequency,
-                nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0);
+                nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0, o.retries, s.divergence_limit);
   return b;
 }
 
@@ -430,6 +443,12 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.kernel = kernel;
   s.single = single;
   s.monitor = sm.radial_row(monitor, "-sweep_monitor");
+  s.divergence_limit = divergence_limit;
+  if (divergence_limit < 0) {  // the tip radius: a displacement no blade survives
+    s.divergence_limit = 0.0;
+    for (const auto& n : s.base.contact.nodes)
+      s.divergence_limit = std::max(s.divergence_limit, std::hypot(n.x[0], n.x[1]));
+  }
   return s;
 }
 
@@ -499,6 +518,36 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   return c;
 }
 
+namespace {
+// A list of speeds decided on rank 0, shared with every rank.
+std::vector<SpeedTask> share_tasks(MPI_Comm comm, const std::vector<SpeedTask>& tasks) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  long n = static_cast<long>(tasks.size());
+  MPI_Bcast(&n, 1, MPI_LONG, 0, comm);
+  std::vector<std::int64_t> idx(static_cast<std::size_t>(n));
+  std::vector<double> om(static_cast<std::size_t>(n));
+  std::vector<int> halvings(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; rank == 0 && i < tasks.size(); ++i)
+    idx[i] = tasks[i].index, om[i] = tasks[i].omega, halvings[i] = tasks[i].halvings;
+  MPI_Bcast(idx.data(), static_cast<int>(n), MPI_INT64_T, 0, comm);
+  MPI_Bcast(om.data(), static_cast<int>(n), MPI_DOUBLE, 0, comm);
+  MPI_Bcast(halvings.data(), static_cast<int>(n), MPI_INT, 0, comm);
+  std::vector<SpeedTask> out;
+  for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i)
+    out.push_back({static_cast<long>(idx[i]), om[i], halvings[i]});
+  return out;
+}
+}  // namespace
+
+std::vector<SpeedTask> SweepOptions::retry(const std::vector<SpeedResult>& done) const {
+  std::vector<SpeedTask> out;
+  for (const auto& R : done)
+    if (R.status != 0 && R.halvings < retries) out.push_back({R.index, R.omega, R.halvings + 1});
+  std::sort(out.begin(), out.end(), [](const SpeedTask& a, const SpeedTask& b) { return a.index < b.index; });
+  return out;
+}
+
 SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,
                         std::vector<SpeedTask> todo, std::vector<SpeedResult>* done, const std::vector<double>& freqs,
                         const std::function<void(const SpeedResult&)>& on_result, std::size_t* n_run) {
@@ -506,31 +555,60 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
   MPI_Comm_rank(comm, &rank);
   SweepStats st;
   *n_run = 0;
-  for (int round = 0;; ++round) {
-    if (!todo.empty()) {
-      if (round > 0) print0(comm, "morse sweep: refinement round %d: %zu speeds\n", round, todo.size());
-      const auto rs = sweep(comm, m, s, todo, [&](const SpeedResult& R) {
+  auto run = [&](const std::vector<SpeedTask>& tasks, int halvings) {
+    SweepSettings sh = s;
+    sh.base.dt = std::ldexp(s.base.dt, -halvings);
+    const auto rs = sweep(comm, m, sh, tasks, [&](const SpeedResult& R) {
+      // A retry replaces the failed result of its speed.
+      auto old = std::find_if(done->begin(), done->end(), [&](const SpeedResult& x) { return x.index == R.index; });
+      if (old != done->end())
+        *old = R;
+      else
         done->push_back(R);
-        on_result(R);
-      });
-      st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
-          st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
-      st.kernel = rs.kernel;
-      *n_run += todo.size();
+      if (R.status != 0 && R.halvings < so.retries)
+        print0(PETSC_COMM_SELF, "morse sweep: omega %.10g rad/s failed at dt %.4g s (%s); it runs again at dt %.4g s\n",
+               R.omega, R.dt, R.error.c_str(), 0.5 * R.dt);
+      on_result(R);
+    });
+    st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
+        st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
+    st.kernel = rs.kernel;
+    *n_run += tasks.size();
+  };
+  // The retries a resumed file still owes run first, with the grid's speeds not yet run.
+  {
+    std::vector<SpeedTask> owed;
+    if (rank == 0) owed = so.retry(*done);
+    owed = share_tasks(comm, owed);
+    todo.insert(todo.end(), owed.begin(), owed.end());
+  }
+  for (int round = 0;; ++round) {
+    if (!todo.empty() && round > 0) print0(comm, "morse sweep: refinement round %d: %zu speeds\n", round, todo.size());
+    // The tasks by step (halvings), the largest step first; the failures of each pass join the
+    // next one at half their step.
+    while (!todo.empty()) {
+      int level = todo.front().halvings;
+      for (const auto& t : todo) level = std::min(level, t.halvings);
+      std::vector<SpeedTask> now, later;
+      for (const auto& t : todo) (t.halvings == level ? now : later).push_back(t);
+      if (level > 0)
+        print0(comm, "morse sweep: %zu speed(s) at dt %.4g s (the step halved %d time(s))\n", now.size(),
+               std::ldexp(s.base.dt, -level), level);
+      run(now, level);
+      std::vector<SpeedTask> again;
+      if (rank == 0)  // the speeds of this pass that failed and may retry
+        for (const auto& t : so.retry(*done))
+          if (std::any_of(now.begin(), now.end(), [&](const SpeedTask& x) { return x.index == t.index; }))
+            again.push_back(t);
+      again = share_tasks(comm, again);
+      later.insert(later.end(), again.begin(), again.end());
+      todo = std::move(later);
     }
     // The next round, decided on rank 0 (which holds the results) and shared.
     std::vector<SpeedTask> next;
     if (rank == 0) next = so.refine(*done, freqs);
-    long nn = static_cast<long>(next.size());
-    MPI_Bcast(&nn, 1, MPI_LONG, 0, comm);
-    std::vector<std::int64_t> idx(static_cast<std::size_t>(nn));
-    std::vector<double> om(static_cast<std::size_t>(nn));
-    for (std::size_t i = 0; rank == 0 && i < next.size(); ++i) idx[i] = next[i].index, om[i] = next[i].omega;
-    MPI_Bcast(idx.data(), static_cast<int>(nn), MPI_INT64_T, 0, comm);
-    MPI_Bcast(om.data(), static_cast<int>(nn), MPI_DOUBLE, 0, comm);
-    if (nn == 0) break;
-    todo.clear();
-    for (long i = 0; i < nn; ++i) todo.push_back({static_cast<long>(idx[i]), om[i]});
+    todo = share_tasks(comm, next);
+    if (todo.empty()) break;
   }
   return st;
 }

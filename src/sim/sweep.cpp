@@ -259,7 +259,9 @@ class Batch {
     ln.start = std::chrono::steady_clock::now();
     ln.res.index = task.index;
     ln.res.omega = task.omega;
+    ln.res.halvings = task.halvings;
     const double h = s_.base.dt;
+    ln.res.dt = h;
     ln.res.t_final = s_.revolutions * 2.0 * M_PI / std::abs(task.omega);
     ln.n_steps = detail::step_count(ln.res.t_final, h);
     ln.half = (ln.n_steps + 1) / 2;
@@ -316,11 +318,18 @@ class Batch {
       const double t = static_cast<double>(n1) * h;
       for (std::size_t j = 0; j < r_; ++j) col_[j] = Qp_[j * L_ + slot], colm_[j] = Qm_[j * L_ + slot];
       bool fail = false;
+      double u = 0.0;
       try {
         if (ln.contact) ln.contact->correct(col_.data(), colm_.data(), h, t);
         if (ln.boundary) ln.boundary->solve(col_.data(), colm_.data(), h, t, nullptr);
         for (std::size_t j = 0; j < r_ && !fail; ++j) fail = !std::isfinite(col_[j]);
         if (fail) ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
+        u = monitored();
+        if (!fail && s_.divergence_limit > 0 && std::abs(u) > s_.divergence_limit) {
+          fail = true;
+          ln.res.error = cat("diverged: the monitored displacement is ", u, " m at t = ", t, " (step ", n1,
+                             "), above the limit ", s_.divergence_limit, " m (-sweep_divergence_limit)");
+        }
       } catch (const std::exception& e) {
         fail = true;
         ln.res.error = message_of(e);
@@ -328,7 +337,7 @@ class Batch {
       if (!fail) {
         for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];
         if (s_.base.energy_balance) balance(ln, slot, n1);
-        record(ln, n1, t);
+        record(ln, n1, t, u);
       }
       ln.n = n1;
       if (fail || n1 == ln.n_steps) {
@@ -366,9 +375,13 @@ class Batch {
     if (n1 == ln.half) ln.res.energy_half = e, ln.res.work_half = ln.ledger->work();
     if (n1 == ln.n_steps) ln.res.energy_end = e, ln.res.work_end = ln.ledger->work();
   }
-  void record(Lane& ln, long n1, double t) {
+  // monitor . q of the state just computed (col_).
+  double monitored() const {
     double u = 0.0;
     for (std::size_t j = 0; j < r_; ++j) u += s_.monitor[j] * col_[j];
+    return u;
+  }
+  void record(Lane& ln, long n1, double t, double u) {
     SpeedResult& R = ln.res;
     R.steps = n1;
     if (std::abs(u) > R.max_displacement) R.max_displacement = std::abs(u), R.time_of_max = t;
@@ -423,6 +436,7 @@ class Batch {
 
 void pack(morse::detail::Packer* pk, const SpeedResult& R) {
   pk->put(R.index), pk->put(R.omega), pk->put(R.status), pk->put_str(R.error), pk->put(R.steps);
+  pk->put(R.dt), pk->put(R.halvings);
   pk->put(R.t_final), pk->put(R.rms), pk->put(R.mean), pk->put(R.max_displacement), pk->put(R.time_of_max);
   pk->put(R.max_force), pk->put(R.time_of_max_force), pk->put(R.max_node_force), pk->put(R.max_active);
   pk->put(R.seconds), pk->put_vec(R.spectrum);
@@ -434,7 +448,8 @@ void pack(morse::detail::Packer* pk, const SpeedResult& R) {
 SpeedResult unpack(morse::detail::Unpacker* up) {
   SpeedResult R;
   R.index = up->get<long>(), R.omega = up->get<double>(), R.status = up->get<int>(), R.error = up->get_str();
-  R.steps = up->get<long>(), R.t_final = up->get<double>(), R.rms = up->get<double>(), R.mean = up->get<double>();
+  R.steps = up->get<long>(), R.dt = up->get<double>(), R.halvings = up->get<int>();
+  R.t_final = up->get<double>(), R.rms = up->get<double>(), R.mean = up->get<double>();
   R.max_displacement = up->get<double>(), R.time_of_max = up->get<double>(), R.max_force = up->get<double>();
   R.time_of_max_force = up->get<double>(), R.max_node_force = up->get<double>(), R.max_active = up->get<int>();
   R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>();

@@ -48,6 +48,11 @@ void write_sweep(const std::string& path, SweepRecord rec) {
   out.write("/sweep/omega", column(rs, [](const SpeedResult& r) { return r.omega; }));
   out.write("/sweep/status", icolumn(rs, [](const SpeedResult& r) { return r.status; }));
   out.write("/sweep/steps", icolumn(rs, [](const SpeedResult& r) { return r.steps; }));
+  out.write("/sweep/dt", column(rs, [](const SpeedResult& r) { return r.dt; }));
+  out.attribute("/sweep/dt", "description", "[s] the time step of each speed's run (smaller after a retry)");
+  out.write("/sweep/halvings", icolumn(rs, [](const SpeedResult& r) { return r.halvings; }));
+  out.attribute("/sweep/halvings", "description",
+                "times the step was halved for the speed after a failure (-sweep_retries): dt = -sim_dt / 2^halvings");
   out.write("/sweep/t_final", column(rs, [](const SpeedResult& r) { return r.t_final; }));
   out.write("/sweep/rms", column(rs, [](const SpeedResult& r) { return r.rms; }));
   out.write("/sweep/mean", column(rs, [](const SpeedResult& r) { return r.mean; }));
@@ -91,8 +96,8 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   }
   // Every dataset with its shape: a resumed file is validated whole before any value is used.
   std::map<std::string, std::vector<hsize_t>> dims;
-  std::vector<double> omega, tf, rms, mean, umax, tmax, fmax, tfmax, fnode, secs, spec, eb;
-  std::vector<std::int64_t> index, status, steps, act;
+  std::vector<double> omega, dt, tf, rms, mean, umax, tmax, fmax, tfmax, fnode, secs, spec, eb;
+  std::vector<std::int64_t> index, status, steps, halvings, act;
   auto dbl = [&](const char* name, std::vector<double>* v) {
     return io::read_doubles(path, cat("/sweep/", name), v, &dims[name], error);
   };
@@ -103,9 +108,9 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   double n_speeds = -1, n_done = -1;
   bool ok = io::read_string(path, "/sweep/settings", &rec->settings, error) && dbl("frequency", &rec->frequencies) &&
             dbl("eigenfrequencies", &rec->eigenfrequencies_hz) && ints("index", &index) && dbl("omega", &omega) &&
-            ints("status", &status) && ints("steps", &steps) && dbl("t_final", &tf) && dbl("rms", &rms) &&
-            dbl("mean", &mean) && dbl("max_displacement", &umax) && dbl("time_of_max", &tmax) &&
-            dbl("max_contact_force", &fmax) && dbl("time_of_max_contact_force", &tfmax) &&
+            ints("status", &status) && ints("steps", &steps) && dbl("dt", &dt) && ints("halvings", &halvings) &&
+            dbl("t_final", &tf) && dbl("rms", &rms) && dbl("mean", &mean) && dbl("max_displacement", &umax) &&
+            dbl("time_of_max", &tmax) && dbl("max_contact_force", &fmax) && dbl("time_of_max_contact_force", &tfmax) &&
             dbl("max_node_force", &fnode) && ints("max_active", &act) && dbl("seconds", &secs) &&
             dbl("spectrum", &spec) && dbl("energy_balance", &eb) &&
             io::read_string(path, "/sweep/errors", &errors, error) &&
@@ -143,6 +148,9 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     if (index[i] < 0 || static_cast<double>(index[i]) >= n_speeds)
       return corrupt(cat("/sweep/index[", i, "] = ", index[i], " is outside the speed grid 0..", n_speeds - 1));
     if (!seen.insert(index[i]).second) return corrupt(cat("/sweep/index holds speed ", index[i], " twice"));
+    if (!(dt[i] > 0 && std::isfinite(dt[i])) || halvings[i] < 0 || halvings[i] > 64)
+      return corrupt(
+          cat("speed ", index[i], " has the step /sweep/dt ", dt[i], " s and /sweep/halvings ", halvings[i]));
   }
   // "<index>\t<message>" per failed speed; a line that does not start so continues the message
   // before it (a message of several lines).
@@ -165,6 +173,7 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   for (std::size_t i = 0; i < n; ++i) {
     SpeedResult r;
     r.index = index[i], r.omega = omega[i], r.status = static_cast<int>(status[i]), r.steps = steps[i];
+    r.dt = dt[i], r.halvings = static_cast<int>(halvings[i]);
     r.t_final = tf[i], r.rms = rms[i], r.mean = mean[i], r.max_displacement = umax[i], r.time_of_max = tmax[i];
     r.max_force = fmax[i], r.time_of_max_force = tfmax[i], r.max_node_force = fnode[i];
     r.max_active = static_cast<int>(act[i]), r.seconds = secs[i];

@@ -93,14 +93,25 @@ struct SweepOptions {
   double refine_step = 0.0;
   double refine_rms = 0.2;         ///< -sweep_refine_rms: relative RMS jump that refines
   double refine_frequency = 0.05;  ///< -sweep_refine_frequency: relative change of the dominant frequency
+  /// -sweep_retries K: a speed that fails (a non-finite state, a contact or boundary solve that does
+  /// not converge) runs again from rest at half its step, up to K times (dt / 2^K). Central
+  /// differences with contact and a cubic force have no a-priori stable step: the stiffening under
+  /// contact lowers the critical step during the run (docs/contact.md, "Longer runs").
+  int retries = 1;
+  /// -sweep_divergence_limit L [m]: a speed whose monitored displacement exceeds L has diverged
+  /// (SweepSettings::divergence_limit). Default (negative): the largest radius of the contact
+  /// nodes, a displacement no blade survives; 0: no limit.
+  double divergence_limit = -1.0;
   ContactOptions contact;
   std::string error;  ///< a bad value, naming the option (raised by check())
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
-  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation and the contact options
-  /// (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, or a grid of more
-  /// than kMaxSweepSpeeds speeds (the message gives the file size it would need) is recorded in `error`. Collective.
+  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation, -sweep_retries, -sweep_divergence_limit and the
+  /// contact options
+  /// (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, -sweep_retries
+  /// outside 0..20, or a grid of more than kMaxSweepSpeeds speeds (the message gives the file size it would need) is
+  /// recorded in `error`. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
   /// Throws (alike on every rank) on options a sweep refuses: `error`, no -rom or -contact_set, a
   /// plane obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
@@ -110,7 +121,8 @@ struct SweepOptions {
   /// which writes the file), before anything is allocated. Collective.
   void check_memory(MPI_Comm comm) const;
   /// The sweep settings for the stored model sm: dt, linear, the casing contact of -contact_set,
-  /// -sim_revolutions (default 200), the spectrum, batch and the radial row of -sweep_monitor.
+  /// -sim_revolutions (default 200), the spectrum, batch, the radial row of -sweep_monitor and the
+  /// divergence limit (default: the largest radius of the contact nodes).
   SweepSettings settings(const nlrom::StoredModel& sm) const;
   /// The size of the speed grid omega_min, omega_min + step, ..., omega_max (with refinement: of
   /// the fine grid of step refine_step up to the last coarse speed).
@@ -125,6 +137,9 @@ struct SweepOptions {
   /// to refine_step), the speed midway. Empty: the refinement is over (or there is none). freqs: the
   /// spectrum's frequencies.
   std::vector<SpeedTask> refine(const std::vector<SpeedResult>& done, const std::vector<double>& freqs) const;
+  /// The retries due among the finished speeds `done` (those of a resumed file included): every
+  /// failed speed with fewer than `retries` halvings, at one more, in index order.
+  std::vector<SpeedTask> retry(const std::vector<SpeedResult>& done) const;
 };
 
 /// The predicted cost of a sweep, from a measured step rate (measure_step_rate, every rank for
@@ -143,9 +158,12 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
                              const std::vector<std::int64_t>& done_idx, double seconds = 0.3);
 
 /// Runs the speeds of todo (sim::sweep), then the refinement rounds of so.refine() until none is
-/// left. done (rank 0): the finished speeds, those of a resumed file included; each new result is
-/// appended to it before on_result(result) runs (the checkpoint). freqs: the spectrum's
-/// frequencies. *n_run: the speeds run. Prints each round on rank 0. Collective.
+/// left. Every speed that fails is run again at half its step (so.retry(), up to so.retries
+/// halvings; those due in a resumed file first), before the next refinement round; s.base.dt is
+/// the step of a speed with no halving. done (rank 0): the finished speeds, those of a resumed file
+/// included; each new result replaces the one of the same index or is appended to it before
+/// on_result(result) runs (the checkpoint). freqs: the spectrum's frequencies. *n_run: the speed
+/// runs (retries included). Prints each round and each retry on rank 0. Collective.
 SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,
                         std::vector<SpeedTask> todo, std::vector<SpeedResult>* done, const std::vector<double>& freqs,
                         const std::function<void(const SpeedResult&)>& on_result, std::size_t* n_run);

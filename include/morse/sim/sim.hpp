@@ -333,6 +333,9 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
 struct SpeedTask {
   long index = 0;
   double omega = 0.0;
+  /// Times the step was halved for this speed (a retry after a failure, sweep_rounds): recorded
+  /// in its result. sweep() runs every task at s.base.dt, which the caller has set accordingly.
+  int halvings = 0;
 };
 
 /// The cubic force kernel of a sweep's lanes (SweepSettings::kernel).
@@ -346,6 +349,8 @@ struct SpeedResult {
   double omega = 0.0;
   int status = 0;  ///< 0 done; 1 failed (error says why; the other fields hold what was reached)
   std::string error;
+  double dt = 0.0;                                   ///< the time step of this run [s]
+  int halvings = 0;                                  ///< SpeedTask::halvings: dt is the sweep's step / 2^halvings
   long steps = 0;                                    ///< states after the initial one
   double t_final = 0.0;                              ///< revolutions * 2 pi / |Omega|
   double rms = 0.0;                                  ///< RMS of the monitored displacement over t >= t_final / 2
@@ -381,6 +386,9 @@ struct SweepSettings {
   SweepKernel kernel = SweepKernel::Auto;
   /// Potential: float coefficients, double arithmetic (CubicKernelBatch; -sweep_float).
   bool single = false;
+  /// A speed fails (status 1, "diverged") as soon as |monitor . q| exceeds this [m] (0: never): a
+  /// run that has lost stability can end with a huge but finite state before it turns non-finite.
+  double divergence_limit = 0.0;
   /// The frequency grid of the spectrum (empty without one).
   std::vector<double> frequencies() const;
 };
