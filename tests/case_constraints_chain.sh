@@ -11,7 +11,14 @@
 #    labels);
 #  - select on the constrained deck;
 #  - export: the MBDyn node 9001 at (0.4, 0.025, 0.025);
-#  - bad input: element-by-element commands refuse the deck naming the constraints; a dependent
+#  - nlrom on the constrained deck (CB + modal derivatives weighted by a training load, exact
+#    tensors; boundary: the solid nodes at x = 0.3): its stored basis is expanded through the spider (in every column the tip grids
+#    5, 10, 15, 20 move as one rigid body, as RBE2 100 makes them), and its lowest frequency bounds
+#    the model's from above within 1 %; a six-DOF point in nlrom's boundary is refused naming the
+#    set;
+#  - static (linear) with loads on the four dependent tip grids: their mean displacement is the
+#    point's translation from the superelement's static condensation K_bb^-1 F;
+#  - bad input: fom refuses the deck naming the constraints; a dependent
 #    grid that is also clamped, and a circular MPC, fail naming the card and the grid; no file is
 #    left.
 # usage: case_constraints_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
@@ -51,8 +58,69 @@ assert (b["/rom/boundary_dofs"][:] == bd).all()
 M = a["/rom/M"][:]
 assert all(M[i, i] > 1.5 for i in range(3)), np.diag(M)[:3]
 PY
-expect_error "the rigid elements, interpolation elements and MPCs of .*spider_beam.bdf are supported by modes, reduce, select and export only" \
-  "$d/static.h5" static -mesh "$deck" -clamp '*BOUNDARY' -load_sets ASET -load_ASET_dir x -load_ASET_amplitude 1
+nl=(-mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets mid -mesh_node_set_mid 4,9,14,19 -boundary mid -nlrom_basis cbmd
+  -nlrom_num_fixed_modes 3 -nlrom_num_derivatives 3 -nlrom_forces exact -load_sets mid -load_mid_dir 0,1,0.5
+  -load_mid_amplitude 100 -load_mid_omega 2000 -nlrom_training_tfinal 0.01)
+run nlrom "${nl[@]}" -out "$d/nl.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+import scipy.linalg as sl
+d = sys.argv[1]
+f, m = h5py.File(f"{d}/nl.h5", "r"), h5py.File(f"{d}/modes.h5", "r")
+ids = f["/mesh/node_ids"][:]
+x = f["/mesh/coordinates"][:]
+V = f["/nlrom/basis"][:]  # [column][node][3]
+assert V.shape[0] == 12 + 3 + 3, V.shape
+# RBE2 100: grids 5, 10, 15, 20 move rigidly with each other in every column: u_d = u_R + th x (x_d - x_R).
+tip = [int(np.where(ids == g)[0][0]) for g in (5, 10, 15, 20)]
+xr = np.array([0.4, 0.025, 0.025])
+for j in range(V.shape[0]):
+    u = V[j][tip]
+    r = x[tip] - xr
+    # least-squares rigid fit (u_R, th) of the four grids, then its residual
+    A = np.zeros((12, 6)); b = u.reshape(-1)
+    for k in range(4):
+        A[3*k:3*k+3, :3] = np.eye(3)
+        rx, ry, rz = r[k]
+        A[3*k:3*k+3, 3:] = -np.array([[0, -rz, ry], [rz, 0, -rx], [-ry, rx, 0]])
+    sol, *_ = np.linalg.lstsq(A, b, rcond=None)
+    res = np.linalg.norm(A @ sol - b) / max(np.linalg.norm(b), 1e-300)
+    assert res < 1e-9 or np.linalg.norm(b) < 1e-12, (j, res)
+assert np.abs(V[:, tip]).max() > 0.1, "the tip moves in some column"
+K, M = f["/nlrom/K"][:], f["/nlrom/M"][:]
+w2 = sl.eigh(K, M, eigvals_only=True)
+f_rom = np.sqrt(w2[0]) / (2 * np.pi)
+f_full = m["/fom/frequencies_hz"][0]
+assert f_full <= f_rom * (1 + 1e-9) and f_rom < 1.01 * f_full, (f_rom, f_full)
+assert np.abs(f["/nlrom/B"][:]).max() > 0, "no cubic tensor"
+print(f"constraints chain: nlrom f1 {f_rom:.6g} Hz (model {f_full:.6g} Hz)")
+PY
+expect_error "the boundary set ASET has 6 DOFs on 1 nodes" "$d/nl_bad.h5" nlrom -mesh "$deck" -clamp '*BOUNDARY' \
+  -boundary ASET -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact
+# static on the constrained deck: 1 kN along y and 0.5 kN along z on each of the four tip grids (all
+# dependent on grid 9001), linear, against the superelement's exact static condensation at the
+# point (K_bb of reduce's /rom/K: the constraint modes are static solutions): the tip grids' mean
+# displacement is the point's translation (their offsets sum to zero), u_R = (K_bb^-1 F)[:3].
+run static -mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip \
+  -load_tip_dir 0,1,0.5 -load_tip_amplitude 1118.0339887498948 -static_linear -out "$d/static.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+d = sys.argv[1]
+s, se = h5py.File(f"{d}/static.h5", "r"), h5py.File(f"{d}/se.h5", "r")
+ids = s["/mesh/node_ids"][:]
+u = s["/static/u"][0]
+tip = [int(np.where(ids == g)[0][0]) for g in (5, 10, 15, 20)]
+mean = u[tip].mean(axis=0)
+Kbb = se["/rom/K"][:6, :6]
+F = np.array([0, 4000.0, 2000.0, 0, 0, 0])
+uR = np.linalg.solve(Kbb, F)[:3]
+err = np.abs(mean - uR).max() / np.abs(uR).max()
+assert err < 1e-8, (mean, uR, err)
+print(f"constraints chain: static tip {mean} m, condensation {uR} m ({err:.1e})")
+PY
+expect_error "the rigid elements, interpolation elements and MPCs of .*spider_beam.bdf are supported by modes, reduce, select, export, nlrom, static and stress only" \
+  "$d/fom.h5" fom -mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip \
+  -load_tip_dir y -load_tip_amplitude 1 -fom_tfinal 1e-4 -fom_dt 1e-5
 sed 's/^RBE2,100,9001,123456,5,10,15,20$/RBE2,100,9001,123456,5,10,15,20,1/' "$deck" >"$d/clamped_dep.bdf"
 expect_error "RBE2 100: node 1 component 1 (x) is dependent but also fixed" "$d/bad1.h5" modes -mesh "$d/clamped_dep.bdf" \
   -clamp '*BOUNDARY' -modes_nev 2

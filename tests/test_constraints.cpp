@@ -6,6 +6,10 @@
 //   - a force and moment on an RBE3's reference point load the structure exactly as the lever
 //     rule's nodal forces F/n + (J^-1 M) x r_i do, and the reference moves as the least-squares
 //     fit of its nodes (mean translation, J^-1 sum r_i x u_i);
+//   - the St Venant-Kirchhoff forces through T (fe::Svk(Model)): on the tied boxes, the strain
+//     energy, nonlinear force, tangent and projected cubic tensors of smooth displacement fields
+//     are those of the one box, and a nonlinear static solve (loads T^T f, tangent T^T K_T T)
+//     under a large tip load gives the one box's displacement field;
 //   - the errors a deck can make (a dependent DOF clamped or dependent twice, a cycle, collinear
 //     RBE3 nodes, rotations of solid nodes) are thrown on every rank.
 #include <petscsys.h>
@@ -13,11 +17,17 @@
 #include <petscblaslapack.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 
 #include "morse/core/error.hpp"
+#include "morse/core/log.hpp"
+#include "morse/dyn/dyn.hpp"
 #include "morse/fe/constraints.hpp"
+#include "morse/fe/nonlinear.hpp"
+#include "morse/io/h5.hpp"
+#include "morse/mesh/partition.hpp"
 #include "util.hpp"
 
 using namespace morse;
@@ -77,8 +87,10 @@ std::string thrown(const std::function<void()>& f) {
 
 }  // namespace
 
-TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
-  // [0, 0.5] and [0.5, 1] (5 + 5 cells) tied node to node on x = 0.5, against [0, 1] (10 cells).
+namespace {
+// [0, 0.5] and [0.5, 1] (5 + 5 cells) tied node to node on x = 0.5 by 27 MPCs u_B = u_A, clamped
+// at x = 0; and the box [0, 1] (10 cells) they make, clamped at x = 0. Collective.
+std::pair<fe::Model, fe::Model> tied_and_one_box() {
   const auto half = [](double x0) {
     auto b = test::box_spec(ElementType::Hex8, 0.5, 0.1, 0.08, 5, 2, 2);
     b.origin = {x0, 0, 0};
@@ -110,6 +122,12 @@ TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
   mesh::Mesh one;
   if (rank_of() == 0) one = mesh::generate_box(test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.08, 10, 2, 2));
   auto ref = build(std::move(one), {"x0"});
+  return {std::move(tied), std::move(ref)};
+}
+}  // namespace
+
+TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
+  auto [tied, ref] = tied_and_one_box();
   ASSERT_TRUE(tied.constraints);
   EXPECT_EQ(tied.constraints->n_dependent, 27);
   EXPECT_EQ(tied.dofs.n_global, ref.dofs.n_global);
@@ -117,6 +135,144 @@ TEST(Constraints, TwoBoxesTiedByMpcsHaveTheSpectrumOfOneBox) {
   const auto wt = test::lowest_eigenvalues(tied.K.get(), tied.M.get(), 8);
   const auto wr = test::lowest_eigenvalues(ref.K.get(), ref.M.get(), 8);
   for (int i = 0; i < 8; ++i) EXPECT_NEAR(wt[i], wr[i], 1e-9 * wr[i]) << "mode " << i + 1;
+}
+
+// The nonlinear forces through T: smooth displacement fields of the tied boxes and of the one box
+// (the same physical fields, the tied model's dependent nodes following through the MPCs) have the
+// same strain energy, directional nonlinear force v . g_nl(u), tangent v . K_T(u) v and projected
+// cubic tensors (exact: the meshes are the same but for the doubled nodes at x = 0.5). The fields
+// reach 24 cm on the 1 m box, so that the nonlinear energy is a sizeable part of the total.
+TEST(Constraints, NonlinearForcesThroughTiedBoxesAreTheOneBoxs) {
+  auto [tied, ref] = tied_and_one_box();
+  ASSERT_TRUE(tied.constraints);
+  const mesh::Material steel = test::steel();
+  fe::Svk st(tied, steel), sr(ref, steel);
+  EXPECT_EQ(st.stiffness(), tied.K.get()) << "the linear part is the model's K_bar";
+  using Field = std::function<void(const double*, double*)>;
+  const Field f1 = [](const double* x, double* u) { u[0] = 0.08 * x[0] * x[1], u[1] = 0.24 * x[0] * x[0], u[2] = 0; };
+  const Field f2 = [](const double* x, double* u) {
+    u[0] = 0.004 * x[0], u[1] = 0.002 * x[0] * x[2], u[2] = 0.02 * x[0] * x[0] * x[0];
+  };
+  // The field on md's DOFs (its owned rows; a dependent node's rows are not the model's).
+  auto vec = [](const fe::Model& md, const Field& f) {
+    UVec v;
+    MORSE_CALL(MatCreateVecs(md.K.get(), v.ptr(), nullptr));
+    const auto& m = md.mesh->mesh;
+    for (std::int64_t k = 0; k < m.num_nodes(); ++k) {
+      double u[3];
+      f(&m.coords[3 * k], u);
+      for (int d = 0; d < 3; ++d) {
+        const PetscInt g = md.dofs.node_dof[3 * k + d];
+        if (g >= md.dofs.first && g < md.dofs.first + md.dofs.n_owned)
+          MORSE_CALL(VecSetValue(v.get(), g, u[d], INSERT_VALUES));
+      }
+    }
+    MORSE_CALL(VecAssemblyBegin(v.get()));
+    MORSE_CALL(VecAssemblyEnd(v.get()));
+    return v;
+  };
+  struct Values {
+    double linear, nonlinear, force, tangent;
+    std::vector<double> A, B;
+  };
+  auto values = [&](const fe::Model& md, const fe::Svk& svk) {
+    Values r;
+    auto u = vec(md, f1), v = vec(md, f2);
+    const auto e = svk.energy(u.get());
+    r.linear = e.linear, r.nonlinear = e.nonlinear;
+    UVec g;
+    MORSE_CALL(VecDuplicate(u.get(), g.ptr()));
+    svk.nonlinear_force(u.get(), g.get());
+    MORSE_CALL(VecDot(v.get(), g.get(), &r.force));
+    auto Kt = svk.create_tangent();
+    svk.tangent(u.get(), Kt.get());
+    MORSE_CALL(MatMult(Kt.get(), v.get(), g.get()));
+    MORSE_CALL(VecDot(v.get(), g.get(), &r.tangent));
+    PetscInt n = 0;
+    MORSE_CALL(VecGetLocalSize(u.get(), &n));
+    UMat Phi;
+    MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, n, PETSC_DECIDE, PETSC_DETERMINE, 2, nullptr, Phi.ptr()));
+    for (PetscInt j = 0; j < 2; ++j) {
+      Vec c;
+      MORSE_CALL(MatDenseGetColumnVecWrite(Phi.get(), j, &c));
+      MORSE_CALL(VecCopy(j == 0 ? u.get() : v.get(), c));
+      MORSE_CALL(MatDenseRestoreColumnVecWrite(Phi.get(), j, &c));
+    }
+    svk.project_tensors(Phi.get(), &r.A, &r.B);
+    return r;
+  };
+  const auto t = values(tied, st), r = values(ref, sr);
+  print0(PETSC_COMM_WORLD,
+         "  tied boxes: W_lin %.6e (one box %.6e), W_nl %.6e (%.6e), v.g %.6e (%.6e), v.Kt v %.6e (%.6e) J\n", t.linear,
+         r.linear, t.nonlinear, r.nonlinear, t.force, r.force, t.tangent, r.tangent);
+  EXPECT_GT(std::abs(r.nonlinear), 0.05 * r.linear) << "the fields should be large enough to be nonlinear";
+  EXPECT_NEAR(t.linear, r.linear, 1e-10 * r.linear);
+  EXPECT_NEAR(t.nonlinear, r.nonlinear, 1e-10 * std::abs(r.nonlinear));
+  EXPECT_NEAR(t.force, r.force, 1e-10 * std::abs(r.force));
+  EXPECT_NEAR(t.tangent, r.tangent, 1e-10 * std::abs(r.tangent));
+  ASSERT_EQ(t.A.size(), r.A.size());
+  ASSERT_EQ(t.B.size(), r.B.size());
+  double scale = 0, diff = 0;
+  for (std::size_t i = 0; i < r.A.size(); ++i)
+    scale = std::max(scale, std::abs(r.A[i])), diff = std::max(diff, std::abs(t.A[i] - r.A[i]));
+  EXPECT_LT(diff, 1e-10 * scale) << "quadratic tensor";
+  scale = diff = 0;
+  for (std::size_t i = 0; i < r.B.size(); ++i)
+    scale = std::max(scale, std::abs(r.B[i])), diff = std::max(diff, std::abs(t.B[i] - r.B[i]));
+  EXPECT_LT(diff, 1e-10 * scale) << "cubic tensor";
+}
+
+// The tied boxes under a large tip load (dead, along y, 300 kN on each of the 9 tip nodes, far into
+// the geometrically nonlinear range), solved with Newton on the model's DOFs
+// (dyn::solve_static): the displacement of every node, expanded through the MPCs, is the one box's
+// at the same place.
+TEST(Constraints, NonlinearStaticOfTiedBoxesIsTheOneBoxs) {
+  auto [tied, ref] = tied_and_one_box();
+  const mesh::Material steel = test::steel();
+  auto solve = [&](const fe::Model& md, const std::string& tip, bool linear) {
+    fe::Svk svk(md, steel);
+    dyn::NodalLoad l;
+    l.set = tip, l.dir[1] = 1.0, l.amplitude = 3e5;
+    dyn::Loads loads(md, {l});
+    dyn::StaticSettings ss;
+    ss.steps = 8;
+    ss.linear = linear;
+    auto r = dyn::solve_static(svk, loads, ss);
+    UVec u = fe::expand(md, r.u.get());
+    // Every node's displacement by its position (rank 0 gathers).
+    const auto& lm = *md.mesh;
+    auto nodal = io::gather_nodal(lm, fe::node_layout(md), u.get());
+    std::vector<std::pair<std::array<long, 3>, std::array<double, 3>>> byx;
+    const auto gm = mesh::gather_to_rank0(lm);
+    for (std::int64_t k = 0; k < gm.num_nodes(); ++k) {
+      std::array<long, 3> key;
+      for (int d = 0; d < 3; ++d) key[d] = std::lround(gm.coords[3 * k + d] * 1e6);
+      byx.push_back({key, {nodal[3 * k], nodal[3 * k + 1], nodal[3 * k + 2]}});
+    }
+    std::sort(byx.begin(), byx.end());
+    byx.erase(std::unique(byx.begin(), byx.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+              byx.end());  // the tied nodes at x = 0.5 once
+    return byx;
+  };
+  const auto t = solve(tied, "B_x1", false), r = solve(ref, "x1", false), rl = solve(ref, "x1", true);
+  int ok = 1;
+  double err = 0, tip = 0, tip_lin = 0;
+  if (rank_of() == 0) {
+    ok = t.size() == r.size();
+    for (std::size_t i = 0; ok && i < r.size(); ++i) {
+      ok = t[i].first == r[i].first;
+      for (int d = 0; d < 3; ++d) err = std::max(err, std::abs(t[i].second[d] - r[i].second[d]));
+      tip = std::max(tip, std::abs(r[i].second[1]));
+      tip_lin = std::max(tip_lin, std::abs(rl[i].second[1]));
+    }
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  for (double* v : {&err, &tip, &tip_lin}) MPI_Bcast(v, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
+  print0(PETSC_COMM_WORLD, "  tied boxes, static: tip u_y %.6e m (linear %.6e m), max |u_tied - u_one| %.2e m\n", tip,
+         tip_lin, err);
+  ASSERT_EQ(ok, 1) << "the nodes' positions differ";
+  EXPECT_GT(tip_lin, 1.1 * tip) << "the load should be large enough to be nonlinear";
+  EXPECT_LT(err, 1e-8 * tip);
 }
 
 TEST(Constraints, RigidSpiderOverAFreeBoxGivesTheRigidBodyMassMatrix) {

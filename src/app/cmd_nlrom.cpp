@@ -15,6 +15,7 @@
 #include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/io/h5.hpp"
 #include "morse/nlrom/nlrom.hpp"
 #include "morse/sim/sim.hpp"
@@ -38,12 +39,21 @@ void run_nlrom(MPI_Comm comm) {
   auto inputs = o.inputs();
   inputs.push_back({"-nlrom_snapshots", no.basis.snapshots});
   const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
-  Model md =
-      build_model(comm, o, "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element");
+  Model md = build_model(comm, o,
+                         "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element", true);
+  // POD snapshots live on the nodes' DOFs; a constrained model's coordinates are its independent
+  // DOFs (and points), to which the snapshots are not restricted.
+  collective_check(comm,
+                   md.constraints && !no.basis.snapshots.empty()
+                       ? cat("morse nlrom: ", o.mesh.path,
+                             " has rigid or interpolation elements or MPCs: snapshots (-nlrom_snapshots: POD "
+                             "bases, -nlrom_filter_pod) are not supported on such a model; use -nlrom_basis cb or "
+                             "cbmd")
+                       : std::string());
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   std::unique_ptr<dyn::Loads> training;
   if (!load_list.empty()) {
-    training = std::make_unique<dyn::Loads>(*md.mesh, md.dofs, load_list);
+    training = std::make_unique<dyn::Loads>(md, load_list);  // through the constraints' T^T, if any
     no.basis.training = training.get();
     if (no.basis.training_dt <= 0) {
       const double w = training->max_omega();
@@ -54,7 +64,7 @@ void run_nlrom(MPI_Comm comm) {
   // cannot fit.
   if (no.forces != "none")
     nlrom::check_force_memory(comm, static_cast<std::size_t>(nlrom::basis_size(md, no.basis)), no.forces != "exact");
-  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
+  fe::Svk svk(md, o.mesh.material);  // through the constraints' T, if any
   auto basis = nlrom::build_basis(md, svk, no.basis);
   const PetscInt r = basis.r();
   print0(comm, "morse nlrom: %s basis of %d vectors (%d boundary DOFs + %d fixed-interface modes + %d %s) in %.2f s\n",
@@ -146,7 +156,8 @@ void run_nlrom(MPI_Comm comm) {
   info.t2_forces_seconds = t2;
   info.t3_projection_seconds = t3;
   rm.g = std::move(g);
-  nlrom::write_stored_model(out, *md.mesh, md.dofs, basis, rm, info);
+  nlrom::write_stored_model(out, *md.mesh, fe::node_layout(md), basis, rm, info,
+                            md.constraints ? md.constraints->T.get() : nullptr);
   out.commit();
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());
 }

@@ -11,6 +11,7 @@
 #include "morse/core/log.hpp"
 #include "morse/core/options.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/fe/nonlinear.hpp"
 #include "morse/io/h5.hpp"
 
@@ -43,14 +44,18 @@ void run_static(MPI_Comm comm) {
   MORSE_CHECK(ss.error.empty(), ss.error);
   const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, o.inputs());
 
-  Model md =
-      build_model(comm, o, "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element");
-  dyn::Loads loads(*md.mesh, md.dofs, load_list);
+  Model md = build_model(comm, o,
+                         "morse static needs a mesh: its nonlinear (SVK) forces are computed element by element", true);
+  // With rigid or interpolation elements or MPCs the solve is on the model's DOFs (loads T^T f,
+  // forces through T) and the output on the nodes' (u = T u_bar).
+  const auto& nodes = fe::node_layout(md);
+  dyn::Loads loads(md, load_list);
   std::vector<dyn::SetProbe> probes;
-  for (const auto& m : monitor) probes.emplace_back(*md.mesh, md.dofs, m);
+  for (const auto& m : monitor) probes.emplace_back(*md.mesh, nodes, m);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the solve
-  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
+  fe::Svk svk(md, o.mesh.material);
   auto res = dyn::solve_static(svk, loads, ss);
+  if (md.constraints) res.u = fe::expand(md, res.u.get());
   check_options(comm, false);
 
   for (const auto& p : probes) {
@@ -66,7 +71,7 @@ void run_static(MPI_Comm comm) {
   io::write_provenance(out, "static", md.units);
   auto gm = mesh::gather_to_rank0(*md.mesh);
   io::write_mesh(out, gm);
-  dyn::write_static(out, *md.mesh, md.dofs, res, probes, ss);
+  dyn::write_static(out, *md.mesh, nodes, res, probes, ss);
   out.commit();
   if (xdmf) write_xdmf_collective(comm, o.out, gm, {{"/static/u", "displacement", 1}});
   print0(comm, "\nmorse: wrote %s\n", o.out.c_str());

@@ -133,7 +133,8 @@ void run_stress(MPI_Comm comm) {
   const auto sm = nlrom::read_stored_model(
       comm, so.rom, so.time_set ? std::vector<std::string>{} : std::vector<std::string>{so.monitor});
   const auto st = sim::stress_state(comm, so, sm);
-  Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element");
+  // The stored basis is expanded at every node (constraints included): only the mesh is used.
+  Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element", true);
   sim::check_stress_mesh(*md.mesh, sm.node_ids, sm.coords, o.mesh.path, so.rom);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   const auto u = sm.field(st.q.data());

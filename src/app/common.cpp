@@ -42,7 +42,7 @@ bool help_requested() {
   return h;
 }
 
-Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh) {
+Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh, bool constraints_ok) {
   o.check(needs_mesh);
   if (o.matrices_given()) {
     Model md;
@@ -64,9 +64,9 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh)
   Model md = fe::mesh_model(comm, o.mesh);
   // Element-by-element commands see the nodes' displacements, which dependent nodes of rigid and
   // interpolation elements do not have as DOFs of the model.
-  collective_check(comm, needs_mesh && md.constraints
+  collective_check(comm, needs_mesh && md.constraints && !constraints_ok
                              ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
-                                   " are supported by modes, reduce, select and export only")
+                                   " are supported by modes, reduce, select, export, nlrom, static and stress only")
                              : std::string());
   int size = 1;
   MPI_Comm_size(comm, &size);

@@ -47,7 +47,9 @@ using fe::Model;
 /// The model of a mesh (-mesh) or of assembled operators (-matrices_*), built by the library
 /// (fe::mesh_model, io::matrix_model) and described on rank 0. needs_mesh: why this command
 /// needs a mesh (then matrix input is refused with that reason), or null if matrices will do.
-Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh = nullptr);
+/// A command that needs a mesh refuses rigid and interpolation elements and MPCs unless
+/// `constraints_ok` (its element-by-element work goes through the constraints: fe::Svk(Model)).
+Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh = nullptr, bool constraints_ok = false);
 
 int rank_of(MPI_Comm comm);
 

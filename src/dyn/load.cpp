@@ -4,6 +4,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/fe/constraints.hpp"
 
 namespace morse::dyn {
 
@@ -66,6 +67,16 @@ Loads::Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::ve
     }
     MORSE_CALL(VecRestoreArray(p.get(), &a));
     patterns_.push_back(std::move(p));
+  }
+}
+
+Loads::Loads(const fe::Model& md, const std::vector<NodalLoad>& loads) : Loads(*md.mesh, fe::node_layout(md), loads) {
+  if (!md.constraints) return;
+  for (auto& p : patterns_) {
+    UVec q;
+    MORSE_CALL(MatCreateVecs(md.constraints->T.get(), q.ptr(), nullptr));
+    MORSE_CALL(MatMultTranspose(md.constraints->T.get(), p.get(), q.get()));
+    p = std::move(q);
   }
 }
 

@@ -669,6 +669,7 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
   cm->point_coords = cs.point_coords;
   cm->full = std::move(md->dofs);
   md->dofs = std::move(red);
+  cm->K_nodes = std::move(md->K);
   md->K = std::move(Kr);
   md->M = std::move(Mr);
   md->mass += point_mass;

@@ -103,8 +103,18 @@ void displacement_gradient(int n, const double* u, const double* g, double* H) {
 
 }  // namespace
 
+Svk::Svk(const Model& md, const mesh::Material& fallback)
+    : Svk(*md.mesh, md.constraints ? md.constraints->full : md.dofs, fallback,
+          md.constraints ? md.constraints->K_nodes.get() : md.K.get()) {
+  if (!md.constraints) return;
+  MORSE_CHECK(md.constraints->K_nodes, "Svk: the model's constraints hold no stiffness of the nodes");
+  T_ = md.constraints->T.get();
+  K_ = md.K.get();
+  MORSE_CALL(MatCreateVecs(T_, nullptr, wf_.ptr()));
+}
+
 Svk::Svk(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback, Mat K)
-    : comm_(lm.comm), K_(K) {
+    : comm_(lm.comm), K_(K), Kn_(K) {
   StageTimer stage(comm_, "SvkSetup");
   const auto& m = lm.mesh;
   const std::int64_t nn = m.num_nodes(), ne = m.num_elements();
@@ -168,14 +178,20 @@ Svk::Svk(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material&
 Svk::~Svk() = default;
 
 void Svk::to_local(Vec u, Vec local) const {
+  if (T_) {  // the nodes' translations T u_bar
+    MORSE_CALL(MatMult(T_, u, wf_.get()));
+    u = wf_.get();
+  }
   MORSE_CALL(VecScatterBegin(scatter_.get(), u, local, INSERT_VALUES, SCATTER_FORWARD));
   MORSE_CALL(VecScatterEnd(scatter_.get(), u, local, INSERT_VALUES, SCATTER_FORWARD));
 }
 
 void Svk::add_to_global(Vec local, Vec g) const {
-  MORSE_CALL(VecSet(g, 0.0));
-  MORSE_CALL(VecScatterBegin(scatter_.get(), local, g, ADD_VALUES, SCATTER_REVERSE));
-  MORSE_CALL(VecScatterEnd(scatter_.get(), local, g, ADD_VALUES, SCATTER_REVERSE));
+  Vec to = T_ ? wf_.get() : g;
+  MORSE_CALL(VecSet(to, 0.0));
+  MORSE_CALL(VecScatterBegin(scatter_.get(), local, to, ADD_VALUES, SCATTER_REVERSE));
+  MORSE_CALL(VecScatterEnd(scatter_.get(), local, to, ADD_VALUES, SCATTER_REVERSE));
+  if (T_) MORSE_CALL(MatMultTranspose(T_, to, g));  // T^T g_nodes on the model's DOFs
 }
 
 void Svk::element_loop(int what, int nv, const double* a, const double* b, double* g, Mat Kt, double* energy) const {
@@ -348,6 +364,11 @@ void Svk::internal_force(Vec u, Vec f) const {
 
 UMat Svk::create_tangent() const {
   UMat Kt;
+  if (T_) {
+    if (!Ktn_) MORSE_CALL(MatDuplicate(Kn_, MAT_COPY_VALUES, Ktn_.ptr()));
+    MORSE_CALL(MatPtAP(Kn_, T_, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Kt.ptr()));
+    return Kt;
+  }
   MORSE_CALL(MatDuplicate(K_, MAT_COPY_VALUES, Kt.ptr()));
   return Kt;
 }
@@ -357,17 +378,21 @@ void Svk::tangent(Vec u, Mat Kt) const { midpoint_tangent(u, nullptr, Kt); }
 void Svk::midpoint_tangent(Vec ua, Vec ub, Mat Kt) const {
   PetscLogEvent ev = log_event("SvkTangent");
   MORSE_CALL(PetscLogEventBegin(ev, 0, 0, 0, 0));
-  MORSE_CALL(MatCopy(K_, Kt, SAME_NONZERO_PATTERN));
+  // With constraints the elements fill the nodes' tangent, projected below.
+  if (T_ && !Ktn_) MORSE_CALL(MatDuplicate(Kn_, MAT_COPY_VALUES, Ktn_.ptr()));
+  Mat to = T_ ? Ktn_.get() : Kt;
+  MORSE_CALL(MatCopy(Kn_, to, SAME_NONZERO_PATTERN));
   to_local(ua, la_.get());
   if (ub) to_local(ub, lb_.get());
   const double *a, *b = nullptr;
   MORSE_CALL(VecGetArrayRead(la_.get(), &a));
   if (ub) MORSE_CALL(VecGetArrayRead(lb_.get(), &b));
-  element_loop(kTangent, 1, a, b, nullptr, Kt, nullptr);
+  element_loop(kTangent, 1, a, b, nullptr, to, nullptr);
   if (ub) MORSE_CALL(VecRestoreArrayRead(lb_.get(), &b));
   MORSE_CALL(VecRestoreArrayRead(la_.get(), &a));
-  MORSE_CALL(MatAssemblyBegin(Kt, MAT_FINAL_ASSEMBLY));
-  MORSE_CALL(MatAssemblyEnd(Kt, MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyBegin(to, MAT_FINAL_ASSEMBLY));
+  MORSE_CALL(MatAssemblyEnd(to, MAT_FINAL_ASSEMBLY));
+  if (T_) MORSE_CALL(MatPtAP(to, T_, MAT_REUSE_MATRIX, PETSC_DEFAULT, &Kt));  // Kt from create_tangent()
   MORSE_CALL(PetscLogEventEnd(ev, 0, 0, 0, 0));
 }
 

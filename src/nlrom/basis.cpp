@@ -304,6 +304,13 @@ PetscInt basis_size(const fe::Model& md, const BasisSettings& s) {
   const PetscInt want_extra = s.kind == BasisKind::CBMD ? s.n_derivatives : s.kind == BasisKind::POD ? s.n_pod : 0;
   cb::CBResult probe;
   cb::set_boundary(md, s.boundary_set, &probe);
+  // The stored model's boundary coordinates are the x, y, z of each boundary node, in node order
+  // (nlrom::StoredModel: contact, massless boundary).
+  MORSE_CHECK(probe.n_b == 3 * static_cast<PetscInt>(probe.boundary_node_ids.size()), "nlrom: the boundary set ",
+              s.boundary_set, " has ", probe.n_b, " DOFs on ", probe.boundary_node_ids.size(),
+              " nodes: the boundary coordinates of a reduced model are the three translations of each of its nodes; a "
+              "six-DOF point (the independent node of a rigid or interpolation element) or a partly clamped node "
+              "cannot be one (give a set of solid nodes)");
   const PetscInt r = probe.n_b + n_fixed + want_extra;
   MORSE_CHECK(r <= md.dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", n_fixed,
               " fixed-interface modes + ", want_extra, " others) is larger than the model (", md.dofs.n_global,

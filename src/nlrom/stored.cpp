@@ -290,7 +290,7 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
 }
 
 void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const Basis& basis,
-                        const ReducedModel& rm, const StoredInfo& info) {
+                        const ReducedModel& rm, const StoredInfo& info, Mat T) {
   auto gm = mesh::gather_to_rank0(lm);
   io::write_mesh(out, gm);
   // Node sets by node id (simulate reconstructs and loads sets without the mesh file): the
@@ -310,10 +310,13 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
                   "cubic coefficients B~^m_ijk (eq. 28): row = (i <= j <= k) lexicographic, column m");
   }
   std::vector<double> nodal;
+  UVec u;  // a column expanded on the nodes (T)
+  if (T) MORSE_CALL(MatCreateVecs(T, nullptr, u.ptr()));
   for (PetscInt j = 0; j < r; ++j) {
     Vec c;
     MORSE_CALL(MatDenseGetColumnVecRead(basis.V.get(), j, &c));
-    auto col = io::gather_nodal(lm, dofs, c);
+    if (T) MORSE_CALL(MatMult(T, c, u.get()));
+    auto col = io::gather_nodal(lm, dofs, T ? u.get() : c);
     MORSE_CALL(MatDenseRestoreColumnVecRead(basis.V.get(), j, &c));
     nodal.insert(nodal.end(), col.begin(), col.end());
   }

@@ -188,6 +188,10 @@ class Loads {
   /// Throws (collectively) if a set does not exist (the message lists the sets), is empty, or
   /// a direction is zero. Loads on clamped DOFs are dropped (they are reactions).
   Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::vector<NodalLoad>& loads);
+  /// The loads on a mesh model's DOFs: with constraints (u = T u_bar), the nodal forces of the
+  /// nodes' layout, f_bar = T^T f (a dependent node's force goes to the DOFs it follows, the lever
+  /// rule of a rigid element). Collective.
+  Loads(const fe::Model& md, const std::vector<NodalLoad>& loads);
   /// F = f_e(t) (F has the DOF layout): the harmonic loads plus the tabulated history, if any.
   /// Collective.
   void evaluate(double t, Vec F) const;

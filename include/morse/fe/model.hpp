@@ -89,6 +89,7 @@ Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh:
 struct ConstraintMap {
   UMat T;                         ///< MPIAIJ, rows as `full`, columns as the model's DOFs
   DofLayout full;                 ///< the nodes' free translations, before elimination
+  UMat K_nodes;                   ///< the stiffness on `full` before elimination (fe::Svk's elements)
   std::int64_t n_dependent = 0;   ///< DOFs eliminated (dependent), nodes' and points'
   std::int64_t n_point_dofs = 0;  ///< DOFs of six-DOF points kept as the model's DOFs
   std::int64_t n_rigid = 0, n_interpolation = 0, n_linear = 0;

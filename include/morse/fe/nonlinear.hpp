@@ -19,6 +19,12 @@
 // evaluates its own elements on its owned + ghost DOFs (one VecScatter) and contributions to
 // ghost DOFs are added to their owners. K_T reuses K's non-zero pattern.
 //
+// A model with rigid or interpolation elements or MPCs (Model::constraints, u = T u_bar, theory
+// §1.1): the element loops see the nodes' translations u = T u_bar, and every force is returned on
+// the model's DOFs, T^T g(T u_bar); the tangent is T^T K_T(T u_bar) T (MatPtAP), the linear part
+// the model's K_bar = T^T K T. Exact: the constrained motions are the subspace u = T u_bar, on which
+// the energy is W(T u_bar) and its gradient and Hessian are these.
+//
 // The midpoint ("algorithmic") forces serve the energy-conserving time integrator of dyn/
 // (Simo & Tarnow 1992): for two states u_a, u_b,
 //   f_alg(u_a, u_b) = int (I + (H_a + H_b)/2) S((E_a + E_b)/2) grad N dV,
@@ -53,6 +59,10 @@ class Svk {
  public:
   /// Collective. Materials as in fe::assemble (mesh material, else `fallback`).
   Svk(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh::Material& fallback, Mat K);
+  /// The forces of a mesh model on its own DOFs: with constraints, on u_bar through T (above),
+  /// the elements on the nodes' layout and stiffness (ConstraintMap::full, K_nodes); without, as
+  /// the constructor above with md.dofs and md.K. md must outlive this object. Collective.
+  Svk(const Model& md, const mesh::Material& fallback);
   ~Svk();
   Svk(const Svk&) = delete;
   Svk& operator=(const Svk&) = delete;
@@ -61,7 +71,8 @@ class Svk {
   void nonlinear_force(Vec u, Vec g) const;
   /// f = f_int(u) = K u + g_nl(u). Collective.
   void internal_force(Vec u, Vec f) const;
-  /// A matrix with K's layout and non-zero pattern, for tangent(). Collective.
+  /// A matrix with K's layout and non-zero pattern, for tangent() (with constraints, the product
+  /// T^T K T that tangent() refills). Collective.
   UMat create_tangent() const;
   /// Kt = K_T(u) = K + d g_nl/du (Kt from create_tangent()). Collective.
   void tangent(Vec u, Mat Kt) const;
@@ -133,7 +144,12 @@ class Svk {
   std::vector<double> grad_, wdet_;
   std::vector<double> lambda_, mu_;
   Unique<VecScatter, VecScatterDestroy> scatter_;
-  UVec la_, lb_, lg_;                        // local work vectors (sequential, n_local_)
+  UVec la_, lb_, lg_;  // local work vectors (sequential, n_local_)
+  // Constraints: u = T u_bar. Kn_ is the stiffness on the nodes' layout (K_ without constraints),
+  // wf_ a vector of that layout, Ktn_ the nodes' tangent that tangent() projects.
+  Mat T_ = nullptr, Kn_ = nullptr;
+  UVec wf_;
+  mutable UMat Ktn_;
   mutable std::vector<double> point_cache_;  // per quadrature point: H (9), S (9) of tangent_point()
 };
 

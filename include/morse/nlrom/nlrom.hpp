@@ -340,9 +340,11 @@ struct StoredInfo {
 /// /nlrom/basis (the columns of basis.V at every node, [r][node][3]), /nlrom/labels,
 /// /nlrom/boundary_nodes, the modal-derivative pairs and weights (cbmd), the POD singular values
 /// (pod), the damped frequencies, and the attributes of info. /meta is the command's.
-/// Collective (gathers the mesh and the basis).
+/// T (a model with constraints, fe::ConstraintMap): basis.V is on the model's DOFs and every
+/// column is written expanded, u = T v, on `dofs`, the nodes' layout (fe::node_layout): the
+/// dependent nodes move with their elements. Collective (gathers the mesh and the basis).
 void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const Basis& basis,
-                        const ReducedModel& rm, const StoredInfo& info);
+                        const ReducedModel& rm, const StoredInfo& info, Mat T = nullptr);
 
 /// A fingerprint of the model's numbers (K~, M~, C~, the cubic force, r, the massless layout):
 /// 16 hex digits of a 64-bit FNV-1a hash of their bytes. Two files of the same model give the same
