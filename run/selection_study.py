@@ -499,7 +499,7 @@ Reference run: %d modes of this stator, the rear frame's and the rotor DOFs: %d 
                 "the interface of 13 six-DOF points, each an RBE3 spider over the mesh nodes within 3 cm (the "
                 "seed: 13 six-DOF master nodes)" if V["tag"] == "78" else
                 "the interface of 13 solid nodes with 3 DOFs each (the seed: 6-DOF master nodes; "
-                "`run/selection_study --interface 78` runs them)",
+                "`run/selection_study --interface 78` runs them: [benchmark78.md](benchmark78.md))",
                 ", ".join("%s in %d rows" % kv for kv in sorted(worst_at.items(), key=lambda kv: -kv[1])) or "?"))
     if ref.get("ranges"):
         L.append("Load range of each bearing in the reference (max − min of F_x, F_y, the larger): %s.\n"
