@@ -18,7 +18,9 @@
 #    set;
 #  - static (linear) with loads on the four dependent tip grids: their mean displacement is the
 #    point's translation from the superelement's static condensation K_bb^-1 F;
-#  - bad input: fom refuses the deck naming the constraints; a dependent
+#  - fom (linear) under the load applied suddenly: mean tip displacement over 10 periods = the
+#    static one, peak at most twice it, the tip grids rigid in every snapshot;
+#  - bad input: stress -fom refuses the deck naming the constraints, fom its nodal inputs; a dependent
 #    grid that is also clamped, and a circular MPC, fail naming the card and the grid; no file is
 #    left.
 # usage: case_constraints_chain.sh DIR MORSE NP BOX MPIEXEC [MPI FLAGS...] -- [MATERIAL OPTIONS...]
@@ -118,9 +120,45 @@ err = np.abs(mean - uR).max() / np.abs(uR).max()
 assert err < 1e-8, (mean, uR, err)
 print(f"constraints chain: static tip {mean} m, condensation {uR} m ({err:.1e})")
 PY
-expect_error "the rigid elements, interpolation elements and MPCs of .*spider_beam.bdf are supported by modes, reduce, select, export, nlrom, static and stress only" \
-  "$d/fom.h5" fom -mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip \
-  -load_tip_dir y -load_tip_amplitude 1 -fom_tfinal 1e-4 -fom_dt 1e-5
+# fom (linear, undamped) under the same load applied suddenly: over 10 periods of the first mode the
+# tip's mean displacement is the static one (Duhamel: u_s (1 - cos w t), whose mean is u_s to
+# 1 / (w T) = 1.6 %), its peak at most 2 u_s; in every snapshot the tip grids move rigidly.
+run fom -mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip \
+  -load_tip_dir 0,1,0.5 -load_tip_amplitude 1118.0339887498948 -fom_linear -fom_dt 2e-5 -fom_tfinal 0.031 \
+  -fom_snapshot_every 5 -fom_monitor tip -out "$d/fom.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+d = sys.argv[1]
+f, se = h5py.File(f"{d}/fom.h5", "r"), h5py.File(f"{d}/se.h5", "r")
+uR = np.linalg.solve(se["/rom/K"][:6, :6], np.array([0, 4000.0, 2000.0, 0, 0, 0]))[:3]
+U = f["/fom/snapshots/u"][:]
+nid, comp = f["/fom/snapshots/dof_node_ids"][:], f["/fom/snapshots/dof_components"][:]
+col = {(int(n), int(c)): j for j, (n, c) in enumerate(zip(nid, comp))}
+tipu = np.array([[U[:, col[(g, c)]] for c in range(3)] for g in (5, 10, 15, 20)])  # [grid][comp][snapshot]
+mean_t = tipu.mean(axis=0)  # the point's translation at each snapshot (offsets sum to zero)
+avg = mean_t.mean(axis=1)
+assert abs(avg[1] - uR[1]) < 0.03 * uR[1] and abs(avg[2] - uR[2]) < 0.03 * uR[2], (avg, uR)
+assert np.abs(mean_t[1]).max() < 2.05 * uR[1], (np.abs(mean_t[1]).max(), uR[1])
+# rigid: the four grids' y and z differ only by the rotation about x (theta_x r), equal and opposite
+xr = np.array([0.4, 0.025, 0.025])
+ids = f["/mesh/node_ids"][:]
+X = f["/mesh/coordinates"][:]
+for k in range(U.shape[0]):
+    A = np.zeros((12, 6)); b = np.zeros(12)
+    for i, g in enumerate((5, 10, 15, 20)):
+        rx, ry, rz = X[int(np.where(ids == g)[0][0])] - xr
+        A[3*i:3*i+3, :3] = np.eye(3)
+        A[3*i:3*i+3, 3:] = -np.array([[0, -rz, ry], [rz, 0, -rx], [-ry, rx, 0]])
+        b[3*i:3*i+3] = tipu[i, :, k]
+    sol, *_ = np.linalg.lstsq(A, b, rcond=None)
+    assert np.linalg.norm(A @ sol - b) <= 1e-9 * max(np.linalg.norm(b), 1e-30), k
+print(f"constraints chain: fom mean tip {avg} m over 10 periods, static {uR} m")
+PY
+expect_error "-load_history and -fom_initial .* are not supported on such a model" "$d/fom_bad.h5" fom -mesh "$deck" \
+  -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip -load_tip_dir y \
+  -load_tip_amplitude 1 -fom_tfinal 1e-4 -fom_dt 1e-5 -fom_initial "$d/static.h5"
+expect_error "the rigid elements, interpolation elements and MPCs of .*spider_beam.bdf are supported by modes, reduce, select, export, nlrom, static, fom and stress -rom only" \
+  "$d/stress_fom.h5" stress -mesh "$deck" -clamp '*BOUNDARY' -fom "$d/fom.h5" -stress_time 0.01
 sed 's/^RBE2,100,9001,123456,5,10,15,20$/RBE2,100,9001,123456,5,10,15,20,1/' "$deck" >"$d/clamped_dep.bdf"
 expect_error "RBE2 100: node 1 component 1 (x) is dependent but also fixed" "$d/bad1.h5" modes -mesh "$d/clamped_dep.bdf" \
   -clamp '*BOUNDARY' -modes_nev 2

@@ -14,6 +14,7 @@
 #include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/fe/nonlinear.hpp"
 #include "morse/io/h5.hpp"
 
@@ -40,16 +41,26 @@ void run_fom(MPI_Comm comm) {
   inputs.push_back({"-fom_initial", fs.initial});
   const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
 
-  Model md = build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element");
-  dyn::Loads loads(*md.mesh, md.dofs, load_list);
+  Model md =
+      build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element", true);
+  // With rigid or interpolation elements or MPCs the run is on the model's DOFs (loads T^T f,
+  // forces through T, M_bar) and the output on the nodes' (u = T u_bar).
+  collective_check(comm,
+                   md.constraints && (!ho.file().empty() || !fs.initial.empty())
+                       ? cat("morse fom: ", o.mesh.path,
+                             " has rigid or interpolation elements or MPCs: -load_history and -fom_initial (nodal "
+                             "fields of the nodes' DOFs) are not supported on such a model")
+                       : std::string());
+  const auto& nodes = fe::node_layout(md);
+  dyn::Loads loads(md, load_list);
   const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fs.t_final / fs.dt - 1e-9));
   if (auto h = dyn::make_load_history(comm, *md.mesh, md.dofs, ho)) {
     h->check_covers(0.0, n_steps * fs.dt);
     loads.set_history(std::move(h));
   }
   std::vector<dyn::SetProbe> probes;
-  for (const auto& m : fs.monitor) probes.emplace_back(*md.mesh, md.dofs, m);
-  fe::Svk svk(*md.mesh, md.dofs, o.mesh.material, md.K.get());
+  for (const auto& m : fs.monitor) probes.emplace_back(*md.mesh, nodes, m);
+  fe::Svk svk(md, o.mesh.material);
   UVec u0;
   if (!fs.initial.empty()) {
     MORSE_CALL(MatCreateVecs(md.K.get(), u0.ptr(), nullptr));
@@ -65,11 +76,22 @@ void run_fom(MPI_Comm comm) {
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the run; removed if the run fails
   std::unique_ptr<dyn::FomSnapshotWriter> snaps;
   if (fs.snapshot_every > 0)
-    snaps = std::make_unique<dyn::FomSnapshotWriter>(out, *md.mesh, md.dofs, n_steps / fs.snapshot_every + 1);
+    snaps = std::make_unique<dyn::FomSnapshotWriter>(out, *md.mesh, nodes, n_steps / fs.snapshot_every + 1);
 
   dyn::FomHistory hist;
   for (const auto& p : probes) hist.sets.push_back({p.name(), p.node_ids(), {}});
-  auto stats = dyn::integrate(svk, md.M.get(), loads, fs, u0.get(), nullptr, [&](const dyn::StepInfo& i) {
+  UVec uf, vf;  // constraints: the state on the nodes
+  if (md.constraints) {
+    MORSE_CALL(MatCreateVecs(md.constraints->T.get(), nullptr, uf.ptr()));
+    MORSE_CALL(VecDuplicate(uf.get(), vf.ptr()));
+  }
+  auto stats = dyn::integrate(svk, md.M.get(), loads, fs, u0.get(), nullptr, [&](const dyn::StepInfo& step) {
+    dyn::StepInfo i = step;
+    if (md.constraints) {
+      MORSE_CALL(MatMult(md.constraints->T.get(), step.u, uf.get()));
+      MORSE_CALL(MatMult(md.constraints->T.get(), step.v, vf.get()));
+      i.u = uf.get(), i.v = vf.get();
+    }
     hist.record(i);
     for (std::size_t p = 0; p < probes.size(); ++p) {
       auto u = probes[p].sample(i.u);

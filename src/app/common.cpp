@@ -64,10 +64,11 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh,
   Model md = fe::mesh_model(comm, o.mesh);
   // Element-by-element commands see the nodes' displacements, which dependent nodes of rigid and
   // interpolation elements do not have as DOFs of the model.
-  collective_check(comm, needs_mesh && md.constraints && !constraints_ok
-                             ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
-                                   " are supported by modes, reduce, select, export, nlrom, static and stress only")
-                             : std::string());
+  collective_check(comm,
+                   needs_mesh && md.constraints && !constraints_ok
+                       ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
+                             " are supported by modes, reduce, select, export, nlrom, static, fom and stress -rom only")
+                       : std::string());
   int size = 1;
   MPI_Comm_size(comm, &size);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements on %d rank(s)\n", o.mesh.path.c_str(),
