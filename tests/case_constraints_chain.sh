@@ -9,7 +9,8 @@
 #    components 1..6; its free-DOF K, M and DOF map (-matrices_write) hold the point's six rows,
 #    and reduce from those matrices gives the same superelement (the matrix path takes 6-DOF
 #    labels);
-#  - select on the constrained deck;
+#  - select on the constrained deck, and without the full-model check (-select_check false: the
+#    same selection, no MAC);
 #  - export: the MBDyn node 9001 at (0.4, 0.025, 0.025);
 #  - nlrom on the constrained deck (CB + modal derivatives weighted by a training load, exact
 #    tensors; boundary: the solid nodes at x = 0.3): its stored basis is expanded through the spider (in every column the tip grids
@@ -39,6 +40,16 @@ run reduce -matrices_K "$d/spider_K.mtx" -matrices_M "$d/spider_M.mtx" -matrices
   -boundary ASET -cb_num_fixed_modes 4 -out "$d/se_mtx.h5"
 run select -mesh "$deck" -clamp '*BOUNDARY' -boundary ASET -cb_num_fixed_modes 8 -select_method eim \
   -select_num_modes 3 -out "$d/sel.h5"
+run select -mesh "$deck" -clamp '*BOUNDARY' -boundary ASET -cb_num_fixed_modes 8 -select_method eim \
+  -select_num_modes 3 -select_check false -out "$d/sel_nocheck.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py
+d = sys.argv[1]
+a, b = h5py.File(f"{d}/sel.h5", "r"), h5py.File(f"{d}/sel_nocheck.h5", "r")
+assert a["/select"].attrs["checked"] == 1 and b["/select"].attrs["checked"] == 0
+assert "/select/fom" in a and "/select/fom" not in b and "mac" not in b["/select/eim"]
+assert (a["/select/eim/selected"][:] == b["/select/eim/selected"][:]).all()
+PY
 run export -export_from "$d/se.h5" -export_format mbdyn,dmig -out "$d/se"
 grep -A1 "RECORD GROUP 2" "$d/se.fem" | grep -q "^9001$"
 grep -A1 "RECORD GROUP 5" "$d/se.fem" | grep -q "^0.4"

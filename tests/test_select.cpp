@@ -362,4 +362,19 @@ TEST(Select, VerifyMatchesExactSuperelement) {
   // Rayleigh-Ritz on a smaller space: some mode unmatched or a matched frequency above its own.
   EXPECT_TRUE(f2.matches < 6 || f2.worst_err > 1e-10) << f2.matches << " " << f2.worst_err;
   EXPECT_LE(f2.in_band, static_cast<PetscInt>(s.cb.n_b + 2));
+  // Unchecked (-select_check false): the same rankings, selections and superelement frequencies,
+  // no full-model modes and no MAC.
+  vs.check = false;
+  const auto unchecked = select::verify(PETSC_COMM_WORLD, s.ops.K.get(), s.ops.M.get(), s.cb, w.get(), vs);
+  EXPECT_FALSE(unchecked.checked);
+  EXPECT_TRUE(unchecked.fom_omega2.empty());
+  ASSERT_EQ(unchecked.methods.size(), two.methods.size());
+  for (std::size_t i = 0; i < two.methods.size(); ++i) {
+    const auto &u = unchecked.methods[i], &c = two.methods[i];
+    EXPECT_EQ(u.sel.selected, c.sel.selected) << c.name;
+    EXPECT_EQ(u.score, c.score) << c.name;
+    EXPECT_EQ(u.rom_f, c.rom_f) << c.name;
+    EXPECT_EQ(u.in_band, c.in_band) << c.name;
+    EXPECT_TRUE(u.mac.empty() && u.best_mac.empty() && u.matches == 0) << c.name;
+  }
 }

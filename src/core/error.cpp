@@ -10,6 +10,15 @@ void throw_petsc_error(PetscErrorCode ierr, const char* expr, const char* file, 
   const char* text = nullptr;
   char* specific = nullptr;
   PetscErrorMessage(ierr, &text, &specific);
+  // A bad option value (an unknown enum choice, a value out of range) is the user's input: its
+  // message names the option; PETSc's code and morse's source line would only bury it.
+  const bool input = ierr == PETSC_ERR_USER || ierr == PETSC_ERR_USER_INPUT || ierr == PETSC_ERR_ARG_OUTOFRANGE ||
+                     ierr == PETSC_ERR_ARG_WRONG;
+  if (input && specific && *specific) {
+    std::string m = specific;
+    while (!m.empty() && (m.back() == ' ' || m.back() == '\n')) m.pop_back();
+    throw Error(m);
+  }
   std::string msg = cat("PETSc error ", ierr, " (", text ? text : "unknown", ")");
   if (specific && *specific) msg += cat(": ", specific);
   msg += cat("\n  in ", expr, " at ", file, ":", line);

@@ -54,6 +54,12 @@ PetscErrorCode Settings::set_from_options(MPI_Comm comm) {
                             v.fom_modes, &v.fom_modes, nullptr));
   PetscCall(MorseOptionsReal("-select_mac_threshold", "MAC above which a full-model mode counts as matched", "",
                              v.mac_threshold, &v.mac_threshold, nullptr));
+  PetscBool check = v.check ? PETSC_TRUE : PETSC_FALSE;
+  PetscCall(MorseOptionsBool("-select_check",
+                             "Check every method's superelement against the full model's modes (MAC); false skips "
+                             "the full model's eigen solve",
+                             "", check, &check, nullptr));
+  v.check = check == PETSC_TRUE;
   PetscCall(MorseOptionsString("-select_rom_method",
                                "Method whose superelement is written to /rom (default: the first)", "", buf, buf,
                                sizeof buf, &set));

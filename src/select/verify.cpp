@@ -64,7 +64,10 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
   }
   // Full-model modes with the real boundary conditions (clamp only): MAC reference and IMR.
   eigen::Eigenpairs fom;
-  {
+  out.checked = s.check;
+  const bool imr_free =
+      std::find(s.methods.begin(), s.methods.end(), Method::IMR) != s.methods.end() && s.imr_support == "free";
+  if (s.check || imr_free) {
     eigen::EigenSettings es;
     es.prefix = "select_fom_";
     es.stage = "Fom";
@@ -75,8 +78,8 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
       es.omega2_max = l_an;
     fom = eigen::solve_eigen(K, M, es, w);
   }
-  const PetscInt n_fom = static_cast<PetscInt>(fom.omega2.size());
-  out.fom_omega2 = fom.omega2;
+  const PetscInt n_fom = s.check ? static_cast<PetscInt>(fom.omega2.size()) : 0;
+  if (s.check) out.fom_omega2 = fom.omega2;
 
   auto& ex = out.excitation;
   if (!s.ebr_load.empty()) {
@@ -151,7 +154,7 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
   }
 
   MacBasis mb;
-  {
+  if (s.check) {
     StageTimer t(comm, "MacProjections");
     UMat MV;
     MORSE_CALL(MatMatMult(M, fom.V.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, MV.ptr()));
@@ -160,7 +163,7 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
   auto f_fom = [&](PetscInt j) { return hz(fom.omega2[j]); };
   // A model free in some rigid-body motions (no clamp, the interface left free): the superelement
   // has the same zero modes as the full model, put in the same basis before the MAC.
-  const double zero_tau = fom.zero_modes > 0 ? eigen::zero_threshold(K, M) : 0.0;
+  const double zero_tau = s.check && fom.zero_modes > 0 ? eigen::zero_threshold(K, M) : 0.0;
   std::vector<double> zero_G;  // W^T M T for the zero modes' reference vectors
   PetscInt zero_G_k = 0;
   auto zero_refs = [&](PetscInt k) {
@@ -200,6 +203,10 @@ VerifyResult verify(MPI_Comm comm, Mat K, Mat M, const cb::CBResult& res, Vec w,
     while (zero_tau > 0 && zeros < n && lam[zeros] < zero_tau) lam[zeros++] = 0.0;
     for (double l : lam) mr.rom_f.push_back(hz(l));
     while (mr.in_band < n && lam[mr.in_band] <= l_an) ++mr.in_band;
+    if (!s.check) {
+      out.methods.push_back(std::move(mr));
+      continue;
+    }
     // Expand the in-band superelement modes on the full CB basis and compare with the FOM.
     const PetscInt nq = std::max<PetscInt>(mr.in_band, 1);
     std::vector<double> Q(static_cast<std::size_t>(nr) * nq, 0.0);
@@ -251,9 +258,10 @@ void write_selection(io::H5Output& out, const VerifyResult& v, double mac_thresh
   std::vector<double> fom_hz;
   for (double l : v.fom_omega2) fom_hz.push_back(hz(l));
   const auto n_fom = static_cast<hsize_t>(fom_hz.size());
-  out.write("/select/fom/frequencies_hz", fom_hz);
+  if (v.checked) out.write("/select/fom/frequencies_hz", fom_hz);
   out.attribute("/select", "fmax_analysis_hz", v.fmax_analysis_hz);
   out.attribute("/select", "mac_threshold", mac_threshold);
+  out.attribute_int("/select", "checked", v.checked ? 1 : 0);
   out.attribute_int("/select", "cb_modes_in_band", static_cast<std::int64_t>(v.cb_in_band));
   out.write("/select/effective_mass/directional_fractions", directional_mass_fractions(v.ic, total_mass),
             {static_cast<hsize_t>(v.ic.n_phi), 3});
@@ -273,9 +281,11 @@ void write_selection(io::H5Output& out, const VerifyResult& v, double mac_thresh
     out.write(g + "/cumulative", mr.sel.cumulative);
     out.write(g + "/selected", sel);
     out.write(g + "/rom_frequencies_hz", mr.rom_f);
-    out.write(g + "/mac", mr.mac, {n_fom, static_cast<hsize_t>(std::max<PetscInt>(mr.in_band, 1))});
-    out.write(g + "/best_mac", mr.best_mac);
-    out.write(g + "/subspace_mac", mr.subspace_mac);
+    if (v.checked) {  // -select_check false: no full-model modes, no MAC
+      out.write(g + "/mac", mr.mac, {n_fom, static_cast<hsize_t>(std::max<PetscInt>(mr.in_band, 1))});
+      out.write(g + "/best_mac", mr.best_mac);
+      out.write(g + "/subspace_mac", mr.subspace_mac);
+    }
     out.attribute(g, "retained_fraction", mr.sel.retained);
     out.attribute_int(g, "n_selected", static_cast<std::int64_t>(mr.sel.selected.size()));
     out.attribute_int(g, "n_rom_modes_in_band", static_cast<std::int64_t>(mr.in_band));

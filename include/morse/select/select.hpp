@@ -150,6 +150,11 @@ struct VerifySettings {
   double fmax_analysis_hz = 0;     ///< the analysis cutoff [Hz] (superelement modes in band, MAC)
   PetscInt fom_modes = -1;         ///< full-model modes for the MAC (> 0), else all below the cutoff
   double mac_threshold = 0.98;     ///< MAC above which a full-model mode counts as matched
+  /// The check against the full model (-select_check): its modes and the MAC of every method's
+  /// superelement. false skips both (the full model's eigen solve is the costliest part of select
+  /// on a large mesh); the ranking, truncation and superelements are the same. IMR on the free
+  /// system still solves the full model's modes it needs.
+  bool check = true;
   /// EBR excitation: a load table file (read_ebr_load), or harmonics on every boundary DOF
   /// (ebr_given: ebr_freq, with ebr_amp (default 1) and ebr_phase [deg] (default 0)), or every
   /// boundary DOF loaded alone at 8 frequencies across the analysis band.
@@ -204,7 +209,8 @@ struct VerifyResult {
   double fmax_analysis_hz = 0;
   InterfaceCoupling ic;
   Excitation excitation;
-  std::vector<double> fom_omega2;     ///< the full-model eigenvalues of the MAC reference, ascending
+  std::vector<double> fom_omega2;     ///< the full-model eigenvalues of the MAC reference, ascending (none unchecked)
+  bool checked = true;                ///< VerifySettings::check
   std::vector<MethodCheck> methods;   ///< same order as the settings' methods
   PetscInt cb_in_band = 0;            ///< superelement modes in band with every candidate (plain Craig-Bampton)
   std::vector<double> eim_fractions;  ///< EIM score of each candidate over their sum (effective mass)
