@@ -183,7 +183,8 @@ def main():
             ts = time.time()
             if not (a.reuse and os.path.exists(os.path.join(ROOT, se))):
                 sh(mpi(a.np) + ["select"] + V["model"] + ["-select_from", basis, "-select_method", m, opt, val,
-                                                      "-select_fmax_analysis", "500", "-out", se],
+                                                      "-select_fmax_analysis", "500", "-select_check", "false",
+                                                      "-out", se],  # the MAC is Fig. 5's (run/selection_fig5.py)
                    os.path.join(ROOT, se.replace(".h5", ".log")))
             ts_sel += time.time() - ts
             with h5py.File(os.path.join(ROOT, se), "r") as f:
