@@ -80,6 +80,11 @@ void run_sweep(MPI_Comm comm) {
           comm,
           "morse sweep: refinement: at most %.4g more steps, %.3g core-hours (if every speed of the fine grid ran)\n",
           cost.refine_steps, cost.refine_core_hours);
+    if (so.retries > 0)
+      print0(
+          comm,
+          "morse sweep: not counted: the retries of failed speeds (a speed retried k times costs at most 2^(k+1) - 1 "
+          "times its run)\n");
   }
   sim::SweepStats st;
   std::size_t n_run = 0;
