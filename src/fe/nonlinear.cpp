@@ -103,11 +103,18 @@ void displacement_gradient(int n, const double* u, const double* g, double* H) {
 
 }  // namespace
 
-Svk::Svk(const Model& md, const mesh::Material& fallback)
-    : Svk(*md.mesh, md.constraints ? md.constraints->full : md.dofs, fallback,
-          md.constraints ? md.constraints->K_nodes.get() : md.K.get()) {
-  if (!md.constraints) return;
+namespace {
+// The stiffness the elements of Svk(Model) are assembled on: the nodes' (before elimination).
+Mat nodes_stiffness(const Model& md) {
+  if (!md.constraints) return md.K.get();
   MORSE_CHECK(md.constraints->K_nodes, "Svk: the model's constraints hold no stiffness of the nodes");
+  return md.constraints->K_nodes.get();
+}
+}  // namespace
+
+Svk::Svk(const Model& md, const mesh::Material& fallback)
+    : Svk(*md.mesh, md.constraints ? md.constraints->full : md.dofs, fallback, nodes_stiffness(md)) {
+  if (!md.constraints) return;
   T_ = md.constraints->T.get();
   K_ = md.K.get();
   MORSE_CALL(MatCreateVecs(T_, nullptr, wf_.ptr()));
@@ -365,7 +372,6 @@ void Svk::internal_force(Vec u, Vec f) const {
 UMat Svk::create_tangent() const {
   UMat Kt;
   if (T_) {
-    if (!Ktn_) MORSE_CALL(MatDuplicate(Kn_, MAT_COPY_VALUES, Ktn_.ptr()));
     MORSE_CALL(MatPtAP(Kn_, T_, MAT_INITIAL_MATRIX, PETSC_DEFAULT, Kt.ptr()));
     return Kt;
   }

@@ -555,6 +555,7 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
   MPI_Comm_rank(comm, &rank);
   SweepStats st;
   *n_run = 0;
+  std::vector<SpeedTask> again;  // rank 0: the failures of the current pass that may retry
   auto run = [&](const std::vector<SpeedTask>& tasks, int halvings) {
     SweepSettings sh = s;
     sh.base.dt = std::ldexp(s.base.dt, -halvings);
@@ -565,9 +566,11 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
         *old = R;
       else
         done->push_back(R);
-      if (R.status != 0 && R.halvings < so.retries)
+      if (R.status != 0 && R.halvings < so.retries) {
         print0(PETSC_COMM_SELF, "morse sweep: omega %.10g rad/s failed at dt %.4g s (%s); it runs again at dt %.4g s\n",
                R.omega, R.dt, R.error.c_str(), 0.5 * R.dt);
+        again.push_back({R.index, R.omega, R.halvings + 1});
+      }
       on_result(R);
     });
     st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
@@ -594,14 +597,11 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
       if (level > 0)
         print0(comm, "morse sweep: %zu speed(s) at dt %.4g s (the step halved %d time(s))\n", now.size(),
                std::ldexp(s.base.dt, -level), level);
+      again.clear();
       run(now, level);
-      std::vector<SpeedTask> again;
-      if (rank == 0)  // the speeds of this pass that failed and may retry
-        for (const auto& t : so.retry(*done))
-          if (std::any_of(now.begin(), now.end(), [&](const SpeedTask& x) { return x.index == t.index; }))
-            again.push_back(t);
-      again = share_tasks(comm, again);
-      later.insert(later.end(), again.begin(), again.end());
+      std::sort(again.begin(), again.end(), [](const SpeedTask& a, const SpeedTask& b) { return a.index < b.index; });
+      const auto retried = share_tasks(comm, again);
+      later.insert(later.end(), retried.begin(), retried.end());
       todo = std::move(later);
     }
     // The next round, decided on rank 0 (which holds the results) and shared.
