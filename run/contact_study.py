@@ -3,8 +3,9 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,pod,sweep,stress,diagnosis,maps] [--ranks N] [--revs 10] [--sweep-revs 5]
-        [--maps linear] [--map-range 750:2190:16] [--map-refine 1] [--map-revs 200] [--rotation auto]
+        [--stages roms,single,pod,sweep,stress,diagnosis,maps,map_stress,realizations] [--ranks N] [--revs 10]
+        [--sweep-revs 5] [--maps linear] [--map-range 750:2190:16] [--map-refine 1] [--map-revs 200]
+        [--map-dt-nonlinear 5e-7] [--rotation auto] [--stress-window 2] [--realizations 1e-12,-1e-12]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
         [--pod-revs 5] [--pod-train-revs 1] [--pod-fom-dt 1e-6] [--pod-snap-every 5] [--pod-num 20]
         [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
@@ -45,6 +46,21 @@ stopped and resumed, and the stages can run at different times.
           leading edge leads, from the LE and TE sets of the model; positive; negative). The
           linear map takes about 15 minutes on 2 cores; a nonlinear one is a cluster job
           (run/cluster/): its predicted cost is printed first, and it resumes.
+  map_stress  Fig. 25 on the maps of `maps` (issue 28): for each of --maps, the main 1B/eo8
+          interaction (the highest RMS, median over the speeds within 2 rad/s, at speeds from the exact
+          1B/eo8 crossing to --stress-window times it whose largest spectral line is engine order 8;
+          the highest there if no speed's is), a single `morse simulate` at that speed with the map's model, sense, step
+          (the speed's own, after any retry) and revolutions, then `morse stress` at the time of
+          the largest radial displacement at LE (linear measure for the linear map, SVK Cauchy
+          stress for the nonlinear one). The single run repeats the sweep's speed (the sweep and
+          simulate give the same result), so its RMS is checked against the map's.
+  realizations  how far round-off moves the linear map (issue 28): the coarse grid of the linear
+          map (--map-range, --map-revs, not refined) run again with every speed multiplied by
+          1 + e for each e of --realizations (a perturbation of round-off size), on the same model
+          and casing. The map's own coarse-grid speeds are the realization e = 0. Prints, per speed,
+          the spread of the LE RMS (largest over smallest) and the speeds where it exceeds 1.2;
+          run/plot_contact_realizations.py draws them over the refined map. About a minute per
+          realization on 2 cores.
   stress  the 1B/eo8 interaction of each sweep (the critical speed nearest 2 pi f_1B / 8 from above,
           within 60 %): a single run at that speed, then `morse stress` at the time of the largest
           radial displacement at LE (Fig. 25).
@@ -224,14 +240,128 @@ def maps_stage(st, args, mesh):
         path = st.file(name + ".h5")
         dt = 8e-6 if lin else args.map_dt_nonlinear
         sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
-                 "-sweep_omega_step", step, "-sweep_refine_step", args.map_refine, "-sim_revolutions", args.map_revs,
-                 "-sim_dt", dt, "-sweep_rotation", sense] + CASING + (["-sim_linear"] if lin else [])
+                 "-sweep_omega_step", step, "-sim_revolutions", args.map_revs, "-sim_dt", dt, "-sweep_rotation",
+                 sense] + CASING + (["-sim_linear"] if lin else []) + \
+            (["-sweep_refine_step", args.map_refine] if args.map_refine > 0 else [])
         st.rec.pop(name, None) if not os.path.exists(path) else None
         st.run(args.ranks, sargs, "%s (r79 mass-scaled, %s rad/s, refined to %s)" % (name, args.map_range,
                                                                                        args.map_refine),
                path + ".done", name)
         if name in st.rec and "error" not in st.rec[name]:
             open(path + ".done", "w").close()
+
+
+def map_interaction(sweep_file, f1b, window, order=8):
+    """The main 1B/eo`order` interaction of a map: among the finished speeds in [w0, window w0]
+    (w0 = 2 pi f1b / order, the exact crossing), the highest RMS (median over the speeds within
+    2 rad/s) of those whose largest spectral line is engine order `order` (to half an
+    order), else the highest in the window. Returns a dict
+    with the speed (|Omega|), its step, RMS, dominant order and whether the order matched."""
+    with h5py.File(sweep_file, "r") as f:
+        w = np.abs(f["/sweep/omega"][:])
+        rms, status = f["/sweep/rms"][:], f["/sweep/status"][:]
+        dt = f["/sweep/dt"][:]
+        spec, freq = f["/sweep/spectrum"][:], f["/sweep/frequency"][:]
+    w0 = 2 * math.pi * f1b / order
+    sel = np.flatnonzero((status == 0) & (w >= w0) & (w <= window * w0))
+    if sel.size == 0:
+        return None
+    dom = np.array([freq[1 + np.argmax(spec[i, 1:])] * 2 * math.pi / w[i] for i in sel])
+    match = sel[np.abs(dom - order) <= 0.5]
+    pick = match if match.size else sel
+    # Neighbouring speeds may land on different branches of coexisting solutions (docs/contact.md,
+    # "Coexisting solutions"), and a single run differs from the sweep's by round-off: the speed is
+    # chosen by the median RMS of the speeds within 2 rad/s of it (on a map refined to 1 rad/s, it
+    # and two neighbours on each side), so that it lies inside a branch rather than on an isolated
+    # spike.
+    smooth = np.array([np.median(rms[(np.abs(w - x) <= 2.0 + 1e-9) & (status == 0)]) for x in w])
+    i = pick[np.argmax(smooth[pick])]
+    return {"omega": float(w[i]), "dt": float(dt[i]), "rms": float(rms[i]), "rms_median": float(smooth[i]),
+            "crossing": w0,
+            "dominant_order": float(dom[np.flatnonzero(sel == i)[0]]), "order_matched": bool(match.size)}
+
+
+def map_stress_stage(st, args, mesh):
+    """Fig. 25 on the seed-scale maps (see the module docstring)."""
+    rom = st.file("rom_r79_ms20k.h5")
+    sense = st.rec.get("map_rotation", {}).get("sense")
+    if not os.path.exists(rom) or sense is None:
+        print("  map_stress: run the maps stage first", flush=True)
+        return
+    f1b = first_bending_hz(rom)
+    sign = -1.0 if sense == "negative" else 1.0
+    for tag in args.maps.split(","):
+        lin = tag == "linear"
+        sw = st.file("map_%s_%s.h5" % (tag, sense))
+        if not os.path.exists(sw + ".done"):
+            print("  map_stress: %s is not finished" % sw, flush=True)
+            continue
+        with h5py.File(sw, "r") as f:
+            settings = dict(l.split("=", 1) for l in f["/sweep/settings"][()].decode().splitlines() if "=" in l)
+        revs = float(settings["revolutions"])
+        it = map_interaction(sw, f1b, args.stress_window)
+        if it is None:
+            print("  map_stress: no finished speed near 1B/eo8 in %s" % sw, flush=True)
+            continue
+        print("  %s map: 1B/eo8 interaction at %g rad/s (crossing %.1f; RMS %.3f mm, dominant order %.2f%s)"
+              % (tag, it["omega"], it["crossing"], 1e3 * it["rms"], it["dominant_order"],
+                 "" if it["order_matched"] else ", no speed on eo8: the highest RMS"), flush=True)
+        name = "map_stress_%s" % tag
+        st.rec[name + "_interaction"] = it
+        # about 40 states per period of the 1B response at 8 Omega
+        every = max(1, int(round(2 * math.pi / (8 * it["omega"]) / 40 / it["dt"])))
+        sim = st.file(name + "_sim.h5")
+        args_sim = ["simulate", "-rom", rom, "-sim_omega", sign * it["omega"], "-sim_revolutions", revs,
+                    "-sim_dt", it["dt"], "-sim_output_every", every, "-out", sim] + CASING + \
+            (["-sim_linear"] if lin else [])
+        if not st.run(1, args_sim, "simulate %s at %g rad/s" % (name, sign * it["omega"]), sim, name + "_sim"):
+            continue
+        with h5py.File(sim, "r") as f:  # the monitor LE is the first contact node; its u_r over the 2nd half
+            t, ur = f["/sim/time"][()], f["/sim/contact/radial_displacement"][()][:, 0]
+        it["single_run_rms"] = float(np.sqrt(np.mean(ur[t >= 0.5 * t[-1]] ** 2)))
+        print("  single run: LE RMS %.3f mm over the second half (sampled every %d steps), the map's %.3f mm"
+              % (1e3 * it["single_run_rms"], every, 1e3 * it["rms"]), flush=True)
+        st.run(args.ranks, ["stress", "-rom", rom, "-sim", sim, "-mesh", mesh, "-out", st.file(name + ".h5")],
+               "stress %s" % name, st.file(name + ".h5"), name)
+    st.save()
+
+
+def realizations_stage(st, args, mesh):
+    """The linear map's coarse grid again with the speeds perturbed by round-off (see the docstring)."""
+    rom = st.file("rom_r79_ms20k.h5")
+    sense = st.rec.get("map_rotation", {}).get("sense")
+    ref = st.file("map_linear_%s.h5" % sense) if sense else None
+    if ref is None or not os.path.exists(ref + ".done"):
+        print("  realizations: run the linear map first (--stages maps --maps linear)", flush=True)
+        return
+    lo, hi, step = parse_range(args.map_range)
+    files = {"0": ref}
+    for e in args.realizations.split(","):
+        f = 1.0 + float(e)
+        path = st.file("map_linear_%s_realization_%s.h5" % (sense, e))
+        sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", repr(lo * f), "-sweep_omega_max", repr(hi * f),
+                 "-sweep_omega_step", repr(step * f), "-sim_revolutions", args.map_revs, "-sim_dt", 8e-6,
+                 "-sweep_rotation", sense, "-sim_linear"] + CASING
+        if st.run(args.ranks, sargs, "linear map, speeds x (1 + %s)" % e, path + ".done", "realization_" + e):
+            open(path + ".done", "w").close()
+            files[e] = path
+    grid, rows = None, []
+    for e, path in files.items():
+        with h5py.File(path, "r") as f:
+            w, rms = np.abs(f["/sweep/omega"][:]), f["/sweep/rms"][:]
+        if grid is None:
+            grid = np.array([lo + k * step for k in range(int(round((hi - lo) / step)) + 1)])
+        rows.append([rms[np.argmin(np.abs(w - x))] for x in grid])  # nearest speed: the perturbed one
+    R = np.array(rows)
+    spread = R.max(0) / R.min(0)
+    wide = [float(x) for x in grid[spread > 1.2]]
+    print("  %d realizations of %d speeds: RMS spread (largest / smallest) median %.3f, 90 %% %.3f, largest %.2f "
+          "at %g rad/s; above 1.2 at %s" % (len(rows), grid.size, np.median(spread), np.percentile(spread, 90),
+                                            spread.max(), grid[np.argmax(spread)], wide), flush=True)
+    st.rec["realizations"] = {"files": files, "speeds": grid.tolist(), "rms": R.tolist(),
+                              "spread_median": float(np.median(spread)), "spread_max": float(spread.max()),
+                              "speeds_spread_above_1.2": wide}
+    st.save()
 
 
 def parse_range(s):
@@ -349,10 +479,14 @@ def main():
     ap.add_argument("--diag-range", default="750:2150:100", help="diagnosis: speed grid min:max:step [rad/s]")
     ap.add_argument("--maps", default="linear", help="maps: linear and/or nonlinear")
     ap.add_argument("--map-range", default="750:2190:16", help="maps: coarse grid min:max:step [rad/s]")
-    ap.add_argument("--map-refine", type=float, default=1.0, help="maps: finest step [rad/s]")
+    ap.add_argument("--map-refine", type=float, default=1.0, help="maps: finest step [rad/s]; 0: no refinement")
     ap.add_argument("--map-revs", type=float, default=200.0, help="maps: revolutions per speed")
     ap.add_argument("--map-dt-nonlinear", type=float, default=5e-7, help="maps: step of the nonlinear map [s]")
     ap.add_argument("--rotation", default="auto", choices=["auto", "positive", "negative"])
+    ap.add_argument("--realizations", default="1e-12,-1e-12",
+                    help="realizations: relative speed perturbations of the extra linear maps")
+    ap.add_argument("--stress-window", type=float, default=2.0,
+                    help="map_stress: the 1B/eo8 interaction is sought up to this multiple of its crossing")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
@@ -414,6 +548,12 @@ def main():
 
     if "maps" in stages:
         maps_stage(st, args, mesh)
+
+    if "realizations" in stages:
+        realizations_stage(st, args, mesh)
+
+    if "map_stress" in stages:
+        map_stress_stage(st, args, mesh)
 
     if "stress" in stages:
         f1b = st.rec.get("f1b_hz") or first_bending_hz(st.file("rom_r79.h5"))
