@@ -61,7 +61,9 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh,
            md.asymmetry_K, md.asymmetry_M);
     return md;
   }
-  Model md = fe::mesh_model(comm, o.mesh);
+  // The stiffness on the nodes' layout of a constrained deck serves only the nonlinear forces (the
+  // commands that take such a deck with constraints_ok); the linear ones do not keep it.
+  Model md = fe::mesh_model(comm, o.mesh, constraints_ok);
   // Element-by-element commands see the nodes' displacements, which dependent nodes of rigid and
   // interpolation elements do not have as DOFs of the model.
   collective_check(comm,

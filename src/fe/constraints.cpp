@@ -411,7 +411,7 @@ void symmetrize(Mat A) {
 
 }  // namespace
 
-void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets) {
+void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets, bool keep_node_stiffness) {
   MORSE_CHECK(md->mesh.has_value(), "eliminate_constraints: not a mesh model");
   const auto& lm = *md->mesh;
   const auto& cs = lm.mesh.constraints;
@@ -669,7 +669,7 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
   cm->point_coords = cs.point_coords;
   cm->full = std::move(md->dofs);
   md->dofs = std::move(red);
-  cm->K_nodes = std::move(md->K);
+  if (keep_node_stiffness) cm->K_nodes = std::move(md->K);
   md->K = std::move(Kr);
   md->M = std::move(Mr);
   md->mass += point_mass;

@@ -157,7 +157,7 @@ void gather_labels(const DofLayout& dofs, std::vector<std::int64_t>* node, std::
   MPI_Gatherv(comp.data(), m, MPI_INT64_T, component->data(), counts.data(), displs.data(), MPI_INT64_T, 0, dofs.comm);
 }
 
-Model mesh_model(MPI_Comm comm, const MeshInput& in) {
+Model mesh_model(MPI_Comm comm, const MeshInput& in, bool keep_node_stiffness) {
   Model md;
   md.source = in.path;
   {
@@ -178,7 +178,7 @@ Model mesh_model(MPI_Comm comm, const MeshInput& in) {
   md.M = std::move(ops.M);
   md.volume = ops.volume;
   md.mass = ops.mass;
-  if (!md.mesh->mesh.constraints.empty()) eliminate_constraints(&md, in.clamp);
+  if (!md.mesh->mesh.constraints.empty()) eliminate_constraints(&md, in.clamp, keep_node_stiffness);
   return md;
 }
 

@@ -40,8 +40,10 @@ namespace morse::fe {
 /// DOF that is also clamped or dependent in another element, a circular dependency, an
 /// independent or reference node that is not a six-DOF point, rotations of a solid node, an
 /// interpolation element whose nodes and weights leave the reference's motion undetermined
-/// (collinear nodes, zero weights), a linear constraint whose first coefficient is 0. Collective.
-void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets);
+/// (collinear nodes, zero weights), a linear constraint whose first coefficient is 0. With
+/// keep_node_stiffness, md->constraints->K_nodes keeps the stiffness on the nodes' layout, which only
+/// the nonlinear forces need (fe::Svk through T); without, it is released (one matrix less). Collective.
+void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets, bool keep_node_stiffness = true);
 
 /// u = T u_bar: the free translations of the mesh's nodes (md.constraints->full) from a vector of
 /// the model's DOFs. Without constraints, a copy of u_bar. Collective.

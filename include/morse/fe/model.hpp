@@ -89,7 +89,8 @@ Operators assemble(const mesh::LocalMesh& lm, const DofLayout& dofs, const mesh:
 struct ConstraintMap {
   UMat T;                         ///< MPIAIJ, rows as `full`, columns as the model's DOFs
   DofLayout full;                 ///< the nodes' free translations, before elimination
-  UMat K_nodes;                   ///< the stiffness on `full` before elimination (fe::Svk's elements)
+  UMat K_nodes;                   ///< the stiffness on `full` before elimination (fe::Svk's elements);
+                                  ///< null if the model was built without it (mesh_model)
   std::int64_t n_dependent = 0;   ///< DOFs eliminated (dependent), nodes' and points'
   std::int64_t n_point_dofs = 0;  ///< DOFs of six-DOF points kept as the model's DOFs
   std::int64_t n_rigid = 0, n_interpolation = 0, n_linear = 0;
@@ -133,8 +134,9 @@ struct MeshInput {
 
 /// Reads and distributes the mesh, applies the set materials and the added node sets, numbers
 /// the free DOFs and assembles K and M. Throws (collectively) as read_and_distribute,
-/// mesh::add_node_set, number_dofs and assemble do. Collective.
-Model mesh_model(MPI_Comm comm, const MeshInput& in);
+/// mesh::add_node_set, number_dofs and assemble do. A deck's rigid and interpolation elements and
+/// MPCs are eliminated (eliminate_constraints, with keep_node_stiffness). Collective.
+Model mesh_model(MPI_Comm comm, const MeshInput& in, bool keep_node_stiffness = true);
 
 /// What `morse mesh info` reports of a distributed mesh beyond its sets: the global element count
 /// per type, the volume, the smallest Jacobian determinant (min_jacobian) and its element, the
