@@ -91,6 +91,8 @@ DT = 5e-8
 OMEGA = 1450.0
 CASING = ["-contact_set", "tip", "-contact_mu", "0.15", "-casing_clearance", "3.56e-4", "-casing_lobes", "2"]
 ROMS = {"r79": (15, 40), "r89": (20, 45), "r54": (10, 20)}
+MAP_ROM = "r79_ms20k"  # the maps' model: r79 mass-scaled to 20 kHz (rom_<MAP_ROM>.h5)
+MAP_DT_LINEAR = 8e-6  # the linear maps' step [s]
 
 
 class Study:
@@ -226,7 +228,7 @@ def rotation_of(rom):
 
 def maps_stage(st, args, mesh):
     """The seed-scale maps of the mass-scaled r79 (see the module docstring)."""
-    rom = st.file("rom_r79_ms20k.h5")
+    rom = st.file("rom_%s.h5" % MAP_ROM)
     margs = rom_args(mesh, 15, 40, rom) + ["-nlrom_mass_scaling_fmax", 20000]
     if not st.run(args.ranks, margs, "nlrom r79 mass-scaled to 20 kHz", rom, "rom_r79_ms20k"):
         return
@@ -238,7 +240,7 @@ def maps_stage(st, args, mesh):
         lin = tag == "linear"
         name = "map_%s_%s" % (tag, sense)
         path = st.file(name + ".h5")
-        dt = 8e-6 if lin else args.map_dt_nonlinear
+        dt = MAP_DT_LINEAR if lin else args.map_dt_nonlinear
         sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
                  "-sweep_omega_step", step, "-sim_revolutions", args.map_revs, "-sim_dt", dt, "-sweep_rotation",
                  sense] + CASING + (["-sim_linear"] if lin else []) + \
@@ -283,7 +285,7 @@ def map_interaction(sweep_file, f1b, window, order=8):
 
 def map_stress_stage(st, args, mesh):
     """Fig. 25 on the seed-scale maps (see the module docstring)."""
-    rom = st.file("rom_r79_ms20k.h5")
+    rom = st.file("rom_%s.h5" % MAP_ROM)
     sense = st.rec.get("map_rotation", {}).get("sense")
     if not os.path.exists(rom) or sense is None:
         print("  map_stress: run the maps stage first", flush=True)
@@ -310,11 +312,8 @@ def map_stress_stage(st, args, mesh):
         st.rec[name + "_interaction"] = it
         # about 40 states per period of the 1B response at 8 Omega
         every = max(1, int(round(2 * math.pi / (8 * it["omega"]) / 40 / it["dt"])))
-        sim = st.file(name + "_sim.h5")
-        args_sim = ["simulate", "-rom", rom, "-sim_omega", sign * it["omega"], "-sim_revolutions", revs,
-                    "-sim_dt", it["dt"], "-sim_output_every", every, "-out", sim] + CASING + \
-            (["-sim_linear"] if lin else [])
-        if not st.run(1, args_sim, "simulate %s at %g rad/s" % (name, sign * it["omega"]), sim, name + "_sim"):
+        sim = simulate(st, MAP_ROM, sign * it["omega"], revs, it["dt"], lin, name + "_sim", every)
+        if sim is None:
             continue
         with h5py.File(sim, "r") as f:  # the monitor LE is the first contact node; its u_r over the 2nd half
             t, ur = f["/sim/time"][()], f["/sim/contact/radial_displacement"][()][:, 0]
@@ -328,7 +327,7 @@ def map_stress_stage(st, args, mesh):
 
 def realizations_stage(st, args, mesh):
     """The linear map's coarse grid again with the speeds perturbed by round-off (see the docstring)."""
-    rom = st.file("rom_r79_ms20k.h5")
+    rom = st.file("rom_%s.h5" % MAP_ROM)
     sense = st.rec.get("map_rotation", {}).get("sense")
     ref = st.file("map_linear_%s.h5" % sense) if sense else None
     if ref is None or not os.path.exists(ref + ".done"):
@@ -340,7 +339,7 @@ def realizations_stage(st, args, mesh):
         f = 1.0 + float(e)
         path = st.file("map_linear_%s_realization_%s.h5" % (sense, e))
         sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", repr(lo * f), "-sweep_omega_max", repr(hi * f),
-                 "-sweep_omega_step", repr(step * f), "-sim_revolutions", args.map_revs, "-sim_dt", 8e-6,
+                 "-sweep_omega_step", repr(step * f), "-sim_revolutions", args.map_revs, "-sim_dt", MAP_DT_LINEAR,
                  "-sweep_rotation", sense, "-sim_linear"] + CASING
         if st.run(args.ranks, sargs, "linear map, speeds x (1 + %s)" % e, path + ".done", "realization_" + e):
             open(path + ".done", "w").close()
