@@ -81,4 +81,57 @@ refused n_done '/sweep@n_done is 5 but /sweep/index holds 11 finished speeds'
 # The intact file resumes with every speed done.
 out=$(run "${sweep[@]}" -out "$d/good.h5")
 grep -q "(11 already in $d/good.h5)" <<<"$out"
-echo "case: ok: corrupt sweep checkpoints refused, files unchanged"
+
+# Continuation (-sweep_continuation up, 2 chains): every speed but each chain's first starts from
+# its neighbour below (/sweep/continuation), every final state is kept; a file cut back to the
+# first speeds of each chain (a killed run) resumes to bitwise the uninterrupted results; the
+# plain sweep's file is not resumed as a continuation (the settings differ, named).
+cont=("${sweep[@]}" -sweep_continuation up -sweep_chains 2)
+out=$(run "${cont[@]}" -out "$d/cont.h5")
+grep -q "continuation up" <<<"$out" || { echo "case: FAIL: no continuation notice in: $out"; exit 1; }
+/usr/bin/python3 - "$d/cont.h5" "$d/cut.h5" <<'PY'
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+s = f["/sweep"]
+idx = s["index"][()]
+frm = s["continuation"][:, 0]
+want = [-1 if i in (0, 5) else i - 1 for i in idx]  # chains 0..4 and 5..10
+assert list(frm) == want, (list(frm), want)
+fs = s["final_state"][()]
+assert np.all(np.isfinite(fs)) and fs.shape[0] == 11 and fs.shape[1] % 2 == 1, fs.shape
+# The same file with speeds 3, 4, 8, 9, 10 removed: a run killed after speed 2 and speed 7.
+g = h5py.File(sys.argv[2], "w")
+f.copy("/sweep", g)
+for k in list(f.keys()):
+    if k != "sweep":
+        f.copy(k, g)
+for k, v in f.attrs.items():
+    g.attrs[k] = v
+keep = np.isin(idx, [0, 1, 2, 5, 6, 7])
+t = g["/sweep"]
+for k in list(t.keys()):
+    d = t[k]
+    if isinstance(d, h5py.Dataset) and d.shape and d.shape[0] == 11 and k not in ("frequency", "eigenfrequencies"):
+        a = d[()][keep]
+        del t[k]
+        t[k] = a
+t.attrs["n_done"] = int(keep.sum())
+g.close()
+print("case: continuation origins and final states ok")
+PY
+out=$(run "${cont[@]}" -out "$d/cut.h5")
+grep -q "(6 already in $d/cut.h5)" <<<"$out" || { echo "case: FAIL: the cut file did not resume: $out"; exit 1; }
+/usr/bin/python3 - "$d/cont.h5" "$d/cut.h5" <<'PY'
+import sys, h5py, numpy as np
+a, b = (h5py.File(p, "r")["/sweep"] for p in sys.argv[1:3])
+for k in ("index", "rms", "spectrum", "continuation", "final_state"):
+    assert np.array_equal(a[k][()], b[k][()]), k
+print("case: resumed continuation is bitwise the uninterrupted one")
+PY
+set +e
+out=$(run "${cont[@]}" -out "$d/good.h5" 2>&1)
+rc=$?
+set -e
+test $rc -ne 0 || { echo "case: FAIL: a plain sweep's file was resumed as a continuation"; exit 1; }
+grep -q "continuation: (none) in the file, up now" <<<"$out" || { echo "case: FAIL: not named: $out"; exit 1; }
+echo "case: ok: corrupt sweep checkpoints refused, files unchanged; continuation resumed"

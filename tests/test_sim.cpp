@@ -1202,6 +1202,151 @@ TEST(Sim, SweepRetriesAFailedSpeedAtHalfTheStep) {
   }
 }
 
+// Continuation (-sweep_continuation): a speed continued from its neighbour's final state, on the
+// grown casing with the lobes where that run left them, is the neighbour's run carried on. With
+// neighbouring speeds 1e-9 rad/s apart (the same step count N), chain k of a continuation sweep
+// ends where one uninterrupted run of 2N steps at its first speed ends (the hardening tip, k3 = 1e14,
+// kicked by the casing, up and down, 2 chains of 2 speeds). Dropping the lobes' angle (phase 0)
+// breaks the identity: the test can fail. A sweep resumed from the file written after the first
+// round (final states read back) gives bitwise the same second round; a linear chain's continued
+// speed closes its energy balance from its start energy.
+TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
+  const double wn = 2 * M_PI * 1000.0, c0 = 2e-4, hb = 6e-4, w0 = 2000.0, dw = 1e-11;
+  const double revs = 10.0, T = revs * 2 * M_PI / w0;
+  sim::SweepSettings s;
+  s.base.contact.obstacle = sim::Obstacle::Casing;
+  s.base.contact.casing = {c0, hb, 2, 0.3, 60.0 / T, 0.0};  // grown to 1 - e^-60 (1.0 in double) by T
+  s.base.contact.mu = 0.15;
+  sim::ContactNode node;
+  node.x[0] = 0.25 * std::cos(0.3), node.x[1] = 0.25 * std::sin(0.3);
+  s.base.contact.nodes.push_back(node);
+  s.revolutions = revs;
+  s.monitor = {std::cos(0.3), std::sin(0.3), 0.0};
+  s.spectrum_fmax = 5000.0;
+  s.spectrum_bins = 50;
+  s.batch = 2;
+  const auto rm = hardening_tip(wn, 1e14);
+  {
+    const double h0 = 0.5 * sim::critical_step(rm, &s.base.contact);
+    s.base.dt = T / (std::floor(T / h0) + 0.5);  // every speed of the grid: the same step count N
+  }
+  const long N = static_cast<long>(std::floor(T / s.base.dt)) + 1;
+  sim::SweepOptions so;
+  so.omega_min = w0, so.omega_step = dw, so.omega_max = w0 + 3.5 * dw, so.chains = 2;
+  ASSERT_EQ(so.n_speeds(), 4);
+  const auto freqs = s.frequencies();
+  const bool root = world_rank() == 0;
+  // One run of 2N steps at speed i (the reference), on this rank.
+  auto uninterrupted = [&](long i) {
+    sim::SweepSettings sr = s;
+    sr.keep_state = true;
+    sr.revolutions = (2.0 * static_cast<double>(N) - 0.5) * s.base.dt * (w0 + static_cast<double>(i) * dw) / (2 * M_PI);
+    sim::SpeedResult out;
+    sim::sweep(PETSC_COMM_SELF, rm, sr, {sim::SpeedTask(i, w0 + static_cast<double>(i) * dw)},
+               [&](const sim::SpeedResult& R) { out = R; });
+    return out;
+  };
+  auto chains = [&](int direction, std::vector<sim::SpeedResult> done) {
+    so.continuation = direction;
+    std::size_t n_run = 0;
+    sim::sweep_rounds(
+        PETSC_COMM_WORLD, rm, s, so, {}, &done, freqs, [](const sim::SpeedResult&) {}, &n_run);
+    std::sort(done.begin(), done.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+    return done;  // on rank 0
+  };
+  auto rel = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double d = 0, m = 0;
+    for (std::size_t j = 0; j < a.size(); ++j) d = std::max(d, std::abs(a[j] - b[j])), m = std::max(m, std::abs(b[j]));
+    return a.size() == b.size() && m > 0 ? d / m : 1.0;
+  };
+  int ok_plan = 1, ok_file = 1, ok_resumed = 1;
+  double worst = 0, dropped = 0, contact = 1e30, balance = 0;
+  for (int direction : {1, -1}) {
+    const auto res = chains(direction, {});
+    if (root) {
+      ok_plan &= res.size() == 4;
+      // Up: 0 -> 1 and 2 -> 3; down: 1 -> 0 and 3 -> 2.
+      for (long first : {0L, 2L}) {
+        if (!ok_plan) break;
+        const long a = direction > 0 ? first : first + 1, b = direction > 0 ? first + 1 : first;
+        const auto &A = res[static_cast<std::size_t>(a)], &B = res[static_cast<std::size_t>(b)];
+        ok_plan &= A.from == -1 && B.from == a && B.phase == A.phase_end && A.steps == N && B.steps == N &&
+                   A.status == 0 && B.status == 0 && B.energy_start > 0;
+        const auto ref = uninterrupted(a);
+        ok_plan &= ref.steps == 2 * N;
+        worst = std::max({worst, rel(B.q_end, ref.q_end), rel(B.qm_end, ref.qm_end)});
+        contact = std::min(contact, static_cast<double>(B.max_active));
+        print0(PETSC_COMM_SELF, "  continuation %s: speed %ld from %ld: |q_N - q_2N(uninterrupted)| / |q| = %.2e\n",
+               direction > 0 ? "up" : "down", b, a, rel(B.q_end, ref.q_end));
+        if (direction > 0 && first == 0) {  // the control: the lobes' angle dropped
+          sim::SpeedTask t(b, B.omega);
+          t.q0 = A.q_end, t.qm0 = A.qm_end, t.from = a, t.phase = 0.0;
+          sim::SweepSettings sk = s;
+          sk.keep_state = true;
+          sim::SpeedResult X;
+          sim::sweep(PETSC_COMM_SELF, rm, sk, {t}, [&](const sim::SpeedResult& R) { X = R; });
+          dropped = rel(X.q_end, ref.q_end);
+          print0(PETSC_COMM_SELF, "  control, the lobes' angle dropped: %.2e\n", dropped);
+        }
+      }
+    }
+    if (direction > 0) {
+      // Resumed after the first round (speeds 0 and 2) from the file.
+      std::vector<sim::SpeedResult> first_round;
+      if (root) {
+        sim::SweepRecord rec, back;
+        rec.settings = "k=v\n", rec.n_speeds = 4, rec.frequencies = freqs;
+        rec.results = {res[0], res[2]};
+        const test::ScratchDir dir("continuation");
+        const std::string path = dir.path("sweep.h5");
+        sim::write_sweep(path, rec);
+        std::string why;
+        ok_file = sim::read_sweep(path, &back, &why) && back.results.size() == 2;
+        for (std::size_t i = 0; ok_file && i < 2; ++i) {
+          const auto &x = back.results[i], &y = rec.results[i];
+          ok_file &= x.q_end == y.q_end && x.qm_end == y.qm_end && x.phase_end == y.phase_end && x.from == y.from &&
+                     x.phase == y.phase && x.energy_start == y.energy_start;
+        }
+        if (!ok_file) print0(PETSC_COMM_SELF, "  file: %s\n", why.c_str());
+        first_round = back.results;
+      }
+      const auto again = chains(1, first_round);
+      if (root) {
+        ok_resumed = again.size() == 4;
+        for (std::size_t i = 0; ok_resumed && i < 4; ++i)
+          ok_resumed &= again[i].q_end == res[i].q_end && again[i].rms == res[i].rms &&
+                        again[i].spectrum == res[i].spectrum && again[i].from == res[i].from;
+      }
+    }
+  }
+  {  // A linear chain: the works of a continued speed count from its start.
+    s.base.linear = true;
+    const auto res = chains(1, {});
+    s.base.linear = false;
+    if (root && res.size() == 4) {
+      const auto& B = res[1];
+      const auto& w = B.work_end;
+      const double sum = w.external + w.normal + w.friction - w.damping;
+      const double scale = std::max({std::abs(B.energy_end), std::abs(B.energy_start), std::abs(w.normal),
+                                     std::abs(w.friction), std::abs(w.damping)});
+      balance = std::abs(B.energy_end - B.energy_start - sum) / scale;
+      print0(PETSC_COMM_SELF, "  linear continued speed: E_start %.4e J, E_end %.4e J, balance residual %.2e\n",
+             B.energy_start, B.energy_end, balance);
+    } else if (root) {
+      balance = 1.0;
+    }
+  }
+  for (int* v : {&ok_plan, &ok_file, &ok_resumed}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  for (double* v : {&worst, &dropped, &contact, &balance}) MPI_Bcast(v, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
+  EXPECT_EQ(ok_plan, 1) << "the chains' order, starts or recorded origins are wrong";
+  EXPECT_LT(worst, 1e-8) << "a continued speed is not the uninterrupted run";
+  EXPECT_GT(dropped, 1e-3) << "without the lobes' angle the continued run should differ (the test cannot fail)";
+  EXPECT_GE(contact, 1.0) << "the continued speeds never touched the casing (the case does not test the phase)";
+  EXPECT_EQ(ok_file, 1) << "the final states do not survive the sweep file";
+  EXPECT_EQ(ok_resumed, 1) << "a resumed continuation differs from the uninterrupted sweep";
+  EXPECT_LT(balance, 1e-9) << "a continued linear speed's energy balance does not close";
+}
+
 // The energy balance of central differences (sim::EnergyWork): the discrete energy E_{n+1/2}
 // changes by the works of the load, the normal contact forces and friction, less the damping
 // dissipation. The clamped box with a harmonic load on its free face, modal damping on every
@@ -1693,6 +1838,59 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   const auto keyed = sim::settings_text(so, limited, model);
   EXPECT_NE(keyed.find("\nretries=3\n"), std::string::npos) << keyed;
   EXPECT_NE(keyed.find("\ndivergence_limit=0.25\n"), std::string::npos) << keyed;
+  EXPECT_EQ(keyed.find("continuation="), std::string::npos) << "a key only for a continuation (old files resume)";
+  // Continuation: its chains (in the order they run), keys of the settings, and what it refuses.
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "1000"},
+             {"-sweep_omega_step", "40"},
+             {"-sweep_continuation", "down"},
+             {"-sweep_chains", "2"}});
+  EXPECT_EQ(so.error, "");
+  EXPECT_EQ(so.continuation, -1);
+  EXPECT_EQ(so.chain_order(), (std::vector<std::vector<long>>{{2, 1, 0}, {5, 4, 3}}));
+  const auto cont = sim::settings_text(so, limited, model);
+  EXPECT_NE(cont.find("\ncontinuation=down\nchains=2\n"), std::string::npos) << cont;
+  {  // the next speed of each chain: after speed 2 (with a state) and none of the second chain
+    sim::SpeedResult R;
+    R.index = 2, R.omega = 880, R.q_end = {1, 2}, R.qm_end = {3, 4}, R.phase_end = 0.5;
+    auto next = so.next_in_chains({R});
+    ASSERT_EQ(next.size(), 2u);
+    EXPECT_EQ(next[0].index, 1);
+    EXPECT_EQ(next[0].omega, 840.0);
+    EXPECT_EQ(next[0].from, 2);
+    EXPECT_EQ(next[0].q0, R.q_end);
+    EXPECT_EQ(next[0].qm0, R.qm_end);
+    EXPECT_EQ(next[0].phase, 0.5);
+    EXPECT_EQ(next[1].index, 5);
+    EXPECT_TRUE(next[1].q0.empty()) << "a chain's first speed starts from rest";
+    R.status = 1, R.q_end.clear(), R.qm_end.clear();  // a failed speed: its successor from rest
+    next = so.next_in_chains({R});
+    EXPECT_TRUE(next[0].q0.empty());
+    EXPECT_EQ(next[0].from, -1);
+  }
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "1000"},
+             {"-sweep_omega_step", "40"},
+             {"-sweep_continuation", "up"},
+             {"-sweep_refine_step", "10"}});
+  EXPECT_NE(so.error.find("-sweep_continuation and -sweep_refine_step exclude each other"), std::string::npos)
+      << so.error;
+  for (const char* bad : {"0", "7"}) {
+    so = read({{"-sweep_omega_min", "800"},
+               {"-sweep_omega_max", "1000"},
+               {"-sweep_omega_step", "40"},
+               {"-sweep_continuation", "up"},
+               {"-sweep_chains", bad}});
+    EXPECT_NE(
+        so.error.find(cat("-sweep_chains ", bad == std::string("0") ? "must be at least 1 (got 0)" : "7 is more")),
+        std::string::npos)
+        << so.error;
+  }
+  test::expect_error_parts(
+      [&] {
+        read({{"-sweep_continuation", "sideways"}});
+      },
+      {"-sweep_continuation", "sideways"}, "an unknown continuation");
 }
 
 // simulate's options refuse non-finite initial states and steps, a case given twice and a case

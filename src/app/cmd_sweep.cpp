@@ -3,6 +3,7 @@
 // over all ranks (sim::sweep). Every finished speed is written to -out at once (atomic rewrite);
 // a killed sweep run again with the same options resumes from the file.
 #include <petscsys.h>
+#include <dlfcn.h>
 
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,27 @@
 
 namespace morse::app::detail {
 
+namespace {
+// One BLAS thread per rank. The step operators are made with BLAS/LAPACK, whose threaded kernels
+// round differently from the sequential ones; where solutions coexist, a last-bit difference can
+// put a speed on the other branch (docs/contact.md, "Coexisting solutions": 1,144 rad/s went from
+// 3.26 to 0.65 mm with threaded OpenBLAS). The sweep's parallelism is over speeds, not threads.
+void single_blas_thread(MPI_Comm comm) {
+  using SetThreads = void (*)(int);
+  using GetThreads = int (*)();
+  auto set = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  auto get = reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+  if (!set || !get) return;  // another BLAS
+  const int before = get();
+  if (before == 1) return;
+  set(1);
+  print0(comm,
+         "morse sweep: OpenBLAS set to 1 thread per rank (it had %d): a speed's result is then the same on any "
+         "machine (set OPENBLAS_NUM_THREADS=1 to silence this)\n",
+         before);
+}
+}  // namespace
+
 void run_sweep(MPI_Comm comm) {
   sim::SweepOptions so;
   MORSE_CALL(so.set_from_options(comm));
@@ -29,6 +51,7 @@ void run_sweep(MPI_Comm comm) {
   so.check();
   const auto output_lock = files::prepare_outputs(comm, {{"-out", so.out}}, {{"-rom", so.rom}});
   so.check_memory(comm);
+  single_blas_thread(comm);
   const auto sm = nlrom::read_stored_model(comm, so.rom, {so.contact.set, so.monitor});
   const std::size_t r = sm.r();
   const sim::SweepSettings s = so.settings(sm);
@@ -61,9 +84,16 @@ void run_sweep(MPI_Comm comm) {
          "r = %zu, %s, %d lanes per rank (-sweep_kernel %s) on %d rank(s)\n",
          coarse, so.omega_min, last, so.rotation > 0 ? "" : " turning negatively about z", nd, so.out.c_str(),
          s.revolutions, so.dt, hc, r, so.linear ? "linear" : "nonlinear", s.batch, sim::kernel_name(so.kernel), size);
-  if (so.retries > 0)
+  if (so.continuation != 0) {
+    print0(comm,
+           "morse sweep: continuation %s: each speed starts from the final state of the speed %s it, on the grown "
+           "casing; %ld chain(s) of neighbouring speeds, the first of each from rest (-sweep_chains)%s\n",
+           so.continuation > 0 ? "up" : "down", so.continuation > 0 ? "below" : "above", static_cast<long>(so.chains),
+           so.chains < size ? "; fewer chains than ranks: some ranks idle" : "");
+  } else if (so.retries > 0) {
     print0(comm, "morse sweep: a speed that fails runs again at half its step, up to %d time(s) (-sweep_retries)\n",
            so.retries);
+  }
   if (so.refine_step > 0)
     print0(comm,
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "
@@ -80,7 +110,7 @@ void run_sweep(MPI_Comm comm) {
           comm,
           "morse sweep: refinement: at most %.4g more steps, %.3g core-hours (if every speed of the fine grid ran)\n",
           cost.refine_steps, cost.refine_core_hours);
-    if (so.retries > 0)
+    if (so.retries > 0 && so.continuation == 0)
       print0(
           comm,
           "morse sweep: not counted: the retries of failed speeds (a speed retried k times costs at most 2^(k+1) - 1 "
@@ -125,12 +155,13 @@ void run_sweep(MPI_Comm comm) {
     for (const auto& R : rec.results)
       if (R.status != 0) failed += cat(failed.empty() ? "" : "; ", "omega ", R.omega, " at dt ", R.dt, " s: ", R.error);
   print0(comm, "morse: wrote %s\n", so.out.c_str());
-  collective_check(
-      comm, failed.empty() ? ""
-                           : cat("morse sweep: speeds failed (recorded with status 1",
-                                 so.retries > 0 ? cat(" after ", so.retries, " halving(s) of the step; -sweep_retries")
-                                                : std::string(),
-                                 "): ", failed));
+  collective_check(comm, failed.empty()
+                             ? ""
+                             : cat("morse sweep: speeds failed (recorded with status 1",
+                                   so.retries > 0 && so.continuation == 0
+                                       ? cat(" after ", so.retries, " halving(s) of the step; -sweep_retries")
+                                       : std::string(),
+                                   "): ", failed));
   check_options(comm, false);
 }
 

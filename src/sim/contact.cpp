@@ -75,7 +75,7 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
       const double* x = c.nodes[k].x;
       const double rho = std::hypot(x[0], x[1]);
       slide_[3 * k] = -sgn * x[1] / rho, slide_[3 * k + 1] = sgn * x[0] / rho;  // sign(omega) e_theta
-      theta0_[k] = std::atan2(x[1], x[0]);
+      theta0_[k] = std::atan2(x[1], x[0]) + cs.phase;                           // the lobes' angle at t = 0 folded in
     }
   }
   set_compliance(P);
@@ -111,7 +111,7 @@ double ContactSolver::gap_of(std::size_t k, const double* q, double t) const {
   if (theta < 0) theta += period;
   const double z = (theta - 0.5 * period) / cs.width;
   const double f = cs.bump_height * std::exp(-z * z);
-  g = cs.clearance - (1.0 - std::exp(-alpha_ * t)) * f;
+  g = cs.clearance - (cs.grown ? 1.0 : 1.0 - std::exp(-alpha_ * t)) * f;
   for (int d = 0; d < 3; ++d) g += q[node.dof + d] * nv[d];  // - u_r
   return g;
 }

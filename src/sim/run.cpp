@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/detail/pack.hpp"
 #include "morse/core/error.hpp"
 #include "morse/core/files.hpp"
 #include "morse/core/log.hpp"
@@ -325,6 +326,19 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsInt("-sweep_retries",
                             "A speed that fails (non-finite state) runs again at half its step, up to this many times",
                             "", retries, &retries, nullptr));
+  {
+    const char* modes[] = {"none", "up", "down", "Continuation", "", nullptr};
+    PetscEnum mode = static_cast<PetscEnum>(o->continuation == 0 ? 0 : o->continuation > 0 ? 1 : 2);
+    PetscCall(MorseOptionsEnum("-sweep_continuation",
+                               "Each speed starts from the final state of the one below it (up) or above it (down) on "
+                               "the grown casing, to follow a branch of solutions; none: every speed from rest",
+                               "", modes, mode, &mode, nullptr));
+    o->continuation = mode == static_cast<PetscEnum>(1) ? 1 : mode == static_cast<PetscEnum>(2) ? -1 : 0;
+  }
+  PetscCall(MorseOptionsInt("-sweep_chains",
+                            "Continuation: the grid is cut into this many runs of neighbouring speeds, run in "
+                            "parallel, each starting from rest",
+                            "", o->chains, &o->chains, nullptr));
   PetscCall(MorseOptionsReal("-sweep_divergence_limit",
                              "A speed whose monitored displacement exceeds this [m] has diverged (default: the largest "
                              "radius of the contact nodes; 0: no limit)",
@@ -363,6 +377,18 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
       bad(cat("-sweep_refine_rms and -sweep_refine_frequency must be > 0 (got ", o->refine_rms, ", ",
               o->refine_frequency, ")"));
   }
+  if (o->error.empty() && o->continuation != 0) {
+    if (o->refine_step != 0)
+      bad(
+          cat("-sweep_continuation and -sweep_refine_step exclude each other: a continuation runs every speed of the "
+              "grid in order (use -sweep_omega_step for its step)"));
+    else if (o->chains < 1)
+      bad(cat("-sweep_chains must be at least 1 (got ", o->chains, ")"));
+    else if (o->omega_step > 0 && o->omega_max >= o->omega_min &&
+             static_cast<double>(o->chains) > std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) + 1)
+      bad(cat("-sweep_chains ", o->chains, " is more than the grid's ",
+              std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) + 1, " speeds"));
+  }
   if (o->error.empty() && o->omega_step > 0 && o->omega_max > o->omega_min) {
     // The count in floating point first: it may not fit any integer (with refinement, of the
     // fine grid).
@@ -397,7 +423,10 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
                 c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel),
                 s.single ? 1 : 0, o.rotation, o.refine_step, o.refine_rms, o.refine_frequency,
                 nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0, o.retries, s.divergence_limit);
-  return b;
+  std::string text = b;
+  if (o.continuation != 0)  // only then: the files of sweeps without it stay resumable
+    text += cat("continuation=", o.continuation > 0 ? "up" : "down", "\nchains=", o.chains, "\n");
+  return text;
 }
 
 void SweepOptions::check() const {
@@ -506,36 +535,47 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   int size = 1;
   MPI_Comm_size(comm, &size);
   // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
-  const int lanes = static_cast<int>(sweep_lanes_per_rank(s.batch, todo.size(), size));
+  // A continuation advances one speed per chain at a time.
+  const std::size_t at_once =
+      so.continuation != 0 ? static_cast<std::size_t>(std::max<PetscInt>(1, so.chains)) : todo.size();
+  const int lanes = static_cast<int>(sweep_lanes_per_rank(s.batch, at_once, size));
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
   c.rate = rate / size;
   if (c.rate > 0) {
     c.core_hours = c.steps / c.rate / 3600.0;
-    c.wall_seconds = c.core_hours * 3600.0 / size;
+    c.wall_seconds = c.core_hours * 3600.0 / static_cast<double>(std::min<std::size_t>(size, at_once));
     c.refine_core_hours = c.refine_steps / c.rate / 3600.0;
   }
   return c;
 }
 
 namespace {
-// A list of speeds decided on rank 0, shared with every rank.
+// A list of speeds decided on rank 0, shared with every rank (with the initial states of continued
+// speeds).
 std::vector<SpeedTask> share_tasks(MPI_Comm comm, const std::vector<SpeedTask>& tasks) {
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  long n = static_cast<long>(tasks.size());
-  MPI_Bcast(&n, 1, MPI_LONG, 0, comm);
-  std::vector<std::int64_t> idx(static_cast<std::size_t>(n));
-  std::vector<double> om(static_cast<std::size_t>(n));
-  std::vector<int> halvings(static_cast<std::size_t>(n));
-  for (std::size_t i = 0; rank == 0 && i < tasks.size(); ++i)
-    idx[i] = tasks[i].index, om[i] = tasks[i].omega, halvings[i] = tasks[i].halvings;
-  MPI_Bcast(idx.data(), static_cast<int>(n), MPI_INT64_T, 0, comm);
-  MPI_Bcast(om.data(), static_cast<int>(n), MPI_DOUBLE, 0, comm);
-  MPI_Bcast(halvings.data(), static_cast<int>(n), MPI_INT, 0, comm);
-  std::vector<SpeedTask> out;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i)
-    out.push_back({static_cast<long>(idx[i]), om[i], halvings[i]});
+  morse::detail::Packer pk;
+  if (rank == 0) {
+    pk.put(static_cast<std::uint64_t>(tasks.size()));
+    for (const auto& t : tasks) {
+      pk.put(t.index), pk.put(t.omega), pk.put(t.halvings), pk.put(t.from), pk.put(t.phase);
+      pk.put_vec(t.q0), pk.put_vec(t.qm0);
+    }
+  }
+  long len = static_cast<long>(pk.buffer().size());
+  MPI_Bcast(&len, 1, MPI_LONG, 0, comm);
+  std::vector<char> buf = pk.buffer();
+  buf.resize(static_cast<std::size_t>(len));
+  MPI_Bcast(buf.data(), static_cast<int>(len), MPI_CHAR, 0, comm);
+  morse::detail::Unpacker up(buf);
+  const auto n = up.get<std::uint64_t>();
+  std::vector<SpeedTask> out(n);
+  for (auto& t : out) {
+    t.index = up.get<long>(), t.omega = up.get<double>(), t.halvings = up.get<int>(), t.from = up.get<long>();
+    t.phase = up.get<double>(), t.q0 = up.get_vec<double>(), t.qm0 = up.get_vec<double>();
+  }
   return out;
 }
 }  // namespace
@@ -555,28 +595,60 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
   MPI_Comm_rank(comm, &rank);
   SweepStats st;
   *n_run = 0;
+  // A result replaces the earlier one of its speed (a retry's failed run) or joins done.
+  auto keep = [&](const SpeedResult& R) {
+    auto old = std::find_if(done->begin(), done->end(), [&](const SpeedResult& x) { return x.index == R.index; });
+    if (old != done->end())
+      *old = R;
+    else
+      done->push_back(R);
+  };
+  auto count = [&](const SweepStats& rs, std::size_t tasks) {
+    st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
+        st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
+    st.kernel = rs.kernel;
+    *n_run += tasks;
+  };
+  if (so.continuation != 0) {
+    // Rounds of one speed per chain, decided on rank 0 (which holds the results and their final
+    // states) and shared; every speed keeps its final state for the next.
+    SweepSettings sk = s;
+    sk.keep_state = true;
+    for (;;) {
+      std::vector<SpeedTask> next;
+      if (rank == 0) next = so.next_in_chains(*done);
+      next = share_tasks(comm, next);
+      if (next.empty()) break;
+      count(sweep(comm, m, sk, next,
+                  [&](const SpeedResult& R) {
+                    keep(R);
+                    if (R.status != 0)
+                      print0(PETSC_COMM_SELF,
+                             "morse sweep: omega %.10g rad/s failed (%s); its chain goes on from rest at the next "
+                             "speed\n",
+                             R.omega, R.error.c_str());
+                    on_result(R);
+                  }),
+            next.size());
+    }
+    return st;
+  }
   std::vector<SpeedTask> again;  // rank 0: the failures of the current pass that may retry
   auto run = [&](const std::vector<SpeedTask>& tasks, int halvings) {
     SweepSettings sh = s;
     sh.base.dt = std::ldexp(s.base.dt, -halvings);
-    const auto rs = sweep(comm, m, sh, tasks, [&](const SpeedResult& R) {
-      // A retry replaces the failed result of its speed.
-      auto old = std::find_if(done->begin(), done->end(), [&](const SpeedResult& x) { return x.index == R.index; });
-      if (old != done->end())
-        *old = R;
-      else
-        done->push_back(R);
-      if (R.status != 0 && R.halvings < so.retries) {
-        print0(PETSC_COMM_SELF, "morse sweep: omega %.10g rad/s failed at dt %.4g s (%s); it runs again at dt %.4g s\n",
-               R.omega, R.dt, R.error.c_str(), 0.5 * R.dt);
-        again.push_back({R.index, R.omega, R.halvings + 1});
-      }
-      on_result(R);
-    });
-    st.lane_steps += rs.lane_steps, st.speeds += rs.speeds, st.seconds += rs.seconds,
-        st.kernel_seconds += rs.kernel_seconds, st.idle_seconds += rs.idle_seconds;
-    st.kernel = rs.kernel;
-    *n_run += tasks.size();
+    count(sweep(comm, m, sh, tasks,
+                [&](const SpeedResult& R) {
+                  keep(R);
+                  if (R.status != 0 && R.halvings < so.retries) {
+                    print0(PETSC_COMM_SELF,
+                           "morse sweep: omega %.10g rad/s failed at dt %.4g s (%s); it runs again at dt %.4g s\n",
+                           R.omega, R.dt, R.error.c_str(), 0.5 * R.dt);
+                    again.push_back({R.index, R.omega, R.halvings + 1});
+                  }
+                  on_result(R);
+                }),
+          tasks.size());
   };
   // The retries a resumed file still owes run first, with the grid's speeds not yet run.
   {
@@ -611,6 +683,38 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
     if (todo.empty()) break;
   }
   return st;
+}
+
+std::vector<std::vector<long>> SweepOptions::chain_order() const {
+  const long n = n_speeds(), k = std::max<long>(1, std::min<long>(chains, n));
+  std::vector<std::vector<long>> out(static_cast<std::size_t>(k));
+  for (long c = 0; c < k; ++c) {
+    auto& o = out[static_cast<std::size_t>(c)];
+    for (long i = c * n / k; i < (c + 1) * n / k; ++i) o.push_back(i);
+    if (continuation < 0) std::reverse(o.begin(), o.end());
+  }
+  return out;
+}
+
+std::vector<SpeedTask> SweepOptions::next_in_chains(const std::vector<SpeedResult>& done) const {
+  std::map<long, const SpeedResult*> by_index;
+  for (const auto& R : done) by_index[R.index] = &R;
+  std::vector<SpeedTask> out;
+  for (const auto& order : chain_order()) {
+    std::size_t p = 0;
+    while (p < order.size() && by_index.count(order[p])) ++p;
+    if (p == order.size()) continue;
+    SpeedTask t;
+    t.index = order[p];
+    t.omega = rotation * (omega_min + static_cast<double>(t.index) * omega_step);
+    if (p > 0) {
+      const SpeedResult& prev = *by_index[order[p - 1]];
+      if (prev.status == 0 && !prev.q_end.empty())
+        t.q0 = prev.q_end, t.qm0 = prev.qm_end, t.phase = prev.phase_end, t.from = prev.index;
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
 }
 
 std::vector<SpeedTask> SweepOptions::refine(const std::vector<SpeedResult>& done,

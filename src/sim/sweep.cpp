@@ -266,10 +266,17 @@ class Batch {
     ln.n_steps = detail::step_count(ln.res.t_final, h);
     ln.half = (ln.n_steps + 1) / 2;
     if (!freqs_.empty()) ln.sample_every = std::max(1L, static_cast<long>(1.0 / (2.5 * s_.spectrum_fmax * h)));
+    const bool continued = !task.q0.empty();
+    MORSE_CHECK(!continued || (task.q0.size() == r_ && task.qm0.size() == r_), "sweep: speed ", task.index,
+                " continues from a state of ", task.q0.size(), " and ", task.qm0.size(), " coordinates, not r = ", r_);
+    ln.res.from = continued ? task.from : -1;
+    ln.res.phase = task.phase;
     if (!s_.base.contact.nodes.empty()) {
       ln.cs = std::make_unique<ContactSettings>(s_.base.contact);
       ln.cs->obstacle = Obstacle::Casing;
       ln.cs->casing.omega = task.omega;
+      ln.cs->casing.phase = task.phase;
+      ln.cs->casing.grown = continued;
       if (!m_.massless) ln.contact = std::make_unique<detail::ContactSolver>(*ln.cs, P3_, r_, ln.res.t_final);
     }
     if (m_.massless)
@@ -277,8 +284,12 @@ class Batch {
           std::make_unique<detail::MasslessBoundary>(m_, ln.cs.get(), ln.res.t_final, !s_.base.linear, raw_, tangent_);
     if (s_.base.energy_balance) ln.ledger = std::make_unique<detail::EnergyLedger>(m_, ln.cs.get(), h);
     if (ln.cs) ln.lam_prev.assign(ln.cs->nodes.size(), 0.0), ln.fric_prev.assign(3 * ln.cs->nodes.size(), 0.0);
-    // At rest: q_0 = q_{-1} = 0.
-    for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
+    if (continued) {  // q_0, q_{-1}: the final state of speed task.from
+      for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = task.q0[j], Qm_[j * L_ + slot] = task.qm0[j];
+      ln.res.energy_start = discrete_energy(m_, task.qm0.data(), task.q0.data(), h, !s_.base.linear);
+    } else {  // at rest: q_0 = q_{-1} = 0
+      for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
+    }
   }
 
   // One step of every busy lane; finished (or failed) lanes are appended to *done and freed.
@@ -341,6 +352,16 @@ class Batch {
       }
       ln.n = n1;
       if (fail || n1 == ln.n_steps) {
+        if (s_.keep_state && !fail) {  // q_N (corrected, in Qp_) and q_{N-1}
+          ln.res.q_end.resize(r_), ln.res.qm_end.resize(r_);
+          for (std::size_t j = 0; j < r_; ++j)
+            ln.res.q_end[j] = Qp_[j * L_ + slot], ln.res.qm_end[j] = Q_[j * L_ + slot];
+          if (ln.cs) {  // the lobes' angle at t_N, as gap_of sees it (theta_0 + phase + omega t)
+            const double period = 2.0 * M_PI / ln.cs->casing.lobes;
+            ln.res.phase_end = std::fmod(ln.res.phase + ln.res.omega * t, period);
+            if (ln.res.phase_end < 0) ln.res.phase_end += period;
+          }
+        }
         finish(ln, fail);
         done->push_back(std::move(ln.res));
         ++st->speeds;
@@ -443,6 +464,8 @@ void pack(morse::detail::Packer* pk, const SpeedResult& R) {
   pk->put(R.energy_half), pk->put(R.energy_end);
   for (const auto* w : {&R.work_half, &R.work_end})
     pk->put(w->external), pk->put(w->normal), pk->put(w->friction), pk->put(w->damping);
+  pk->put(R.from), pk->put(R.phase), pk->put(R.energy_start), pk->put_vec(R.q_end), pk->put_vec(R.qm_end);
+  pk->put(R.phase_end);
 }
 
 SpeedResult unpack(morse::detail::Unpacker* up) {
@@ -458,6 +481,9 @@ SpeedResult unpack(morse::detail::Unpacker* up) {
     w->external = up->get<double>(), w->normal = up->get<double>();
     w->friction = up->get<double>(), w->damping = up->get<double>();
   }
+  R.from = up->get<long>(), R.phase = up->get<double>(), R.energy_start = up->get<double>();
+  R.q_end = up->get_vec<double>(), R.qm_end = up->get_vec<double>();
+  R.phase_end = up->get<double>();
   return R;
 }
 

@@ -81,6 +81,30 @@ void write_sweep(const std::string& path, SweepRecord rec) {
                 "[speed][10] energy balance from rest (theory 10.6), at t_final / 2 then at t_final: discrete energy, "
                 "work of the loads, of the normal contact forces, of friction, damping dissipation [J]; energy = "
                 "load + normal + friction - damping (exact for a linear model)");
+  std::vector<double> cont;
+  std::size_t r_state = 0;
+  for (const auto& r : rs) {
+    cont.push_back(static_cast<double>(r.from)), cont.push_back(r.phase), cont.push_back(r.energy_start);
+    r_state = std::max(r_state, r.q_end.size());
+  }
+  out.write("/sweep/continuation", cont, {static_cast<hsize_t>(rs.size()), 3});
+  out.attribute("/sweep/continuation", "description",
+                "[speed][3] the speed (index) whose final state this speed started from (-1: from rest on the "
+                "growing casing), the casing lobes' angle at its start [rad], its discrete energy there [J] "
+                "(-sweep_continuation)");
+  if (r_state > 0) {  // a continuation sweep: every speed's final state, for the next one and a resume
+    std::vector<double> fs;
+    for (const auto& r : rs) {
+      const bool has = r.q_end.size() == r_state && r.qm_end.size() == r_state;
+      for (std::size_t j = 0; j < r_state; ++j) fs.push_back(has ? r.q_end[j] : std::nan(""));
+      for (std::size_t j = 0; j < r_state; ++j) fs.push_back(has ? r.qm_end[j] : std::nan(""));
+      fs.push_back(has ? r.phase_end : std::nan(""));
+    }
+    out.write("/sweep/final_state", fs, {static_cast<hsize_t>(rs.size()), static_cast<hsize_t>(2 * r_state + 1)});
+    out.attribute("/sweep/final_state", "description",
+                  "[speed][2r + 1] the final state q_N, q_{N-1} and the casing lobes' angle at t_N [rad] (NaN: none, "
+                  "a failed speed)");
+  }
   std::string errors;
   for (const auto& r : rs)
     if (r.status != 0) errors += cat(r.index, "\t", r.error, "\n");
@@ -116,6 +140,10 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
             io::read_string(path, "/sweep/errors", &errors, error) &&
             io::read_attribute(path, "/sweep", "n_speeds", &n_speeds, error) &&
             io::read_attribute(path, "/sweep", "n_done", &n_done, error);
+  // Continuation data: in the files of a version that had it (optional: older files resume).
+  std::vector<double> cont, fs;
+  if (ok && io::has_object(path, "/sweep/continuation")) ok = dbl("continuation", &cont);
+  if (ok && io::has_object(path, "/sweep/final_state")) ok = dbl("final_state", &fs);
   if (!ok) {
     *error = cat(path, " is not a complete morse sweep file: ", *error);
     return false;
@@ -134,7 +162,11 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   if (dims["frequency"].size() != 1 || nf == 0) return corrupt("/sweep/frequency is not a list of frequencies");
   for (const auto& [name, d] : dims) {
     if (name == "frequency" || name == "eigenfrequencies") continue;
-    const hsize_t cols = name == "spectrum" ? nf : name == "energy_balance" ? 10 : 0;
+    const hsize_t cols = name == "spectrum"         ? nf
+                         : name == "energy_balance" ? 10
+                         : name == "continuation"   ? 3
+                         : name == "final_state"    ? (d.size() == 2 && d[1] % 2 == 1 && d[1] >= 3 ? d[1] : 0)
+                                                    : 0;
     const std::vector<hsize_t> want = cols ? std::vector<hsize_t>{n, cols} : std::vector<hsize_t>{n};
     if (d != want) {
       std::string shape;
@@ -183,6 +215,20 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     r.energy_half = e[0], r.work_half = {e[1], e[2], e[3], e[4]};
     r.energy_end = e[5], r.work_end = {e[6], e[7], e[8], e[9]};
     if (r.status != 0) r.error = msg[r.index];
+    if (!cont.empty()) {
+      r.from = static_cast<long>(cont[3 * i]), r.phase = cont[3 * i + 1], r.energy_start = cont[3 * i + 2];
+      if (r.from < -1 || static_cast<double>(r.from) >= n_speeds)
+        return corrupt(cat("speed ", r.index, " continues from speed ", r.from, ", outside the grid"));
+    }
+    if (!fs.empty()) {
+      const std::size_t w = fs.size() / n, rr = (w - 1) / 2;
+      const double* row = &fs[w * i];
+      if (std::isfinite(row[0])) {
+        r.q_end.assign(row, row + rr), r.qm_end.assign(row + rr, row + 2 * rr), r.phase_end = row[2 * rr];
+        for (std::size_t j = 0; j < w; ++j)
+          if (!std::isfinite(row[j])) return corrupt(cat("speed ", r.index, " has a non-finite final state"));
+      }
+    }
     rec->results.push_back(std::move(r));
   }
   return true;

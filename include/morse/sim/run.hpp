@@ -102,6 +102,15 @@ struct SweepOptions {
   /// (SweepSettings::divergence_limit). Default (negative): the largest radius of the contact
   /// nodes, a displacement no blade survives; 0: no limit.
   double divergence_limit = -1.0;
+  /// -sweep_continuation up|down (+1, -1; 0: none, every speed from rest on the growing casing):
+  /// natural-parameter continuation. Each speed starts from the final state of its neighbour below
+  /// (up) or above (down) in |Omega|, on the grown casing with its lobes where that run left them, so
+  /// that a branch of solutions is followed across the speeds where another coexists (docs/contact.md,
+  /// "Coexisting solutions"). The grid is cut into `chains` runs of neighbouring speeds (the first
+  /// of each from rest), which run in parallel (one lane each); a failed speed ends its chain's
+  /// branch: the next speed starts from rest. No retries, no refinement.
+  int continuation = 0;
+  PetscInt chains = 1;  ///< -sweep_chains
   ContactOptions contact;
   std::string error;  ///< a bad value, naming the option (raised by check())
 
@@ -140,6 +149,14 @@ struct SweepOptions {
   /// The retries due among the finished speeds `done` (those of a resumed file included): every
   /// failed speed with fewer than `retries` halvings, at one more, in index order.
   std::vector<SpeedTask> retry(const std::vector<SpeedResult>& done) const;
+  /// Continuation: the grid indices of each chain in the order they run (up: increasing |Omega|).
+  /// Chain k holds the speeds k n / chains .. (k + 1) n / chains - 1 of the n of the grid.
+  std::vector<std::vector<long>> chain_order() const;
+  /// Continuation: the next speed of every chain after the finished speeds `done` (those of a
+  /// resumed file included): the first speed of the chain's order not in done, continued from the
+  /// final state of the speed before it (SpeedResult::q_end, phase_end) if that one finished with
+  /// a state, else from rest. Empty: every chain is done.
+  std::vector<SpeedTask> next_in_chains(const std::vector<SpeedResult>& done) const;
 };
 
 /// The predicted cost of a sweep, from a measured step rate (measure_step_rate, every rank for
@@ -158,10 +175,11 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
                              const std::vector<std::int64_t>& done_idx, double seconds = 0.3);
 
 /// Runs the speeds of todo (sim::sweep), then the refinement rounds of so.refine() until none is
-/// left. Every speed that fails is run again at half its step (so.retry(), up to so.retries
-/// halvings; those due in a resumed file first), before the next refinement round; s.base.dt is
-/// the step of a speed with no halving. done (rank 0): the finished speeds, those of a resumed file
-/// included; each new result replaces the one of the same index or is appended to it before
+/// left. A continuation sweep (so.continuation) instead runs rounds of so.next_in_chains(), one
+/// speed of every chain per round, each from its predecessor's final state (todo is not used). Every speed that fails
+/// is run again at half its step (so.retry(), up to so.retries halvings; those due in a resumed file first), before the
+/// next refinement round; s.base.dt is the step of a speed with no halving. done (rank 0): the finished speeds, those
+/// of a resumed file included; each new result replaces the one of the same index or is appended to it before
 /// on_result(result) runs (the checkpoint). freqs: the spectrum's frequencies. *n_run: the speed
 /// runs (retries included). Prints each round and each retry on rank 0. Collective.
 SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s, const SweepOptions& so,

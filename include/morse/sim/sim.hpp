@@ -67,6 +67,13 @@ struct Casing {
   double width = 0.15;  ///< of each bump [rad]
   double alpha = 0.0;   ///< growth rate [1/s]; 0: 99 % of h_b at 20 % of t_final
   double omega = 0.0;   ///< rotation speed [rad/s]
+  /// The lobes' angle at t = 0 [rad]: a node at reference angle theta_0 sees the casing at
+  /// theta_0 + phase + omega t (a run continued from another's final state keeps the lobes where
+  /// that run left them; SpeedTask::phase).
+  double phase = 0.0;
+  /// The lobes at their full height h_b from t = 0 (no growth): a run continued from a state in
+  /// contact with the grown casing.
+  bool grown = false;
 };
 enum class Obstacle { Plane, Casing };
 struct ContactSettings {
@@ -331,11 +338,19 @@ Stats integrate_trapezoidal(const nlrom::ReducedModel& m, const std::vector<Redu
 
 /// One speed of a sweep: its index in the sweep's speed grid and Omega [rad/s].
 struct SpeedTask {
+  SpeedTask() = default;
+  SpeedTask(long i, double w, int h = 0) : index(i), omega(w), halvings(h) {}
   long index = 0;
   double omega = 0.0;
   /// Times the step was halved for this speed (a retry after a failure, sweep_rounds): recorded
   /// in its result. sweep() runs every task at s.base.dt, which the caller has set accordingly.
   int halvings = 0;
+  /// A continued speed (-sweep_continuation): the initial state q_0 = q0, q_{-1} = qm0 (r each,
+  /// both at the step s.base.dt: the final state of speed `from`), the casing fully grown with its
+  /// lobes at angle `phase` at t = 0. Empty q0: from rest on the growing casing.
+  std::vector<double> q0, qm0;
+  double phase = 0.0;
+  long from = -1;  ///< the index of the speed whose final state q0 is (-1: from rest)
 };
 
 /// The cubic force kernel of a sweep's lanes (SweepSettings::kernel).
@@ -365,6 +380,16 @@ struct SpeedResult {
   /// state of the analysed window (t_final / 2) and at the end.
   double energy_half = 0.0, energy_end = 0.0;
   EnergyWork work_half, work_end;
+  /// Continuation (SpeedTask::from, phase): the speed whose final state this run started from (-1:
+  /// from rest), the lobes' angle at its start and its discrete energy E_{-1/2} there (0 from rest);
+  /// the works above count from this start, so energy - energy_start = their sum.
+  long from = -1;
+  double phase = 0.0, energy_start = 0.0;
+  /// The final state q_N, q_{N-1} (r each) and the lobes' angle at t_N, modulo 2 pi / lobes: kept
+  /// when SweepSettings::keep_state (a continuation sweep's next speed starts from it); empty
+  /// otherwise and for a failed speed.
+  std::vector<double> q_end, qm_end;
+  double phase_end = 0.0;
 };
 
 struct SweepSettings {
@@ -389,6 +414,8 @@ struct SweepSettings {
   /// A speed fails (status 1, "diverged") as soon as |monitor . q| exceeds this [m] (0: never): a
   /// run that has lost stability can end with a huge but finite state before it turns non-finite.
   double divergence_limit = 0.0;
+  /// Every finished speed returns its final state (SpeedResult::q_end, qm_end, phase_end).
+  bool keep_state = false;
   /// The frequency grid of the spectrum (empty without one).
   std::vector<double> frequencies() const;
 };
