@@ -3,7 +3,7 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,pod,sweep,stress,diagnosis,maps,map_stress,realizations] [--ranks N] [--revs 10]
+        [--stages roms,single,pod,sweep,stress,diagnosis,maps,map_stress,realizations,continuation] [--ranks N] [--revs 10]
         [--sweep-revs 5] [--maps linear] [--map-range 750:2190:16] [--map-refine 1] [--map-revs 200]
         [--map-dt-nonlinear 5e-7] [--rotation auto] [--stress-window 2] [--realizations 1e-12,-1e-12]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
@@ -61,6 +61,14 @@ stopped and resumed, and the stages can run at different times.
           the spread of the LE RMS (largest over smallest) and the speeds where it exceeds 1.2;
           run/plot_contact_realizations.py draws them over the refined map. About a minute per
           realization on 2 cores.
+  continuation  both branches of the maps (issue 28): for each of --cont-maps, `morse sweep
+          -sweep_continuation up` and `down` over --cont-range (lo:hi:step rad/s) with --cont-revs
+          revolutions per speed, each speed starting from its neighbour's final state on the grown
+          casing (the first from rest), same model, sense, step and casing as the maps; the two
+          directions run at once, one rank each. Prints the hysteresis bands (speeds where up and
+          down differ by more than 20 %) and where each direction jumps; run/plot_contact_continuation.py
+          draws them over the from-rest map. The linear pair (750:1450:1, 50 revolutions) takes
+          about 15 minutes on 2 cores.
   stress  the 1B/eo8 interaction of each sweep (the critical speed nearest 2 pi f_1B / 8 from above,
           within 60 %): a single run at that speed, then `morse stress` at the time of the largest
           radial displacement at LE (Fig. 25).
@@ -72,12 +80,14 @@ Writes <out>/study.json (what ran, with times) for run/plot_contact_study.py.
 """
 
 import argparse
+import concurrent.futures
 import json
 import math
 import os
 import shutil
 import subprocess
 import sys
+import threading
 import time
 
 import h5py
@@ -101,6 +111,7 @@ class Study:
         self.binary = binary
         self.log = open(os.path.join(out, "morse.log"), "a")
         self.path = os.path.join(out, "study.json")
+        self.lock = threading.Lock()
         try:
             with open(self.path) as fh:
                 self.rec = json.load(fh)
@@ -109,6 +120,10 @@ class Study:
 
     def save(self):
         """Merges this run's entries into the record on disk (stages may run as separate processes)."""
+        with self.lock:  # runs of one stage may finish at once (threads)
+            self._save()
+
+    def _save(self):
         try:
             with open(self.path) as fh:
                 disk = json.load(fh)
@@ -363,6 +378,72 @@ def realizations_stage(st, args, mesh):
     st.save()
 
 
+def continuation_stage(st, args, mesh):
+    """Both branches by continuation up and down (see the module docstring)."""
+    rom = st.file("rom_%s.h5" % MAP_ROM)
+    sense = st.rec.get("map_rotation", {}).get("sense")
+    if not os.path.exists(rom) or sense is None:
+        print("  continuation: build the maps' model first (--stages maps)", flush=True)
+        return
+    lo, hi, step = parse_range(args.cont_range)
+    for tag in args.cont_maps.split(","):
+        lin = tag == "linear"
+        dt = MAP_DT_LINEAR if lin else args.map_dt_nonlinear
+        files = {}
+
+        def one(direction):
+            name = "continuation_%s_%s" % (tag, direction)
+            path = st.file(name + ".h5")
+            sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
+                     "-sweep_omega_step", step, "-sim_revolutions", args.cont_revs, "-sim_dt", dt, "-sweep_rotation",
+                     sense, "-sweep_continuation", direction, "-sweep_chains", 1, "-sweep_retries", 0] + CASING + \
+                (["-sim_linear"] if lin else [])
+            if st.run(1, sargs, "%s (%s rad/s, %g revolutions)" % (name, args.cont_range, args.cont_revs),
+                      path + ".done", name):
+                open(path + ".done", "w").close()
+                files[direction] = path
+
+        with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, min(2, args.ranks))) as ex:
+            list(ex.map(one, ["up", "down"]))
+        if len(files) < 2:
+            continue
+        res = {}
+        for direction, path in files.items():
+            with h5py.File(path, "r") as f:
+                w, rms = np.abs(f["/sweep/omega"][:]), f["/sweep/rms"][:]
+                frm = f["/sweep/continuation"][:, 0]
+            o = np.argsort(w)
+            res[direction] = (w[o], rms[o], frm[o])
+        w, up, down = res["up"][0], res["up"][1], res["down"][1]
+        ratio = np.maximum(up, down) / np.minimum(up, down)
+        bands, k = [], 0
+        while k < w.size:  # runs of neighbouring speeds where the branches differ
+            if ratio[k] > 1.2:
+                j = k
+                while j + 1 < w.size and ratio[j + 1] > 1.2:
+                    j += 1
+                bands.append([float(w[k]), float(w[j]), "up" if up[k:j + 1].mean() > down[k:j + 1].mean()
+                              else "down"])
+                k = j + 1
+            else:
+                k += 1
+
+        def jumps(r):  # neighbouring speeds whose RMS differ by more than 1.5 x
+            q = r[1:] / r[:-1]
+            return [[float(w[i]), float(w[i + 1]), float(q[i])] for i in np.nonzero((q > 1.5) | (q < 1 / 1.5))[0]]
+
+        rec = {"files": files, "range": args.cont_range, "revs": args.cont_revs, "bands": bands,
+               "jumps_up": jumps(up), "jumps_down": jumps(down), "rms_max_up": float(up.max()),
+               "rms_max_down": float(down.max()), "speeds_differing": int((ratio > 1.2).sum()),
+               "speeds": int(w.size)}
+        print("  %s: %d of %d speeds differ by > 20 %% between up and down; bands %s" %
+              (tag, rec["speeds_differing"], w.size, ["%g-%g (%s higher)" % tuple(b) for b in bands]), flush=True)
+        print("  %s: jumps up %s; down %s" % (tag, ["%g->%g x%.2f" % tuple(j) for j in rec["jumps_up"]],
+                                              ["%g->%g x%.2f" % tuple(j) for j in rec["jumps_down"]]), flush=True)
+        st.rec["continuation_" + tag] = rec
+        st.save()
+
+
 def parse_range(s):
     lo, hi, step = (float(x) for x in s.split(":"))
     return lo, hi, step
@@ -486,6 +567,9 @@ def main():
                     help="realizations: relative speed perturbations of the extra linear maps")
     ap.add_argument("--stress-window", type=float, default=2.0,
                     help="map_stress: the 1B/eo8 interaction is sought up to this multiple of its crossing")
+    ap.add_argument("--cont-maps", default="linear", help="continuation: linear and/or nonlinear")
+    ap.add_argument("--cont-range", default="750:1450:1", help="continuation: lo:hi:step rad/s")
+    ap.add_argument("--cont-revs", type=float, default=50.0, help="continuation: revolutions per speed")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
@@ -551,6 +635,9 @@ def main():
     if "realizations" in stages:
         realizations_stage(st, args, mesh)
 
+    if "continuation" in stages:
+        print("continuation up and down (both branches)", flush=True)
+        continuation_stage(st, args, mesh)
     if "map_stress" in stages:
         map_stress_stage(st, args, mesh)
 
