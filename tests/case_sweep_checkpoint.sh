@@ -134,4 +134,14 @@ rc=$?
 set -e
 test $rc -ne 0 || { echo "case: FAIL: a plain sweep's file was resumed as a continuation"; exit 1; }
 grep -q "continuation: (none) in the file, up now" <<<"$out" || { echo "case: FAIL: not named: $out"; exit 1; }
+
+# One BLAS thread per rank: given a threaded OpenBLAS (2 threads, the rank not bound to a core, so
+# OpenBLAS may use them), the sweep sets it to 1 and says so. Only where morse uses OpenBLAS and
+# the machine has 2 CPUs; on one rank (the notice is the same on every rank count).
+if [ "$np" -eq 1 ] && ldd "$morse" | grep -q openblas && [ "$(nproc)" -ge 2 ]; then
+  out=$(OPENBLAS_NUM_THREADS=2 "$mpiexec" "${flags[@]}" --bind-to none -x OPENBLAS_NUM_THREADS -n 1 "$morse" \
+        "${sweep[@]}" -sweep_restart -out "$d/blas.h5")
+  grep -q "OpenBLAS set to 1 thread per rank (it had 2)" <<<"$out" || { echo "case: FAIL: no BLAS notice: $out"; exit 1; }
+  echo "case: BLAS threads set to 1"
+fi
 echo "case: ok: corrupt sweep checkpoints refused, files unchanged; continuation resumed"

@@ -1336,6 +1336,14 @@ TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
       balance = 1.0;
     }
   }
+  {  // The predicted wall time: the chains run side by side, on at most as many ranks as chains.
+    so.continuation = 1;
+    const auto cost = sim::predict_sweep_cost(PETSC_COMM_WORLD, rm, s, so, so.todo({}), {}, 0.02);
+    int size = 1;
+    MPI_Comm_size(PETSC_COMM_WORLD, &size);
+    EXPECT_EQ(cost.steps, 4.0 * static_cast<double>(N));
+    EXPECT_NEAR(cost.wall_seconds, cost.core_hours * 3600.0 / std::min(size, 2), 1e-12 * cost.wall_seconds);
+  }
   for (int* v : {&ok_plan, &ok_file, &ok_resumed}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
   for (double* v : {&worst, &dropped, &contact, &balance}) MPI_Bcast(v, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
   EXPECT_EQ(ok_plan, 1) << "the chains' order, starts or recorded origins are wrong";
