@@ -335,9 +335,44 @@ def map_stress_stage(st, args, mesh):
         it["single_run_rms"] = float(np.sqrt(np.mean(ur[t >= 0.5 * t[-1]] ** 2)))
         print("  single run: LE RMS %.3f mm over the second half (sampled every %d steps), the map's %.3f mm"
               % (1e3 * it["single_run_rms"], every, 1e3 * it["rms"]), flush=True)
-        st.run(args.ranks, ["stress", "-rom", rom, "-sim", sim, "-mesh", mesh, "-out", st.file(name + ".h5")],
-               "stress %s" % name, st.file(name + ".h5"), name)
+        if st.run(args.ranks, ["stress", "-rom", rom, "-sim", sim, "-mesh", mesh, "-out", st.file(name + ".h5")],
+                  "stress %s" % name, st.file(name + ".h5"), name):
+            it["by_distance"] = stress_by_contact_distance(st.file(name + ".h5"), rom)
+            for b in it["by_distance"]:
+                print("    %4.0f-%4.0f mm from a contact node: %5d elements, von Mises median %8.0f MPa, "
+                      "90 %% %8.0f, max %10.0f at %.0f %% span" % (b["from_mm"], b["to_mm"], b["elements"],
+                                                                  b["median_mpa"], b["p90_mpa"], b["max_mpa"],
+                                                                  100 * b["span_of_max"]), flush=True)
     st.save()
+
+
+def stress_by_contact_distance(stress_file, rom, edges_mm=(0, 8, 15, 30, 1e6)):
+    """Element von Mises of a `morse stress` file binned by the distance of the element's centroid
+    from the nearest contact node (the point loads of the casing), with the span (0 root, 1 tip, by
+    radius) of each bin's maximum."""
+    with h5py.File(stress_file, "r") as f:
+        X, ids = f["/mesh/coordinates"][()], f["/mesh/node_ids"][()]
+        vm = f["/stress/von_mises_element"][0]
+        top = f["/mesh/topology"][()].reshape(vm.size, -1)
+    with h5py.File(rom, "r") as f:
+        tip = f["/nlrom/node_sets/tip"][()]
+    pos = {n: i for i, n in enumerate(ids)}
+    T = X[[pos[n] for n in tip]]
+    rad = np.hypot(X[:, 0], X[:, 1])
+    C = X[top].mean(1)
+    dist = 1e3 * np.min(np.linalg.norm(C[:, None, :] - T[None], axis=2), 1)
+    span = (np.hypot(C[:, 0], C[:, 1]) - rad.min()) / (rad.max() - rad.min())
+    out = []
+    for lo, hi in zip(edges_mm[:-1], edges_mm[1:]):
+        s = (dist >= lo) & (dist < hi)
+        if not s.any():
+            continue
+        k = int(np.argmax(np.where(s, vm, -1.0)))
+        out.append({"from_mm": lo, "to_mm": min(hi, float(dist.max())), "elements": int(s.sum()),
+                    "median_mpa": float(np.median(vm[s]) / 1e6), "p90_mpa": float(np.percentile(vm[s], 90) / 1e6),
+                    "max_mpa": float(vm[k] / 1e6), "span_of_max": float(span[k]),
+                    "above_2000_mpa": int((vm[s] > 2e9).sum())})
+    return out
 
 
 def realizations_stage(st, args, mesh):
