@@ -128,6 +128,23 @@ for k in ("index", "rms", "spectrum", "continuation", "final_state"):
     assert np.array_equal(a[k][()], b[k][()]), k
 print("case: resumed continuation is bitwise the uninterrupted one")
 PY
+# Both ways in one sweep (-sweep_continuation both): 22 runs, indices 0..10 are the up sweep's
+# (bitwise those of cont.h5), 11..21 the down sweep's, each from its neighbour above.
+out=$(run "${sweep[@]}" -sweep_continuation both -sweep_chains 2 -out "$d/both.h5")
+grep -q "continuation both ways" <<<"$out" || { echo "case: FAIL: no both-ways notice in: $out"; exit 1; }
+/usr/bin/python3 - "$d/cont.h5" "$d/both.h5" <<'PY'
+import sys, h5py, numpy as np
+up, both = (h5py.File(p, "r")["/sweep"] for p in sys.argv[1:3])
+idx = both["index"][()]
+assert sorted(idx) == list(range(22)), idx
+o = np.argsort(idx)
+for k in ("rms", "spectrum", "final_state"):
+    assert np.array_equal(both[k][()][o][:11], up[k][()][np.argsort(up["index"][()])]), k
+frm = both["continuation"][()][o][:, 0]
+want = [-1 if i in (0, 5) else i - 1 for i in range(11)] + [-1 if i in (15, 21) else i + 1 for i in range(11, 22)]
+assert list(frm) == want, (list(frm), want)
+print("case: both ways: the up half is the up sweep bitwise, the down half continues downwards")
+PY
 set +e
 out=$(run "${cont[@]}" -out "$d/good.h5" 2>&1)
 rc=$?

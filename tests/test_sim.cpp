@@ -1261,8 +1261,10 @@ TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
   };
   int ok_plan = 1, ok_file = 1, ok_resumed = 1;
   double worst = 0, dropped = 0, contact = 1e30, balance = 0;
+  std::map<int, std::vector<sim::SpeedResult>> by_direction;
   for (int direction : {1, -1}) {
     const auto res = chains(direction, {});
+    by_direction[direction] = res;
     if (root) {
       ok_plan &= res.size() == 4;
       // Up: 0 -> 1 and 2 -> 3; down: 1 -> 0 and 3 -> 2.
@@ -1319,6 +1321,21 @@ TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
       }
     }
   }
+  int ok_both = 1;
+  {  // Both ways in one sweep: indices 0..3 are the up sweep's speeds, 4..7 the down sweep's, bitwise
+    // (a lane's arithmetic does not depend on the lanes beside it).
+    const auto both = chains(2, {});
+    if (root) {
+      ok_both = both.size() == 8 && so.n_speeds() == 8;
+      for (std::size_t i = 0; ok_both && i < 8; ++i) {
+        const auto& ref = by_direction[i < 4 ? 1 : -1][i % 4];
+        const auto& x = both[i];
+        ok_both &= x.index == static_cast<long>(i) && x.omega == ref.omega && x.q_end == ref.q_end &&
+                   x.rms == ref.rms && x.spectrum == ref.spectrum &&
+                   x.from == (ref.from < 0 ? -1 : ref.from + (i < 4 ? 0 : 4));
+      }
+    }
+  }
   {  // A linear chain: the works of a continued speed count from its start.
     s.base.linear = true;
     const auto res = chains(1, {});
@@ -1343,8 +1360,12 @@ TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
     MPI_Comm_size(PETSC_COMM_WORLD, &size);
     EXPECT_EQ(cost.steps, 4.0 * static_cast<double>(N));
     EXPECT_NEAR(cost.wall_seconds, cost.core_hours * 3600.0 / std::min(size, 2), 1e-12 * cost.wall_seconds);
+    so.continuation = 2;  // both ways: every speed twice, 4 chains
+    const auto cost2 = sim::predict_sweep_cost(PETSC_COMM_WORLD, rm, s, so, so.todo({}), {}, 0.02);
+    EXPECT_EQ(cost2.steps, 8.0 * static_cast<double>(N));
+    EXPECT_NEAR(cost2.wall_seconds, cost2.core_hours * 3600.0 / std::min(size, 4), 1e-12 * cost2.wall_seconds);
   }
-  for (int* v : {&ok_plan, &ok_file, &ok_resumed}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+  for (int* v : {&ok_plan, &ok_file, &ok_resumed, &ok_both}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
   for (double* v : {&worst, &dropped, &contact, &balance}) MPI_Bcast(v, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
   EXPECT_EQ(ok_plan, 1) << "the chains' order, starts or recorded origins are wrong";
   EXPECT_LT(worst, 1e-8) << "a continued speed is not the uninterrupted run";
@@ -1353,6 +1374,7 @@ TEST(Sim, ContinuedSpeedsAreOneUninterruptedRun) {
   EXPECT_EQ(ok_file, 1) << "the final states do not survive the sweep file";
   EXPECT_EQ(ok_resumed, 1) << "a resumed continuation differs from the uninterrupted sweep";
   EXPECT_LT(balance, 1e-9) << "a continued linear speed's energy balance does not close";
+  EXPECT_EQ(ok_both, 1) << "a continuation both ways differs from the up and down sweeps";
 }
 
 // The energy balance of central differences (sim::EnergyWork): the discrete energy E_{n+1/2}
@@ -1858,6 +1880,20 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   EXPECT_EQ(so.chain_order(), (std::vector<std::vector<long>>{{2, 1, 0}, {5, 4, 3}}));
   const auto cont = sim::settings_text(so, limited, model);
   EXPECT_NE(cont.find("\ncontinuation=down\nchains=2\n"), std::string::npos) << cont;
+  {
+    auto both = so;
+    both.continuation = 2;
+    EXPECT_EQ(both.n_speeds(), 12);
+    EXPECT_EQ(both.chain_order(), (std::vector<std::vector<long>>{{0, 1, 2}, {3, 4, 5}, {8, 7, 6}, {11, 10, 9}}));
+    EXPECT_EQ(both.omega_of(7), 840.0);
+    EXPECT_NE(sim::settings_text(both, limited, model).find("\ncontinuation=both\n"), std::string::npos);
+    EXPECT_EQ(read({{"-sweep_omega_min", "800"},
+                    {"-sweep_omega_max", "1000"},
+                    {"-sweep_omega_step", "40"},
+                    {"-sweep_continuation", "both"}})
+                  .continuation,
+              2);
+  }
   {  // the next speed of each chain: after speed 2 (with a state) and none of the second chain
     sim::SpeedResult R;
     R.index = 2, R.omega = 880, R.q_end = {1, 2}, R.qm_end = {3, 4}, R.phase_end = 0.5;

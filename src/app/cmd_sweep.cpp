@@ -76,7 +76,7 @@ void run_sweep(MPI_Comm comm) {
   std::vector<sim::SpeedTask> todo = so.todo(done_idx);
   int size = 1;
   MPI_Comm_size(comm, &size);
-  const long coarse = (n_speeds - 1) / so.stride() + 1;
+  const long coarse = (so.grid_speeds() - 1) / so.stride() + 1;
   const double last = so.omega_min + static_cast<double>(coarse - 1) * so.omega_step;
   print0(comm,
          "morse sweep: %ld speeds %.6g..%.6g rad/s%s (%ld already in %s), %.6g revolutions each, dt "
@@ -88,8 +88,14 @@ void run_sweep(MPI_Comm comm) {
     print0(comm,
            "morse sweep: continuation %s: each speed starts from the final state of the speed %s it, on the grown "
            "casing; %ld chain(s) of neighbouring speeds, the first of each from rest (-sweep_chains)%s\n",
-           so.continuation > 0 ? "up" : "down", so.continuation > 0 ? "below" : "above", static_cast<long>(so.chains),
-           so.chains < size ? "; fewer chains than ranks: some ranks idle" : "");
+           so.continuation == 2  ? "both ways"
+           : so.continuation > 0 ? "up"
+                                 : "down",
+           so.continuation == 2  ? "below (up: indices 0..n-1 of the file) or above (down: n..2n-1)"
+           : so.continuation > 0 ? "below"
+                                 : "above",
+           static_cast<long>(so.chains) * (so.continuation == 2 ? 2 : 1),
+           so.chains * (so.continuation == 2 ? 2 : 1) < size ? "; fewer chains than ranks: some ranks idle" : "");
   } else if (so.retries > 0) {
     print0(comm, "morse sweep: a speed that fails runs again at half its step, up to %d time(s) (-sweep_retries)\n",
            so.retries);

@@ -327,13 +327,17 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                             "A speed that fails (non-finite state) runs again at half its step, up to this many times",
                             "", retries, &retries, nullptr));
   {
-    const char* modes[] = {"none", "up", "down", "Continuation", "", nullptr};
-    PetscEnum mode = static_cast<PetscEnum>(o->continuation == 0 ? 0 : o->continuation > 0 ? 1 : 2);
+    const char* modes[] = {"none", "up", "down", "both", "Continuation", "", nullptr};
+    const int values[] = {0, 1, -1, 2};
+    PetscEnum mode = static_cast<PetscEnum>(0);
+    for (int k = 0; k < 4; ++k)
+      if (values[k] == o->continuation) mode = static_cast<PetscEnum>(k);
     PetscCall(MorseOptionsEnum("-sweep_continuation",
                                "Each speed starts from the final state of the one below it (up) or above it (down) on "
-                               "the grown casing, to follow a branch of solutions; none: every speed from rest",
+                               "the grown casing, to follow a branch of solutions; both: up and down in one sweep "
+                               "(their speeds share the force kernel's passes); none: every speed from rest",
                                "", modes, mode, &mode, nullptr));
-    o->continuation = mode == static_cast<PetscEnum>(1) ? 1 : mode == static_cast<PetscEnum>(2) ? -1 : 0;
+    o->continuation = values[static_cast<int>(mode)];
   }
   PetscCall(MorseOptionsInt("-sweep_chains",
                             "Continuation: the grid is cut into this many runs of neighbouring speeds, run in "
@@ -393,7 +397,8 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
     // The count in floating point first: it may not fit any integer (with refinement, of the
     // fine grid).
     const double fine = o->refine_step > 0 ? o->refine_step : o->omega_step;
-    const double n = std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) * (o->omega_step / fine) + 1;
+    const double n = (std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) * (o->omega_step / fine) + 1) *
+                     (o->continuation == 2 ? 2 : 1);  // both ways: every speed twice
     if (n > static_cast<double>(kMaxSweepSpeeds)) {
       const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1);
       char b[512];
@@ -425,7 +430,11 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
                 nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0, o.retries, s.divergence_limit);
   std::string text = b;
   if (o.continuation != 0)  // only then: the files of sweeps without it stay resumable
-    text += cat("continuation=", o.continuation > 0 ? "up" : "down", "\nchains=", o.chains, "\n");
+    text += cat("continuation=",
+                o.continuation == 2  ? "both"
+                : o.continuation > 0 ? "up"
+                                     : "down",
+                "\nchains=", o.chains, "\n");
   return text;
 }
 
@@ -483,17 +492,23 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
 
 long SweepOptions::stride() const { return refine_step > 0 ? std::lround(omega_step / refine_step) : 1; }
 
-long SweepOptions::n_speeds() const {
+long SweepOptions::grid_speeds() const {
   if (omega_max == omega_min) return 1;
   return static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) * stride() + 1;
 }
 
+long SweepOptions::n_speeds() const { return (continuation == 2 ? 2 : 1) * grid_speeds(); }
+
+double SweepOptions::omega_of(long index) const {
+  const double step = refine_step > 0 ? refine_step : omega_step;
+  return rotation * (omega_min + static_cast<double>(index % grid_speeds()) * step);
+}
+
 std::vector<SpeedTask> SweepOptions::todo(const std::vector<std::int64_t>& done_idx) const {
   const std::set<std::int64_t> done(done_idx.begin(), done_idx.end());
-  const double step = refine_step > 0 ? refine_step : omega_step;
   std::vector<SpeedTask> todo;
   for (long i = 0; i < n_speeds(); i += stride())
-    if (!done.count(i)) todo.push_back({i, rotation * (omega_min + static_cast<double>(i) * step)});
+    if (!done.count(i)) todo.push_back({i, omega_of(i)});
   return todo;
 }
 
@@ -537,7 +552,8 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
   // A continuation advances one speed per chain at a time.
   const std::size_t at_once =
-      so.continuation != 0 ? static_cast<std::size_t>(std::max<PetscInt>(1, so.chains)) : todo.size();
+      so.continuation != 0 ? static_cast<std::size_t>(std::max<PetscInt>(1, so.chains)) * (so.continuation == 2 ? 2 : 1)
+                           : todo.size();
   const int lanes = static_cast<int>(sweep_lanes_per_rank(s.batch, at_once, size));
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
@@ -686,12 +702,17 @@ SweepStats sweep_rounds(MPI_Comm comm, const nlrom::ReducedModel& m, const Sweep
 }
 
 std::vector<std::vector<long>> SweepOptions::chain_order() const {
-  const long n = n_speeds(), k = std::max<long>(1, std::min<long>(chains, n));
-  std::vector<std::vector<long>> out(static_cast<std::size_t>(k));
-  for (long c = 0; c < k; ++c) {
-    auto& o = out[static_cast<std::size_t>(c)];
-    for (long i = c * n / k; i < (c + 1) * n / k; ++i) o.push_back(i);
-    if (continuation < 0) std::reverse(o.begin(), o.end());
+  // Both: the up chains on indices 0..n-1, the down chains on n..2n-1 (the same speeds).
+  const long n = grid_speeds(), k = std::max<long>(1, std::min<long>(chains, n));
+  std::vector<std::vector<long>> out;
+  for (int d : continuation == 2 ? std::vector<int>{1, -1} : std::vector<int>{continuation}) {
+    const long offset = continuation == 2 && d < 0 ? n : 0;
+    for (long c = 0; c < k; ++c) {
+      std::vector<long> o;
+      for (long i = c * n / k; i < (c + 1) * n / k; ++i) o.push_back(offset + i);
+      if (d < 0) std::reverse(o.begin(), o.end());
+      out.push_back(std::move(o));
+    }
   }
   return out;
 }
@@ -706,7 +727,7 @@ std::vector<SpeedTask> SweepOptions::next_in_chains(const std::vector<SpeedResul
     if (p == order.size()) continue;
     SpeedTask t;
     t.index = order[p];
-    t.omega = rotation * (omega_min + static_cast<double>(t.index) * omega_step);
+    t.omega = omega_of(t.index);
     if (p > 0) {
       const SpeedResult& prev = *by_index[order[p - 1]];
       if (prev.status == 0 && !prev.q_end.empty())

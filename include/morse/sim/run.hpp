@@ -102,13 +102,15 @@ struct SweepOptions {
   /// (SweepSettings::divergence_limit). Default (negative): the largest radius of the contact
   /// nodes, a displacement no blade survives; 0: no limit.
   double divergence_limit = -1.0;
-  /// -sweep_continuation up|down (+1, -1; 0: none, every speed from rest on the growing casing):
+  /// -sweep_continuation up|down|both (+1, -1, 2; 0: none, every speed from rest on the growing casing):
   /// natural-parameter continuation. Each speed starts from the final state of its neighbour below
   /// (up) or above (down) in |Omega|, on the grown casing with its lobes where that run left them, so
   /// that a branch of solutions is followed across the speeds where another coexists (docs/contact.md,
   /// "Coexisting solutions"). The grid is cut into `chains` runs of neighbouring speeds (the first
   /// of each from rest), which run in parallel (one lane each); a failed speed ends its chain's
-  /// branch: the next speed starts from rest. No retries, no refinement.
+  /// branch: the next speed starts from rest. No retries, no refinement. Both: the up chains on
+  /// the grid indices 0..n-1 and the down chains on n..2n-1 (index n + i is speed i again), run
+  /// together, so that a rank's up and down speeds share the passes of the force kernel.
   int continuation = 0;
   PetscInt chains = 1;  ///< -sweep_chains
   ContactOptions contact;
@@ -135,7 +137,11 @@ struct SweepOptions {
   SweepSettings settings(const nlrom::StoredModel& sm) const;
   /// The size of the speed grid omega_min, omega_min + step, ..., omega_max (with refinement: of
   /// the fine grid of step refine_step up to the last coarse speed).
+  long grid_speeds() const;
+  /// The indices of a sweep: grid_speeds(), twice that for a continuation both ways.
   long n_speeds() const;
+  /// The signed speed of index i (i modulo grid_speeds()) [rad/s].
+  double omega_of(long index) const;
   /// Grid points per coarse step: omega_step / refine_step (1 without refinement).
   long stride() const;
   /// The (coarse) speeds of the grid not in done_idx (indices of finished speeds), in grid order.
