@@ -3,7 +3,7 @@
 nonlinearity (docs/contact.md).
 
     /usr/bin/python3 run/contact_study.py [--mesh meshes/blade_coarse.msh] [--out out/contact_study]
-        [--stages roms,single,pod,sweep,stress,diagnosis,maps,map_stress,realizations,continuation] [--ranks N] [--revs 10]
+        [--stages roms,single,pod,sweep,stress,diagnosis,maps,map_stress,realizations,continuation,windows] [--ranks N] [--revs 10]
         [--sweep-revs 5] [--maps linear] [--map-range 750:2190:16] [--map-refine 1] [--map-revs 200]
         [--map-dt-nonlinear 5e-7] [--rotation auto] [--stress-window 2] [--realizations 1e-12,-1e-12]
         [--sweep-linear 750:2200:10] [--sweep-nonlinear 750:2200:50] [--sweeps linear,nonlinear]
@@ -69,6 +69,15 @@ stopped and resumed, and the stages can run at different times.
           down differ by more than 20 %) and where each direction jumps; run/plot_contact_continuation.py
           draws them over the from-rest map. The linear pair (750:1450:1, 50 revolutions) takes
           about 15 minutes on 2 cores.
+  windows  the nonlinear map on fine grids around its interactions (issue 28): `morse sweep` of
+          the maps' model (built here if `maps` has not run) with geometric nonlinearity over each
+          grid of --windows (lo:hi:step rad/s, from rest, --window-revs revolutions, step
+          --map-dt-nonlinear, the maps' sense and casing). Prints per speed the LE RMS, max |u_r|,
+          the dominant spectral line and its engine order, the largest total normal force, the
+          energy at the end and the friction work over the second half; then the window's largest
+          RMS and the crossing of its engine order with the free 1B. The two default windows (the
+          coarse nonlinear map's 1B/eo8 and 1B/eo6 peaks, 17 speeds each, 20 revolutions, 2.5e-7 s)
+          take about 35 minutes each on 2 cores.
   stress  the 1B/eo8 interaction of each sweep (the critical speed nearest 2 pi f_1B / 8 from above,
           within 60 %): a single run at that speed, then `morse stress` at the time of the largest
           radial displacement at LE (Fig. 25).
@@ -241,15 +250,24 @@ def rotation_of(rom):
     return sense, text
 
 
-def maps_stage(st, args, mesh):
-    """The seed-scale maps of the mass-scaled r79 (see the module docstring)."""
+def map_model(st, args, mesh):
+    """The maps' model (r79 mass-scaled to 20 kHz), built if it is not on disk, and the sense of
+    rotation (--rotation; auto: the leading edge leads). Returns (rom, sense), or (None, None)."""
     rom = st.file("rom_%s.h5" % MAP_ROM)
     margs = rom_args(mesh, 15, 40, rom) + ["-nlrom_mass_scaling_fmax", 20000]
     if not st.run(args.ranks, margs, "nlrom r79 mass-scaled to 20 kHz", rom, "rom_r79_ms20k"):
-        return
+        return None, None
     sense, why = (args.rotation, "given") if args.rotation != "auto" else rotation_of(rom)
     print("  rotation: %s (%s)" % (sense, why), flush=True)
     st.rec["map_rotation"] = {"sense": sense, "why": why}
+    return rom, sense
+
+
+def maps_stage(st, args, mesh):
+    """The seed-scale maps of the mass-scaled r79 (see the module docstring)."""
+    rom, sense = map_model(st, args, mesh)
+    if rom is None:
+        return
     lo, hi, step = parse_range(args.map_range)
     for tag in args.maps.split(","):
         lin = tag == "linear"
@@ -411,6 +429,62 @@ def realizations_stage(st, args, mesh):
                               "spread_median": float(np.median(spread)), "spread_max": float(spread.max()),
                               "speeds_spread_above_1.2": wide}
     st.save()
+
+
+def windows_stage(st, args, mesh):
+    """The nonlinear map on fine grids around its interactions (see the module docstring)."""
+    rom, sense = map_model(st, args, mesh)
+    if rom is None:
+        return
+    f1b = first_bending_hz(rom)  # the 1B of the model without contact
+    for rng in args.windows.split(","):
+        lo, hi, step = parse_range(rng)
+        name = "window_nonlinear_%s_%g_%g" % (sense, lo, hi)
+        path = st.file(name + ".h5")
+        sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
+                 "-sweep_omega_step", step, "-sim_revolutions", args.window_revs, "-sim_dt", args.map_dt_nonlinear,
+                 "-sweep_rotation", sense] + CASING
+        st.rec.pop(name, None) if not os.path.exists(path) else None
+        st.run(args.ranks, sargs, "%s (%s rad/s, %g revolutions)" % (name, rng, args.window_revs), path + ".done",
+               name)
+        if name not in st.rec or "error" in st.rec[name]:
+            continue
+        open(path + ".done", "w").close()
+        with h5py.File(path, "r") as f:
+            w = np.abs(f["/sweep/omega"][:])
+            o = np.argsort(w)
+            w = w[o]
+            rms, status = f["/sweep/rms"][:][o], f["/sweep/status"][:][o]
+            umax, fmax = f["/sweep/max_displacement"][:][o], f["/sweep/max_contact_force"][:][o]
+            spec, freq = f["/sweep/spectrum"][:][o], f["/sweep/frequency"][:]
+            dt = f["/sweep/dt"][:][o]
+            eb = f["/sweep/energy_balance"][:][o]
+        rows = []
+        print("  %s: |Omega| [rad/s], LE RMS [mm], max |u_r| [mm], dominant line [Hz], its engine order, "
+              "max total force [kN], energy at the end [J], friction work over the 2nd half [J], step [s]" % name, flush=True)
+        for k in range(w.size):
+            line = float(freq[1 + np.argmax(spec[k, 1:])]) if status[k] == 0 else float("nan")
+            row = {"omega": float(w[k]), "status": int(status[k]), "rms_mm": 1e3 * float(rms[k]),
+                   "max_mm": 1e3 * float(umax[k]), "line_hz": line, "order": line * 2 * math.pi / w[k],
+                   "force_kn": 1e-3 * float(fmax[k]), "energy_end": float(eb[k, 5]),
+                   "friction_2nd_half": float(eb[k, 8] - eb[k, 3]), "dt": float(dt[k])}
+            rows.append(row)
+            print("    %7.1f  %6.3f  %6.2f  %7.1f  %5.2f  %8.1f  %7.1f  %8.1f  %.3g%s" %
+                  (row["omega"], row["rms_mm"], row["max_mm"], line, row["order"], row["force_kn"],
+                   row["energy_end"], row["friction_2nd_half"], row["dt"], "" if status[k] == 0 else "  FAILED"),
+                  flush=True)
+        ok = [r for r in rows if r["status"] == 0]
+        peak = max(ok, key=lambda r: r["rms_mm"]) if ok else None
+        rec = {"range": rng, "revs": args.window_revs, "f1b_hz": f1b, "rows": rows, "peak": peak}
+        if peak is not None:
+            n = round(peak["order"])
+            rec["peak_order"] = n
+            rec["crossing_free_1b"] = 2 * math.pi * f1b / n
+            print("  %s: the largest RMS %.3f mm at %g rad/s, line %.0f Hz = engine order %.2f (the free 1B's "
+                  "eo%d crossing: %.0f rad/s)" % (name, peak["rms_mm"], peak["omega"], peak["line_hz"],
+                                                  peak["order"], n, rec["crossing_free_1b"]), flush=True)
+        st.rec[name + "_analysis"] = rec
+        st.save()
 
 
 def continuation_stage(st, args, mesh):
@@ -602,6 +676,9 @@ def main():
                     help="realizations: relative speed perturbations of the extra linear maps")
     ap.add_argument("--stress-window", type=float, default=2.0,
                     help="map_stress: the 1B/eo8 interaction is sought up to this multiple of its crossing")
+    ap.add_argument("--windows", default="1280:1440:10,1680:1840:10",
+                    help="windows: fine grids lo:hi:step of the nonlinear map, comma separated")
+    ap.add_argument("--window-revs", type=float, default=20.0, help="windows: revolutions per speed")
     ap.add_argument("--cont-maps", default="linear", help="continuation: linear and/or nonlinear")
     ap.add_argument("--cont-range", default="750:1450:1", help="continuation: lo:hi:step rad/s")
     ap.add_argument("--cont-revs", type=float, default=50.0, help="continuation: revolutions per speed")
@@ -669,6 +746,10 @@ def main():
 
     if "realizations" in stages:
         realizations_stage(st, args, mesh)
+
+    if "windows" in stages:
+        print("the nonlinear map on fine grids around its interactions", flush=True)
+        windows_stage(st, args, mesh)
 
     if "continuation" in stages:
         print("continuation up and down (both branches)", flush=True)
