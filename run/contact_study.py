@@ -286,6 +286,11 @@ def maps_stage(st, args, mesh):
             open(path + ".done", "w").close()
 
 
+def dominant_lines(spec, freq):
+    """The frequency [Hz] of the largest line of each spectrum row (the mean, bin 0, left out)."""
+    return freq[1 + np.argmax(spec[:, 1:], axis=1)]
+
+
 def map_interaction(sweep_file, f1b, window, order=8):
     """The main 1B/eo`order` interaction of a map: among the finished speeds in [w0, window w0]
     (w0 = 2 pi f1b / order, the exact crossing), the highest RMS (median over the speeds within
@@ -301,7 +306,7 @@ def map_interaction(sweep_file, f1b, window, order=8):
     sel = np.flatnonzero((status == 0) & (w >= w0) & (w <= window * w0))
     if sel.size == 0:
         return None
-    dom = np.array([freq[1 + np.argmax(spec[i, 1:])] * 2 * math.pi / w[i] for i in sel])
+    dom = dominant_lines(spec[sel], freq) * 2 * math.pi / w[sel]
     match = sel[np.abs(dom - order) <= 0.5]
     pick = match if match.size else sel
     # Neighbouring speeds may land on different branches of coexisting solutions (docs/contact.md,
@@ -462,8 +467,9 @@ def windows_stage(st, args, mesh):
         rows = []
         print("  %s: |Omega| [rad/s], LE RMS [mm], max |u_r| [mm], dominant line [Hz], its engine order, "
               "max total force [kN], energy at the end [J], friction work over the 2nd half [J], step [s]" % name, flush=True)
+        lines = dominant_lines(spec, freq)
         for k in range(w.size):
-            line = float(freq[1 + np.argmax(spec[k, 1:])]) if status[k] == 0 else float("nan")
+            line = float(lines[k]) if status[k] == 0 else float("nan")
             row = {"omega": float(w[k]), "status": int(status[k]), "rms_mm": 1e3 * float(rms[k]),
                    "max_mm": 1e3 * float(umax[k]), "line_hz": line, "order": line * 2 * math.pi / w[k],
                    "force_kn": 1e-3 * float(fmax[k]), "energy_end": float(eb[k, 5]),

@@ -22,6 +22,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from contact_study import dominant_lines  # noqa: E402
+
 
 def load(path):
     with h5py.File(path, "r") as f:
@@ -31,8 +33,7 @@ def load(path):
         rms, status = s["rms"][:][o], s["status"][:][o]
         spec, freq = s["spectrum"][:][o], s["frequency"][:]
     w = w[o]
-    line = np.array([freq[1 + np.argmax(spec[k, 1:])] for k in range(w.size)])
-    return w, 1e3 * rms, status, line * 2 * math.pi / w
+    return w, 1e3 * rms, status, dominant_lines(spec, freq) * 2 * math.pi / w
 
 
 def main():

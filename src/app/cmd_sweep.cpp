@@ -94,8 +94,8 @@ void run_sweep(MPI_Comm comm) {
            so.continuation == 2  ? "below (up: indices 0..n-1 of the file) or above (down: n..2n-1)"
            : so.continuation > 0 ? "below"
                                  : "above",
-           static_cast<long>(so.chains) * (so.continuation == 2 ? 2 : 1),
-           so.chains * (so.continuation == 2 ? 2 : 1) < size ? "; fewer chains than ranks: some ranks idle" : "");
+           static_cast<long>(so.chains) * so.directions(),
+           so.chains * so.directions() < size ? "; fewer chains than ranks: some ranks idle" : "");
   } else if (so.retries > 0) {
     print0(comm, "morse sweep: a speed that fails runs again at half its step, up to %d time(s) (-sweep_retries)\n",
            so.retries);

@@ -398,7 +398,7 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
     // fine grid).
     const double fine = o->refine_step > 0 ? o->refine_step : o->omega_step;
     const double n = (std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) * (o->omega_step / fine) + 1) *
-                     (o->continuation == 2 ? 2 : 1);  // both ways: every speed twice
+                     o->directions();  // both ways: every speed twice
     if (n > static_cast<double>(kMaxSweepSpeeds)) {
       const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1);
       char b[512];
@@ -497,7 +497,7 @@ long SweepOptions::grid_speeds() const {
   return static_cast<long>(std::floor((omega_max - omega_min) / omega_step + 1e-9)) * stride() + 1;
 }
 
-long SweepOptions::n_speeds() const { return (continuation == 2 ? 2 : 1) * grid_speeds(); }
+long SweepOptions::n_speeds() const { return directions() * grid_speeds(); }
 
 double SweepOptions::omega_of(long index) const {
   const double step = refine_step > 0 ? refine_step : omega_step;
@@ -552,8 +552,7 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   // As many lanes as a rank will advance together: the batched kernels' rate per lane grows with them.
   // A continuation advances one speed per chain at a time.
   const std::size_t at_once =
-      so.continuation != 0 ? static_cast<std::size_t>(std::max<PetscInt>(1, so.chains)) * (so.continuation == 2 ? 2 : 1)
-                           : todo.size();
+      so.continuation != 0 ? static_cast<std::size_t>(std::max<PetscInt>(1, so.chains) * so.directions()) : todo.size();
   const int lanes = static_cast<int>(sweep_lanes_per_rank(s.batch, at_once, size));
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);

@@ -138,8 +138,10 @@ struct SweepOptions {
   /// The size of the speed grid omega_min, omega_min + step, ..., omega_max (with refinement: of
   /// the fine grid of step refine_step up to the last coarse speed).
   long grid_speeds() const;
-  /// The indices of a sweep: grid_speeds(), twice that for a continuation both ways.
+  /// The indices of a sweep: grid_speeds() times directions().
   long n_speeds() const;
+  /// The directions a continuation runs: 2 for both ways, else 1 (every speed once).
+  int directions() const { return continuation == 2 ? 2 : 1; }
   /// The signed speed of index i (i modulo grid_speeds()) [rad/s].
   double omega_of(long index) const;
   /// Grid points per coarse step: omega_step / refine_step (1 without refinement).
