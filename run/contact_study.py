@@ -64,7 +64,8 @@ stopped and resumed, and the stages can run at different times.
   continuation  both branches of the maps (issue 28): for each of --cont-maps, `morse sweep
           -sweep_continuation up` and `down` over --cont-range (lo:hi:step rad/s) with --cont-revs
           revolutions per speed, each speed starting from its neighbour's final state on the grown
-          casing (the first from rest), same model, sense, step and casing as the maps; the two
+          casing (the first from rest), same model (built here if `maps` has not run), sense, step
+          and casing as the maps; the two
           directions run at once, one rank each. Prints the hysteresis bands (speeds where up and
           down differ by more than 20 %) and where each direction jumps; run/plot_contact_continuation.py
           draws them over the from-rest map. The linear pair (750:1450:1, 50 revolutions) takes
@@ -495,10 +496,8 @@ def windows_stage(st, args, mesh):
 
 def continuation_stage(st, args, mesh):
     """Both branches by continuation up and down (see the module docstring)."""
-    rom = st.file("rom_%s.h5" % MAP_ROM)
-    sense = st.rec.get("map_rotation", {}).get("sense")
-    if not os.path.exists(rom) or sense is None:
-        print("  continuation: build the maps' model first (--stages maps)", flush=True)
+    rom, sense = map_model(st, args, mesh)
+    if rom is None:
         return
     lo, hi, step = parse_range(args.cont_range)
     for tag in args.cont_maps.split(","):

@@ -15,8 +15,9 @@
 #  - nlrom on the constrained deck (CB + modal derivatives weighted by a training load, exact
 #    tensors; boundary: the solid nodes at x = 0.3): its stored basis is expanded through the spider (in every column the tip grids
 #    5, 10, 15, 20 move as one rigid body, as RBE2 100 makes them), and its lowest frequency bounds
-#    the model's from above within 1 %; a six-DOF point in nlrom's boundary is refused naming the
-#    set;
+#    the model's from above within 1 %;
+#  - nlrom with the six-DOF point as its boundary (below: rigid constraint modes, the frequency
+#    bound, a large tip load against the full nonlinear static solution);
 #  - static (linear) with loads on the four dependent tip grids: their mean displacement is the
 #    point's translation from the superelement's static condensation K_bb^-1 F;
 #  - fom (linear) under the load applied suddenly: mean tip displacement over 10 periods = the
@@ -108,8 +109,85 @@ assert f_full <= f_rom * (1 + 1e-9) and f_rom < 1.01 * f_full, (f_rom, f_full)
 assert np.abs(f["/nlrom/B"][:]).max() > 0, "no cubic tensor"
 print(f"constraints chain: nlrom f1 {f_rom:.6g} Hz (model {f_full:.6g} Hz)")
 PY
-expect_error "the boundary set ASET has 6 DOFs on 1 nodes" "$d/nl_bad.h5" nlrom -mesh "$deck" -clamp '*BOUNDARY' \
-  -boundary ASET -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces exact
+# nlrom with the six-DOF point as its boundary (ASET: grid 9001, components 1..6), CB + 3 modal
+# derivatives trained along y, exact tensors:
+#  - the boundary coordinates are (9001, 1..6), labelled x .. rz;
+#  - each constraint mode moves the tip grids rigidly by its unit DOF of the point: e_c for a
+#    translation, e_c x (x_k - x_R) for a rotation (exact: RBE2 100 and the other five held);
+#  - the reduced model's lowest frequency bounds the model's from above within 1 %;
+#  - 100 kN along y on each tip grid: the reduced static equilibrium K q + g(q) = V^T f (Newton on
+#    the stored tensors) against `morse static` of the full model, nonlinear and linear: the mean
+#    tip displacement within 0.5 % (y) and 1 % (the axial shortening), where the linear answer is
+#    9 % off; the linear reduced answer is the full linear one (the constraint modes are static
+#    solutions);
+#  - a contact set that is not on the boundary is refused naming it.
+nl6=(-mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -boundary ASET
+  -nlrom_basis cbmd -nlrom_num_fixed_modes 3 -nlrom_num_derivatives 3 -nlrom_forces exact -load_sets tip
+  -load_tip_dir 0,1,0 -load_tip_amplitude 100 -load_tip_omega 2000 -nlrom_training_tfinal 0.01)
+run nlrom "${nl6[@]}" -out "$d/nl6.h5"
+tipload=(-mesh "$deck" -clamp '*BOUNDARY' -mesh_node_sets tip -mesh_node_set_tip 5,10,15,20 -load_sets tip
+  -load_tip_dir 0,1,0 -load_tip_amplitude 100000)
+run static "${tipload[@]}" -out "$d/static6.h5"
+run static "${tipload[@]}" -static_linear -out "$d/static6_lin.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+import scipy.linalg as sl
+d = sys.argv[1]
+f, m = h5py.File(f"{d}/nl6.h5", "r"), h5py.File(f"{d}/modes.h5", "r")
+assert f["/nlrom/boundary_dofs"][:].tolist() == [[9001, c] for c in range(1, 7)], f["/nlrom/boundary_dofs"][:]
+labels = f["/nlrom/labels"][()]
+labels = (labels.decode() if isinstance(labels, bytes) else labels).split("\n")
+assert labels[:6] == ["u_b node 9001 " + c for c in ("x", "y", "z", "rx", "ry", "rz")], labels[:6]
+ids, X, V = f["/mesh/node_ids"][:], f["/mesh/coordinates"][:], f["/nlrom/basis"][:]
+tip = [int(np.where(ids == g)[0][0]) for g in (5, 10, 15, 20)]
+xr = np.array([0.4, 0.025, 0.025])
+for c in range(6):
+    e = np.eye(3)[c % 3]
+    want = np.array([e if c < 3 else np.cross(e, X[k] - xr) for k in tip])
+    err = np.abs(V[c][tip] - want).max()
+    assert err < 1e-10, (c, err)
+K, M = f["/nlrom/K"][:], f["/nlrom/M"][:]
+f_rom = np.sqrt(sl.eigh(K, M, eigvals_only=True)[0]) / (2 * np.pi)
+f_full = m["/fom/frequencies_hz"][0]
+assert f_full <= f_rom * (1 + 1e-9) and f_rom < 1.01 * f_full, (f_rom, f_full)
+# the reduced static equilibrium under the tip load (eq. 28's tensors, Newton with a central-difference Jacobian)
+A, B, r = f["/nlrom/A"][:], f["/nlrom/B"][:], K.shape[0]
+P = 100000.0
+fq = sum(V[:, k, 1] * P for k in tip)
+pairs = [(i, j) for i in range(r) for j in range(i, r)]
+trip = [(i, j, k) for i in range(r) for j in range(i, r) for k in range(j, r)]
+def res(q):
+    m2 = np.array([q[i] * q[j] for i, j in pairs])
+    m3 = np.array([q[i] * q[j] * q[k] for i, j, k in trip])
+    return K @ q + m2 @ A + m3 @ B - fq
+ql = np.linalg.solve(K, fq)
+q = ql.copy()
+for it in range(50):
+    h = 1e-7 * np.abs(q).max()
+    J = np.column_stack([(res(q + h * e) - res(q - h * e)) / (2 * h) for e in np.eye(r)])
+    dq = np.linalg.solve(J, -res(q))
+    q += dq
+    if np.linalg.norm(dq) < 1e-12 * np.linalg.norm(q):
+        break
+else:
+    raise AssertionError("reduced Newton did not converge")
+mean = lambda qq: np.einsum("j,jkd->kd", qq, V[:, tip, :]).mean(axis=0)
+u_rom, u_rom_lin = mean(q), mean(ql)
+full = {}
+for n in ("static6", "static6_lin"):
+    s = h5py.File(f"{d}/{n}.h5", "r")
+    sid = s["/mesh/node_ids"][:]
+    full[n] = s["/static/u"][-1][[int(np.where(sid == g)[0][0]) for g in (5, 10, 15, 20)]].mean(axis=0)
+u_full, u_lin = full["static6"], full["static6_lin"]
+assert abs(u_lin[1] - u_full[1]) > 0.05 * u_full[1], (u_lin, u_full)  # the load is nonlinear
+assert abs(u_rom[1] - u_full[1]) < 5e-3 * u_full[1], (u_rom, u_full)
+assert abs(u_rom[0] - u_full[0]) < 1e-2 * abs(u_full[0]), (u_rom, u_full)
+assert abs(u_rom_lin[1] - u_lin[1]) < 1e-8 * u_lin[1], (u_rom_lin, u_lin)
+print(f"constraints chain: six-DOF boundary f1 {f_rom:.6g} Hz (model {f_full:.6g}); tip under 4 x 100 kN: "
+      f"reduced {u_rom[0]:.4e}, {u_rom[1]:.5e} m, full {u_full[0]:.4e}, {u_full[1]:.5e} m (linear {u_lin[1]:.5e})")
+PY
+expect_error "node 5 of set tip is not a physical boundary node" "$d/nl6_contact.h5" simulate -rom "$d/nl6.h5" \
+  -contact_set tip -sim_dt 1e-6 -sim_tfinal 1e-4
 # static on the constrained deck: 1 kN along y and 0.5 kN along z on each of the four tip grids (all
 # dependent on grid 9001), linear, against the superelement's exact static condensation at the
 # point (K_bb of reduce's /rom/K: the constraint modes are static solutions): the tip grids' mean

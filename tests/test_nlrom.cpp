@@ -448,6 +448,8 @@ TEST(Nlrom, StoredModelRoundTrips) {
   basis.n_fixed = 1;
   basis.labels = {"u_x", "u_y", "u_z", "phi_1"};
   basis.cb.boundary_node_ids = {7};
+  basis.cb.boundary_dof_node = {7, 7, 7};
+  basis.cb.boundary_dof_component = {1, 2, 3};
   basis.seconds = 1.5;
   nlrom::ReducedModel rm;
   auto fill = [](std::size_t n, double s) {
@@ -497,6 +499,23 @@ TEST(Nlrom, StoredModelRoundTrips) {
   EXPECT_EQ(sm.model.g.A, rm.g.A);
   EXPECT_EQ(sm.model.g.B, rm.g.B);
   EXPECT_EQ(sm.boundary_nodes, basis.cb.boundary_node_ids);
+  // The boundary coordinates: (node, component) of each.
+  EXPECT_EQ(sm.boundary_dof_node, basis.cb.boundary_dof_node);
+  EXPECT_EQ(sm.boundary_dof_component, basis.cb.boundary_dof_component);
+  {
+    // A file written before /nlrom/boundary_dofs existed reads as the translations of its nodes.
+    MPI_Barrier(PETSC_COMM_WORLD);
+    if (world_rank() == 0) {
+      const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+      EXPECT_GE(H5Ldelete(f, "/nlrom/boundary_dofs", H5P_DEFAULT), 0);
+      H5Fclose(f);
+    }
+    MPI_Barrier(PETSC_COMM_WORLD);
+    const auto old = nlrom::read_stored_model(PETSC_COMM_WORLD, file, {"x1"});
+    EXPECT_EQ(old.boundary_dof_node, sm.boundary_dof_node);
+    EXPECT_EQ(old.boundary_dof_component, sm.boundary_dof_component);
+    EXPECT_EQ(old.model.n_b, sm.model.n_b);
+  }
   EXPECT_EQ(sm.units, "SI");
   ASSERT_EQ(sm.node_ids.size(), static_cast<std::size_t>(m.lm.n_global_nodes));
   // The basis: the gathered columns of V, in the order of /mesh/node_ids.
@@ -593,6 +612,29 @@ ModalRatios modal_ratios(const nlrom::ReducedModel& rm) {
 }
 
 }  // namespace
+
+// The boundary coordinates of a six-DOF point come before a solid node with a larger id: the
+// solid node's translations start after the point's six coordinates, not at 3k; a node with a
+// clamped translation or outside the boundary cannot carry contact (refused naming it).
+TEST(Nlrom, BoundaryTranslationsAfterASixDofPoint) {
+  nlrom::StoredModel sm;
+  sm.file = "model.h5";
+  sm.node_ids = {3, 5, 7, 9};
+  sm.boundary_nodes = {5, 7, 9};
+  for (int c = 1; c <= 6; ++c) sm.boundary_dof_node.push_back(5), sm.boundary_dof_component.push_back(c);
+  for (int c = 1; c <= 3; ++c) sm.boundary_dof_node.push_back(7), sm.boundary_dof_component.push_back(c);
+  for (int c : {1, 2}) sm.boundary_dof_node.push_back(9), sm.boundary_dof_component.push_back(c);  // z clamped
+  sm.sets["solid"] = {2};
+  sm.sets["both"] = {1, 2};
+  sm.sets["clamped"] = {2, 3};
+  sm.sets["inner"] = {0};
+  EXPECT_EQ(sm.boundary_translations("solid"), (std::vector<std::size_t>{6}));
+  EXPECT_EQ(sm.boundary_translations("both"), (std::vector<std::size_t>{0, 6}));
+  test::expect_error_parts([&] { sm.boundary_translations("clamped"); },
+                           {"model.h5", "node 9 of set clamped", "three translations"}, "a partly clamped node");
+  test::expect_error_parts([&] { sm.boundary_translations("inner"); },
+                           {"model.h5", "node 3 of set inner", "not a physical boundary node"}, "an interior node");
+}
 
 // -nlrom_damping_modes all (seed 003 §2: proportional damping, xi on every mode): every mode of the
 // reduced model has the ratio xi, and the modes stay uncoupled; the partial form damps the first k

@@ -289,8 +289,10 @@ std::vector<PetscInt> mgs(Mat M, Mat base, PetscInt b0, PetscInt nb, Mat cand, c
 }
 
 std::vector<std::string> cb_labels(const cb::CBResult& c) {
+  static const char* const component[] = {"x", "y", "z", "rx", "ry", "rz"};
   std::vector<std::string> l;
-  for (PetscInt j = 0; j < c.n_b; ++j) l.push_back(cat("u_b node ", c.boundary_node_ids[j / 3], " ", "xyz"[j % 3]));
+  for (PetscInt j = 0; j < c.n_b; ++j)
+    l.push_back(cat("u_b node ", c.boundary_dof_node[j], " ", component[c.boundary_dof_component[j] - 1]));
   for (PetscInt j = 0; j < c.n_phi; ++j) l.push_back(cat("phi ", j + 1));
   return l;
 }
@@ -304,13 +306,16 @@ PetscInt basis_size(const fe::Model& md, const BasisSettings& s) {
   const PetscInt want_extra = s.kind == BasisKind::CBMD ? s.n_derivatives : s.kind == BasisKind::POD ? s.n_pod : 0;
   cb::CBResult probe;
   cb::set_boundary(md, s.boundary_set, &probe);
-  // The stored model's boundary coordinates are the x, y, z of each boundary node, in node order
-  // (nlrom::StoredModel: contact, massless boundary).
-  MORSE_CHECK(probe.n_b == 3 * static_cast<PetscInt>(probe.boundary_node_ids.size()), "nlrom: the boundary set ",
-              s.boundary_set, " has ", probe.n_b, " DOFs on ", probe.boundary_node_ids.size(),
-              " nodes: the boundary coordinates of a reduced model are the three translations of each of its nodes; a "
-              "six-DOF point (the independent node of a rigid or interpolation element) or a partly clamped node "
-              "cannot be one (give a set of solid nodes)");
+  // The boundary coordinates are the boundary set's free DOFs in node order, then component
+  // (nlrom::StoredModel::boundary_dof_node): the three translations of a solid node, the six DOFs
+  // of a point (the independent node of a rigid or interpolation element). A POD basis removes the
+  // interface part of nodal snapshots (eq. 15), which hold translations only.
+  const bool translations = probe.n_b == 3 * static_cast<PetscInt>(probe.boundary_node_ids.size());
+  MORSE_CHECK(s.kind != BasisKind::POD || translations, "nlrom: the boundary set ", s.boundary_set, " has ", probe.n_b,
+              " DOFs on ", probe.boundary_node_ids.size(),
+              " nodes: a POD basis (-nlrom_basis pod) needs the three translations of each boundary node (its "
+              "snapshots are nodal displacements); a six-DOF point or a partly clamped node cannot be one (give a set "
+              "of solid nodes)");
   const PetscInt r = probe.n_b + n_fixed + want_extra;
   MORSE_CHECK(r <= md.dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", n_fixed,
               " fixed-interface modes + ", want_extra, " others) is larger than the model (", md.dofs.n_global,

@@ -84,16 +84,23 @@ void StoredModel::dof_values(const std::vector<std::size_t>& rows, const double*
   }
 }
 
-std::vector<std::size_t> StoredModel::boundary_positions(const std::string& set) const {
-  std::map<std::int64_t, std::size_t> pos;
-  for (std::size_t k = 0; k < boundary_nodes.size(); ++k) pos[boundary_nodes[k]] = k;
+std::vector<std::size_t> StoredModel::boundary_translations(const std::string& set) const {
+  std::map<std::int64_t, std::size_t> first;  // node -> its first boundary coordinate
+  for (std::size_t j = boundary_dof_node.size(); j-- > 0;) first[boundary_dof_node[j]] = j;
   std::vector<std::size_t> out;
   for (auto row : sets.at(set)) {
-    auto it = pos.find(node_ids[row]);
-    MORSE_CHECK(it != pos.end(), file, ": node ", node_ids[row], " of set ", set,
+    const std::int64_t id = node_ids[row];
+    auto it = first.find(id);
+    MORSE_CHECK(it != first.end(), file, ": node ", id, " of set ", set,
                 " is not a physical boundary node of the reduced model (its boundary set has ", boundary_nodes.size(),
                 " nodes); rebuild it with morse nlrom -boundary naming a set that contains ", set);
-    out.push_back(it->second);
+    const std::size_t j = it->second;
+    bool xyz = j + 2 < boundary_dof_node.size();
+    for (int c = 0; xyz && c < 3; ++c) xyz = boundary_dof_node[j + c] == id && boundary_dof_component[j + c] == c + 1;
+    MORSE_CHECK(xyz, file, ": node ", id, " of set ", set,
+                " does not have its three translations among the boundary coordinates (a partly clamped node); "
+                "contact and the massless boundary need them");
+    out.push_back(j);
   }
   return out;
 }
@@ -155,8 +162,31 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
          io::read_ints(file, "/mesh/node_ids", &s.node_ids, &d, &err) &&
          io::read_doubles(file, "/mesh/coordinates", &s.coords, &d, &err) &&
          io::read_ints(file, "/nlrom/boundary_nodes", &s.boundary_nodes, &d, &err);
+    // What each boundary coordinate is; a file written before six-DOF boundaries existed holds
+    // the three translations of each boundary node.
+    if (ok && io::has_object(file, "/nlrom/boundary_dofs")) {
+      std::vector<std::int64_t> pairs;
+      ok = io::read_ints(file, "/nlrom/boundary_dofs", &pairs, &d, &err);
+      if (ok && (d.size() != 2 || d[1] != 2)) {
+        err = cat(file, ": /nlrom/boundary_dofs is not an (n_b, 2) array of (node, component)");
+        ok = false;
+      }
+      for (std::size_t j = 0; ok && j < pairs.size() / 2; ++j) {
+        const std::int64_t id = pairs[2 * j], c = pairs[2 * j + 1];
+        if (c < 1 || c > 6 || !std::binary_search(s.boundary_nodes.begin(), s.boundary_nodes.end(), id)) {
+          err = cat(file, ": /nlrom/boundary_dofs row ", j, " (node ", id, ", component ", c,
+                    ") is not a component 1..6 of a node of /nlrom/boundary_nodes");
+          ok = false;
+        }
+        s.boundary_dof_node.push_back(id);
+        s.boundary_dof_component.push_back(static_cast<int>(c));
+      }
+    } else {
+      for (std::int64_t id : s.boundary_nodes)
+        for (int c = 1; c <= 3; ++c) s.boundary_dof_node.push_back(id), s.boundary_dof_component.push_back(c);
+    }
     const std::size_t r = static_cast<std::size_t>(m.r);
-    m.n_b = static_cast<PetscInt>(3 * s.boundary_nodes.size());
+    m.n_b = static_cast<PetscInt>(s.boundary_dof_node.size());
     m.g.r = linear_model ? 0 : r;
     if (ok && (m.K.size() != r * r || m.C.size() != r * r ||
                (!linear_model && (m.g.A.size() != n_quadratic(r) * r || m.g.B.size() != n_cubic(r) * r)) ||
@@ -248,7 +278,8 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
       pk.put(m.n_static);
       pk.put_vec(m.M), pk.put_vec(m.K), pk.put_vec(m.C), pk.put_vec(m.g.A), pk.put_vec(m.g.B);
       pk.put_vec(m.damping_omega), pk.put_vec(s.basis), pk.put_vec(s.node_ids);
-      pk.put_vec(s.coords), pk.put_vec(s.boundary_nodes);
+      pk.put_vec(s.coords), pk.put_vec(s.boundary_nodes), pk.put_vec(s.boundary_dof_node);
+      pk.put_vec(s.boundary_dof_component);
       pk.put_str(s.units);
       pk.put<std::uint64_t>(s.sets.size());
       for (const auto& [name, rows] : s.sets) pk.put_str(name), pk.put_vec(rows);
@@ -279,6 +310,8 @@ StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std:
     s.node_ids = up.get_vec<std::int64_t>();
     s.coords = up.get_vec<double>();
     s.boundary_nodes = up.get_vec<std::int64_t>();
+    s.boundary_dof_node = up.get_vec<std::int64_t>();
+    s.boundary_dof_component = up.get_vec<int>();
     s.units = up.get_str();
     const auto ns = up.get<std::uint64_t>();
     for (std::uint64_t i = 0; i < ns; ++i) {
@@ -326,6 +359,13 @@ void write_stored_model(io::H5Output& out, const mesh::LocalMesh& lm, const fe::
   for (const auto& l : basis.labels) labels += l + "\n";
   out.write_string("/nlrom/labels", labels);
   out.write("/nlrom/boundary_nodes", basis.cb.boundary_node_ids);
+  MORSE_CHECK(basis.cb.boundary_dof_node.size() >= static_cast<std::size_t>(basis.n_b) &&
+                  basis.cb.boundary_dof_component.size() >= static_cast<std::size_t>(basis.n_b),
+              "nlrom: the basis does not say what its ", basis.n_b, " boundary coordinates are");
+  std::vector<std::int64_t> bdofs;  // (node, component) of each boundary coordinate, as /rom/boundary_dofs
+  for (PetscInt j = 0; j < basis.n_b; ++j)
+    bdofs.push_back(basis.cb.boundary_dof_node[j]), bdofs.push_back(basis.cb.boundary_dof_component[j]);
+  out.write("/nlrom/boundary_dofs", bdofs, {static_cast<hsize_t>(basis.n_b), 2});
   if (!basis.md_pairs.empty()) {
     std::vector<std::int64_t> pairs, sel;
     for (std::size_t k = 0; k < basis.md_pairs.size(); ++k) {

@@ -20,12 +20,12 @@
 namespace morse::sim {
 
 std::vector<ContactNode> contact_nodes(const nlrom::StoredModel& sm, const std::string& set) {
-  const auto pos = sm.boundary_positions(set);
+  const auto pos = sm.boundary_translations(set);
   const auto& rows = sm.sets.at(set);
   std::vector<ContactNode> out;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     ContactNode n;
-    n.dof = 3 * pos[i];
+    n.dof = pos[i];
     for (int d = 0; d < 3; ++d) n.x[d] = sm.coords[3 * rows[i] + d];
     out.push_back(n);
   }

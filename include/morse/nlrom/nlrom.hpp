@@ -284,7 +284,11 @@ struct StoredModel {
   std::vector<std::int64_t> node_ids;                    ///< node of each basis row
   std::map<std::string, std::vector<std::size_t>> sets;  ///< node set -> basis rows (ascending id)
   std::vector<double> coords;                            ///< [node][3] reference positions (/mesh/coordinates)
-  std::vector<std::int64_t> boundary_nodes;              ///< q[3k..3k+2] = u of boundary_nodes[k] (eq. 9)
+  std::vector<std::int64_t> boundary_nodes;              ///< the boundary set's nodes, ascending
+  /// What the boundary coordinates q[0..n_b) are (eq. 9): node id and component 1..6 (1..3 the
+  /// x, y, z translations; 4..6 the rotations of a six-DOF point), in node order, then component.
+  std::vector<std::int64_t> boundary_dof_node;
+  std::vector<int> boundary_dof_component;
 
   std::size_t r() const { return static_cast<std::size_t>(model.r); }
   /// Phi^T f for a unit force per node of `set` along `dir` (normalized here).
@@ -303,17 +307,18 @@ struct StoredModel {
   /// e_r = (x, y, 0) / |(x, y)| of its reference position. Throws, naming `option` and the set,
   /// if the set does not hold exactly one node or the node lies on the rotation axis.
   std::vector<double> radial_row(const std::string& set, const std::string& option) const;
-  /// Index k of each node of `set` in boundary_nodes (its u is q[3k..3k+2]), in the set's order.
-  /// Throws naming the first node of the set that is not a physical boundary node of the basis.
-  std::vector<std::size_t> boundary_positions(const std::string& set) const;
+  /// The boundary coordinate j of each node of `set` whose translations are q[j..j+2] (x, y, z),
+  /// in the set's order. Throws naming the first node of the set that is not a boundary node of
+  /// the basis with its three translations (a node outside the boundary, or a partly clamped one).
+  std::vector<std::size_t> boundary_translations(const std::string& set) const;
   /// The least-squares coordinates of a nodal field (3 values per basis node): argmin ||Phi q - u||,
   /// by the normal equations on the stored basis. *rel_residual receives ||Phi q - u|| / ||u||.
   std::vector<double> fit(const std::vector<double>& u, double* rel_residual) const;
 };
 
-/// Reads /nlrom/{M,K,C,A,B,basis,boundary_nodes}, /mesh/{node_ids,coordinates}, /meta/units and the node sets `sets` of
-/// a `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the missing or
-/// inconsistent dataset, or the missing set (listing the file's sets). Collective.
+/// Reads /nlrom/{M,K,C,A,B,basis,boundary_nodes,boundary_dofs}, /mesh/{node_ids,coordinates}, /meta/units and the node
+/// sets `sets` of a `morse nlrom` file on rank 0 and broadcasts them. Throws (collectively) naming the file and the
+/// missing or inconsistent dataset, or the missing set (listing the file's sets). Collective.
 StoredModel read_stored_model(MPI_Comm comm, const std::string& file, const std::vector<std::string>& sets);
 
 /// How a `morse nlrom` file's model was built, recorded as attributes of /nlrom.
@@ -338,7 +343,7 @@ struct StoredInfo {
 /// Writes what read_stored_model reads (docs/hdf5-schema.md, /nlrom): /mesh (the mesh gathered on
 /// rank 0), /nlrom/node_sets (every node set of lm), /nlrom/{M,K,C} (rm), /nlrom/{A,B} (rm.g),
 /// /nlrom/basis (the columns of basis.V at every node, [r][node][3]), /nlrom/labels,
-/// /nlrom/boundary_nodes, the modal-derivative pairs and weights (cbmd), the POD singular values
+/// /nlrom/boundary_nodes, /nlrom/boundary_dofs, the modal-derivative pairs and weights (cbmd), the POD singular values
 /// (pod), the damped frequencies, and the attributes of info. /meta is the command's.
 /// T (a model with constraints, fe::ConstraintMap): basis.V is on the model's DOFs and every
 /// column is written expanded, u = T v, on `dofs`, the nodes' layout (fe::node_layout): the
