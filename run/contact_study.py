@@ -19,7 +19,11 @@ stopped and resumed, and the stages can run at different times.
           (300 N at LE in e_y, 2000 rad/s). r54 = 24 + 10 + 20 is the cheaper sweep basis.
   single  Omega = 1450 rad/s, --revs revolutions (the seed: 200): r79 nonlinear and linear (Fig. 17),
           r79 at dt and dt / 5 over 2 revolutions (Fig. 18), r89 and r54 nonlinear (Fig. 19: the
-          seed's convergence check, and the fidelity of the cheaper sweep basis).
+          seed's convergence check, and the fidelity of the cheaper sweep basis). With
+          --single-scaled (the 60k blade, whose unscaled step is 6.8e-8 s): the maps' models instead,
+          r79, r89 and r54 mass-scaled to 20 kHz (built here), turning in the maps' sense
+          (--rotation), nonlinear at --map-dt-nonlinear (Fig. 18: it and a fifth of it), linear at
+          the linear maps' step; two runs at a time on one rank each.
   pod     seed Figs. 20-22: the MD model r79 at 1450 rad/s over --pod-revs revolutions (the `single`
           stage's fig17_nonlinear if --pod-revs equals --revs), then for each training of
           --pod-trainings a full-order `morse fom` over --pod-train-revs revolutions with snapshots
@@ -195,6 +199,33 @@ def casing_with_mu(mu):
     casing = list(CASING)
     casing[casing.index("-contact_mu") + 1] = mu
     return casing
+
+
+def single_scaled_stage(st, args, mesh):
+    """Figs. 17-19 with the maps' mass-scaled models (see the module docstring, --single-scaled)."""
+    rom, sense = map_model(st, args, mesh)
+    if rom is None:
+        return
+    for name in ("r89", "r54"):
+        nf, nmd = ROMS[name]
+        path = st.file("rom_%s_ms20k.h5" % name)
+        st.run(args.ranks, rom_args(mesh, nf, nmd, path) + ["-nlrom_mass_scaling_fmax", 20000],
+               "nlrom %s mass-scaled to 20 kHz" % name, path, "rom_%s_ms20k" % name)
+    omega = -OMEGA if sense == "negative" else OMEGA
+    dt = args.map_dt_nonlinear
+    every = max(1, int(round(1e-6 / dt)))  # about 1 us sampling
+    print("Omega = %g rad/s, %g revolutions, mass-scaled models, step %g s" % (omega, args.revs, dt), flush=True)
+    runs = [(MAP_ROM, args.revs, dt, False, "fig17_nonlinear", every),
+            (MAP_ROM, args.revs, MAP_DT_LINEAR, True, "fig17_linear", 1),
+            ("r89_ms20k", args.revs, dt, False, "fig19_r89", every),
+            ("r54_ms20k", args.revs, dt, False, "fig19_r54", every),
+            (MAP_ROM, 2, dt, False, "fig18_dt", every),
+            (MAP_ROM, 2, dt / 5, False, "fig18_dt5", 5 * every)]
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, min(2, args.ranks))) as ex:
+        list(ex.map(lambda a: simulate(st, a[0], omega, a[1], a[2], a[3], a[4], a[5]), runs))
+    st.rec["single_scaled"] = {"omega": omega, "dt": dt, "revs": args.revs, "models": [MAP_ROM, "r89_ms20k",
+                                                                                      "r54_ms20k"]}
+    st.save()
 
 
 def diagnosis_stage(st, args, mesh):
@@ -656,6 +687,8 @@ def main():
     ap.add_argument("--stages", default="roms,single,pod,sweep,stress")
     ap.add_argument("--ranks", type=int, default=2)
     ap.add_argument("--revs", type=float, default=10.0)
+    ap.add_argument("--single-scaled", action="store_true",
+                    help="single: the maps' mass-scaled models, sense and steps (the 60k blade)")
     ap.add_argument("--sweep-revs", type=float, default=5.0)
     ap.add_argument("--sweeps", default="linear,nonlinear", help="which sweeps (and stress cases) to run")
     ap.add_argument("--sweep-linear", default="750:2200:10")
@@ -712,7 +745,9 @@ def main():
         st.save()
 
     every = 20  # 1 us sampling at 5e-8 s: 14 samples per period of the 6th mode
-    if "single" in stages:
+    if "single" in stages and args.single_scaled:
+        single_scaled_stage(st, args, mesh)
+    elif "single" in stages:
         print("Omega = %g rad/s, %g revolutions" % (OMEGA, args.revs), flush=True)
         simulate(st, "r79", OMEGA, args.revs, DT, False, "fig17_nonlinear", every)
         simulate(st, "r79", OMEGA, args.revs, DT, True, "fig17_linear", every)

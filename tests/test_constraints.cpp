@@ -610,6 +610,64 @@ TEST(Constraints, SpidersOnANodeSet) {
   EXPECT_NE(msg.find("do not determine the reference's motion"), std::string::npos) << msg;
 }
 
+// fe::restrict_columns, the model coordinates of nodal fields (how morse nlrom reads a fom file's
+// snapshots on a constrained deck): for fields that satisfy the constraints (X = T Y, Y random on
+// the model's DOFs, the six-DOF points' rotations included) it returns Y; for any field it returns
+// the least-squares fit, whose residual is orthogonal to the range of T (T^T (T Y - X) = 0).
+TEST(Constraints, NodalFieldsRestrictToTheirModelCoordinates) {
+  const auto spec = test::box_spec(ElementType::Hex8, 1.0, 0.1, 0.1, 8, 2, 2);
+  for (auto type : {mesh::SpiderType::Rigid, mesh::SpiderType::Interpolation}) {
+    fe::Model md;
+    md.mesh = test::box_mesh(PETSC_COMM_WORLD, spec);
+    mesh::add_node_set(&*md.mesh, "corners", {9, 81}, "test");
+    mesh::add_spiders(&*md.mesh, {"corners"}, 0.06, type);
+    md.dofs = fe::number_dofs(*md.mesh, {"x0"});
+    auto ops = fe::assemble(*md.mesh, md.dofs, test::steel());
+    md.K = std::move(ops.K);
+    md.M = std::move(ops.M);
+    fe::eliminate_constraints(&md, {"x0"});
+    ASSERT_TRUE(md.constraints);
+    ASSERT_GT(md.constraints->n_point_dofs, 0);
+    Mat T = md.constraints->T.get();
+    const PetscInt ncol = 3;
+    PetscInt m_loc = 0, n_loc = 0;
+    MORSE_CALL(MatGetLocalSize(T, &m_loc, &n_loc));
+    (void)m_loc;
+    UMat Y, X;
+    MORSE_CALL(MatCreateDense(PETSC_COMM_WORLD, n_loc, PETSC_DECIDE, PETSC_DETERMINE, ncol, nullptr, Y.ptr()));
+    PetscInt lo = 0, hi = 0;
+    MORSE_CALL(MatGetOwnershipRange(Y.get(), &lo, &hi));
+    for (PetscInt j = 0; j < ncol; ++j)
+      for (PetscInt i = lo; i < hi; ++i)  // a field of every DOF, independent of the rank count
+        MORSE_CALL(MatSetValue(Y.get(), i, j, std::sin(0.7 * i + 1.3 * j + 0.1) * (j + 1), INSERT_VALUES));
+    MORSE_CALL(MatAssemblyBegin(Y.get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatAssemblyEnd(Y.get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatMatMult(T, Y.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, X.ptr()));
+    auto R = fe::restrict_columns(md, X.get());
+    double ny = 0, nd = 0;
+    MORSE_CALL(MatNorm(Y.get(), NORM_FROBENIUS, &ny));
+    MORSE_CALL(MatAXPY(R.get(), -1.0, Y.get(), SAME_NONZERO_PATTERN));
+    MORSE_CALL(MatNorm(R.get(), NORM_FROBENIUS, &nd));
+    EXPECT_LT(nd, 1e-12 * ny) << "fields that satisfy the constraints";
+    // A field that does not: X + a nodal perturbation; the fit's residual is orthogonal to range(T).
+    MORSE_CALL(MatGetOwnershipRange(X.get(), &lo, &hi));
+    for (PetscInt j = 0; j < ncol; ++j)
+      for (PetscInt i = lo; i < hi; ++i)
+        MORSE_CALL(MatSetValue(X.get(), i, j, 0.3 * std::cos(1.1 * i - 0.4 * j), ADD_VALUES));
+    MORSE_CALL(MatAssemblyBegin(X.get(), MAT_FINAL_ASSEMBLY));
+    MORSE_CALL(MatAssemblyEnd(X.get(), MAT_FINAL_ASSEMBLY));
+    auto F = fe::restrict_columns(md, X.get());
+    UMat TF, G;
+    MORSE_CALL(MatMatMult(T, F.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, TF.ptr()));
+    MORSE_CALL(MatAXPY(TF.get(), -1.0, X.get(), SAME_NONZERO_PATTERN));
+    MORSE_CALL(MatTransposeMatMult(T, TF.get(), MAT_INITIAL_MATRIX, PETSC_DEFAULT, G.ptr()));
+    double nx = 0, ng = 0;
+    MORSE_CALL(MatNorm(X.get(), NORM_FROBENIUS, &nx));
+    MORSE_CALL(MatNorm(G.get(), NORM_FROBENIUS, &ng));
+    EXPECT_LT(ng, 1e-12 * nx) << "least squares: T^T (T Y - X) = 0";
+  }
+}
+
 TEST(Constraints, ASpiderCentreFixedByTheDeckClampsItsNodes) {
   // *BOUNDARY / SPC 123456 on the centre of an RBE2 over the tip face: the tip face is clamped,
   // so the model is the box clamped at both ends. Without the rotations fixed (123) the tip face

@@ -41,15 +41,6 @@ void run_nlrom(MPI_Comm comm) {
   const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
   Model md = build_model(comm, o,
                          "morse nlrom needs a mesh: its nonlinear (SVK) forces are computed element by element", true);
-  // POD snapshots live on the nodes' DOFs; a constrained model's coordinates are its independent
-  // DOFs (and points), to which the snapshots are not restricted.
-  collective_check(comm,
-                   md.constraints && !no.basis.snapshots.empty()
-                       ? cat("morse nlrom: ", o.mesh.path,
-                             " has rigid or interpolation elements or MPCs: snapshots (-nlrom_snapshots: POD "
-                             "bases, -nlrom_filter_pod) are not supported on such a model; use -nlrom_basis cb or "
-                             "cbmd")
-                       : std::string());
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   std::unique_ptr<dyn::Loads> training;
   if (!load_list.empty()) {

@@ -9,6 +9,7 @@
 
 #include "morse/core/error.hpp"
 #include "morse/dyn/dyn.hpp"
+#include "morse/fe/constraints.hpp"
 #include "morse/io/h5.hpp"
 
 namespace morse::dyn {
@@ -196,6 +197,12 @@ SnapshotField read_fom_snapshot(const std::string& file, double time) {
 
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file) {
   return io::read_dof_rows(lm, dofs, file, "/fom/snapshots/u");
+}
+
+UMat read_fom_snapshots(const fe::Model& md, const std::string& file) {
+  MORSE_CHECK(md.mesh, "the snapshots of ", file, " need a mesh model");
+  auto X = read_fom_snapshots(*md.mesh, fe::node_layout(md), file);
+  return md.constraints ? fe::restrict_columns(md, X.get()) : std::move(X);
 }
 
 }  // namespace morse::dyn

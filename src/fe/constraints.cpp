@@ -1,6 +1,7 @@
 #include "morse/fe/constraints.hpp"
 
 #include <petscblaslapack.h>
+#include <petscksp.h>
 
 #include <algorithm>
 #include <array>
@@ -10,6 +11,7 @@
 #include <utility>
 
 #include "morse/core/error.hpp"
+#include "morse/core/factor.hpp"
 #include "morse/core/log.hpp"
 #include "morse/mesh/constraints.hpp"
 #include "morse/mesh/mesh.hpp"
@@ -690,6 +692,48 @@ UVec expand(const Model& md, Vec u_bar) {
   MORSE_CALL(MatCreateVecs(md.constraints->T.get(), nullptr, u.ptr()));
   MORSE_CALL(MatMult(md.constraints->T.get(), u_bar, u.get()));
   return u;
+}
+
+UMat restrict_columns(const Model& md, Mat X) {
+  UMat Y;
+  if (!md.constraints) {
+    MORSE_CALL(MatDuplicate(X, MAT_COPY_VALUES, Y.ptr()));
+    return Y;
+  }
+  // The normal equations of min ||T y - x||: (T^T T) y = T^T x. T has full column rank (every
+  // model DOF moves some node, or is a node's own translation), so T^T T is positive definite,
+  // and for x = T y the solution is y.
+  Mat T = md.constraints->T.get();
+  UMat TtT, B;
+  MORSE_CALL(MatTransposeMatMult(T, T, MAT_INITIAL_MATRIX, PETSC_DEFAULT, TtT.ptr()));
+  MORSE_CALL(MatTransposeMatMult(T, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, B.ptr()));
+  MPI_Comm comm;
+  MORSE_CALL(PetscObjectGetComm((PetscObject)T, &comm));
+  UKSP ksp;
+  MORSE_CALL(KSPCreate(comm, ksp.ptr()));
+  MORSE_CALL(KSPSetOperators(ksp.get(), TtT.get(), TtT.get()));
+  MORSE_CALL(KSPSetType(ksp.get(), KSPPREONLY));
+  PC pc;
+  MORSE_CALL(KSPGetPC(ksp.get(), &pc));
+  MORSE_CALL(PCSetType(pc, PCCHOLESKY));
+  MORSE_CALL(PCFactorSetMatSolverType(pc, cholesky_solver(comm)));
+  MORSE_CALL(KSPSetUp(ksp.get()));
+  MORSE_CALL(MatDuplicate(B.get(), MAT_DO_NOT_COPY_VALUES, Y.ptr()));
+  PetscInt n = 0;
+  MORSE_CALL(MatGetSize(B.get(), nullptr, &n));
+  UVec b, y;
+  MORSE_CALL(MatCreateVecs(TtT.get(), y.ptr(), b.ptr()));
+  for (PetscInt j = 0; j < n; ++j) {  // column by column: MUMPS's multiple right-hand sides need a dense B on rank 0
+    Vec c;
+    MORSE_CALL(MatDenseGetColumnVecRead(B.get(), j, &c));
+    MORSE_CALL(VecCopy(c, b.get()));
+    MORSE_CALL(MatDenseRestoreColumnVecRead(B.get(), j, &c));
+    MORSE_CALL(KSPSolve(ksp.get(), b.get(), y.get()));
+    MORSE_CALL(MatDenseGetColumnVecWrite(Y.get(), j, &c));
+    MORSE_CALL(VecCopy(y.get(), c));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(Y.get(), j, &c));
+  }
+  return Y;
 }
 
 const DofLayout& node_layout(const Model& md) { return md.constraints ? md.constraints->full : md.dofs; }

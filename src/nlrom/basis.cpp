@@ -308,14 +308,7 @@ PetscInt basis_size(const fe::Model& md, const BasisSettings& s) {
   cb::set_boundary(md, s.boundary_set, &probe);
   // The boundary coordinates are the boundary set's free DOFs in node order, then component
   // (nlrom::StoredModel::boundary_dof_node): the three translations of a solid node, the six DOFs
-  // of a point (the independent node of a rigid or interpolation element). A POD basis removes the
-  // interface part of nodal snapshots (eq. 15), which hold translations only.
-  const bool translations = probe.n_b == 3 * static_cast<PetscInt>(probe.boundary_node_ids.size());
-  MORSE_CHECK(s.kind != BasisKind::POD || translations, "nlrom: the boundary set ", s.boundary_set, " has ", probe.n_b,
-              " DOFs on ", probe.boundary_node_ids.size(),
-              " nodes: a POD basis (-nlrom_basis pod) needs the three translations of each boundary node (its "
-              "snapshots are nodal displacements); a six-DOF point or a partly clamped node cannot be one (give a set "
-              "of solid nodes)");
+  // of a point (the independent node of a rigid or interpolation element).
   const PetscInt r = probe.n_b + n_fixed + want_extra;
   MORSE_CHECK(r <= md.dofs.n_global, "nlrom: a basis of ", r, " vectors (", probe.n_b, " boundary DOFs + ", n_fixed,
               " fixed-interface modes + ", want_extra, " others) is larger than the model (", md.dofs.n_global,
@@ -339,7 +332,6 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
   MORSE_CHECK(md.mesh, "nlrom: the nonlinear basis needs a mesh model");
   MORSE_CHECK(svk.stiffness() == md.K.get(), "nlrom: the SVK forces must be built on the model's K");
   const auto& lm = *md.mesh;
-  const auto& dofs = md.dofs;
   Mat M = md.M.get();
   MPI_Comm comm = lm.comm;
   const auto t0 = std::chrono::steady_clock::now();
@@ -411,7 +403,7 @@ Basis build_basis(const fe::Model& md, const fe::Svk& svk, const BasisSettings& 
       b.labels.push_back(cat("psi ", b.md_pairs[k].first + 1, ",", b.md_pairs[k].second + 1));
     }
   } else {
-    auto X = dyn::read_fom_snapshots(lm, dofs, s.snapshots);
+    auto X = dyn::read_fom_snapshots(md, s.snapshots);  // on the model's DOFs (points included)
     PetscInt ns = 0;
     MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
     MORSE_CHECK(s.n_pod <= ns, "nlrom: -nlrom_num_pod ", s.n_pod, " exceeds the ", ns, " snapshots of ", s.snapshots);

@@ -178,7 +178,7 @@ std::string OfflineSettings::damping() const {
 
 UMat force_filter(const fe::Model& md, const fe::Svk& svk, const std::string& file, PetscInt n) {
   StageTimer t(md.mesh->comm, "PodFilter");
-  auto X = dyn::read_fom_snapshots(*md.mesh, md.dofs, file);
+  auto X = dyn::read_fom_snapshots(md, file);
   PetscInt ns = 0;
   MORSE_CALL(MatGetSize(X.get(), nullptr, &ns));
   MORSE_CHECK(n <= ns, "-nlrom_filter_pod ", n, " exceeds the ", ns, " snapshots of ", file);

@@ -489,5 +489,9 @@ SnapshotRow read_fom_snapshot_row(const std::string& file, double time);
 /// The snapshots of a fom file (/fom/snapshots/u) as the columns of an MPIDENSE matrix with the
 /// DOF layout of dofs (io::read_dof_rows: rows matched by node id and component). Collective.
 UMat read_fom_snapshots(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::string& file);
+/// The snapshots on md's DOFs: read on the nodes' layout (fe::node_layout) and, for a model with
+/// rigid or interpolation elements or MPCs, restricted to its DOFs (fe::restrict_columns: the
+/// independent DOFs and the six-DOF points' motions of each snapshot). Collective.
+UMat read_fom_snapshots(const fe::Model& md, const std::string& file);
 
 }  // namespace morse::dyn

@@ -23,6 +23,7 @@
 // distributed; the constraints themselves (a few thousand terms) are replicated on every rank.
 #pragma once
 
+#include <petscmat.h>
 #include <petscvec.h>
 
 #include <string>
@@ -48,6 +49,13 @@ void eliminate_constraints(Model* md, const std::vector<std::string>& clamp_sets
 /// u = T u_bar: the free translations of the mesh's nodes (md.constraints->full) from a vector of
 /// the model's DOFs. Without constraints, a copy of u_bar. Collective.
 UVec expand(const Model& md, Vec u_bar);
+
+/// The columns of X (MPIDENSE, rows as node_layout(md): nodal fields such as a fom file's
+/// snapshots) on the model's DOFs, by least squares: Y = argmin ||T Y - X|| (the normal equations,
+/// a Cholesky factor of T^T T). A field that satisfies the constraints (X = T Y) gives its model
+/// coordinates exactly, the six-DOF points' rotations included. Without constraints, a copy of X.
+/// Collective.
+UMat restrict_columns(const Model& md, Mat X);
 
 /// The layout of the nodes' free translations: md.constraints->full, or md.dofs. Not collective.
 const DofLayout& node_layout(const Model& md);
