@@ -43,18 +43,13 @@ void run_fom(MPI_Comm comm) {
 
   Model md =
       build_model(comm, o, "morse fom needs a mesh: its nonlinear (SVK) forces are computed element by element", true);
-  // With rigid or interpolation elements or MPCs the run is on the model's DOFs (loads T^T f,
-  // forces through T, M_bar) and the output on the nodes' (u = T u_bar).
-  collective_check(comm,
-                   md.constraints && (!ho.file().empty() || !fs.initial.empty())
-                       ? cat("morse fom: ", o.mesh.path,
-                             " has rigid or interpolation elements or MPCs: -load_history and -fom_initial (nodal "
-                             "fields of the nodes' DOFs) are not supported on such a model")
-                       : std::string());
+  // With rigid or interpolation elements or MPCs the run is on the model's DOFs (loads T^T f, a
+  // load history included; forces through T, M_bar), the output on the nodes' (u = T u_bar), and
+  // an initial displacement is restricted to the model's DOFs (fe::restrict_vector).
   const auto& nodes = fe::node_layout(md);
   dyn::Loads loads(md, load_list);
   const PetscInt n_steps = static_cast<PetscInt>(std::ceil(fs.t_final / fs.dt - 1e-9));
-  if (auto h = dyn::make_load_history(comm, *md.mesh, md.dofs, ho)) {
+  if (auto h = dyn::make_load_history(comm, *md.mesh, nodes, ho)) {
     h->check_covers(0.0, n_steps * fs.dt);
     loads.set_history(std::move(h));
   }
@@ -63,9 +58,14 @@ void run_fom(MPI_Comm comm) {
   fe::Svk svk(md, o.mesh.material);
   UVec u0;
   if (!fs.initial.empty()) {
-    MORSE_CALL(MatCreateVecs(md.K.get(), u0.ptr(), nullptr));
-    MORSE_CALL(VecSet(u0.get(), 0.0));
-    io::read_nodal_field(*md.mesh, md.dofs, fs.initial, fs.initial_dataset, u0.get());
+    UVec x;
+    if (md.constraints)
+      MORSE_CALL(MatCreateVecs(md.constraints->T.get(), nullptr, x.ptr()));
+    else
+      MORSE_CALL(MatCreateVecs(md.K.get(), x.ptr(), nullptr));
+    MORSE_CALL(VecSet(x.get(), 0.0));
+    io::read_nodal_field(*md.mesh, nodes, fs.initial, fs.initial_dataset, x.get());
+    u0 = md.constraints ? fe::restrict_vector(md, x.get()) : std::move(x);
   }
   if (std::abs(n_steps * fs.dt - fs.t_final) > 1e-9 * fs.t_final)
     print0(comm, "morse fom: -fom_tfinal is not a multiple of -fom_dt: the run ends at t = %g (%lld steps)\n",

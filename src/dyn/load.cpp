@@ -72,6 +72,8 @@ Loads::Loads(const mesh::LocalMesh& lm, const fe::DofLayout& dofs, const std::ve
 
 Loads::Loads(const fe::Model& md, const std::vector<NodalLoad>& loads) : Loads(*md.mesh, fe::node_layout(md), loads) {
   if (!md.constraints) return;
+  T_ = md.constraints->T.get();
+  MORSE_CALL(MatCreateVecs(T_, nullptr, nodal_.ptr()));
   for (auto& p : patterns_) {
     UVec q;
     MORSE_CALL(MatCreateVecs(md.constraints->T.get(), q.ptr(), nullptr));
@@ -88,7 +90,13 @@ double Loads::factor(std::size_t i, double t) const {
 void Loads::evaluate(double t, Vec F) const {
   MORSE_CALL(VecSet(F, 0.0));
   for (std::size_t i = 0; i < loads_.size(); ++i) MORSE_CALL(VecAXPY(F, factor(i, t), patterns_[i].get()));
-  if (history_) history_->add_to(t, F);
+  if (history_ && T_) {
+    MORSE_CALL(VecSet(nodal_.get(), 0.0));
+    history_->add_to(t, nodal_.get());
+    MORSE_CALL(MatMultTransposeAdd(T_, nodal_.get(), F, F));
+  } else if (history_) {
+    history_->add_to(t, F);
+  }
 }
 
 double Loads::max_omega() const {

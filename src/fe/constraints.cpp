@@ -694,46 +694,77 @@ UVec expand(const Model& md, Vec u_bar) {
   return u;
 }
 
+namespace {
+// Least squares on the model's DOFs, min ||T y - x||, by the normal equations (T^T T) y = T^T x.
+// T has full column rank (every model DOF moves some node, or is a node's own translation), so
+// T^T T is positive definite, and for x = T y the solution is y.
+class Restriction {
+ public:
+  explicit Restriction(const Model& md) : T_(md.constraints->T.get()) {
+    MORSE_CALL(MatTransposeMatMult(T_, T_, MAT_INITIAL_MATRIX, PETSC_DEFAULT, TtT_.ptr()));
+    MPI_Comm comm;
+    MORSE_CALL(PetscObjectGetComm((PetscObject)T_, &comm));
+    MORSE_CALL(KSPCreate(comm, ksp_.ptr()));
+    MORSE_CALL(KSPSetOperators(ksp_.get(), TtT_.get(), TtT_.get()));
+    MORSE_CALL(KSPSetType(ksp_.get(), KSPPREONLY));
+    PC pc;
+    MORSE_CALL(KSPGetPC(ksp_.get(), &pc));
+    MORSE_CALL(PCSetType(pc, PCCHOLESKY));
+    MORSE_CALL(PCFactorSetMatSolverType(pc, cholesky_solver(comm)));
+    MORSE_CALL(KSPSetUp(ksp_.get()));
+    MORSE_CALL(MatCreateVecs(TtT_.get(), y_.ptr(), b_.ptr()));
+  }
+  // y = the fit of x (y: a vector of the model's DOFs).
+  void apply(Vec x, Vec y) {
+    MORSE_CALL(MatMultTranspose(T_, x, b_.get()));
+    MORSE_CALL(KSPSolve(ksp_.get(), b_.get(), y));
+  }
+  Vec work() { return y_.get(); }
+
+ private:
+  Mat T_;
+  UMat TtT_;
+  UKSP ksp_;
+  UVec y_, b_;
+};
+}  // namespace
+
 UMat restrict_columns(const Model& md, Mat X) {
   UMat Y;
   if (!md.constraints) {
     MORSE_CALL(MatDuplicate(X, MAT_COPY_VALUES, Y.ptr()));
     return Y;
   }
-  // The normal equations of min ||T y - x||: (T^T T) y = T^T x. T has full column rank (every
-  // model DOF moves some node, or is a node's own translation), so T^T T is positive definite,
-  // and for x = T y the solution is y.
-  Mat T = md.constraints->T.get();
-  UMat TtT, B;
-  MORSE_CALL(MatTransposeMatMult(T, T, MAT_INITIAL_MATRIX, PETSC_DEFAULT, TtT.ptr()));
-  MORSE_CALL(MatTransposeMatMult(T, X, MAT_INITIAL_MATRIX, PETSC_DEFAULT, B.ptr()));
+  Restriction r(md);
+  PetscInt m = 0, n = 0;
+  MORSE_CALL(MatGetLocalSize(md.constraints->T.get(), nullptr, &m));
+  MORSE_CALL(MatGetSize(X, nullptr, &n));
   MPI_Comm comm;
-  MORSE_CALL(PetscObjectGetComm((PetscObject)T, &comm));
-  UKSP ksp;
-  MORSE_CALL(KSPCreate(comm, ksp.ptr()));
-  MORSE_CALL(KSPSetOperators(ksp.get(), TtT.get(), TtT.get()));
-  MORSE_CALL(KSPSetType(ksp.get(), KSPPREONLY));
-  PC pc;
-  MORSE_CALL(KSPGetPC(ksp.get(), &pc));
-  MORSE_CALL(PCSetType(pc, PCCHOLESKY));
-  MORSE_CALL(PCFactorSetMatSolverType(pc, cholesky_solver(comm)));
-  MORSE_CALL(KSPSetUp(ksp.get()));
-  MORSE_CALL(MatDuplicate(B.get(), MAT_DO_NOT_COPY_VALUES, Y.ptr()));
-  PetscInt n = 0;
-  MORSE_CALL(MatGetSize(B.get(), nullptr, &n));
-  UVec b, y;
-  MORSE_CALL(MatCreateVecs(TtT.get(), y.ptr(), b.ptr()));
-  for (PetscInt j = 0; j < n; ++j) {  // column by column: MUMPS's multiple right-hand sides need a dense B on rank 0
-    Vec c;
-    MORSE_CALL(MatDenseGetColumnVecRead(B.get(), j, &c));
-    MORSE_CALL(VecCopy(c, b.get()));
-    MORSE_CALL(MatDenseRestoreColumnVecRead(B.get(), j, &c));
-    MORSE_CALL(KSPSolve(ksp.get(), b.get(), y.get()));
-    MORSE_CALL(MatDenseGetColumnVecWrite(Y.get(), j, &c));
-    MORSE_CALL(VecCopy(y.get(), c));
-    MORSE_CALL(MatDenseRestoreColumnVecWrite(Y.get(), j, &c));
+  MORSE_CALL(PetscObjectGetComm((PetscObject)X, &comm));
+  MORSE_CALL(MatCreateDense(comm, m, PETSC_DECIDE, PETSC_DETERMINE, n, nullptr, Y.ptr()));
+  for (PetscInt j = 0; j < n; ++j) {  // column by column: MUMPS takes several right-hand sides only on rank 0
+    Vec x, y;
+    MORSE_CALL(MatDenseGetColumnVecRead(X, j, &x));
+    r.apply(x, r.work());
+    MORSE_CALL(MatDenseRestoreColumnVecRead(X, j, &x));
+    MORSE_CALL(MatDenseGetColumnVecWrite(Y.get(), j, &y));
+    MORSE_CALL(VecCopy(r.work(), y));
+    MORSE_CALL(MatDenseRestoreColumnVecWrite(Y.get(), j, &y));
   }
   return Y;
+}
+
+UVec restrict_vector(const Model& md, Vec x) {
+  UVec y;
+  if (!md.constraints) {
+    MORSE_CALL(VecDuplicate(x, y.ptr()));
+    MORSE_CALL(VecCopy(x, y.get()));
+    return y;
+  }
+  Restriction r(md);
+  MORSE_CALL(VecDuplicate(r.work(), y.ptr()));
+  r.apply(x, y.get());
+  return y;
 }
 
 const DofLayout& node_layout(const Model& md) { return md.constraints ? md.constraints->full : md.dofs; }

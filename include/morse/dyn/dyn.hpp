@@ -197,7 +197,8 @@ class Loads {
   void evaluate(double t, Vec F) const;
   const std::vector<NodalLoad>& loads() const { return loads_; }
   /// Adds a tabulated history to f_e (at most one; replaces a previous one). factor(), pattern()
-  /// and max_omega() describe the harmonic loads only.
+  /// and max_omega() describe the harmonic loads only. Loads built on a model with constraints
+  /// take a history on the nodes' layout (fe::node_layout) and apply T^T to it.
   void set_history(std::shared_ptr<const LoadHistory> history) { history_ = std::move(history); }
   const LoadHistory* history() const { return history_.get(); }
   bool empty() const { return loads_.empty() && !history_; }
@@ -212,6 +213,8 @@ class Loads {
   std::vector<NodalLoad> loads_;
   std::vector<UVec> patterns_;  // unit-amplitude spatial pattern of each load
   std::shared_ptr<const LoadHistory> history_;
+  Mat T_ = nullptr;  // the model's constraints (not owned), else null
+  UVec nodal_;       // with T_: the history's forces on the nodes
 };
 
 // ------------------------------------------------------------------------------------------

@@ -56,6 +56,8 @@ UVec expand(const Model& md, Vec u_bar);
 /// coordinates exactly, the six-DOF points' rotations included. Without constraints, a copy of X.
 /// Collective.
 UMat restrict_columns(const Model& md, Mat X);
+/// The same for one nodal field x (a vector of node_layout(md)): a vector of the model's DOFs.
+UVec restrict_vector(const Model& md, Vec x);
 
 /// The layout of the nodes' free translations: md.constraints->full, or md.dofs. Not collective.
 const DofLayout& node_layout(const Model& md);
