@@ -59,7 +59,9 @@ void run_stress_fom(MPI_Comm comm, const CommonOptions& o, const sim::StressOpti
   auto inputs = o.inputs();
   inputs.push_back({"-fom", so.fom});
   const auto output_lock = files::prepare_outputs(comm, {{"-out", o.out}}, inputs);
-  Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element");
+  // A fom file holds every node's displacement (dependent nodes of rigid and interpolation
+  // elements included): only the mesh is used, as for -rom.
+  Model md = build_model(comm, o, "morse stress needs a mesh: stresses are recovered element by element", true);
   io::H5Output out(comm, o.out);  // early: a bad -out fails before the work
   // Rank 0 reads the snapshot and completes it with the mesh's nodes; every rank receives it.
   auto gm = mesh::gather_to_rank0(*md.mesh);

@@ -69,7 +69,7 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh,
   collective_check(comm,
                    needs_mesh && md.constraints && !constraints_ok
                        ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
-                             " are supported by modes, reduce, select, export, nlrom, static, fom and stress -rom only")
+                             " are not supported by this command")
                        : std::string());
   int size = 1;
   MPI_Comm_size(comm, &size);
