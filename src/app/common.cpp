@@ -66,11 +66,10 @@ Model build_model(MPI_Comm comm, const CommonOptions& o, const char* needs_mesh,
   Model md = fe::mesh_model(comm, o.mesh, constraints_ok);
   // Element-by-element commands see the nodes' displacements, which dependent nodes of rigid and
   // interpolation elements do not have as DOFs of the model.
-  collective_check(comm,
-                   needs_mesh && md.constraints && !constraints_ok
-                       ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
-                             " are not supported by this command")
-                       : std::string());
+  collective_check(comm, needs_mesh && md.constraints && !constraints_ok
+                             ? cat(needs_mesh, "; the rigid elements, interpolation elements and MPCs of ", o.mesh.path,
+                                   " are not supported by this command")
+                             : std::string());
   int size = 1;
   MPI_Comm_size(comm, &size);
   print0(comm, "morse: mesh %s (%s units): %lld nodes, %lld elements on %d rank(s)\n", o.mesh.path.c_str(),
