@@ -72,7 +72,8 @@ stopped and resumed, and the stages can run at different times.
           and casing as the maps; the two
           directions run at once, one rank each. Prints the hysteresis bands (speeds where up and
           down differ by more than 20 %) and where each direction jumps; run/plot_contact_continuation.py
-          draws them over the from-rest map. The linear pair (750:1450:1, 50 revolutions) takes
+          draws them over the from-rest map. --cont-label names a further range's files and record
+          (continuation_<map>_<label>_<up|down>.h5). The linear pair (750:1450:1, 50 revolutions) takes
           about 15 minutes on 2 cores.
   windows  the nonlinear map on fine grids around its interactions (issue 28): `morse sweep` of
           the maps' model (built here if `maps` has not run) with geometric nonlinearity over each
@@ -531,13 +532,14 @@ def continuation_stage(st, args, mesh):
     if rom is None:
         return
     lo, hi, step = parse_range(args.cont_range)
+    label = "_" + args.cont_label if args.cont_label else ""
     for tag in args.cont_maps.split(","):
         lin = tag == "linear"
         dt = MAP_DT_LINEAR if lin else args.map_dt_nonlinear
         files = {}
 
         def one(direction):
-            name = "continuation_%s_%s" % (tag, direction)
+            name = "continuation_%s%s_%s" % (tag, label, direction)
             path = st.file(name + ".h5")
             sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
                      "-sweep_omega_step", step, "-sim_revolutions", args.cont_revs, "-sim_dt", dt, "-sweep_rotation",
@@ -585,7 +587,7 @@ def continuation_stage(st, args, mesh):
               (tag, rec["speeds_differing"], w.size, ["%g-%g (%s higher)" % tuple(b) for b in bands]), flush=True)
         print("  %s: jumps up %s; down %s" % (tag, ["%g->%g x%.2f" % tuple(j) for j in rec["jumps_up"]],
                                               ["%g->%g x%.2f" % tuple(j) for j in rec["jumps_down"]]), flush=True)
-        st.rec["continuation_" + tag] = rec
+        st.rec["continuation_" + tag + label] = rec
         st.save()
 
 
@@ -720,6 +722,8 @@ def main():
     ap.add_argument("--cont-maps", default="linear", help="continuation: linear and/or nonlinear")
     ap.add_argument("--cont-range", default="750:1450:1", help="continuation: lo:hi:step rad/s")
     ap.add_argument("--cont-revs", type=float, default=50.0, help="continuation: revolutions per speed")
+    ap.add_argument("--cont-label", default="", help="continuation: a name for this range (files "
+                    "continuation_<map>_<label>_<up|down>.h5, record continuation_<map>_<label>)")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
