@@ -189,6 +189,27 @@ assert abs(u_rom_lin[1] - u_lin[1]) < 1e-8 * u_lin[1], (u_rom_lin, u_lin)
 print(f"constraints chain: six-DOF boundary f1 {f_rom:.6g} Hz (model {f_full:.6g}); tip under 4 x 100 kN: "
       f"reduced {u_rom[0]:.4e}, {u_rom[1]:.5e} m, full {u_full[0]:.4e}, {u_full[1]:.5e} m (linear {u_lin[1]:.5e})")
 PY
+# The massless boundary on the point (MacNeal, theory §11.1): with the boundary free, its dynamic
+# modes are the lowest modes of the mass-carrying CB model on the same point (1e-9).
+run nlrom -mesh "$deck" -clamp '*BOUNDARY' -boundary ASET -nlrom_basis cb -nlrom_num_fixed_modes 4 -nlrom_forces exact \
+  -out "$d/cb6.h5"
+run nlrom -mesh "$deck" -clamp '*BOUNDARY' -boundary ASET -nlrom_basis cb -nlrom_num_fixed_modes 4 -nlrom_forces exact \
+  -nlrom_boundary_mass massless -out "$d/ml6.h5"
+/usr/bin/python3 - "$d" <<'PY' || [ $? -eq 127 ]
+import sys, h5py, numpy as np
+import scipy.linalg as sl
+d = sys.argv[1]
+c, m = h5py.File(f"{d}/cb6.h5", "r"), h5py.File(f"{d}/ml6.h5", "r")
+w_cb = sl.eigh(c["/nlrom/K"][:], c["/nlrom/M"][:], eigvals_only=True)
+K, ns = m["/nlrom/K"][:], int(m["/nlrom"].attrs["n_static_coordinates"])
+assert m["/nlrom/boundary_dofs"][:].tolist() == [[9001, k] for k in range(1, 7)]
+Kc = K[ns:, ns:] - K[ns:, :ns] @ np.linalg.solve(K[:ns, :ns], K[:ns, ns:])  # static coordinates condensed, M = I
+w_ml = np.sort(np.linalg.eigvalsh(0.5 * (Kc + Kc.T)))
+nd = len(w_ml)
+err = np.abs(w_ml / w_cb[:nd] - 1).max()
+assert nd >= 1 and err < 1e-9, (w_ml, w_cb[:nd], err)
+print(f"constraints chain: massless on the point: {nd} dynamic modes = the CB model's lowest to {err:.1e}")
+PY
 expect_error "node 5 of set tip is not a physical boundary node" "$d/nl6_contact.h5" simulate -rom "$d/nl6.h5" \
   -contact_set tip -sim_dt 1e-6 -sim_tfinal 1e-4
 # static on the constrained deck: 1 kN along y and 0.5 kN along z on each of the four tip grids (all
