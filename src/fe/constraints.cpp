@@ -742,7 +742,7 @@ UMat restrict_columns(const Model& md, Mat X) {
   MPI_Comm comm;
   MORSE_CALL(PetscObjectGetComm((PetscObject)X, &comm));
   MORSE_CALL(MatCreateDense(comm, m, PETSC_DECIDE, PETSC_DETERMINE, n, nullptr, Y.ptr()));
-  for (PetscInt j = 0; j < n; ++j) {  // column by column: MUMPS takes several right-hand sides only on rank 0
+  for (PetscInt j = 0; j < n; ++j) {  // one solve per column, with the one factor
     Vec x, y;
     MORSE_CALL(MatDenseGetColumnVecRead(X, j, &x));
     r.apply(x, r.work());
