@@ -3,7 +3,8 @@
 // Cardano's (plain Newton needs dozens of iterations, the line search two), the error message of a
 // Newton failure, exact energy conservation of the energy scheme at any step (the trapezoidal rule
 // does not conserve it), second-order convergence of both schemes to a converged explicit run, and
-// the time-discretization error estimate against the exact phase error of an oscillator.
+// the time-discretization error estimate against the exact phase error of an oscillator; the
+// tangent critical step of explicit runs against closed forms, and a divergence message naming it.
 // Serial integrators: every rank runs the same case (the verdicts agree by construction).
 #include <petscsys.h>
 #include <gtest/gtest.h>
@@ -340,5 +341,108 @@ TEST(Implicit, RoundOffFloorStopsOnlyInTheQuadraticPhase) {
     EXPECT_GT(floor.newton_floor_steps, floor.steps / 2) << "the floor rule did not stop most steps";
     EXPECT_EQ(tight.newton_floor_steps, 0);
     EXPECT_LT(d, 1e-9 * n);  // the rtol 1e-10 run's own error
+  }
+}
+
+// The tangent critical step (sim::tangent_step) against closed forms: a Duffing oscillator with a
+// quadratic term, J = k + 2 a q + 3 k3 q^2, so dt = 2 sqrt(m / J) while J > 0 and no stable step
+// (one negative eigenvalue) past it; the three-coordinate potential model against the eigenvalues
+// of its analytic Hessian K + 2 c3 (w.q) w w^T + 3 c4 (u.q)^2 u u^T + d4 ((q.q) I + 2 q q^T).
+TEST(Tangent, CriticalStepOfTheLinearizedModel) {
+  const double m = 2.0, k = 50.0, k3 = 1.0e4, a = -300.0;
+  auto rm = duffing(m, k, k3);
+  rm.g.A = {a};
+  for (double q : {0.0, 0.03, 0.3, -0.2}) {
+    const double J = k + 2.0 * a * q + 3.0 * k3 * q * q;
+    const auto ts = sim::tangent_step(rm, &q);
+    EXPECT_NEAR(ts.omega2_max, J / m, 1e-14 * (k + 3.0 * k3 * q * q) / m) << "q = " << q;
+    if (J > 0) {
+      EXPECT_NEAR(ts.dt, 2.0 * std::sqrt(m / J), 1e-13 * 2.0 * std::sqrt(m / J)) << "q = " << q;
+      EXPECT_EQ(ts.negative, 0);
+    } else {
+      EXPECT_TRUE(std::isinf(ts.dt)) << "q = " << q << ": J = " << J << " < 0 has no stable step";
+      EXPECT_EQ(ts.negative, 1);
+    }
+  }
+  auto soft = duffing(1.0, 1.0, 1.0);
+  soft.g.A = {-10.0};
+  const double q1 = 1.0;  // J = 1 - 20 + 3 = -16
+  const auto neg = sim::tangent_step(soft, &q1);
+  EXPECT_EQ(neg.negative, 1);
+  EXPECT_TRUE(std::isinf(neg.dt));
+  EXPECT_NEAR(neg.omega2_min, -16.0, 1e-13);
+  // Null state: the linear model's critical step.
+  EXPECT_NEAR(sim::tangent_step(rm, nullptr).dt, sim::critical_step(rm), 1e-15);
+
+  const auto r3 = three_dof();
+  const Potential3 pot;
+  for (const std::vector<double>& q : std::vector<std::vector<double>>{{0.1, -0.2, 0.3}, {-0.5, 0.2, -0.4}}) {
+    double wq = 0, uq = 0, qq = 0;
+    for (int i = 0; i < 3; ++i) wq += pot.w[i] * q[i], uq += pot.u[i] * q[i], qq += q[i] * q[i];
+    std::vector<double> H(r3.K);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        H[i * 3 + j] += 2.0 * pot.c3 * wq * pot.w[i] * pot.w[j] + 3.0 * pot.c4 * uq * uq * pot.u[i] * pot.u[j] +
+                        pot.d4 * ((i == j ? qq : 0.0) + 2.0 * q[i] * q[j]);
+    // The largest and smallest eigenvalues of (H, M) by the Rayleigh quotient's extremes: the roots of
+    // det(H - w M) = 0, found by bisection on the cubic (independent of LAPACK).
+    auto det = [&](double w) {
+      double A[9];
+      for (int i = 0; i < 9; ++i) A[i] = H[i] - w * r3.M[i];
+      return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+             A[2] * (A[3] * A[7] - A[4] * A[6]);
+    };
+    // det(H - w M) = -det(M) w^3 + ...: positive for w -> -inf, negative for w -> +inf. The largest
+    // root: the last sign change scanning down from a bound above every eigenvalue.
+    double hi = 0.0;
+    for (double x : H) hi += std::abs(x);
+    hi /= 0.5;  // M's smallest eigenvalue exceeds 0.5
+    double lo = hi;
+    while (det(lo) < 0.0) lo -= 1e-3 * hi;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (det(mid) < 0.0 ? hi : lo) = mid;
+    }
+    const auto ts = sim::tangent_step(r3, q.data());
+    EXPECT_NEAR(ts.omega2_max, 0.5 * (lo + hi), 1e-10 * ts.omega2_max);
+    EXPECT_NEAR(ts.dt, 2.0 / std::sqrt(0.5 * (lo + hi)), 1e-10 * ts.dt);
+  }
+}
+
+// In a run (central differences, Settings::tangent_checks): the checks fall at steps 0, every, ...,
+// the first is the closed form at q0; a step above the tangent critical step but below the linear
+// one diverges, and the message names the tangent step and the time of the last check.
+TEST(Tangent, RunsCheckTheStepAndDivergenceNamesIt) {
+  const double m = 1.0, k = 1.0, k3 = 1.0e4, q0 = 0.2;
+  const auto rm = duffing(m, k, k3);
+  const double dt0 = 2.0 / std::sqrt((k + 3.0 * k3 * q0 * q0) / m);  // 0.05764
+  sim::Settings s;
+  s.q0 = {q0};
+  s.dt = 0.02;  // below dt0, far below the linear 2 s
+  s.t_final = 20.0;
+  s.tangent_checks = 200;
+  auto st = sim::integrate(rm, {}, s, [](const sim::StepState&) {});
+  ASSERT_EQ(st.steps, 1000);
+  ASSERT_EQ(st.tangent.size(), 201u);
+  EXPECT_EQ(st.tangent[1].t, 5 * s.dt);
+  EXPECT_NEAR(st.tangent[0].dt, dt0, 1e-14 * dt0);
+  // The amplitude stays q0 to O(h^2) (undamped, conservative): the smallest step is that at q0.
+  EXPECT_NEAR(st.tangent_dt_min, dt0, 0.02 * dt0);
+  EXPECT_EQ(st.tangent_negative_checks, 0);
+  s.tangent_checks = 0;
+  EXPECT_TRUE(sim::integrate(rm, {}, s, [](const sim::StepState&) {}).tangent.empty());
+  // h = 0.1 > dt0 (but < 2 s, the linear critical step): the run diverges.
+  s.tangent_checks = 200;
+  s.dt = 0.1;
+  s.t_final = 1000.0;
+  try {
+    sim::integrate(rm, {}, s, [](const sim::StepState&) {});
+    ADD_FAILURE() << "a step 1.7 times the tangent critical step did not diverge";
+  } catch (const Error& e) {
+    const std::string w = e.what();
+    print0(PETSC_COMM_WORLD, "  divergence: %s\n", w.c_str());
+    for (const char* part : {"NaN or infinite state", "tangent critical step 2/omega_max", "at the last check (t = ",
+                             "-sim_dt is 0.1 s", "reduce it below the tangent critical step"})
+      EXPECT_NE(w.find(part), std::string::npos) << part << " missing from: " << w;
   }
 }

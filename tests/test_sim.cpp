@@ -785,7 +785,9 @@ void check_sweep(bool massless) {
                 a.max_force == b.max_force && a.max_node_force == b.max_node_force && a.max_active == b.max_active &&
                 a.spectrum == b.spectrum && a.energy_half == b.energy_half && a.energy_end == b.energy_end &&
                 a.work_end.normal == b.work_end.normal && a.work_end.friction == b.work_end.friction &&
-                a.work_end.damping == b.work_end.damping && a.work_half.friction == b.work_half.friction;
+                a.work_end.damping == b.work_end.damping && a.work_half.friction == b.work_half.friction &&
+                a.tangent_dt_min == b.tangent_dt_min && a.tangent_checks == b.tangent_checks &&
+                a.tangent_negative_checks == b.tangent_negative_checks;
       }
     MPI_Bcast(&same, 1, MPI_INT, 0, PETSC_COMM_WORLD);
     EXPECT_EQ(same, 1) << "sweep results depend on the ranks or the batch (kernel " << sim::kernel_name(kernel)
@@ -807,7 +809,7 @@ void check_sweep(bool massless) {
     sim::EnergyWork w_half, w_end;
     long cnt = 0, steps = 0;
     int act = 0;
-    sim::integrate(rm, {}, si, [&](const sim::StepState& x) {
+    const auto ist = sim::integrate(rm, {}, si, [&](const sim::StepState& x) {
       // The sweep's balance rows: E_{n+1/2} and the works of steps 0..n for n = half - 1, n_steps - 1.
       if (x.step == half - 1) e_half = x.balance_energy(), w_half = *x.work;
       if (x.step == n_steps - 1) e_end = x.balance_energy(), w_end = *x.work;
@@ -837,6 +839,13 @@ void check_sweep(bool massless) {
     EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);
     EXPECT_NEAR(R.max_force, fmax, 1e-7 * fmax + 1e-12);
     EXPECT_EQ(R.max_active, act);
+    // The tangent checks at the same states (none for the massless model).
+    EXPECT_EQ(R.tangent_checks, static_cast<long>(ist.tangent.size()));
+    EXPECT_EQ(R.tangent_negative_checks, ist.tangent_negative_checks);
+    if (std::isinf(ist.tangent_dt_min))
+      EXPECT_TRUE(std::isinf(R.tangent_dt_min) && massless);
+    else
+      EXPECT_NEAR(R.tangent_dt_min, ist.tangent_dt_min, 1e-9 * ist.tangent_dt_min);
     const double es = std::max({std::abs(e_end), std::abs(w_end.normal), std::abs(w_end.friction), w_end.damping});
     EXPECT_NEAR(R.energy_half, e_half, 1e-9 * es);
     EXPECT_NEAR(R.energy_end, e_end, 1e-9 * es);
@@ -1140,9 +1149,20 @@ TEST(Sim, SweepRetriesAFailedSpeedAtHalfTheStep) {
     // A resumed file: the sweep without retries, whose failures are owed one retry.
     const auto resumed = rounds(rm, 1, {}, none, &n_run);
     const long runs_resumed = static_cast<long>(n_run);
-    int failures = 0, ok_none = 1, ok_once = 1, ok_resumed = 1, ok_file = 1;
+    int failures = 0, ok_none = 1, ok_once = 1, ok_resumed = 1, ok_file = 1, ok_note = 1, ok_checks = 1;
     double umax = 0;
     if (root) {
+      // Tangent checks (Settings::tangent_checks, 200): a failure names the tangent critical step;
+      // a finished speed was checked at steps 0, every, 2 every, ... (every = steps / 200).
+      for (std::size_t i = 0; i < 9; ++i) {
+        if (at_h[i].status != 0) {
+          ok_note &= at_h[i].error.find("the tangent critical step was") != std::string::npos;
+          continue;
+        }
+        const long every = std::max(1L, at_h[i].steps / 200);
+        ok_checks &= at_h[i].tangent_checks == at_h[i].steps / every + 1 && at_h[i].tangent_dt_min > 0 &&
+                     at_h[i].tangent_dt_min <= sim::critical_step(rm) * (1 + 1e-12);
+      }
       ok_none = ok_once = ok_resumed = none.size() == 9 && once.size() == 9 && resumed.size() == 9;
       for (std::size_t i = 0; ok_none && i < 9; ++i) {
         failures += at_h[i].status != 0;
@@ -1165,9 +1185,14 @@ TEST(Sim, SweepRetriesAFailedSpeedAtHalfTheStep) {
       std::string why;
       ok_file = sim::read_sweep(path, &back, &why) && back.results.size() == 9;
       for (std::size_t i = 0; ok_file && i < 9; ++i)
-        ok_file &= back.results[i].dt == once[i].dt && back.results[i].halvings == once[i].halvings;
+        ok_file &= back.results[i].dt == once[i].dt && back.results[i].halvings == once[i].halvings &&
+                   back.results[i].tangent_dt_min == once[i].tangent_dt_min &&
+                   back.results[i].tangent_dt_min_time == once[i].tangent_dt_min_time &&
+                   back.results[i].tangent_checks == once[i].tangent_checks &&
+                   back.results[i].tangent_negative_checks == once[i].tangent_negative_checks;
     }
-    for (int* v : {&failures, &ok_none, &ok_once, &ok_resumed, &ok_file}) MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
+    for (int* v : {&failures, &ok_none, &ok_once, &ok_resumed, &ok_file, &ok_note, &ok_checks})
+      MPI_Bcast(v, 1, MPI_INT, 0, PETSC_COMM_WORLD);
     MPI_Bcast(&umax, 1, MPI_DOUBLE, 0, PETSC_COMM_WORLD);
     EXPECT_GE(failures, 5) << "the step should fail at most speeds (the case does not test retries)";
     EXPECT_LT(failures, 9) << "some speeds should run at the full step";
@@ -1176,7 +1201,9 @@ TEST(Sim, SweepRetriesAFailedSpeedAtHalfTheStep) {
     EXPECT_EQ(runs_once, 9 + failures) << "speed runs with one retry";
     EXPECT_EQ(ok_resumed, 1) << "a resumed file's owed retries differ from the sweep's own";
     EXPECT_EQ(runs_resumed, failures) << "a resume runs the owed retries only";
-    EXPECT_EQ(ok_file, 1) << "dt and halvings do not survive the sweep file";
+    EXPECT_EQ(ok_file, 1) << "dt, halvings and the tangent checks do not survive the sweep file";
+    EXPECT_EQ(ok_note, 1) << "a failed speed's message does not name the tangent critical step";
+    EXPECT_EQ(ok_checks, 1) << "a finished speed's tangent checks are not at steps 0, every, 2 every, ...";
     // The casing pushes the tip in by at most h_b - c0; the retried runs stay on that scale.
     EXPECT_LT(umax, 1.1 * (hb - c0)) << "a retried run is not physical";
   }

@@ -68,6 +68,18 @@ void run_case(const sim::SimOptions& so, const nlrom::StoredModel& sm, const sim
     print0(PETSC_COMM_SELF, "  nonlinear force kernel: %s, %.3g flop and %.3g MB per step (%.2f GFLOP/s, %.2f GB/s)\n",
            stats.kernel.c_str(), stats.kernel_flops, stats.kernel_bytes * 1e-6, sps * stats.kernel_flops * 1e-9,
            sps * stats.kernel_bytes * 1e-9);
+  if (!stats.tangent.empty()) {
+    const double h = so.s.dt, m = stats.tangent_dt_min;
+    print0(PETSC_COMM_SELF,
+           "  tangent critical step (K~ + dg~/dq at %zu states): smallest %.4e s at t = %.6g s (dt / smallest = %.3g), "
+           "%ld states with negative tangent stiffness\n",
+           stats.tangent.size(), m, stats.tangent_dt_min_time, h / m, stats.tangent_negative_checks);
+    if (h > 0.5 * m)
+      print0(PETSC_COMM_SELF,
+             "  WARNING: -sim_dt %.4e s was above half the smallest tangent critical step; runs of the blade have "
+             "diverged from 0.7 of it (docs/contact.md): check this one against a run at dt <= %.4e s\n",
+             h, 0.5 * m);
+  }
   if (sm.model.massless && !so.s.linear)
     print0(PETSC_COMM_SELF, "  massless boundary: %ld equilibrium iterations (%.2f per step), %ld tangents\n",
            stats.boundary_iterations,

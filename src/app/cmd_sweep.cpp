@@ -156,6 +156,22 @@ void run_sweep(MPI_Comm comm) {
     }
     print0(comm, "morse sweep: idle per rank: %s\n", per_rank.c_str());
   }
+  if (rank == 0) {  // the tangent checks: how close the speeds came to the stiffened model's step
+    const sim::SpeedResult* worst = nullptr;
+    long close = 0, checked = 0;
+    for (const auto& R : rec.results) {
+      if (R.tangent_checks == 0) continue;
+      ++checked;
+      close += R.dt > 0.5 * R.tangent_dt_min ? 1 : 0;
+      if (!worst || R.tangent_dt_min < worst->tangent_dt_min) worst = &R;
+    }
+    if (worst)
+      print0(PETSC_COMM_SELF,
+             "morse sweep: tangent critical step 2/omega_max(K~ + dg~/dq): smallest %.4e s (omega %g rad/s, t = %.6g "
+             "s); %ld of %ld speeds ran above half of their smallest (/sweep/tangent; docs/contact.md: runs have "
+             "diverged from 0.7 of it)\n",
+             worst->tangent_dt_min, worst->omega, worst->tangent_dt_min_time, close, checked);
+  }
   std::string failed;
   if (rank == 0)
     for (const auto& R : rec.results)

@@ -115,6 +115,31 @@ double critical_step(const nlrom::ReducedModel& m) {
   return 2.0 / std::sqrt(std::max(w.back(), 1e-300));
 }
 
+TangentStep tangent_step(const nlrom::ReducedModel& m, const double* q) {
+  MORSE_CHECK(!m.massless, "simulate: the tangent critical step is defined for mass-carrying models only");
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  std::vector<double> J(m.K);
+  if (q && m.g.r == r) {
+    std::vector<double> D(r * r);
+    m.g.jacobian(q, D.data());
+    for (std::size_t p = 0; p < r; ++p)
+      for (std::size_t c = 0; c < r; ++c) J[p * r + c] += 0.5 * (D[p * r + c] + D[c * r + p]);
+  }
+  TangentStep ts;
+  for (double x : J)
+    if (!std::isfinite(x)) {  // a state so large that the tangent overflows: no stable step
+      ts.dt = 0.0;
+      ts.omega2_max = std::numeric_limits<double>::infinity();
+      return ts;
+    }
+  const auto w = eigen::dense_eigenvalues(static_cast<int>(r), J, m.M, nullptr);
+  ts.omega2_min = w.front();
+  ts.omega2_max = w.back();
+  for (double x : w) ts.negative += x < 0.0 ? 1 : 0;
+  if (ts.omega2_max > 0.0) ts.dt = 2.0 / std::sqrt(ts.omega2_max);
+  return ts;
+}
+
 namespace {
 // Lexicographic numbering of sorted index tuples: the triples i <= j <= k start at off2[i r + j]
 // (k = j.. r-1 follow), the quadruples i <= j <= k <= l at off3[(i r + j) r + k] (l = k.. r-1).
@@ -483,11 +508,36 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
   ss.nonlinear = kernel != nullptr;
   if (nc) ss.contact_normal = c_lam.data(), ss.contact_friction = c_fric.data(), ss.gap = c_gap.data();
   callback(ss);
+  // Tangent checks (Settings::tangent_checks) at steps 0, every, 2 every, ...
+  const bool check_tangent = kernel && !m.massless && s.tangent_checks > 0;
+  const long check_every = check_tangent ? std::max(1L, n_steps / s.tangent_checks) : 0;
+  // What a divergence message says about the step.
+  auto divergence_note = [&]() -> std::string {
+    if (!kernel || m.massless) return ": reduce -sim_dt";
+    std::string note;
+    if (!st->tangent.empty()) {
+      const auto& last = st->tangent.back();
+      note =
+          cat(". The tangent critical step 2/omega_max(K~ + dg~/dq, M~) was ", last.dt,
+              " s at the last check (t = ", last.t, " s, ", last.negative, " negative tangent eigenvalues), at least ",
+              st->tangent_dt_min, " s over the ", st->tangent.size(), " checks (t = ", st->tangent_dt_min_time, " s)");
+    } else if (!check_tangent) {
+      note = " (no tangent checks: -sim_tangent_checks 0)";
+    }
+    return cat(note, ". -sim_dt is ", h,
+               " s: reduce it below the tangent critical step (the nonlinear model stiffens with the amplitude)");
+  };
   const auto t0 = std::chrono::steady_clock::now();
   // Step n: from (q_{n-1}, q_n) to q_{n+1}; v_n is known after it, so the callback for state n
   // runs one step late (the last state's velocity uses one extra step).
   for (long n = 0; n <= n_steps; ++n) {
     const double t = static_cast<double>(n) * h;
+    if (check_tangent && n % check_every == 0) {
+      const auto ts = tangent_step(m, q.data());
+      st->tangent.push_back({t, ts.dt, ts.negative});
+      if (ts.dt < st->tangent_dt_min) st->tangent_dt_min = ts.dt, st->tangent_dt_min_time = t;
+      if (ts.negative > 0) ++st->tangent_negative_checks;
+    }
     for (std::size_t i = 0; i < r; ++i) {
       double x = 0.0;
       const double* p1 = &P1[i * r];
@@ -508,7 +558,7 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
     for (std::size_t i = 0; i < r; ++i) finite = finite && std::isfinite(qp[i]);
     if (!finite)
       throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
-                      ". The nonlinear model stiffened beyond the critical step: reduce -sim_dt"));
+                      divergence_note()));
     if (s.energy_balance) {
       // The contact forces of step n: the equilibrium's of state n (massless), or the correction's.
       const double* lam = !nc ? nullptr : corr.forces_of_state ? c_lam.data() : corr.normal();

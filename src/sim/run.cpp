@@ -168,6 +168,12 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
                              "Track the energy balance (works of loads, contact, friction, damping; theory 10.6); "
                              "false saves up to half the time of a linear step",
                              "", o->energy_balance, &o->energy_balance, nullptr));
+  PetscInt checks = static_cast<PetscInt>(o->s.tangent_checks);
+  PetscCall(MorseOptionsInt("-sim_tangent_checks",
+                            "central, nonlinear: the critical step of the tangent model K~ + dg~/dq at the initial "
+                            "and at this many evenly spaced states (0: none), printed and written to /sim/tangent",
+                            "", checks, &checks, nullptr));
+  o->s.tangent_checks = static_cast<long>(checks);
   PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
   buf[0] = 0;
   PetscCall(MorseOptionsString("-sim_snapshots",
@@ -277,6 +283,11 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsReal("-sweep_omega_step", "Speed step [rad/s]", "", o->omega_step, &o->omega_step, nullptr));
   PetscCall(MorseOptionsReal("-sim_dt", "Time step [s] (at most the critical step)", "", o->dt, &o->dt, nullptr));
   PetscCall(MorseOptionsBool("-sim_linear", "Linear reduced model (g~ = 0)", "", o->linear, &o->linear, nullptr));
+  PetscCall(MorseOptionsInt("-sim_tangent_checks",
+                            "nonlinear: the critical step of the tangent model K~ + dg~/dq at the initial and at "
+                            "this many evenly spaced states of each speed (0: none); its smallest per speed is "
+                            "written to /sweep/tangent",
+                            "", o->tangent_checks, &o->tangent_checks, nullptr));
   PetscCall(MorseOptionsBool("-sim_energy_balance",
                              "Track the energy balance (works of loads, contact, friction, damping; theory 10.6); "
                              "false saves up to half the time of a linear step",
@@ -473,6 +484,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.base.dt = dt;
   s.base.linear = linear;
   s.base.energy_balance = energy_balance;
+  s.base.tangent_checks = static_cast<long>(tangent_checks);
   contact.apply(sm, &s.base.contact);  // the casing (check())
   s.revolutions = contact.revolutions > 0 ? contact.revolutions : 200.0;
   s.spectrum_fmax = fmax;

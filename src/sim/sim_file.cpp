@@ -123,6 +123,17 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
     out.attribute_int("/sim", "newton_floor_steps", stats.newton_floor_steps);
     out.attribute("/sim", "newton_floor_ratio", stats.newton_floor_ratio);
   }
+  if (!stats.tangent.empty()) {
+    std::vector<double> rows;
+    for (const auto& x : stats.tangent) rows.insert(rows.end(), {x.t, x.dt, static_cast<double>(x.negative)});
+    out.write("/sim/tangent", rows, {static_cast<hsize_t>(stats.tangent.size()), 3});
+    out.attribute("/sim/tangent", "description",
+                  "[check][t, dt, negative]: the critical step of central differences for the model linearized at "
+                  "q(t), 2 / omega_max of (K~ + sym dg~/dq, M~) [s], and its number of negative eigenvalues");
+    out.attribute("/sim", "tangent_dt_min", stats.tangent_dt_min);
+    out.attribute("/sim", "tangent_dt_min_time", stats.tangent_dt_min_time);
+    out.attribute_int("/sim", "tangent_negative_checks", stats.tangent_negative_checks);
+  }
   if (stats.error_estimated) {
     out.attribute("/sim", "error_local_max", stats.error_local_max);
     out.attribute("/sim", "error_local_max_time", stats.error_time);

@@ -184,6 +184,8 @@ struct Lane {
   std::unique_ptr<detail::EnergyLedger> ledger;
   std::vector<double> lam_prev, fric_prev;  // massless: the forces of state n (its equilibrium's)
   long n = 0, n_steps = 0, half = 0, sample_every = 1, in_block = 0;
+  long check_every = 0;  // tangent checks (Settings::tangent_checks): 0 none
+  double last_tangent_dt = 0.0, last_tangent_t = 0.0;
   double sum = 0.0, sum2 = 0.0, block = 0.0;
   long count = 0;
   std::vector<double> samples;
@@ -290,6 +292,11 @@ class Batch {
     } else {  // at rest: q_0 = q_{-1} = 0
       for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
     }
+    if (!s_.base.linear && !m_.massless && s_.base.tangent_checks > 0) {  // at steps 0, every, 2 every, ...
+      ln.check_every = std::max(1L, ln.n_steps / s_.base.tangent_checks);
+      for (std::size_t j = 0; j < r_; ++j) col_[j] = Q_[j * L_ + slot];
+      check_tangent(ln, 0.0);
+    }
   }
 
   // One step of every busy lane; finished (or failed) lanes are appended to *done and freed.
@@ -334,12 +341,15 @@ class Batch {
         if (ln.contact) ln.contact->correct(col_.data(), colm_.data(), h, t);
         if (ln.boundary) ln.boundary->solve(col_.data(), colm_.data(), h, t, nullptr);
         for (std::size_t j = 0; j < r_ && !fail; ++j) fail = !std::isfinite(col_[j]);
-        if (fail) ln.res.error = cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h);
+        if (fail)
+          ln.res.error =
+              cat("NaN or infinite state at t = ", t, " (step ", n1, "); last finite time ", t - h, tangent_note(ln));
         u = monitored();
         if (!fail && s_.divergence_limit > 0 && std::abs(u) > s_.divergence_limit) {
           fail = true;
-          ln.res.error = cat("diverged: the monitored displacement is ", u, " m at t = ", t, " (step ", n1,
-                             "), above the limit ", s_.divergence_limit, " m (-sweep_divergence_limit)");
+          ln.res.error =
+              cat("diverged: the monitored displacement is ", u, " m at t = ", t, " (step ", n1, "), above the limit ",
+                  s_.divergence_limit, " m (-sweep_divergence_limit)", tangent_note(ln));
         }
       } catch (const std::exception& e) {
         fail = true;
@@ -349,6 +359,7 @@ class Batch {
         for (std::size_t j = 0; j < r_; ++j) Qp_[j * L_ + slot] = col_[j];
         if (s_.base.energy_balance) balance(ln, slot, n1);
         record(ln, n1, t, u);
+        if (ln.check_every && n1 % ln.check_every == 0) check_tangent(ln, t);  // col_: the state n1
       }
       ln.n = n1;
       if (fail || n1 == ln.n_steps) {
@@ -423,6 +434,21 @@ class Batch {
       R.max_active = std::max(R.max_active, ln.active());
     }
   }
+  // tangent_step() at the state in col_, time t.
+  void check_tangent(Lane& ln, double t) {
+    const auto ts = tangent_step(m_, col_.data());
+    SpeedResult& R = ln.res;
+    ++R.tangent_checks;
+    if (ts.dt < R.tangent_dt_min) R.tangent_dt_min = ts.dt, R.tangent_dt_min_time = t;
+    if (ts.negative > 0) ++R.tangent_negative_checks;
+    ln.last_tangent_dt = ts.dt, ln.last_tangent_t = t;
+  }
+  std::string tangent_note(const Lane& ln) const {
+    if (ln.res.tangent_checks == 0) return {};
+    return cat("; the tangent critical step was ", ln.last_tangent_dt, " s at the last check (t = ", ln.last_tangent_t,
+               " s), at least ", ln.res.tangent_dt_min, " s over ", ln.res.tangent_checks,
+               " checks (t = ", ln.res.tangent_dt_min_time, " s), against the step ", s_.base.dt, " s");
+  }
   void finish(Lane& ln, bool fail) {
     SpeedResult& R = ln.res;
     R.status = fail ? 1 : 0;
@@ -460,6 +486,8 @@ void pack(morse::detail::Packer* pk, const SpeedResult& R) {
   pk->put(R.dt), pk->put(R.halvings);
   pk->put(R.t_final), pk->put(R.rms), pk->put(R.mean), pk->put(R.max_displacement), pk->put(R.time_of_max);
   pk->put(R.max_force), pk->put(R.time_of_max_force), pk->put(R.max_node_force), pk->put(R.max_active);
+  pk->put(R.tangent_dt_min), pk->put(R.tangent_dt_min_time), pk->put(R.tangent_checks);
+  pk->put(R.tangent_negative_checks);
   pk->put(R.seconds), pk->put_vec(R.spectrum);
   pk->put(R.energy_half), pk->put(R.energy_end);
   for (const auto* w : {&R.work_half, &R.work_end})
@@ -475,6 +503,8 @@ SpeedResult unpack(morse::detail::Unpacker* up) {
   R.t_final = up->get<double>(), R.rms = up->get<double>(), R.mean = up->get<double>();
   R.max_displacement = up->get<double>(), R.time_of_max = up->get<double>(), R.max_force = up->get<double>();
   R.time_of_max_force = up->get<double>(), R.max_node_force = up->get<double>(), R.max_active = up->get<int>();
+  R.tangent_dt_min = up->get<double>(), R.tangent_dt_min_time = up->get<double>();
+  R.tangent_checks = up->get<long>(), R.tangent_negative_checks = up->get<long>();
   R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>();
   R.energy_half = up->get<double>(), R.energy_end = up->get<double>();
   for (auto* w : {&R.work_half, &R.work_end}) {

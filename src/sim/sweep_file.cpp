@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -20,6 +21,16 @@ template <class F>
 std::vector<double> column(const std::vector<SpeedResult>& rs, F f) {
   std::vector<double> v;
   for (const auto& r : rs) v.push_back(f(r));
+  return v;
+}
+// A [speed][N] table: the N values f(r) returns for each speed, row by row.
+template <std::size_t N, class F>
+std::vector<double> table(const std::vector<SpeedResult>& rs, F f) {
+  std::vector<double> v;
+  for (const auto& r : rs) {
+    const std::array<double, N> row = f(r);
+    v.insert(v.end(), row.begin(), row.end());
+  }
   return v;
 }
 template <class F>
@@ -63,6 +74,18 @@ void write_sweep(const std::string& path, SweepRecord rec) {
   out.write("/sweep/max_node_force", column(rs, [](const SpeedResult& r) { return r.max_node_force; }));
   out.write("/sweep/max_active", icolumn(rs, [](const SpeedResult& r) { return r.max_active; }));
   out.write("/sweep/seconds", column(rs, [](const SpeedResult& r) { return r.seconds; }));
+  out.write("/sweep/tangent",
+            table<4>(rs,
+                     [](const SpeedResult& r) {
+                       return std::array<double, 4>{r.tangent_dt_min, r.tangent_dt_min_time,
+                                                    static_cast<double>(r.tangent_checks),
+                                                    static_cast<double>(r.tangent_negative_checks)};
+                     }),
+            {static_cast<hsize_t>(rs.size()), 4});
+  out.attribute("/sweep/tangent", "description",
+                "[speed][4] the smallest tangent critical step 2 / omega_max(K~ + dg~/dq, M~) over the checked states "
+                "[s] (inf: none checked), its time [s], the number of checks and of checked states with negative "
+                "tangent stiffness (-sim_tangent_checks; theory 9)");
   std::vector<double> spec;
   for (const auto& r : rs) {
     MORSE_CHECK(r.spectrum.size() == rec.frequencies.size(), "sweep: speed ", r.index, " has ", r.spectrum.size(),
@@ -71,12 +94,14 @@ void write_sweep(const std::string& path, SweepRecord rec) {
   }
   out.write("/sweep/spectrum", spec, {static_cast<hsize_t>(rs.size()), static_cast<hsize_t>(rec.frequencies.size())});
   out.attribute("/sweep/spectrum", "description", "[speed][frequency] amplitude of the monitored displacement [m]");
-  std::vector<double> eb;
-  for (const auto& r : rs)
-    for (double x : {r.energy_half, r.work_half.external, r.work_half.normal, r.work_half.friction, r.work_half.damping,
-                     r.energy_end, r.work_end.external, r.work_end.normal, r.work_end.friction, r.work_end.damping})
-      eb.push_back(x);
-  out.write("/sweep/energy_balance", eb, {static_cast<hsize_t>(rs.size()), 10});
+  out.write("/sweep/energy_balance",
+            table<10>(rs,
+                      [](const SpeedResult& r) {
+                        const auto &h = r.work_half, &e = r.work_end;
+                        return std::array<double, 10>{r.energy_half, h.external, h.normal, h.friction, h.damping,
+                                                      r.energy_end,  e.external, e.normal, e.friction, e.damping};
+                      }),
+            {static_cast<hsize_t>(rs.size()), 10});
   out.attribute("/sweep/energy_balance", "description",
                 "[speed][10] energy balance from rest (theory 10.6), at t_final / 2 then at t_final: discrete energy, "
                 "work of the loads, of the normal contact forces, of friction, damping dissipation [J]; energy = "
@@ -141,8 +166,9 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
             io::read_attribute(path, "/sweep", "n_speeds", &n_speeds, error) &&
             io::read_attribute(path, "/sweep", "n_done", &n_done, error);
   // Continuation data: in the files of a version that had it (optional: older files resume).
-  std::vector<double> cont, fs;
+  std::vector<double> cont, fs, tan;
   if (ok && io::has_object(path, "/sweep/continuation")) ok = dbl("continuation", &cont);
+  if (ok && io::has_object(path, "/sweep/tangent")) ok = dbl("tangent", &tan);
   if (ok && io::has_object(path, "/sweep/final_state")) ok = dbl("final_state", &fs);
   if (!ok) {
     *error = cat(path, " is not a complete morse sweep file: ", *error);
@@ -165,6 +191,7 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     const hsize_t cols = name == "spectrum"         ? nf
                          : name == "energy_balance" ? 10
                          : name == "continuation"   ? 3
+                         : name == "tangent"        ? 4
                          : name == "final_state"    ? (d.size() == 2 && d[1] % 2 == 1 && d[1] >= 3 ? d[1] : 0)
                                                     : 0;
     const std::vector<hsize_t> want = cols ? std::vector<hsize_t>{n, cols} : std::vector<hsize_t>{n};
@@ -215,6 +242,11 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     r.energy_half = e[0], r.work_half = {e[1], e[2], e[3], e[4]};
     r.energy_end = e[5], r.work_end = {e[6], e[7], e[8], e[9]};
     if (r.status != 0) r.error = msg[r.index];
+    if (!tan.empty()) {
+      const double* x = &tan[4 * i];
+      r.tangent_dt_min = x[0], r.tangent_dt_min_time = x[1];
+      r.tangent_checks = static_cast<long>(x[2]), r.tangent_negative_checks = static_cast<long>(x[3]);
+    }
     if (!cont.empty()) {
       r.from = static_cast<long>(cont[3 * i]), r.phase = cont[3 * i + 1], r.energy_start = cont[3 * i + 2];
       if (r.from < -1 || static_cast<double>(r.from) >= n_speeds)

@@ -84,6 +84,7 @@ struct SweepOptions {
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, single = PETSC_FALSE;
   SweepKernel kernel = SweepKernel::Auto;  ///< -sweep_kernel
   PetscBool energy_balance = PETSC_TRUE;   ///< -sim_energy_balance
+  PetscInt tangent_checks = 200;           ///< -sim_tangent_checks (per speed)
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
   int rotation = 1;

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -125,6 +126,11 @@ struct Settings {
   /// The energy balance (EnergyWork, central differences): about k r multiply-adds per step for C~
   /// of rank k, up to 2 times the time of a linear step at r = 54 with every mode damped.
   bool energy_balance = true;
+  /// Nonlinear central runs of mass-carrying models: tangent_step() at the initial state and at
+  /// this many evenly spaced states more (0: none), so that a run reports how close its step came to
+  /// the critical step of the stiffened model, and a divergence names it. One check costs about
+  /// 3 n_cubic(r) r multiply-adds and an r x r eigen solve (~20 ms at r = 79). -sim_tangent_checks.
+  long tangent_checks = 200;
   std::vector<double> q0, v0;  ///< initial state (empty: zero)
 };
 
@@ -192,8 +198,17 @@ struct Stats {
   /// an oscillator's phase drift), and the largest |q|_M of the run.
   bool error_estimated = false;
   double error_local_max = 0.0, error_time = 0.0, error_local_rms = 0.0, error_sum = 0.0, error_q_max = 0.0;
-  long boundary_iterations = 0;  ///< massless boundary: equilibrium iterations (one per step if linear)
-  long tangent_updates = 0;      ///< massless boundary: tangent compliances computed
+  /// Settings::tangent_checks: each check's time, tangent critical step and number of negative
+  /// tangent eigenvalues; the smallest step and its time.
+  struct TangentSample {
+    double t = 0.0, dt = 0.0;
+    int negative = 0;
+  };
+  std::vector<TangentSample> tangent;
+  double tangent_dt_min = std::numeric_limits<double>::infinity(), tangent_dt_min_time = 0.0;
+  long tangent_negative_checks = 0;  ///< checks with at least one negative tangent eigenvalue
+  long boundary_iterations = 0;      ///< massless boundary: equilibrium iterations (one per step if linear)
+  long tangent_updates = 0;          ///< massless boundary: tangent compliances computed
   double seconds = 0.0;
   double critical_dt = 0.0;
 };
@@ -209,6 +224,20 @@ double energy(const nlrom::ReducedModel& m, const double* q, const double* v);
 /// (undamped bound), omega_max^2 the largest eigenvalue of (K~, M~); for a massless boundary
 /// (m.massless), that of the internal part with the boundary held (nlrom::massless_critical_step).
 double critical_step(const nlrom::ReducedModel& m);
+/// Central differences on the model linearized at state q: dt = 2 / omega_max, omega_max^2 the
+/// largest eigenvalue of (K~ + J_s(q), M~), J_s the symmetric part of dg~/dq (dg~/dq itself for
+/// forces with a potential: exact tensors, STEP to its identification error). `negative` counts
+/// the negative eigenvalues: directions of negative tangent stiffness, in which the state departs
+/// exponentially whatever the step. q null or a model without nonlinear force: the linear model
+/// (critical_step(m)). A state whose tangent overflows (not finite) gives dt = 0. Mass-carrying
+/// models only (throws on a massless one).
+struct TangentStep {
+  double dt = std::numeric_limits<double>::infinity();  ///< infinity if no eigenvalue is positive
+  double omega2_max = 0.0, omega2_min = 0.0;
+  int negative = 0;
+};
+TangentStep tangent_step(const nlrom::ReducedModel& m, const double* q);
+
 /// The critical step of a run with contact c (null or no nodes: none). Mass-carrying models:
 /// critical_step(m). Massless: the dynamic modes with the normal directions of the contact nodes
 /// held (a sliding contact holds no other; nlrom::massless_critical_step), or with every static
@@ -374,6 +403,11 @@ struct SpeedResult {
   double max_force = 0.0, time_of_max_force = 0.0;   ///< max over time of the total normal force [N]
   double max_node_force = 0.0;                       ///< max over time and nodes of one normal force
   int max_active = 0;                                ///< most nodes in contact at once
+  /// Settings::tangent_checks (nonlinear, mass-carrying): the smallest tangent critical step
+  /// (tangent_step()) over the checked states and its time, the number of checks and of checked
+  /// states with negative tangent stiffness (infinity, 0, 0, 0 without checks).
+  double tangent_dt_min = std::numeric_limits<double>::infinity(), tangent_dt_min_time = 0.0;
+  long tangent_checks = 0, tangent_negative_checks = 0;
   double seconds = 0.0;          ///< wall time on its rank (shared with the other lanes of its batch)
   std::vector<double> spectrum;  ///< amplitude at SweepSettings::frequencies(), same window, mean removed
   /// The energy balance (EnergyWork) from rest: the discrete energy and the works at the first
