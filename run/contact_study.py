@@ -554,11 +554,15 @@ def continuation_stage(st, args, mesh):
             list(ex.map(one, ["up", "down"]))
         if len(files) < 2:
             continue
-        res = {}
+        res, tangent = {}, {}
         for direction, path in files.items():
             with h5py.File(path, "r") as f:
                 w, rms = np.abs(f["/sweep/omega"][:]), f["/sweep/rms"][:]
                 frm = f["/sweep/continuation"][:, 0]
+                if "/sweep/tangent" in f:  # the smallest tangent critical step of each speed (-sim_tangent_checks)
+                    hT = f["/sweep/tangent"][:, 0]
+                    tangent[direction] = {"min": float(hT.min()), "max": float(hT.max()),
+                                          "dt_over_min": float(f["/sweep/dt"][:].max() / hT.min())}
             o = np.argsort(w)
             res[direction] = (w[o], rms[o], frm[o])
         w, up, down = res["up"][0], res["up"][1], res["down"][1]
@@ -582,7 +586,10 @@ def continuation_stage(st, args, mesh):
         rec = {"files": files, "range": args.cont_range, "revs": args.cont_revs, "bands": bands,
                "jumps_up": jumps(up), "jumps_down": jumps(down), "rms_max_up": float(up.max()),
                "rms_max_down": float(down.max()), "speeds_differing": int((ratio > 1.2).sum()),
-               "speeds": int(w.size)}
+               "speeds": int(w.size), "tangent_dt_min": tangent}
+        for direction, tg in tangent.items():
+            print("  %s %s: smallest tangent critical step over the speeds %.3g-%.3g s (dt / smallest up to %.2f)"
+                  % (tag, direction, tg["min"], tg["max"], tg["dt_over_min"]), flush=True)
         print("  %s: %d of %d speeds differ by > 20 %% between up and down; bands %s" %
               (tag, rec["speeds_differing"], w.size, ["%g-%g (%s higher)" % tuple(b) for b in bands]), flush=True)
         print("  %s: jumps up %s; down %s" % (tag, ["%g->%g x%.2f" % tuple(j) for j in rec["jumps_up"]],

@@ -1881,6 +1881,11 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
                {"-sweep_retries", bad}});
     EXPECT_NE(so.error.find(cat("-sweep_retries must be in 0..20 (got ", bad)), std::string::npos) << so.error;
   }
+  so = read({{"-sweep_omega_min", "800"},
+             {"-sweep_omega_max", "900"},
+             {"-sweep_omega_step", "100"},
+             {"-sim_tangent_checks", "-1"}});
+  EXPECT_EQ(so.error, "-sim_tangent_checks must be >= 0 (got -1; 0: no tangent checks)");
   refused({{"-sweep_omega_min", "800"},
            {"-sweep_omega_max", "900"},
            {"-sweep_omega_step", "100"},
@@ -1991,6 +1996,10 @@ TEST(SimRun, SimOptionsRefuseNonFiniteValuesAndBadCases) {
   const auto ok = read({{"-sim_cases", "a,b"}, {"-sim_q0", "1,2"}, {"-sim_dt", "1e-6"}});
   EXPECT_EQ(ok.error, "");
   EXPECT_EQ(ok.s.q0, (std::vector<double>{1, 2}));
+  EXPECT_EQ(ok.s.tangent_checks, 200);
+  EXPECT_EQ(read({{"-sim_tangent_checks", "0"}}).s.tangent_checks, 0);
+  EXPECT_EQ(read({{"-sim_tangent_checks", "-3"}}).error,
+            "-sim_tangent_checks must be >= 0 (got -3; 0: no tangent checks)");
   refused({{"-sim_omega", "inf"}}, "-sim_omega inf: expected a finite number");
   refused({{"-contact_plane_normal", "0,0,inf"}},
           "-contact_plane_normal 0,0,inf: item 'inf': expected a finite number");

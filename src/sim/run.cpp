@@ -203,6 +203,8 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
   auto bad = [&](const std::string& e) {
     if (o->error.empty()) o->error = e;
   };
+  if (o->s.tangent_checks < 0)
+    bad(cat("-sim_tangent_checks must be >= 0 (got ", o->s.tangent_checks, "; 0: no tangent checks)"));
   // Every case writes <out stem>_<case><ext>: its name must keep the file beside -out, once.
   std::set<std::string> seen;
   for (const auto& c : o->cases) {
@@ -372,6 +374,8 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                                 {"-sweep_divergence_limit", o->divergence_limit},
                                 {"-sweep_spectrum_fmax", o->fmax}})
     if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (o->tangent_checks < 0)
+    bad(cat("-sim_tangent_checks must be >= 0 (got ", o->tangent_checks, "; 0: no tangent checks)"));
   if (!(retries >= 0 && retries <= 20))
     bad(cat("-sweep_retries must be in 0..20 (got ", retries, "; each retry halves the step of a failed speed)"));
   else
