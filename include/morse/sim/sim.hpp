@@ -129,7 +129,7 @@ struct Settings {
   /// Nonlinear central runs of mass-carrying models: tangent_step() at the initial state and at
   /// this many evenly spaced states more (0: none), so that a run reports how close its step came to
   /// the critical step of the stiffened model, and a divergence names it. One check costs about
-  /// 3 n_cubic(r) r multiply-adds and an r x r eigen solve (~20 ms at r = 79). -sim_tangent_checks.
+  /// 3 n_cubic(r) r multiply-adds and an r x r eigen solve (~5 ms at r = 79). -sim_tangent_checks.
   long tangent_checks = 200;
   std::vector<double> q0, v0;  ///< initial state (empty: zero)
 };
