@@ -10,6 +10,8 @@
 //   - lane: CubicKernel::apply once per lane (B = 1 only: it is B times that),
 //   - batch: CubicKernelBatch::apply over ceil(B / 4) groups of 4 lanes (B = 1: one group, 1 lane used),
 //   - float: the same with float coefficients.
+// batch and float run the widest build the processor has (as the sweep does; "isa" in the JSON);
+// on an AVX-512 processor, batch-avx2 and float-avx2 also time the AVX2 build.
 // Each figure is the median of --reps timings of about --seconds each, the kernels of one r timed
 // in turn in every repetition (the machine's drift hits them alike). Prints one JSON object:
 // {"r": [{"r", "coefficients", "bytes_double", "flops_per_lane", "runs": [{"kernel", "lanes",
@@ -160,9 +162,14 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < r; ++i) P3[i * r + i] = 1.0;
     const morse::sim::CubicKernel lane(g, P3, morse::sim::KernelLayout::Potential);
     const morse::sim::CubicKernelBatch batch(lane), single(lane, true);
+    morse::sim::CubicKernelBatch batch2(lane), single2(lane, true);
+    const bool both = batch.isa() == morse::sim::KernelIsa::Avx512;
+    if (both) batch2.set_isa(morse::sim::KernelIsa::Avx2), single2.set_isa(morse::sim::KernelIsa::Avx2);
     const double coefficients = batch.bytes() / 8.0;
-    std::printf("%s{\"r\": %zu, \"coefficients\": %.0f, \"bytes_double\": %.0f, \"flops_per_lane\": %.0f, \"runs\": [",
-                ir ? ", " : "", r, coefficients, batch.bytes(), batch.flops());
+    std::printf(
+        "%s{\"r\": %zu, \"coefficients\": %.0f, \"bytes_double\": %.0f, \"flops_per_lane\": %.0f, \"isa\": \"%s\", "
+        "\"runs\": [",
+        ir ? ", " : "", r, coefficients, batch.bytes(), batch.flops(), morse::sim::kernel_isa_name(batch.isa()));
     bool first = true;
     auto emit = [&](const char* kernel, std::size_t B, double passes, double lanes_per_pass, double bytes,
                     const std::vector<double>& samples) {
@@ -174,7 +181,7 @@ int main(int argc, char** argv) {
       for (std::size_t k = 0; k < samples.size(); ++k) std::printf("%s%.6g", k ? ", " : "", samples[k]);
       std::printf("]}");
       first = false;
-      std::fprintf(stderr, "  r = %zu, %-9s B = %2zu: %9.1f lane-steps/s, %6.2f GFLOP/s, %6.2f GB/s\n", r, kernel, B,
+      std::fprintf(stderr, "  r = %zu, %-10s B = %2zu: %9.1f lane-steps/s, %6.2f GFLOP/s, %6.2f GB/s\n", r, kernel, B,
                    ls, ls * batch.flops() * 1e-9, passes * bytes * 1e-9);
     };
     // Every kernel and number of lanes of this r, timed interleaved.
@@ -202,6 +209,12 @@ int main(int argc, char** argv) {
       fs.push_back([&, ng]() { batch.apply(Lmax, groups.data(), ng, Q.data(), Y.data()); });
       cases.push_back({"float", B, static_cast<double>(B), single.bytes()});
       fs.push_back([&, ng]() { single.apply(Lmax, groups.data(), ng, Q.data(), Y.data()); });
+      if (both) {
+        cases.push_back({"batch-avx2", B, static_cast<double>(B), batch2.bytes()});
+        fs.push_back([&, ng]() { batch2.apply(Lmax, groups.data(), ng, Q.data(), Y.data()); });
+        cases.push_back({"float-avx2", B, static_cast<double>(B), single2.bytes()});
+        fs.push_back([&, ng]() { single2.apply(Lmax, groups.data(), ng, Q.data(), Y.data()); });
+      }
     }
     std::vector<std::vector<double>> samples;
     const auto med = rates(fs, seconds, reps, &samples);

@@ -445,6 +445,96 @@ TEST(Sim, BatchedPotentialKernelMatchesReferenceAndIsBitwisePerLane) {
   EXPECT_THROW(sim::CubicKernelBatch(sim::CubicKernel(bad, P3, sim::KernelLayout::Auto)), Error);
 }
 
+// The batched potential kernel's builds for each instruction set (AVX-512: 4 groups in two 8-lane
+// registers, 6 rows at a time, then pairs of groups in one register 12 rows at a time; AVX2: pairs
+// of groups 3 rows at a time; a last single group 4 rows at a time in both), in double and in float
+// coefficients: for 20 lanes in 5 groups (every pass shape), for subsets and orders of the groups
+// that put each lane in another pass shape, every lane's bits equal those of the single-speed
+// kernel (CubicKernel, `morse simulate`) on every build that fuses multiply-adds, and the float
+// builds agree bitwise. The baseline build (products and sums rounded apart) is checked against
+// the reference loops and for its own lane-by-lane bits. A build the processor lacks is refused.
+TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
+  const auto [exact, step] = box_forces_r30();
+  const std::size_t r = 30, L = 24, lanes = 20;  // groups 0..4 used; group 5 must stay untouched
+  std::vector<double> P3(r * r);
+  for (std::size_t i = 0; i < r * r; ++i) P3[i] = std::cos(0.3 + 0.41 * static_cast<double>(i));
+  std::vector<double> Q(r * L, 0.0);
+  for (std::size_t j = 0; j < r; ++j)
+    for (std::size_t l = 0; l < lanes; ++l)
+      Q[j * L + l] = 1e-3 * std::sin(0.7 * static_cast<double>(j) + 0.23 * static_cast<double>(l) + 0.1);
+  const std::vector<std::vector<std::size_t>> passes = {
+      {0, 1, 2, 3, 4}, {4, 2, 0, 3, 1}, {0, 1, 2, 3}, {1, 3}, {2, 4, 0}, {4}, {3, 1, 0, 2}};
+  // Y of the listed groups, each pass in turn (a group in several passes: its latest).
+  auto run = [&](const sim::CubicKernelBatch& b, const std::vector<std::size_t>& groups) {
+    std::vector<double> Y(r * L, 7.0);
+    b.apply(L, groups.data(), groups.size(), Q.data(), Y.data());
+    return Y;
+  };
+  const bool fused = sim::kernel_isa_supported(sim::KernelIsa::Avx2);
+  if (!sim::kernel_isa_supported(sim::KernelIsa::Avx512))
+    print0(PETSC_COMM_WORLD, "  NOTICE: this processor has no AVX-512: that build of the kernel is not run here\n");
+  for (const nlrom::CubicForce* force : {&exact, &step}) {
+    const sim::CubicKernel pot(*force, P3, sim::KernelLayout::Potential);
+    std::vector<double> lane(r * lanes), q(r), y(r);  // the single-speed kernel, lane by lane
+    for (std::size_t l = 0; l < lanes; ++l) {
+      for (std::size_t j = 0; j < r; ++j) q[j] = Q[j * L + l];
+      pot.apply(q.data(), y.data());
+      for (std::size_t j = 0; j < r; ++j) lane[j * lanes + l] = y[j];
+    }
+    std::vector<double> float_ref;  // the first fused build's float result (all 5 groups)
+    for (sim::KernelIsa isa : {sim::KernelIsa::Avx512, sim::KernelIsa::Avx2, sim::KernelIsa::Baseline}) {
+      sim::CubicKernelBatch b(pot), f(pot, true);
+      if (!sim::kernel_isa_supported(isa)) {
+        EXPECT_THROW(b.set_isa(isa), Error) << sim::kernel_isa_name(isa);
+        continue;
+      }
+      b.set_isa(isa), f.set_isa(isa);
+      EXPECT_EQ(b.isa(), isa);
+      const bool fuses = isa != sim::KernelIsa::Baseline;
+      const auto Yall = run(b, passes[0]);
+      double worst = 0.0, scale = 0.0;
+      bool same_lane = true, same_pass = true, untouched = true;
+      for (std::size_t j = 0; j < r; ++j) {
+        for (std::size_t l = 0; l < lanes; ++l) {
+          const double y_ref = lane[j * lanes + l];
+          same_lane = same_lane && Yall[j * L + l] == y_ref;
+          worst = std::max(worst, std::abs(Yall[j * L + l] - y_ref)), scale = std::max(scale, std::abs(y_ref));
+        }
+        for (std::size_t l = lanes; l < L; ++l) untouched = untouched && Yall[j * L + l] == 7.0;
+      }
+      for (const auto& groups : passes) {
+        const auto Y = run(b, groups);
+        for (std::size_t g : groups)
+          for (std::size_t j = 0; j < r; ++j)
+            for (std::size_t l = 4 * g; l < 4 * g + 4; ++l) same_pass = same_pass && Y[j * L + l] == Yall[j * L + l];
+      }
+      EXPECT_TRUE(untouched) << sim::kernel_isa_name(isa) << ": a group not listed was written";
+      EXPECT_TRUE(same_pass) << sim::kernel_isa_name(isa) << ": a lane's bits depend on the groups beside it";
+      if (fuses && fused)
+        EXPECT_TRUE(same_lane) << sim::kernel_isa_name(isa) << ": not the single-speed kernel's bits";
+      else  // products and sums rounded apart: the same sums, rounded otherwise
+        EXPECT_LT(worst, 1e-12 * scale) << sim::kernel_isa_name(isa);
+      // Float coefficients: the same conversion (exact) and the same fused operations on every build.
+      const auto Yf = run(f, passes[0]);
+      if (fuses) {
+        if (float_ref.empty()) float_ref = Yf;
+        EXPECT_TRUE(Yf == float_ref) << sim::kernel_isa_name(isa) << ": float coefficients differ between builds";
+      }
+      bool float_pass = true;
+      for (const auto& groups : passes) {
+        const auto Y = run(f, groups);
+        for (std::size_t g : groups)
+          for (std::size_t j = 0; j < r; ++j)
+            for (std::size_t l = 4 * g; l < 4 * g + 4; ++l) float_pass = float_pass && Y[j * L + l] == Yf[j * L + l];
+      }
+      EXPECT_TRUE(float_pass) << sim::kernel_isa_name(isa) << ": float lanes depend on the groups beside them";
+      print0(PETSC_COMM_WORLD, "  %s, %s tensors: %s the single-speed kernel (%.1e)\n", sim::kernel_isa_name(isa),
+             force == &exact ? "exact" : "STEP", same_lane ? "bitwise" : "not bitwise", worst / scale);
+    }
+  }
+  EXPECT_NE(sim::best_kernel_isa() == sim::KernelIsa::Avx512, !sim::kernel_isa_supported(sim::KernelIsa::Avx512));
+}
+
 // The implicit scheme's one-pass force and tangent (TangentKernel: Euler's theorem on the
 // homogeneous parts, the symmetric fourth-derivative storage when g~ is a gradient) against the
 // reference O(r^4) loops of CubicForce, and the tangent of those against central differences of

@@ -43,7 +43,24 @@ inline __attribute__((always_inline)) v4 bcast(const double* c) { return __built
 inline __attribute__((always_inline)) v4 bcast(const float* c) {
   return __builtin_convertvector(__builtin_shuffle(*reinterpret_cast<const f4*>(c), i4{0, 0, 0, 0}), v4);
 }
-
+// 8 lanes in one AVX-512 register (the x86-64-v4 build only): two adjacent groups of 4.
+typedef double v8 __attribute__((vector_size(64), aligned(8)));
+inline __attribute__((always_inline)) v8 vld8(const double* p) { return *reinterpret_cast<const v8*>(p); }
+inline __attribute__((always_inline)) void vst8(double* p, v8 v) { *reinterpret_cast<v8*>(p) = v; }
+// A broadcast from memory (vbroadcastsd zmm, m64: a load port only), written out because GCC turns
+// both the load-and-shuffle of bcast and a scalar's broadcast into a 64-byte load (mostly across
+// two cache lines) and a register broadcast on port 5, one of the two 512-bit multiply-add ports.
+// (Used in the x86-64-v4 build only.)
+inline __attribute__((always_inline)) v8 bcast8(const double* c) {
+  v8 v;
+  __asm__("vbroadcastsd %1, %0" : "=v"(v) : "m"(*c));
+  return v;
+}
+inline __attribute__((always_inline)) v8 bcast8(const float* c) {
+  v8 v;
+  __asm__("vbroadcastss %1, %t0\n\tvcvtps2pd %t0, %0" : "=v"(v) : "m"(*c));
+  return v;
+}
 // The width of a group: 4 lanes in one AVX2 register (a sweep's lanes), or 1 lane in a scalar
 // (`morse simulate`, CubicKernel). The same operations in the same order, each rounded alike (a
 // fused multiply-add in the AVX2 + FMA clone, a product then a sum in the baseline), so that a
@@ -59,6 +76,17 @@ struct Wide {
   }
   static V zero() { return V{0.0, 0.0, 0.0, 0.0}; }
 };
+struct Wide8 {
+  typedef v8 V;
+  static constexpr std::size_t W = 8;
+  static V ld(const double* p) { return vld8(p); }
+  static void st(double* p, V v) { vst8(p, v); }
+  template <class T>
+  static V bc(const T* c) {
+    return bcast8(c);
+  }
+  static V zero() { return V{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
+};
 struct Narrow {
   typedef double V;
   static constexpr std::size_t W = 1;
@@ -70,7 +98,8 @@ struct Narrow {
   }
   static V zero() { return 0.0; }
 };
-constexpr std::size_t kPad = 4;
+// The kernels load 8 coefficients (Wide8's broadcast) from any coefficient: the arrays are padded.
+constexpr std::size_t kPad = 8;
 
 // Rows kb .. kb + RH - 1 of a triangle of n columns (row kb + a: its column l at p[a][l]), for NG
 // groups of 4 lanes at X and G (row stride ld). Returns acc[a][g] and adds the rows' slot-l terms
@@ -83,29 +112,39 @@ inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t
   // registers: acc in memory would put a store-to-load forwarding into every multiply-add chain.
   typename Op::V acc[RH][NG], s[RH][NG];
   const T* pa[RH];
-#pragma GCC unroll 4
+#pragma GCC unroll 16
   for (int a = 0; a < RH; ++a) {
     pa[a] = p[a];
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) acc[a][g] = Op::zero(), s[a][g] = s_in[a][g];
   }
-  // The triangle of the block: row a has the columns kb + a .. kb + RH - 1 of it.
+  // The triangle of the block, column by column: column kb + b holds rows a = 0 .. b of it. Each
+  // g_l is loaded and stored once (row by row, a column's updates would chain through memory);
+  // a row's acc still sums its columns in increasing l, a column its rows in increasing a.
+#pragma GCC unroll 16
+  for (int b = 0; b < RH; ++b) {
+    const std::size_t l = kb + static_cast<std::size_t>(b);
+    typename Op::V x[NG], y[NG];
 #pragma GCC unroll 4
-  for (int a = 0; a < RH; ++a)
-    for (std::size_t l = kb + static_cast<std::size_t>(a); l < kb + RH; ++l) {
+    for (int g = 0; g < NG; ++g) x[g] = Op::ld(X + l * ld + Op::W * g), y[g] = Op::ld(G + l * ld + Op::W * g);
+#pragma GCC unroll 16
+    for (int a = 0; a <= b; ++a) {
       const typename Op::V c = Op::bc(pa[a] + l);
 #pragma GCC unroll 4
       for (int g = 0; g < NG; ++g) {
-        acc[a][g] += c * Op::ld(X + l * ld + Op::W * g);
-        Op::st(G + l * ld + Op::W * g, Op::ld(G + l * ld + Op::W * g) + c * s[a][g]);
+        acc[a][g] += c * x[g];
+        y[g] += c * s[a][g];
       }
     }
+#pragma GCC unroll 4
+    for (int g = 0; g < NG; ++g) Op::st(G + l * ld + Op::W * g, y[g]);
+  }
   // The rectangle: every row of the block, columns kb + RH .. n - 1.
   for (std::size_t l = kb + RH; l < n; ++l) {
     typename Op::V x[NG], y[NG];
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) x[g] = Op::ld(X + l * ld + Op::W * g), y[g] = Op::ld(G + l * ld + Op::W * g);
-#pragma GCC unroll 4
+#pragma GCC unroll 16
     for (int a = 0; a < RH; ++a) {
       const typename Op::V c = Op::bc(pa[a] + l);
 #pragma GCC unroll 4
@@ -117,7 +156,7 @@ inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) Op::st(G + l * ld + Op::W * g, y[g]);
   }
-#pragma GCC unroll 4
+#pragma GCC unroll 16
   for (int a = 0; a < RH; ++a)
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) acc_out[a][g] = acc[a][g];
@@ -194,49 +233,104 @@ inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j
   }
 }
 
-// Every triangle for the groups at X, G (ng groups, row stride 4 ng): pairs of groups 3 rows at a
-// time (16 vector registers), a last single group 4 rows at a time (11); the fastest measured on
-// the 2-core EPYC (bench/README.md, "Batched potential kernel").
-template <class Op, bool Quartic, class T>
-inline __attribute__((always_inline)) void triangles(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
-                                                     std::size_t ng, const T* C, const double* X, double* G) {
-  const std::size_t ld = Op::W * ng;
-  std::size_t g = 0;
-  for (; g + 2 <= ng; g += 2) triangle<Op, 2, 3, Quartic>(i, j, k0, r, C, X + Op::W * g, G + Op::W * g, ld);
-  if (g < ng) triangle<Op, 1, 4, Quartic>(i, j, k0, r, C, X + Op::W * g, G + Op::W * g, ld);
-}
+// Every triangle for the ng groups of 4 lanes at X, G (row stride ld >= 4 ng), in passes whose
+// shapes were measured fastest (bench/README.md, "Batched potential kernel"):
+//  - Avx2 (x86-64-v3, 16 vector registers): pairs of groups 3 rows at a time, a last single group
+//    4 rows at a time;
+//  - Avx512 (x86-64-v4, 32 registers of 8 lanes): 4 groups (2 registers) 6 rows at a time, then a
+//    pair of groups (one register) 12 rows at a time, then a last single group as in Avx2;
+//  - Scalar (one lane, `morse simulate`): 4 rows at a time.
+// A lane's bits do not depend on the pass it is in (file comment), so every shape gives the same.
+struct PassAvx2 {
+  template <bool Quartic, class T>
+  static inline __attribute__((always_inline)) void run(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
+                                                        std::size_t ng, std::size_t ld, const T* C, const double* X,
+                                                        double* G) {
+    std::size_t g = 0;
+    for (; g + 2 <= ng; g += 2) triangle<Wide, 2, 3, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+    if (g < ng) triangle<Wide, 1, 4, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+  }
+};
+struct PassAvx512 {
+  template <bool Quartic, class T>
+  static inline __attribute__((always_inline)) void run(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
+                                                        std::size_t ng, std::size_t ld, const T* C, const double* X,
+                                                        double* G) {
+    std::size_t g = 0;
+    for (; g + 4 <= ng; g += 4) triangle<Wide8, 2, 6, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+    for (; g + 2 <= ng; g += 2) triangle<Wide8, 1, 12, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+    if (g < ng) triangle<Wide, 1, 4, Quartic>(i, j, k0, r, C, X + 4 * g, G + 4 * g, ld);
+  }
+};
+struct PassScalar {
+  template <bool Quartic, class T>
+  static inline __attribute__((always_inline)) void run(std::size_t i, std::size_t j, std::size_t k0, std::size_t r,
+                                                        std::size_t, std::size_t, const T* C, const double* X,
+                                                        double* G) {
+    triangle<Narrow, 1, 4, Quartic>(i, j, k0, r, C, X, G, 1);
+  }
+};
 
-template <class Op, class T>
-inline __attribute__((always_inline)) void gradient(std::size_t r, std::size_t ng, const T* c3, const T* c4,
-                                                    const double* X, double* G) {
-  std::memset(G, 0, sizeof(double) * r * Op::W * ng);
+template <class Pass, class T>
+inline __attribute__((always_inline)) void gradient(std::size_t r, std::size_t ng, std::size_t ld, const T* c3,
+                                                    const T* c4, const double* X, double* G) {
+  std::memset(G, 0, sizeof(double) * r * ld);
   for (std::size_t i = 0; i < r; ++i) {  // cubic: triangle of rows j = i .. r - 1
-    triangles<Op, false>(i, i, i, r, ng, c3, X, G);
+    Pass::template run<false>(i, i, i, r, ng, ld, c3, X, G);
     c3 += (r - i) * (r - i + 1) / 2;
   }
   for (std::size_t i = 0; i < r; ++i)
     for (std::size_t j = i; j < r; ++j) {  // quartic: triangle of rows k = j .. r - 1
-      triangles<Op, true>(i, j, j, r, ng, c4, X, G);
+      Pass::template run<true>(i, j, j, r, ng, ld, c4, X, G);
       c4 += (r - j) * (r - j + 1) / 2;
     }
 }
 
-MORSE_KERNEL_CLONES
-void gradient_double(std::size_t r, std::size_t ng, const double* c3, const double* c4, const double* X, double* G) {
-  gradient<Wide>(r, ng, c3, c4, X, G);
+// The batched gradient, one build per instruction set (chosen by CubicKernelBatch, not by GCC's
+// dispatch, so that a test can run each on a machine that has them all). The x86-64-v3 and v4
+// builds fuse every multiply-add, the baseline rounds products and sums apart.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define MORSE_TARGET_V3 __attribute__((target("arch=x86-64-v3")))
+#define MORSE_TARGET_V4 __attribute__((target("arch=x86-64-v4")))
+#define MORSE_HAVE_ISA_BUILDS 1
+#else
+#define MORSE_TARGET_V3
+#define MORSE_TARGET_V4
+#define MORSE_HAVE_ISA_BUILDS 0
+#endif
+template <class T>
+void gradient_baseline(std::size_t r, std::size_t ng, std::size_t ld, const T* c3, const T* c4, const double* X,
+                       double* G) {
+  gradient<PassAvx2>(r, ng, ld, c3, c4, X, G);
+}
+template <class T>
+MORSE_TARGET_V3 void gradient_avx2(std::size_t r, std::size_t ng, std::size_t ld, const T* c3, const T* c4,
+                                   const double* X, double* G) {
+  gradient<PassAvx2>(r, ng, ld, c3, c4, X, G);
+}
+template <class T>
+MORSE_TARGET_V4 void gradient_avx512(std::size_t r, std::size_t ng, std::size_t ld, const T* c3, const T* c4,
+                                     const double* X, double* G) {
+  gradient<PassAvx512>(r, ng, ld, c3, c4, X, G);
+}
+template <class T>
+void gradient_isa(KernelIsa isa, std::size_t r, std::size_t ng, std::size_t ld, const T* c3, const T* c4,
+                  const double* X, double* G) {
+  switch (isa) {
+    case KernelIsa::Avx512:
+      return gradient_avx512(r, ng, ld, c3, c4, X, G);
+    case KernelIsa::Avx2:
+      return gradient_avx2(r, ng, ld, c3, c4, X, G);
+    case KernelIsa::Baseline:
+      return gradient_baseline(r, ng, ld, c3, c4, X, G);
+  }
 }
 
-MORSE_KERNEL_CLONES
-void gradient_float(std::size_t r, std::size_t ng, const float* c3, const float* c4, const double* X, double* G) {
-  gradient<Wide>(r, ng, c3, c4, X, G);
-}
-
-// Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing (G compact: row stride W ng).
+// Y(p, groups) = sum_k P3(p, k) G(k, :), k increasing (G: row stride ld, group g at W g).
 template <class Op>
 inline __attribute__((always_inline)) void project(std::size_t r, std::size_t L, const std::size_t* groups,
-                                                   std::size_t ng, const double* __restrict P3,
+                                                   std::size_t ng, std::size_t ld, const double* __restrict P3,
                                                    const double* __restrict G, double* __restrict Y) {
-  const std::size_t ld = Op::W * ng;
   for (std::size_t p = 0; p < r; ++p)
     for (std::size_t g = 0; g < ng; ++g) {
       typename Op::V y = Op::zero();
@@ -244,11 +338,16 @@ inline __attribute__((always_inline)) void project(std::size_t r, std::size_t L,
       Op::st(Y + p * L + Op::W * groups[g], y);
     }
 }
-
-MORSE_KERNEL_CLONES
-void project_groups(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng,
-                    const double* __restrict P3, const double* __restrict G, double* __restrict Y) {
-  project<Wide>(r, L, groups, ng, P3, G, Y);
+// The projection is r^2 per lane against the gradient's r^4 / 24: the AVX2 build serves Avx512 too
+// (the same fused operations, so the same bits).
+void project_baseline(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng, std::size_t ld,
+                      const double* __restrict P3, const double* __restrict G, double* __restrict Y) {
+  project<Wide>(r, L, groups, ng, ld, P3, G, Y);
+}
+MORSE_TARGET_V3 void project_avx2(std::size_t r, std::size_t L, const std::size_t* groups, std::size_t ng,
+                                  std::size_t ld, const double* __restrict P3, const double* __restrict G,
+                                  double* __restrict Y) {
+  project<Wide>(r, L, groups, ng, ld, P3, G, Y);
 }
 
 }  // namespace
@@ -259,10 +358,40 @@ namespace detail {
 MORSE_KERNEL_CLONES __attribute__((optimize("no-tree-vectorize"))) void potential_force_lane(
     std::size_t r, const double* q, const double* c3, const double* c4, const double* P3, double* g, double* y) {
   const std::size_t lane = 0;
-  gradient<Narrow>(r, 1, c3, c4, q, g);
-  project<Narrow>(r, 1, &lane, 1, P3, g, y);
+  gradient<PassScalar>(r, 1, 1, c3, c4, q, g);
+  project<Narrow>(r, 1, &lane, 1, 1, P3, g, y);
 }
 }  // namespace detail
+
+bool kernel_isa_supported(KernelIsa isa) {
+  switch (isa) {
+    case KernelIsa::Baseline:
+      return true;
+    case KernelIsa::Avx2:
+      return MORSE_HAVE_ISA_BUILDS && __builtin_cpu_supports("x86-64-v3");
+    case KernelIsa::Avx512:
+      return MORSE_HAVE_ISA_BUILDS && __builtin_cpu_supports("x86-64-v4");
+  }
+  return false;
+}
+
+KernelIsa best_kernel_isa() {
+  for (KernelIsa isa : {KernelIsa::Avx512, KernelIsa::Avx2})
+    if (kernel_isa_supported(isa)) return isa;
+  return KernelIsa::Baseline;
+}
+
+const char* kernel_isa_name(KernelIsa isa) {
+  switch (isa) {
+    case KernelIsa::Baseline:
+      return "baseline x86-64";
+    case KernelIsa::Avx2:
+      return "AVX2 + FMA (x86-64-v3)";
+    case KernelIsa::Avx512:
+      return "AVX-512 (x86-64-v4)";
+  }
+  return "?";
+}
 
 CubicKernelBatch::CubicKernelBatch(const CubicKernel& k, bool single) : r_(k.r()), single_(single) {
   MORSE_CHECK(k.potential(),
@@ -280,13 +409,20 @@ CubicKernelBatch::CubicKernelBatch(const CubicKernel& k, bool single) : r_(k.r()
     c3_.resize(n3_ + kPad, 0.0), c4_.resize(n4_ + kPad, 0.0);
   }
   P3_.resize(r_ * r_ + kPad, 0.0);
+  isa_ = best_kernel_isa();
+}
+
+void CubicKernelBatch::set_isa(KernelIsa isa) {
+  MORSE_CHECK(kernel_isa_supported(isa), "the batched potential kernel: this processor has no ", kernel_isa_name(isa));
+  isa_ = isa;
 }
 
 void CubicKernelBatch::apply(std::size_t L, const std::size_t* groups, std::size_t ng, const double* Q,
                              double* Y) const {
   if (ng == 0) return;
-  const std::size_t ld = 4 * ng;
-  // X and G on 64-byte boundaries: their 32-byte rows of a group then never straddle a cache line.
+  // Rows of a whole number of 8-lane registers, and X and G on 64-byte boundaries: no row of a
+  // group or a pair of groups straddles a cache line.
+  const std::size_t ld = 8 * ((ng + 1) / 2);
   if (X_.size() < r_ * ld + 8) X_.resize(r_ * ld + 8), G_.resize(r_ * ld + 8);
   auto aligned = [](std::vector<double>& v) {
     const auto a = reinterpret_cast<std::uintptr_t>(v.data());
@@ -296,10 +432,13 @@ void CubicKernelBatch::apply(std::size_t L, const std::size_t* groups, std::size
   for (std::size_t j = 0; j < r_; ++j)
     for (std::size_t g = 0; g < ng; ++g) std::memcpy(X + j * ld + 4 * g, Q + j * L + 4 * groups[g], 4 * sizeof(double));
   if (single_)
-    gradient_float(r_, ng, c3f_.data(), c4f_.data(), X, G);
+    gradient_isa(isa_, r_, ng, ld, c3f_.data(), c4f_.data(), X, G);
   else
-    gradient_double(r_, ng, c3_.data(), c4_.data(), X, G);
-  project_groups(r_, L, groups, ng, P3_.data(), G, Y);
+    gradient_isa(isa_, r_, ng, ld, c3_.data(), c4_.data(), X, G);
+  if (isa_ == KernelIsa::Baseline)
+    project_baseline(r_, L, groups, ng, ld, P3_.data(), G, Y);
+  else
+    project_avx2(r_, L, groups, ng, ld, P3_.data(), G, Y);
 }
 
 double CubicKernelBatch::flops() const {

@@ -272,6 +272,15 @@ class CubicKernel {
   friend class CubicKernelBatch;
 };
 
+/// The instruction sets the batched potential kernel is built for. Avx2 and Avx512 fuse every
+/// multiply-add and give the same bits lane by lane; Baseline rounds products and sums apart.
+enum class KernelIsa { Baseline, Avx2, Avx512 };
+/// Whether this processor runs the kernel's build for isa (Baseline: always).
+bool kernel_isa_supported(KernelIsa isa);
+/// The widest supported: Avx512, else Avx2, else Baseline.
+KernelIsa best_kernel_isa();
+const char* kernel_isa_name(KernelIsa isa);
+
 /// The nonlinear term G = P3 g~ of several lanes (speeds of a sweep) in one pass over the potential
 /// coefficients of a CubicKernel (KernelLayout::Potential): every coefficient loaded feeds the
 /// multiply-adds of all the lanes, so the pass turns from bandwidth-bound (one lane) to compute-bound
@@ -285,7 +294,8 @@ class CubicKernel {
 ///  - Float coefficients (`single`): the coefficients rounded to float (half the bytes), the
 ///    products and sums in double. Their error is that of the rounding, about 6e-8 relative per
 ///    coefficient.
-/// Built for AVX2 + FMA (x86-64-v3) and the baseline; the processor picks at run time.
+/// Built for AVX-512 (x86-64-v4: two 8-lane registers of 4 groups 6 rows at a time), AVX2 + FMA
+/// (x86-64-v3) and the baseline; the widest the processor runs is used (set_isa to choose).
 class CubicKernelBatch {
  public:
   /// Throws unless k holds the potential layout (k.potential()).
@@ -295,6 +305,9 @@ class CubicKernelBatch {
   void apply(std::size_t L, const std::size_t* groups, std::size_t ng, const double* Q, double* Y) const;
   std::size_t r() const { return r_; }
   bool single() const { return single_; }
+  KernelIsa isa() const { return isa_; }
+  /// Runs the build for isa from now on; throws if this processor lacks it.
+  void set_isa(KernelIsa isa);
   /// Floating-point operations per lane and bytes of coefficients read by one apply() (whatever the
   /// number of lanes).
   double flops() const;
@@ -303,9 +316,10 @@ class CubicKernelBatch {
  private:
   std::size_t r_ = 0, n3_ = 0, n4_ = 0;
   bool single_ = false;
-  std::vector<double> c3_, c4_, P3_;  // padded (the kernel loads 4 from any coefficient)
+  KernelIsa isa_ = KernelIsa::Baseline;
+  std::vector<double> c3_, c4_, P3_;  // padded (the kernel loads 8 from any coefficient)
   std::vector<float> c3f_, c4f_;
-  mutable std::vector<double> X_, G_;  // the listed groups, compact: r x 4 ng
+  mutable std::vector<double> X_, G_;  // the listed groups, compact: r x 8 ceil(ng / 2)
 };
 
 /// The nonlinear force and its tangent in one pass, for Newton in the implicit scheme. By Euler's
