@@ -31,3 +31,9 @@ morse_add_error_case(sweep_bad_kernel
   sweep_bad_kernel.h5
   ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 4e-6 -sweep_monitor x1
        -sweep_omega_min 800 -sweep_omega_max 900 -sweep_omega_step 100 -sweep_kernel fast)
+# A build of the batched potential kernel that does not exist is named with the choices.
+morse_add_error_case(sweep_bad_isa
+  "morse: error: .*Unknown option sse4 for -sweep_isa. Available options: auto baseline avx2 avx512"
+  sweep_bad_isa.h5
+  ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 4e-6 -sweep_monitor x1
+       -sweep_omega_min 800 -sweep_omega_max 900 -sweep_omega_step 100 -sweep_isa sse4)

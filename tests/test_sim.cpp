@@ -834,12 +834,13 @@ void check_sweep(bool massless) {
   std::vector<sim::SpeedTask> tasks;
   for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
   long mine = 0;  // speeds this rank ran in the last sweep
-  auto run = [&](MPI_Comm comm, int batch, sim::SweepKernel kernel, bool single) {
+  auto run = [&](MPI_Comm comm, int batch, sim::SweepKernel kernel, bool single, int isa = -1) {
     std::vector<sim::SpeedResult> out(tasks.size());
     sim::SweepSettings sb = s;
     sb.batch = batch;
     sb.kernel = kernel;
     sb.single = single;
+    sb.isa = isa;
     mine = sim::sweep(comm, rm, sb, tasks, [&](const sim::SpeedResult& R) {
              out[static_cast<std::size_t>(R.index)] = R;
            }).speeds;
@@ -886,6 +887,18 @@ void check_sweep(bool massless) {
      : kernel == sim::SweepKernel::Potential ? one
      : kernel == sim::SweepKernel::Folded    ? folded
                                              : lane) = std::move(alone);
+  }
+  // The AVX2 build of the potential kernel where the processor also has the AVX-512 one (which
+  // `one` ran): the same bits, speed by speed (all 5 speeds in one pass on this rank).
+  if (sim::best_kernel_isa() == sim::KernelIsa::Avx512) {
+    const auto avx2 = run(PETSC_COMM_SELF, 6, sim::SweepKernel::Potential, false, static_cast<int>(sim::KernelIsa::Avx2));
+    bool same = true;
+    for (std::size_t i = 0; i < tasks.size(); ++i)
+      same = same && avx2[i].status == 0 && avx2[i].rms == one[i].rms && avx2[i].spectrum == one[i].spectrum &&
+             avx2[i].max_force == one[i].max_force && avx2[i].energy_end == one[i].energy_end;
+    EXPECT_TRUE(same) << "the AVX2 and AVX-512 builds of the potential kernel give other sweeps";
+  } else {
+    print0(PETSC_COMM_WORLD, "  NOTICE: no AVX-512 on this processor: the sweep's two builds are not compared here\n");
   }
   // Against sim::integrate, speed by speed (on every rank, from `one`).
   int touched = 0;

@@ -139,10 +139,14 @@ void run_sweep(MPI_Comm comm) {
   MPI_Allreduce(MPI_IN_PLACE, &wall, 1, MPI_DOUBLE, MPI_MAX, comm);
   print0(comm,
          "morse sweep: %zu speeds in %.2f s (%.3g core-hours), %.4g steps/s over all ranks (%.4g per rank), %.0f%% "
-         "in the force kernels (%s%s), %.0f%% idle (no speed to advance: the load-balance loss)\n",
+         "in the force kernels (%s%s%s%s), %.0f%% idle (no speed to advance: the load-balance loss)\n",
          n_run, wall, wall * size / 3600.0, wall > 0 ? lane_steps / wall : 0.0,
          wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0,
          so.linear ? "linear" : sim::kernel_name(st.kernel), so.single ? ", float coefficients" : "",
+         !so.linear && st.kernel == sim::SweepKernel::Potential ? ", " : "",
+         !so.linear && st.kernel == sim::SweepKernel::Potential
+             ? sim::kernel_isa_name(so.isa >= 0 ? static_cast<sim::KernelIsa>(so.isa) : sim::best_kernel_isa())
+             : "",
          wall > 0 ? 100.0 * idle / (wall * size) : 0.0);
   if (size > 1) {  // the load balance, rank by rank
     std::vector<double> idles(static_cast<std::size_t>(size), 0.0);

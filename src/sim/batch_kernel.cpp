@@ -201,12 +201,14 @@ inline __attribute__((always_inline)) void triangle(std::size_t i, std::size_t j
       for (int g = 0; g < NG; ++g) s[a][g] = base[g] * Op::ld(X + (kb + a) * ld + Op::W * g);
     }
     // The hardware prefetcher does not run far enough ahead of the short rows of a triangle:
-    // ask for the lines 1 KB past this block's coefficients (measured: 4 % more lane-steps/s at
-    // r = 79 with 8 lanes; 4 KB ahead gains less).
-    for (const char *a = reinterpret_cast<const char*>(p[0] + kb) + 1024,
-                    *b = reinterpret_cast<const char*>(row) + 1024;
-         a < b; a += 64)
-      __builtin_prefetch(a);
+    // ask for the lines 1 KB past this block's coefficients (measured on the 2-core EPYC: 4 % more
+    // lane-steps/s at r = 79 with 8 lanes; 4 KB ahead gains less). Not in the AVX-512 passes: on
+    // the Xeon whose L3 holds the coefficients it cost 3 % (r = 79, 16 lanes).
+    if constexpr (Op::W < 8)
+      for (const char *a = reinterpret_cast<const char*>(p[0] + kb) + 1024,
+                      *b = reinterpret_cast<const char*>(row) + 1024;
+           a < b; a += 64)
+        __builtin_prefetch(a);
     row_block_upto<Op, NG, R>(rh, kb, n, p, s, acc, X, G, ld);
     for (std::size_t a = 0; a < rh; ++a) {
       const std::size_t k = kb + a;

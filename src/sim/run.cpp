@@ -314,6 +314,16 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                                "", kernels, kernel, &kernel, nullptr));
     o->kernel = static_cast<SweepKernel>(kernel);
   }
+  {
+    const char* isas[] = {"auto", "baseline", "avx2", "avx512", "KernelIsa", "", nullptr};
+    PetscEnum isa = static_cast<PetscEnum>(o->isa + 1);
+    PetscCall(MorseOptionsEnum("-sweep_isa",
+                               "Build of the batched potential kernel: auto (the widest this processor runs), avx512 "
+                               "(x86-64-v4), avx2 (x86-64-v3; the same bits as avx512) or baseline (no fused "
+                               "multiply-adds: other bits)",
+                               "", isas, isa, &isa, nullptr));
+    o->isa = static_cast<int>(isa) - 1;
+  }
   PetscCall(MorseOptionsBool("-sweep_float",
                              "Potential kernel: coefficients in float (half the bytes), arithmetic in double; check "
                              "its accuracy on your model (docs/user-guide.md)",
@@ -374,6 +384,9 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                                 {"-sweep_divergence_limit", o->divergence_limit},
                                 {"-sweep_spectrum_fmax", o->fmax}})
     if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
+  if (o->isa >= 0 && !kernel_isa_supported(static_cast<KernelIsa>(o->isa)))
+    bad(cat("-sweep_isa: this processor has no ", kernel_isa_name(static_cast<KernelIsa>(o->isa)),
+            " (use auto: ", kernel_isa_name(best_kernel_isa()), " here)"));
   if (o->tangent_checks < 0)
     bad(cat("-sim_tangent_checks must be >= 0 (got ", o->tangent_checks, "; 0: no tangent checks)"));
   if (!(retries >= 0 && retries <= 20))
@@ -496,6 +509,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.batch = static_cast<int>(batch);
   s.kernel = kernel;
   s.single = single;
+  s.isa = isa;
   s.monitor = sm.radial_row(monitor, "-sweep_monitor");
   s.divergence_limit = divergence_limit;
   if (divergence_limit < 0) {  // the tip radius: a displacement no blade survives

@@ -219,6 +219,7 @@ class Batch {
         k = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Potential);
       if (k->potential()) {
         potential_ = std::make_unique<CubicKernelBatch>(*k, s.single);
+        if (s.isa >= 0) potential_->set_isa(static_cast<KernelIsa>(s.isa));
         kind_ = SweepKernel::Potential;
       } else {
         lane_kernel_ = std::move(k);

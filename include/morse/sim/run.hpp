@@ -83,6 +83,9 @@ struct SweepOptions {
   PetscInt bins = 500, batch = 8;
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, single = PETSC_FALSE;
   SweepKernel kernel = SweepKernel::Auto;  ///< -sweep_kernel
+  /// -sweep_isa auto|avx512|avx2|baseline: the build of the batched potential kernel (-1: auto, the
+  /// widest the processor runs; else a KernelIsa). avx512 and avx2 give the same bits.
+  int isa = -1;
   PetscBool energy_balance = PETSC_TRUE;   ///< -sim_energy_balance
   PetscInt tangent_checks = 200;           ///< -sim_tangent_checks (per speed)
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
@@ -119,7 +122,7 @@ struct SweepOptions {
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
-  /// -sweep_kernel, -sweep_float, -sweep_restart, -sweep_rotation, -sweep_retries, -sweep_divergence_limit and the
+  /// -sweep_kernel, -sweep_isa, -sweep_float, -sweep_restart, -sweep_rotation, -sweep_retries, -sweep_divergence_limit and the
   /// contact options
   /// (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, -sweep_retries
   /// outside 0..20, or a grid of more than kMaxSweepSpeeds speeds (the message gives the file size it would need) is

@@ -459,6 +459,9 @@ struct SweepSettings {
   SweepKernel kernel = SweepKernel::Auto;
   /// Potential: float coefficients, double arithmetic (CubicKernelBatch; -sweep_float).
   bool single = false;
+  /// Potential: the kernel's build (-1: the widest the processor runs, best_kernel_isa(); else a
+  /// KernelIsa the processor must have).
+  int isa = -1;
   /// A speed fails (status 1, "diverged") as soon as |monitor . q| exceeds this [m] (0: never): a
   /// run that has lost stability can end with a huge but finite state before it turns non-finite.
   double divergence_limit = 0.0;
