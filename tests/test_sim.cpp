@@ -891,7 +891,8 @@ void check_sweep(bool massless) {
   // The AVX2 build of the potential kernel where the processor also has the AVX-512 one (which
   // `one` ran): the same bits, speed by speed (all 5 speeds in one pass on this rank).
   if (sim::best_kernel_isa() == sim::KernelIsa::Avx512) {
-    const auto avx2 = run(PETSC_COMM_SELF, 6, sim::SweepKernel::Potential, false, static_cast<int>(sim::KernelIsa::Avx2));
+    const auto avx2 =
+        run(PETSC_COMM_SELF, 6, sim::SweepKernel::Potential, false, static_cast<int>(sim::KernelIsa::Avx2));
     bool same = true;
     for (std::size_t i = 0; i < tasks.size(); ++i)
       same = same && avx2[i].status == 0 && avx2[i].rms == one[i].rms && avx2[i].spectrum == one[i].spectrum &&

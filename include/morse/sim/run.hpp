@@ -86,8 +86,8 @@ struct SweepOptions {
   /// -sweep_isa auto|avx512|avx2|baseline: the build of the batched potential kernel (-1: auto, the
   /// widest the processor runs; else a KernelIsa). avx512 and avx2 give the same bits.
   int isa = -1;
-  PetscBool energy_balance = PETSC_TRUE;   ///< -sim_energy_balance
-  PetscInt tangent_checks = 200;           ///< -sim_tangent_checks (per speed)
+  PetscBool energy_balance = PETSC_TRUE;  ///< -sim_energy_balance
+  PetscInt tangent_checks = 200;          ///< -sim_tangent_checks (per speed)
   /// -sweep_rotation: +1 (positive, default) the blade turns at +|omega| about +z, -1 at -|omega|
   /// (the sign of the speeds given to the casing: friction and the lobes' travel turn with it).
   int rotation = 1;
@@ -122,11 +122,10 @@ struct SweepOptions {
 
   /// Reads -rom, -out, -sweep_omega_min, -sweep_omega_max, -sweep_omega_step, -sim_dt,
   /// -sim_linear, -sweep_monitor, -sweep_spectrum_fmax, -sweep_spectrum_bins, -sweep_batch,
-  /// -sweep_kernel, -sweep_isa, -sweep_float, -sweep_restart, -sweep_rotation, -sweep_retries, -sweep_divergence_limit and the
-  /// contact options
-  /// (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or -sweep_spectrum_fmax, -sweep_retries
-  /// outside 0..20, or a grid of more than kMaxSweepSpeeds speeds (the message gives the file size it would need) is
-  /// recorded in `error`. Collective.
+  /// -sweep_kernel, -sweep_isa, -sweep_float, -sweep_restart, -sweep_rotation, -sweep_retries, -sweep_divergence_limit
+  /// and the contact options (ContactOptions::set_from_options). A non-finite speed, step, -sim_dt or
+  /// -sweep_spectrum_fmax, -sweep_retries outside 0..20, or a grid of more than kMaxSweepSpeeds speeds (the message
+  /// gives the file size it would need) is recorded in `error`. Collective.
   PetscErrorCode set_from_options(MPI_Comm comm);
   /// Throws (alike on every rank) on options a sweep refuses: `error`, no -rom or -contact_set, a
   /// plane obstacle, -sim_omega, a bad speed grid, batch or spectrum. Not collective.
