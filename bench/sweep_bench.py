@@ -13,13 +13,15 @@ Parts, each --runs times (medians):
     kernel that `auto` picks: potential above r = 56): steps/s, and with --limits its GFLOP/s and
     coefficient GB/s against the FMA peak and read bandwidth measured by bench/machine_limits.cpp;
   - batch: `morse sweep` on one core with L speeds and -sweep_batch L, L in --lanes, for each kernel
-    of --kernels (-sweep_kernel lane, potential, folded; float = potential with -sweep_float):
+    of --kernels (-sweep_kernel lane, potential, folded; float = potential with -sweep_float;
+    potential-avx2, potential-avx512, potential-baseline: potential with -sweep_isa avx2, ...):
     lane-steps/s and the gain over the lane kernel with as many lanes;
-  - map: the same 16-speed sweep (-sweep_batch 8) on 2 ranks with each kernel of --kernels, and on 1
+  - map: the same 16-speed sweep (-sweep_batch --map-batch, 8) on 2 ranks with each kernel of --kernels, and on 1
     rank with the default kernel: lane-steps/s per core, the gain of each kernel over `lane` (the
     sweep's kernel before the batched potential kernel, issue 29: target x3 at r = 79), and the
     2-rank efficiency t1 / (2 t2).
-Writes bench/results/sweep_<UTC>_<mesh>_r<r>.json (summary, runs, git, blas).
+Every run has -sim_tangent_checks 0 (the checks, a fixed count per speed, would dominate runs this
+short). Writes bench/results/sweep_<UTC>_<mesh>_r<r>.json (summary, runs, git, blas).
 Exit status 0 on success, 2 if morse failed.
 """
 
@@ -52,6 +54,7 @@ def main():
     ap.add_argument("--lanes", default="1,4,8,16")
     ap.add_argument("--kernels", default="lane,potential,float,folded",
                     help="sweep kernels to time (lane, potential, float, folded)")
+    ap.add_argument("--map-batch", type=int, default=8, help="-sweep_batch of the 16-speed map part")
     ap.add_argument("--limits", action="store_true",
                     help="measure the machine's FMA peak and read bandwidth (bench/machine_limits.cpp) and give the "
                          "single run's ratio to them")
@@ -70,7 +73,9 @@ def main():
                                "-load_LE_omega", "2000", "-out", rom], 2, work, 1)
     if res is None:
         return 2
-    casing = ["-contact_set", "tip", "-sim_dt", str(args.dt)]
+    # No tangent checks (-sim_tangent_checks 0): 200 per speed at about 8 ms each (r = 79) would be
+    # most of these short runs' time (a 200-revolution speed spends under 1 % in them).
+    casing = ["-contact_set", "tip", "-sim_dt", str(args.dt), "-sim_tangent_checks", "0"]
     runs = {"single": [], "batch": {}, "scaling": {"1": [], "2": []}}
     r_size = None
     # Single runs (unbatched kernel) at 1,450 rad/s.
@@ -90,10 +95,13 @@ def main():
 
     kernels = args.kernels.split(",")
     for k in kernels:
-        if k not in ("lane", "potential", "float", "folded"):
+        if k not in ("lane", "potential", "float", "folded", "potential-avx2", "potential-avx512",
+                     "potential-baseline"):
             sys.exit("sweep_bench: unknown kernel %s" % k)
 
     def kernel_options(kernel):
+        if kernel.startswith("potential-"):
+            return ["-sweep_kernel", "potential", "-sweep_isa", kernel.split("-", 1)[1]]
         return ["-sweep_kernel", "potential", "-sweep_float"] if kernel == "float" else ["-sweep_kernel", kernel]
 
     def sweep(n_speeds, batch, ranks, revolutions, kernel):
@@ -109,6 +117,7 @@ def main():
                 "seconds": rate(res["stdout"], r"speeds in ([\d.]+) s"),
                 "kernel_percent": rate(res["stdout"], r"([\d.]+)% in the force kernels"),
                 "idle_percent": rate(res["stdout"], r"([\d.]+)% idle"),
+                "isa": (re.search(r"in the force kernels \(potential, ([^)]*\))\)", res["stdout"]) or [None, None])[1],
                 "max_rss_mb": res.get("rank_max_rss_mb")}
 
     runs["batch"] = {k: {} for k in kernels}
@@ -124,11 +133,11 @@ def main():
                 runs["batch"][k][str(L)].append(x)
     for _ in range(args.runs):
         for k in kernels:
-            x = sweep(16, 8, 2, args.revolutions, k)
+            x = sweep(16, args.map_batch, 2, args.revolutions, k)
             if x is None:
                 return 2
             runs["map"][k].append(x)
-        x = sweep(16, 8, 1, args.revolutions, "potential")
+        x = sweep(16, args.map_batch, 1, args.revolutions, "potential")
         if x is None:
             return 2
         runs["scaling"]["1"].append(x)
@@ -140,8 +149,11 @@ def main():
     single = med([x["steps_per_s"] for x in runs["single"]])
     batch = {k: {L: med([x["lane_steps_per_s"] for x in runs["batch"][k][str(L)]]) for L in lanes} for k in kernels}
     mapr = {k: med([x["lane_steps_per_s"] for x in runs["map"][k]]) for k in kernels}
+    isa = None  # the build of the batched potential kernel that `potential` ran (from the summary line)
+    for x in runs["map"].get("potential", []):
+        isa = isa or x.get("isa")
     summary = {
-        "r": r_size, "dt": args.dt, "flops_per_lane_step_potential": flops_potential,
+        "r": r_size, "potential_isa": isa, "map_batch": args.map_batch, "dt": args.dt, "flops_per_lane_step_potential": flops_potential,
         "single_steps_per_s": single, "single_kernel": runs["single"][0]["kernel"],
         "batch_lane_steps_per_s": {k: {str(L): batch[k][L] for L in lanes} for k in kernels},
         "map16_2ranks_lane_steps_per_s_per_core": {k: mapr[k] / 2 for k in kernels},

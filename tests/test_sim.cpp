@@ -901,6 +901,22 @@ void check_sweep(bool massless) {
   } else {
     print0(PETSC_COMM_WORLD, "  NOTICE: no AVX-512 on this processor: the sweep's two builds are not compared here\n");
   }
+  // The predicted cost counts the tangent checks the speeds then ran (none for a massless model)
+  // at their measured time.
+  {
+    const auto cost = sim::predict_sweep_cost(PETSC_COMM_WORLD, rm, s, sim::SweepOptions{}, tasks, {}, 0.02);
+    long ran = 0;
+    double steps = 0.0;
+    for (const auto& R : one) ran += R.tangent_checks, steps += static_cast<double>(R.steps);
+    EXPECT_EQ(cost.checks, static_cast<double>(ran));
+    EXPECT_EQ(cost.steps, steps);
+    EXPECT_EQ(ran == 0, massless);
+    if (!massless) {
+      EXPECT_GT(cost.check_seconds, 0.0);
+    }
+    EXPECT_NEAR(cost.core_hours, (steps / cost.rate + cost.checks * cost.check_seconds) / 3600.0,
+                1e-12 * cost.core_hours);
+  }
   // Against sim::integrate, speed by speed (on every rank, from `one`).
   int touched = 0;
   for (std::size_t i = 0; i < tasks.size(); ++i) {
@@ -1123,6 +1139,7 @@ TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
     EXPECT_EQ(cost.refine_steps, rest);
     EXPECT_GT(cost.rate, 0.0);
     EXPECT_NEAR(cost.core_hours, coarse / cost.rate / 3600.0, 1e-12 * cost.core_hours);
+    EXPECT_EQ(cost.checks, 0.0) << "a linear model has no tangent checks";
   }
   std::vector<sim::SpeedResult> refined;
   std::size_t n_run = 0;

@@ -111,6 +111,12 @@ void run_sweep(MPI_Comm comm) {
            "morse sweep: predicted cost: %.4g steps, %.3g core-hours at %.4g steps/s per rank (measured), about %s "
            "on %d rank(s)\n",
            cost.steps, cost.core_hours, cost.rate, duration_text(cost.wall_seconds).c_str(), size);
+    if (cost.checks > 0)
+      print0(comm,
+             "morse sweep: of which %.4g tangent checks (-sim_tangent_checks per speed) at %.3g ms each (measured): "
+             "%.0f%% of the cost\n",
+             cost.checks, 1e3 * cost.check_seconds,
+             100.0 * cost.checks * cost.check_seconds / (cost.core_hours * 3600.0));
     if (so.refine_step > 0)
       print0(
           comm,

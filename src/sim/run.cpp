@@ -6,6 +6,7 @@
 #include <petscsys.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -569,8 +570,12 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   };
   std::set<std::int64_t> planned(done_idx.begin(), done_idx.end());
   double slowest = 0.0;
+  const bool checked = !s.base.linear && !m.massless && s.base.tangent_checks > 0;
   for (const auto& t : todo) {
     c.steps += steps_of(t.omega), planned.insert(t.index);
+    if (checked)
+      c.checks +=
+          static_cast<double>(sweep_tangent_checks(static_cast<long>(steps_of(t.omega)), s.base.tangent_checks));
     if (slowest == 0.0 || std::abs(t.omega) < std::abs(slowest)) slowest = t.omega;
   }
   if (so.refine_step > 0)
@@ -587,8 +592,22 @@ SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const 
   double rate = measure_step_rate(m, s, slowest, seconds, lanes);
   MPI_Allreduce(MPI_IN_PLACE, &rate, 1, MPI_DOUBLE, MPI_SUM, comm);
   c.rate = rate / size;
+  if (c.checks > 0) {  // one tangent check at rest, timed until 3 calls and 0.02 s
+    const std::vector<double> q(static_cast<std::size_t>(m.r), 0.0);
+    const auto t0 = std::chrono::steady_clock::now();
+    double dt = 0.0;
+    int calls = 0;
+    do {
+      (void)tangent_step(m, q.data());
+      ++calls;
+      dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    } while (calls < 3 || dt < 0.02);
+    c.check_seconds = dt / calls;
+    MPI_Allreduce(MPI_IN_PLACE, &c.check_seconds, 1, MPI_DOUBLE, MPI_SUM, comm);
+    c.check_seconds /= size;
+  }
   if (c.rate > 0) {
-    c.core_hours = c.steps / c.rate / 3600.0;
+    c.core_hours = (c.steps / c.rate + c.checks * c.check_seconds) / 3600.0;
     c.wall_seconds = c.core_hours * 3600.0 / static_cast<double>(std::min<std::size_t>(size, at_once));
     c.refine_core_hours = c.refine_steps / c.rate / 3600.0;
   }

@@ -293,8 +293,8 @@ class Batch {
     } else {  // at rest: q_0 = q_{-1} = 0
       for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
     }
-    if (!s_.base.linear && !m_.massless && s_.base.tangent_checks > 0) {  // at steps 0, every, 2 every, ...
-      ln.check_every = std::max(1L, ln.n_steps / s_.base.tangent_checks);
+    if (!s_.base.linear && !m_.massless && s_.base.tangent_checks > 0) {   // at steps 0, every, 2 every, ...
+      ln.check_every = std::max(1L, ln.n_steps / s_.base.tangent_checks);  // sweep_tangent_checks()
       for (std::size_t j = 0; j < r_; ++j) col_[j] = Q_[j * L_ + slot];
       check_tangent(ln, 0.0);
     }
@@ -552,6 +552,11 @@ std::size_t sweep_share(std::size_t speeds, int ranks) {
 
 std::size_t sweep_lanes_per_rank(int batch, std::size_t speeds, int ranks) {
   return std::min(static_cast<std::size_t>(std::max(1, batch)), sweep_share(speeds, ranks));
+}
+
+long sweep_tangent_checks(long n_steps, long checks) {
+  const long every = std::max(1L, n_steps / checks);  // as Batch::start
+  return 1 + n_steps / every;
 }
 
 const char* kernel_name(SweepKernel k) {

@@ -179,6 +179,10 @@ struct SweepCost {
   double wall_seconds = 0.0;  ///< core_hours over the ranks (perfect balance)
   double refine_steps = 0.0;  ///< refinement: at most this many more (every fine speed not done)
   double refine_core_hours = 0.0;
+  /// The tangent checks of the speeds of todo (Settings::tangent_checks; none for linear and
+  /// massless models) and the measured time of one (tangent_step at rest): in core_hours. A check
+  /// costs thousands of steps at r = 79, so a short sweep's cost is mostly its checks.
+  double checks = 0.0, check_seconds = 0.0;
 };
 /// Collective. With nothing to run, the rate is not measured (all zero).
 SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,

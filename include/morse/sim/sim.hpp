@@ -500,6 +500,9 @@ struct SweepStats {
 std::size_t sweep_share(std::size_t speeds, int ranks);
 /// The speeds a rank of sweep() starts with: min(batch, sweep_share) (batch at least 1).
 std::size_t sweep_lanes_per_rank(int batch, std::size_t speeds, int ranks);
+/// The tangent checks of a sweep's speed of n_steps steps with Settings::tangent_checks = checks
+/// (> 0): at step 0 and every max(1, n_steps / checks) steps after it.
+long sweep_tangent_checks(long n_steps, long checks);
 
 /// Runs every task of `todo` on the ranks of comm with dynamic load balancing: rank 0 hands out
 /// speeds one at a time (longest first) to whichever rank has a free lane, and also computes.
