@@ -1994,6 +1994,24 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
   // Retries and the divergence limit: their ranges, and keys of the settings.
   so = read({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "900"}, {"-sweep_omega_step", "100"}});
   EXPECT_EQ(so.retries, 1);
+  // The batch: unless given, 16 lanes for the AVX-512 build of the potential kernel, else 8.
+  EXPECT_FALSE(so.batch_given);
+  EXPECT_EQ(so.isa, -1);
+  EXPECT_EQ(sim::default_sweep_batch(-1), sim::best_kernel_isa() == sim::KernelIsa::Avx512 ? 16 : 8);
+  EXPECT_EQ(sim::default_sweep_batch(static_cast<int>(sim::KernelIsa::Avx512)), 16);
+  EXPECT_EQ(sim::default_sweep_batch(static_cast<int>(sim::KernelIsa::Avx2)), 8);
+  EXPECT_EQ(sim::default_sweep_batch(static_cast<int>(sim::KernelIsa::Baseline)), 8);
+  {
+    const auto given = read({{"-sweep_omega_min", "800"},
+                             {"-sweep_omega_max", "900"},
+                             {"-sweep_omega_step", "100"},
+                             {"-sweep_batch", "5"},
+                             {"-sweep_isa", "baseline"}});
+    EXPECT_TRUE(given.batch_given);
+    EXPECT_EQ(given.batch, 5);
+    EXPECT_EQ(given.isa, static_cast<int>(sim::KernelIsa::Baseline));
+    EXPECT_TRUE(given.error.empty()) << given.error;
+  }
   EXPECT_LT(so.divergence_limit, 0.0) << "default: the tip radius";
   for (const char* bad : {"-1", "21"}) {
     so = read({{"-sweep_omega_min", "800"},

@@ -303,8 +303,10 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                              nullptr));
   PetscCall(MorseOptionsInt("-sweep_spectrum_bins", "Frequencies of the spectrum (k fmax / bins, k = 0..bins)", "",
                             o->bins, &o->bins, nullptr));
-  PetscCall(MorseOptionsInt("-sweep_batch", "Speeds advanced together per rank (one pass of the cubic tensor)", "",
-                            o->batch, &o->batch, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_batch",
+                            "Speeds advanced together per rank (one pass of the cubic tensor); default 16 with the "
+                            "AVX-512 build of the potential kernel, else 8",
+                            "", o->batch, &o->batch, &o->batch_given));
   {
     const char* kernels[] = {"auto", "lane", "folded", "potential", "SweepKernel", "", nullptr};
     PetscEnum kernel = static_cast<PetscEnum>(o->kernel);
@@ -507,7 +509,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.revolutions = contact.revolutions > 0 ? contact.revolutions : 200.0;
   s.spectrum_fmax = fmax;
   s.spectrum_bins = static_cast<int>(bins);
-  s.batch = static_cast<int>(batch);
+  s.batch = batch_given ? static_cast<int>(batch) : default_sweep_batch(isa);
   s.kernel = kernel;
   s.single = single;
   s.isa = isa;
@@ -558,6 +560,11 @@ bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector
   if (ka == 0 || kb == 0 || freqs.size() < 2) return false;
   const double fa = freqs[ka], fb = freqs[kb], bin = freqs[1] - freqs[0];
   return std::abs(fa - fb) > frequency_jump * std::max(fa, fb) && std::abs(fa - fb) > 2.0 * bin;
+}
+
+int default_sweep_batch(int isa) {
+  const KernelIsa used = isa >= 0 ? static_cast<KernelIsa>(isa) : best_kernel_isa();
+  return used == KernelIsa::Avx512 ? 16 : 8;
 }
 
 SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,

@@ -80,7 +80,10 @@ constexpr long kMaxSweepSpeeds = 1000000;
 struct SweepOptions {
   std::string rom, out = "sweep.h5", monitor = "LE";
   double omega_min = 0, omega_max = 0, omega_step = 0, dt = 0, fmax = 10000.0;
+  /// batch: -sweep_batch; unless given (batch_given), 16 where the potential kernel runs its
+  /// AVX-512 build and 8 otherwise (default_sweep_batch; the fastest measured, bench/README.md).
   PetscInt bins = 500, batch = 8;
+  PetscBool batch_given = PETSC_FALSE;
   PetscBool linear = PETSC_FALSE, restart = PETSC_FALSE, single = PETSC_FALSE;
   SweepKernel kernel = SweepKernel::Auto;  ///< -sweep_kernel
   /// -sweep_isa auto|avx512|avx2|baseline: the build of the batched potential kernel (-1: auto, the
@@ -169,6 +172,10 @@ struct SweepOptions {
   /// a state, else from rest. Empty: every chain is done.
   std::vector<SpeedTask> next_in_chains(const std::vector<SpeedResult>& done) const;
 };
+
+/// The lanes per rank of a sweep with no -sweep_batch: 16 if isa (a KernelIsa, or -1: the widest
+/// this processor runs) is Avx512, else 8.
+int default_sweep_batch(int isa);
 
 /// The predicted cost of a sweep, from a measured step rate (measure_step_rate, every rank for
 /// `seconds` at the lowest speed of todo, the mean taken).
