@@ -470,6 +470,17 @@ TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
     b.apply(L, groups.data(), groups.size(), Q.data(), Y.data());
     return Y;
   };
+  // Whether every pass of `passes` gives each of its lanes the bits of Yall.
+  auto same_in_every_pass = [&](const sim::CubicKernelBatch& b, const std::vector<double>& Yall) {
+    bool same = true;
+    for (const auto& groups : passes) {
+      const auto Y = run(b, groups);
+      for (std::size_t g : groups)
+        for (std::size_t j = 0; j < r; ++j)
+          for (std::size_t l = 4 * g; l < 4 * g + 4; ++l) same = same && Y[j * L + l] == Yall[j * L + l];
+    }
+    return same;
+  };
   const bool fused = sim::kernel_isa_supported(sim::KernelIsa::Avx2);
   if (!sim::kernel_isa_supported(sim::KernelIsa::Avx512))
     print0(PETSC_COMM_WORLD, "  NOTICE: this processor has no AVX-512: that build of the kernel is not run here\n");
@@ -493,7 +504,7 @@ TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
       const bool fuses = isa != sim::KernelIsa::Baseline;
       const auto Yall = run(b, passes[0]);
       double worst = 0.0, scale = 0.0;
-      bool same_lane = true, same_pass = true, untouched = true;
+      bool same_lane = true, untouched = true;
       for (std::size_t j = 0; j < r; ++j) {
         for (std::size_t l = 0; l < lanes; ++l) {
           const double y_ref = lane[j * lanes + l];
@@ -502,14 +513,9 @@ TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
         }
         for (std::size_t l = lanes; l < L; ++l) untouched = untouched && Yall[j * L + l] == 7.0;
       }
-      for (const auto& groups : passes) {
-        const auto Y = run(b, groups);
-        for (std::size_t g : groups)
-          for (std::size_t j = 0; j < r; ++j)
-            for (std::size_t l = 4 * g; l < 4 * g + 4; ++l) same_pass = same_pass && Y[j * L + l] == Yall[j * L + l];
-      }
       EXPECT_TRUE(untouched) << sim::kernel_isa_name(isa) << ": a group not listed was written";
-      EXPECT_TRUE(same_pass) << sim::kernel_isa_name(isa) << ": a lane's bits depend on the groups beside it";
+      EXPECT_TRUE(same_in_every_pass(b, Yall))
+          << sim::kernel_isa_name(isa) << ": a lane's bits depend on the groups beside it";
       if (fuses && fused)
         EXPECT_TRUE(same_lane) << sim::kernel_isa_name(isa) << ": not the single-speed kernel's bits";
       else  // products and sums rounded apart: the same sums, rounded otherwise
@@ -520,14 +526,8 @@ TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
         if (float_ref.empty()) float_ref = Yf;
         EXPECT_TRUE(Yf == float_ref) << sim::kernel_isa_name(isa) << ": float coefficients differ between builds";
       }
-      bool float_pass = true;
-      for (const auto& groups : passes) {
-        const auto Y = run(f, groups);
-        for (std::size_t g : groups)
-          for (std::size_t j = 0; j < r; ++j)
-            for (std::size_t l = 4 * g; l < 4 * g + 4; ++l) float_pass = float_pass && Y[j * L + l] == Yf[j * L + l];
-      }
-      EXPECT_TRUE(float_pass) << sim::kernel_isa_name(isa) << ": float lanes depend on the groups beside them";
+      EXPECT_TRUE(same_in_every_pass(f, Yf))
+          << sim::kernel_isa_name(isa) << ": float lanes depend on the groups beside them";
       print0(PETSC_COMM_WORLD, "  %s, %s tensors: %s the single-speed kernel (%.1e)\n", sim::kernel_isa_name(isa),
              force == &exact ? "exact" : "STEP", same_lane ? "bitwise" : "not bitwise", worst / scale);
     }
