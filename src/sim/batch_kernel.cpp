@@ -51,6 +51,7 @@ inline __attribute__((always_inline)) void vst8(double* p, v8 v) { *reinterpret_
 // both the load-and-shuffle of bcast and a scalar's broadcast into a 64-byte load (mostly across
 // two cache lines) and a register broadcast on port 5, one of the two 512-bit multiply-add ports.
 // (Used in the x86-64-v4 build only.)
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 inline __attribute__((always_inline)) v8 bcast8(const double* c) {
   v8 v;
   __asm__("vbroadcastsd %1, %0" : "=v"(v) : "m"(*c));
@@ -61,6 +62,13 @@ inline __attribute__((always_inline)) v8 bcast8(const float* c) {
   __asm__("vbroadcastss %1, %t0\n\tvcvtps2pd %t0, %0" : "=v"(v) : "m"(*c));
   return v;
 }
+#else  // other compilers and processors: the generic vector code (never chosen, kernel_isa_supported)
+template <class T>
+inline v8 bcast8(const T* c) {
+  const double x = static_cast<double>(*c);
+  return v8{x, x, x, x, x, x, x, x};
+}
+#endif
 // The width of a group: 4 lanes in one AVX2 register (a sweep's lanes), or 1 lane in a scalar
 // (`morse simulate`, CubicKernel). The same operations in the same order, each rounded alike (a
 // fused multiply-add in the AVX2 + FMA clone, a product then a sum in the baseline), so that a
@@ -98,7 +106,8 @@ struct Narrow {
   }
   static V zero() { return 0.0; }
 };
-// The kernels load 8 coefficients (Wide8's broadcast) from any coefficient: the arrays are padded.
+// Wide's broadcast loads 4 coefficients from any coefficient: the arrays are padded (by a whole
+// 64-byte line).
 constexpr std::size_t kPad = 8;
 
 // Rows kb .. kb + RH - 1 of a triangle of n columns (row kb + a: its column l at p[a][l]), for NG
@@ -369,10 +378,16 @@ bool kernel_isa_supported(KernelIsa isa) {
   switch (isa) {
     case KernelIsa::Baseline:
       return true;
+#if MORSE_HAVE_ISA_BUILDS
     case KernelIsa::Avx2:
-      return MORSE_HAVE_ISA_BUILDS && __builtin_cpu_supports("x86-64-v3");
+      return __builtin_cpu_supports("x86-64-v3");
     case KernelIsa::Avx512:
-      return MORSE_HAVE_ISA_BUILDS && __builtin_cpu_supports("x86-64-v4");
+      return __builtin_cpu_supports("x86-64-v4");
+#else
+    case KernelIsa::Avx2:
+    case KernelIsa::Avx512:
+      return false;
+#endif
   }
   return false;
 }

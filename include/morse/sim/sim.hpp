@@ -317,7 +317,7 @@ class CubicKernelBatch {
   std::size_t r_ = 0, n3_ = 0, n4_ = 0;
   bool single_ = false;
   KernelIsa isa_ = KernelIsa::Baseline;
-  std::vector<double> c3_, c4_, P3_;  // padded (the kernel loads 8 from any coefficient)
+  std::vector<double> c3_, c4_, P3_;  // padded (the kernel loads 4 from any coefficient)
   std::vector<float> c3f_, c4f_;
   mutable std::vector<double> X_, G_;  // the listed groups, compact: r x 8 ceil(ng / 2)
 };
