@@ -148,8 +148,27 @@ inline __attribute__((always_inline)) void row_block(std::size_t kb, std::size_t
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) Op::st(G + l * ld + Op::W * g, y[g]);
   }
-  // The rectangle: every row of the block, columns kb + RH .. n - 1.
-  for (std::size_t l = kb + RH; l < n; ++l) {
+  // The rectangle: every row of the block, columns kb + RH .. n - 1. With one 8-lane register
+  // (NG = 1), two columns at a time, interleaved: each column's g_l is a chain of RH dependent
+  // multiply-adds, and two chains side by side keep both ports busy (theory §10.4). A row's acc
+  // still takes column l before l + 1, so the bits are those of one column at a time.
+  std::size_t l0 = kb + RH;
+  if constexpr (Op::W == 8 && NG == 1) {
+    for (; l0 + 2 <= n; l0 += 2) {
+      const typename Op::V x0 = Op::ld(X + l0 * ld), x1 = Op::ld(X + (l0 + 1) * ld);
+      typename Op::V y0 = Op::ld(G + l0 * ld), y1 = Op::ld(G + (l0 + 1) * ld);
+#pragma GCC unroll 16
+      for (int a = 0; a < RH; ++a) {
+        const typename Op::V c0 = Op::bc(pa[a] + l0), c1 = Op::bc(pa[a] + l0 + 1);
+        acc[a][0] += c0 * x0;
+        y0 += c0 * s[a][0];
+        acc[a][0] += c1 * x1;
+        y1 += c1 * s[a][0];
+      }
+      Op::st(G + l0 * ld, y0), Op::st(G + (l0 + 1) * ld, y1);
+    }
+  }
+  for (std::size_t l = l0; l < n; ++l) {
     typename Op::V x[NG], y[NG];
 #pragma GCC unroll 4
     for (int g = 0; g < NG; ++g) x[g] = Op::ld(X + l * ld + Op::W * g), y[g] = Op::ld(G + l * ld + Op::W * g);
