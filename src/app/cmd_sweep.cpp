@@ -150,9 +150,8 @@ void run_sweep(MPI_Comm comm) {
          wall > 0 ? lane_steps / wall / size : 0.0, wall > 0 ? 100.0 * kernel / (wall * size) : 0.0,
          so.linear ? "linear" : sim::kernel_name(st.kernel), so.single ? ", float coefficients" : "",
          !so.linear && st.kernel == sim::SweepKernel::Potential ? ", " : "",
-         !so.linear && st.kernel == sim::SweepKernel::Potential
-             ? sim::kernel_isa_name(so.isa >= 0 ? static_cast<sim::KernelIsa>(so.isa) : sim::best_kernel_isa())
-             : "",
+         !so.linear && st.kernel == sim::SweepKernel::Potential ? sim::kernel_isa_name(sim::kernel_isa_or_best(so.isa))
+                                                                : "",
          wall > 0 ? 100.0 * idle / (wall * size) : 0.0);
   if (size > 1) {  // the load balance, rank by rank
     std::vector<double> idles(static_cast<std::size_t>(size), 0.0);

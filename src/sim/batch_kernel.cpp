@@ -31,7 +31,6 @@ namespace {
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double v4 __attribute__((vector_size(32), aligned(8)));
 inline __attribute__((always_inline)) v4 vld(const double* p) { return *reinterpret_cast<const v4*>(p); }
-inline __attribute__((always_inline)) void vst(double* p, v4 v) { *reinterpret_cast<v4*>(p) = v; }
 // The coefficient at c in all 4 lanes. Written as a load of 4 and a shuffle, which GCC turns into
 // one vbroadcastsd from memory in the AVX2 clone (a broadcast of a scalar used twice becomes
 // vmovddup + vinsertf128, a shuffle on a multiply-add port); the coefficient arrays are padded so
@@ -45,13 +44,11 @@ inline __attribute__((always_inline)) v4 bcast(const float* c) {
 }
 // 8 lanes in one AVX-512 register (the x86-64-v4 build only): two adjacent groups of 4.
 typedef double v8 __attribute__((vector_size(64), aligned(8)));
-inline __attribute__((always_inline)) v8 vld8(const double* p) { return *reinterpret_cast<const v8*>(p); }
-inline __attribute__((always_inline)) void vst8(double* p, v8 v) { *reinterpret_cast<v8*>(p) = v; }
 // A broadcast from memory (vbroadcastsd zmm, m64: a load port only), written out because GCC turns
 // both the load-and-shuffle of bcast and a scalar's broadcast into a 64-byte load (mostly across
 // two cache lines) and a register broadcast on port 5, one of the two 512-bit multiply-add ports.
 // (Used in the x86-64-v4 build only.)
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#if MORSE_GCC_X86
 inline __attribute__((always_inline)) v8 bcast8(const double* c) {
   v8 v;
   __asm__("vbroadcastsd %1, %0" : "=v"(v) : "m"(*c));
@@ -69,32 +66,38 @@ inline v8 bcast8(const T* c) {
   return v8{x, x, x, x, x, x, x, x};
 }
 #endif
-// The width of a group: 4 lanes in one AVX2 register (a sweep's lanes), or 1 lane in a scalar
-// (`morse simulate`, CubicKernel). The same operations in the same order, each rounded alike (a
-// fused multiply-add in the AVX2 + FMA clone, a product then a sum in the baseline), so that a
-// lane gets the same bits at either width.
-struct Wide {
-  typedef v4 V;
-  static constexpr std::size_t W = 4;
-  static V ld(const double* p) { return vld(p); }
-  static void st(double* p, V v) { vst(p, v); }
+// The width of a group: 4 lanes in one AVX2 register (a sweep's lanes; Wide8: two groups in one
+// AVX-512 register), or 1 lane in a scalar (`morse simulate`, CubicKernel). The same operations in
+// the same order, each rounded alike (a fused multiply-add in the x86-64-v3 and v4 builds, a product
+// then a sum in the baseline), so that a lane gets the same bits at any width.
+// The vector of N lanes (a member typedef keeps aligned(8), which a template argument would drop).
+template <std::size_t N>
+struct VecOf;
+template <>
+struct VecOf<4> {
+  typedef v4 type;
+};
+template <>
+struct VecOf<8> {
+  typedef v8 type;
+};
+template <std::size_t N>
+struct Lanes {
+  typedef typename VecOf<N>::type V;
+  static constexpr std::size_t W = N;
+  static V ld(const double* p) { return *reinterpret_cast<const V*>(p); }
+  static void st(double* p, V v) { *reinterpret_cast<V*>(p) = v; }
   template <class T>
   static V bc(const T* c) {
-    return bcast(c);
+    if constexpr (N == 8)
+      return bcast8(c);
+    else
+      return bcast(c);
   }
-  static V zero() { return V{0.0, 0.0, 0.0, 0.0}; }
+  static V zero() { return V{}; }
 };
-struct Wide8 {
-  typedef v8 V;
-  static constexpr std::size_t W = 8;
-  static V ld(const double* p) { return vld8(p); }
-  static void st(double* p, V v) { vst8(p, v); }
-  template <class T>
-  static V bc(const T* c) {
-    return bcast8(c);
-  }
-  static V zero() { return V{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}; }
-};
+using Wide = Lanes<4>;
+using Wide8 = Lanes<8>;
 struct Narrow {
   typedef double V;
   static constexpr std::size_t W = 1;
@@ -319,14 +322,12 @@ inline __attribute__((always_inline)) void gradient(std::size_t r, std::size_t n
 // The batched gradient, one build per instruction set (chosen by CubicKernelBatch, not by GCC's
 // dispatch, so that a test can run each on a machine that has them all). The x86-64-v3 and v4
 // builds fuse every multiply-add, the baseline rounds products and sums apart.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#if MORSE_GCC_X86
 #define MORSE_TARGET_V3 __attribute__((target("arch=x86-64-v3")))
 #define MORSE_TARGET_V4 __attribute__((target("arch=x86-64-v4")))
-#define MORSE_HAVE_ISA_BUILDS 1
 #else
 #define MORSE_TARGET_V3
 #define MORSE_TARGET_V4
-#define MORSE_HAVE_ISA_BUILDS 0
 #endif
 template <class T>
 void gradient_baseline(std::size_t r, std::size_t ng, std::size_t ld, const T* c3, const T* c4, const double* X,
@@ -397,7 +398,7 @@ bool kernel_isa_supported(KernelIsa isa) {
   switch (isa) {
     case KernelIsa::Baseline:
       return true;
-#if MORSE_HAVE_ISA_BUILDS
+#if MORSE_GCC_X86
     case KernelIsa::Avx2:
       return __builtin_cpu_supports("x86-64-v3");
     case KernelIsa::Avx512:
@@ -416,6 +417,8 @@ KernelIsa best_kernel_isa() {
     if (kernel_isa_supported(isa)) return isa;
   return KernelIsa::Baseline;
 }
+
+KernelIsa kernel_isa_or_best(int isa) { return isa >= 0 ? static_cast<KernelIsa>(isa) : best_kernel_isa(); }
 
 const char* kernel_isa_name(KernelIsa isa) {
   switch (isa) {

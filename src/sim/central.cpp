@@ -510,7 +510,7 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
   callback(ss);
   // Tangent checks (Settings::tangent_checks) at steps 0, every, 2 every, ...
   const bool check_tangent = kernel && !m.massless && s.tangent_checks > 0;
-  const long check_every = check_tangent ? std::max(1L, n_steps / s.tangent_checks) : 0;
+  const long check_every = check_tangent ? tangent_check_every(n_steps, s.tangent_checks) : 0;
   // What a divergence message says about the step.
   auto divergence_note = [&]() -> std::string {
     if (!kernel || m.massless) return ": reduce -sim_dt";

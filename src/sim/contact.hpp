@@ -6,6 +6,7 @@
 #include <petscsys.h>
 #include <petscblaslapack.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -18,12 +19,21 @@
 // dispatched on the CPU model and never chosen on AMD processors. In the x86-64-v3 clone GCC fuses
 // a * b + c into one FMA (C++ contracts by default).
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define MORSE_GCC_X86 1  // GCC on x86-64: multiversioned and per-ISA builds of the kernels
+#else
+#define MORSE_GCC_X86 0
+#endif
+#if MORSE_GCC_X86
 #define MORSE_KERNEL_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define MORSE_KERNEL_CLONES
 #endif
 
 namespace morse::sim::detail {
+
+/// The steps between tangent checks (Settings::tangent_checks = checks > 0) of a run of n_steps:
+/// the checks are at steps 0, every, 2 every, ... (simulate and sweep alike).
+inline long tangent_check_every(long n_steps, long checks) { return std::max(1L, n_steps / checks); }
 
 /// Rows per panel of panel_product.
 constexpr std::size_t kPanel = 16;

@@ -562,10 +562,7 @@ bool speeds_differ(const SpeedResult& a, const SpeedResult& b, const std::vector
   return std::abs(fa - fb) > frequency_jump * std::max(fa, fb) && std::abs(fa - fb) > 2.0 * bin;
 }
 
-int default_sweep_batch(int isa) {
-  const KernelIsa used = isa >= 0 ? static_cast<KernelIsa>(isa) : best_kernel_isa();
-  return used == KernelIsa::Avx512 ? 16 : 8;
-}
+int default_sweep_batch(int isa) { return kernel_isa_or_best(isa) == KernelIsa::Avx512 ? 16 : 8; }
 
 SweepCost predict_sweep_cost(MPI_Comm comm, const nlrom::ReducedModel& m, const SweepSettings& s,
                              const SweepOptions& so, const std::vector<SpeedTask>& todo,

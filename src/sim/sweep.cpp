@@ -28,7 +28,7 @@
 // (each product and sum rounded) in the vector body and in the scalar remainder, so a speed's
 // result does not depend on how many lanes share its pass, bitwise. With FMA contraction the
 // vectorized and scalar paths round differently.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#if MORSE_GCC_X86
 #define MORSE_BATCH_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define MORSE_BATCH_CLONES
@@ -219,7 +219,7 @@ class Batch {
         k = std::make_unique<CubicKernel>(m.g, P3_, KernelLayout::Potential);
       if (k->potential()) {
         potential_ = std::make_unique<CubicKernelBatch>(*k, s.single);
-        if (s.isa >= 0) potential_->set_isa(static_cast<KernelIsa>(s.isa));
+        potential_->set_isa(kernel_isa_or_best(s.isa));
         kind_ = SweepKernel::Potential;
       } else {
         lane_kernel_ = std::move(k);
@@ -293,8 +293,8 @@ class Batch {
     } else {  // at rest: q_0 = q_{-1} = 0
       for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
     }
-    if (!s_.base.linear && !m_.massless && s_.base.tangent_checks > 0) {   // at steps 0, every, 2 every, ...
-      ln.check_every = std::max(1L, ln.n_steps / s_.base.tangent_checks);  // sweep_tangent_checks()
+    if (!s_.base.linear && !m_.massless && s_.base.tangent_checks > 0) {  // at steps 0, every, 2 every, ...
+      ln.check_every = detail::tangent_check_every(ln.n_steps, s_.base.tangent_checks);
       for (std::size_t j = 0; j < r_; ++j) col_[j] = Q_[j * L_ + slot];
       check_tangent(ln, 0.0);
     }
@@ -555,8 +555,7 @@ std::size_t sweep_lanes_per_rank(int batch, std::size_t speeds, int ranks) {
 }
 
 long sweep_tangent_checks(long n_steps, long checks) {
-  const long every = std::max(1L, n_steps / checks);  // as Batch::start
-  return 1 + n_steps / every;
+  return 1 + n_steps / detail::tangent_check_every(n_steps, checks);
 }
 
 const char* kernel_name(SweepKernel k) {

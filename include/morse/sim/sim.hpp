@@ -279,6 +279,9 @@ enum class KernelIsa { Baseline, Avx2, Avx512 };
 bool kernel_isa_supported(KernelIsa isa);
 /// The widest supported: Avx512, else Avx2, else Baseline.
 KernelIsa best_kernel_isa();
+/// The build an option's value stands for (SweepSettings::isa, -sweep_isa): isa if >= 0 (a
+/// KernelIsa), else best_kernel_isa().
+KernelIsa kernel_isa_or_best(int isa);
 const char* kernel_isa_name(KernelIsa isa);
 
 /// The nonlinear term G = P3 g~ of several lanes (speeds of a sweep) in one pass over the potential
