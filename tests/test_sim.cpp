@@ -453,6 +453,45 @@ TEST(Sim, BatchedPotentialKernelMatchesReferenceAndIsBitwisePerLane) {
 // kernel (CubicKernel, `morse simulate`) on every build that fuses multiply-adds, and the float
 // builds agree bitwise. The baseline build (products and sums rounded apart) is checked against
 // the reference loops and for its own lane-by-lane bits. A build the processor lacks is refused.
+// V(q) of the batched kernel's coefficients is the potential of the reference force g~ = A(q, q) +
+// B(q, q, q): Euler's theorem on its homogeneous parts (V = q.A(q, q)/3 + q.B(q, q, q)/4) and its
+// derivative along a direction d (central differences against d.g~(q), error O(eps^2): halving eps
+// divides it by 4). Float coefficients: within their rounding.
+TEST(Sim, BatchedKernelPotentialIsTheEnergyOfItsForce) {
+  const auto [exact, step] = box_forces_r30();
+  const std::size_t r = 30;
+  std::vector<double> P3(r * r, 0.0);
+  for (std::size_t i = 0; i < r; ++i) P3[i * r + i] = 1.0;
+  std::vector<double> q(r), d(r), qn(r), gp(r), gm(r), qa(r), qb(r);
+  for (std::size_t j = 0; j < r; ++j) {
+    q[j] = 1e-3 * std::sin(0.7 * static_cast<double>(j) + 0.1), qn[j] = -q[j];
+    d[j] = std::cos(1.3 * static_cast<double>(j) + 0.4);
+  }
+  for (const nlrom::CubicForce* force : {&exact, &step}) {
+    const sim::CubicKernel pot(*force, P3, sim::KernelLayout::Potential);
+    force->evaluate(q.data(), gp.data());
+    force->evaluate(qn.data(), gm.data());
+    double euler = 0.0, dg = 0.0;
+    for (std::size_t i = 0; i < r; ++i)
+      euler += q[i] * ((gp[i] + gm[i]) / 6.0 + (gp[i] - gm[i]) / 8.0), dg += d[i] * gp[i];
+    const sim::CubicKernelBatch b(pot), f(pot, true);
+    const double V = b.potential(q.data()), Vf = f.potential(q.data());
+    EXPECT_GT(std::abs(V), 0.0);
+    EXPECT_LE(std::abs(V - euler), 1e-12 * std::abs(euler)) << V << " against " << euler;
+    EXPECT_LE(std::abs(Vf - euler), 1e-6 * std::abs(euler)) << Vf << " against " << euler;
+    double err[2];
+    for (int k = 0; k < 2; ++k) {
+      const double eps = 1e-7 / (1 << k);  // 1e-4 of q: truncation (1e-8) far above round-off
+      for (std::size_t j = 0; j < r; ++j) qa[j] = q[j] + eps * d[j], qb[j] = q[j] - eps * d[j];
+      err[k] = std::abs((b.potential(qa.data()) - b.potential(qb.data())) / (2 * eps) - dg);
+    }
+    EXPECT_LE(err[0], 1e-7 * std::abs(dg)) << err[0] << " against " << dg;
+    EXPECT_NEAR(err[0] / err[1], 4.0, 0.2) << err[0] << ", " << err[1];
+    print0(PETSC_COMM_WORLD, "  %s: V %.6e, Euler %.6e (float %.1e off), dV/ds error %.2e then %.2e (d.g %.3e)\n",
+           force == &exact ? "exact" : "STEP", V, euler, std::abs(Vf - euler) / std::abs(euler), err[0], err[1], dg);
+  }
+}
+
 TEST(Sim, BatchedPotentialKernelIsBitwiseTheSameOnEveryInstructionSet) {
   const auto [exact, step] = box_forces_r30();
   const std::size_t r = 30, L = 24, lanes = 20;  // groups 0..4 used; group 5 must stay untouched

@@ -480,6 +480,33 @@ void CubicKernelBatch::apply(std::size_t L, const std::size_t* groups, std::size
     project_avx2(r_, L, groups, ng, ld, P3_.data(), G, Y);
 }
 
+namespace {
+// V(q) = sum_{i<=j<=k} c3 q_i q_j q_k + sum_{i<=j<=k<=l} c4 q_i q_j q_k q_l, the coefficients in
+// the lexicographic order of the sorted tuples (the last index innermost, contiguous).
+template <class T>
+double potential_of_coefficients(std::size_t r, const T* c3, const T* c4, const double* q) {
+  double v3 = 0.0, v4 = 0.0;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = i; j < r; ++j) {
+      const double qij = q[i] * q[j];
+      double s3 = 0.0;
+      for (std::size_t k = j; k < r; ++k) s3 += static_cast<double>(*c3++) * q[k];
+      v3 += qij * s3;
+      for (std::size_t k = j; k < r; ++k) {
+        double s4 = 0.0;
+        for (std::size_t l = k; l < r; ++l) s4 += static_cast<double>(*c4++) * q[l];
+        v4 += qij * q[k] * s4;
+      }
+    }
+  return v3 + v4;
+}
+}  // namespace
+
+double CubicKernelBatch::potential(const double* q) const {
+  return single_ ? potential_of_coefficients(r_, c3f_.data(), c4f_.data(), q)
+                 : potential_of_coefficients(r_, c3_.data(), c4_.data(), q);
+}
+
 double CubicKernelBatch::flops() const {
   return 4.0 * static_cast<double>(n3_ + n4_) + 2.0 * static_cast<double>(r_ * r_);
 }

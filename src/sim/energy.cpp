@@ -9,7 +9,9 @@
 
 namespace morse::sim {
 
-double discrete_energy(const nlrom::ReducedModel& m, const double* qa, const double* qb, double h, bool nonlinear) {
+namespace {
+// v^T M v / 2 + q_a^T K q_b / 2, v = (q_b - q_a) / h.
+double quadratic_energy(const nlrom::ReducedModel& m, const double* qa, const double* qb, double h) {
   const std::size_t r = static_cast<std::size_t>(m.r);
   std::vector<double> v(r);
   for (std::size_t i = 0; i < r; ++i) v[i] = (qb[i] - qa[i]) / h;
@@ -19,6 +21,22 @@ double discrete_energy(const nlrom::ReducedModel& m, const double* qa, const dou
     for (std::size_t j = 0; j < r; ++j) mv += m.M[i * r + j] * v[j], kq += m.K[i * r + j] * qb[j];
     e += 0.5 * (v[i] * mv + qa[i] * kq);
   }
+  return e;
+}
+}  // namespace
+
+double discrete_energy(const nlrom::ReducedModel& m, const double* qa, const double* qb, double h,
+                       const CubicKernelBatch& potential) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  MORSE_CHECK(potential.r() == r, "energy: a potential kernel of r = ", potential.r(), " for a model of r = ", r);
+  std::vector<double> q(r);
+  for (std::size_t i = 0; i < r; ++i) q[i] = 0.5 * (qa[i] + qb[i]);
+  return quadratic_energy(m, qa, qb, h) + potential.potential(q.data());
+}
+
+double discrete_energy(const nlrom::ReducedModel& m, const double* qa, const double* qb, double h, bool nonlinear) {
+  const std::size_t r = static_cast<std::size_t>(m.r);
+  double e = quadratic_energy(m, qa, qb, h);
   if (nonlinear) {
     std::vector<double> q(r), qn(r), gp(r), gm(r);
     for (std::size_t i = 0; i < r; ++i) q[i] = 0.5 * (qa[i] + qb[i]), qn[i] = -q[i];

@@ -245,6 +245,12 @@ class Batch {
     col_.resize(r_), colm_.resize(r_);
     freqs_ = s.frequencies();
   }
+  // E_{n+1/2} of the energy balance from q_a = q_n, q_b = q_{n+1}: V from the batched kernel's
+  // coefficients when it runs (one pass over them), else from the reference force.
+  double energy(const double* qa, const double* qb) const {
+    if (potential_ && !s_.base.linear) return discrete_energy(m_, qa, qb, s_.base.dt, *potential_);
+    return discrete_energy(m_, qa, qb, s_.base.dt, !s_.base.linear);
+  }
   std::size_t free_slots() const {
     std::size_t n = 0;
     for (const auto& l : lanes_) n += !l.busy;
@@ -289,7 +295,7 @@ class Batch {
     if (ln.cs) ln.lam_prev.assign(ln.cs->nodes.size(), 0.0), ln.fric_prev.assign(3 * ln.cs->nodes.size(), 0.0);
     if (continued) {  // q_0, q_{-1}: the final state of speed task.from
       for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = task.q0[j], Qm_[j * L_ + slot] = task.qm0[j];
-      ln.res.energy_start = discrete_energy(m_, task.qm0.data(), task.q0.data(), h, !s_.base.linear);
+      ln.res.energy_start = energy(task.qm0.data(), task.q0.data());
     } else {  // at rest: q_0 = q_{-1} = 0
       for (std::size_t j = 0; j < r_; ++j) Q_[j * L_ + slot] = Qm_[j * L_ + slot] = 0.0;
     }
@@ -404,7 +410,7 @@ class Batch {
     if (n1 != ln.half && n1 != ln.n_steps) return;
     std::vector<double> qn(r_);
     for (std::size_t j = 0; j < r_; ++j) qn[j] = Q_[j * L_ + slot];
-    const double e = discrete_energy(m_, qn.data(), col_.data(), h, !s_.base.linear);
+    const double e = energy(qn.data(), col_.data());
     if (n1 == ln.half) ln.res.energy_half = e, ln.res.work_half = ln.ledger->work();
     if (n1 == ln.n_steps) ln.res.energy_end = e, ln.res.work_end = ln.ledger->work();
   }

@@ -156,6 +156,11 @@ struct EnergyWork {
 /// E_{n+1/2} of EnergyWork for q_a = q_n, q_b = q_{n+1}. V(q) = q.[g(q) + g(-q)] / 6 + q.[g(q) -
 /// g(-q)] / 8 (Euler's theorem on the cubic and quartic parts of the potential).
 double discrete_energy(const nlrom::ReducedModel& m, const double* q_a, const double* q_b, double h, bool nonlinear);
+class CubicKernelBatch;
+/// The same with V from the kernel's potential coefficients (CubicKernelBatch::potential), the
+/// same up to round-off.
+double discrete_energy(const nlrom::ReducedModel& m, const double* q_a, const double* q_b, double h,
+                       const CubicKernelBatch& potential);
 
 struct StepState {
   long step = 0;  ///< 0 = initial state
@@ -315,6 +320,11 @@ class CubicKernelBatch {
   /// number of lanes).
   double flops() const;
   double bytes() const;
+  /// The potential V(q) whose gradient is g~(q) (the cubic and quartic energy coefficients of one
+  /// lane, q of r entries; the rounded coefficients if single): one pass over them, about half the
+  /// work of one lane's apply(). The sweep's energy balance takes it instead of two evaluations of
+  /// the reference force.
+  double potential(const double* q) const;
 
  private:
   std::size_t r_ = 0, n3_ = 0, n4_ = 0;
