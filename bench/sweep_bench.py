@@ -16,7 +16,7 @@ Parts, each --runs times (medians):
     of --kernels (-sweep_kernel lane, potential, folded; float = potential with -sweep_float;
     potential-avx2, potential-avx512, potential-baseline: potential with -sweep_isa avx2, ...):
     lane-steps/s and the gain over the lane kernel with as many lanes;
-  - map: the same 16-speed sweep (-sweep_batch --map-batch, 8) on 2 ranks with each kernel of --kernels, and on 1
+  - map: a sweep of --map-speeds speeds (16; -sweep_batch --map-batch, 8) on 2 ranks with each kernel of --kernels, and on 1
     rank with the default kernel: lane-steps/s per core, the gain of each kernel over `lane` (the
     sweep's kernel before the batched potential kernel, issue 29: target x3 at r = 79), and the
     2-rank efficiency t1 / (2 t2).
@@ -54,7 +54,9 @@ def main():
     ap.add_argument("--lanes", default="1,4,8,16")
     ap.add_argument("--kernels", default="lane,potential,float,folded",
                     help="sweep kernels to time (lane, potential, float, folded)")
-    ap.add_argument("--map-batch", type=int, default=8, help="-sweep_batch of the 16-speed map part")
+    ap.add_argument("--map-batch", type=int, default=8, help="-sweep_batch of the map part")
+    ap.add_argument("--map-speeds", type=int, default=16,
+                    help="speeds of the map part (1 rad/s apart from 1,000 rad/s); its keys keep the name map16")
     ap.add_argument("--limits", action="store_true",
                     help="measure the machine's FMA peak and read bandwidth (bench/machine_limits.cpp) and give the "
                          "single run's ratio to them")
@@ -133,11 +135,11 @@ def main():
                 runs["batch"][k][str(L)].append(x)
     for _ in range(args.runs):
         for k in kernels:
-            x = sweep(16, args.map_batch, 2, args.revolutions, k)
+            x = sweep(args.map_speeds, args.map_batch, 2, args.revolutions, k)
             if x is None:
                 return 2
             runs["map"][k].append(x)
-        x = sweep(16, args.map_batch, 1, args.revolutions, "potential")
+        x = sweep(args.map_speeds, args.map_batch, 1, args.revolutions, "potential")
         if x is None:
             return 2
         runs["scaling"]["1"].append(x)
@@ -153,7 +155,7 @@ def main():
     for x in runs["map"].get("potential", []):
         isa = isa or x.get("isa")
     summary = {
-        "r": r_size, "potential_isa": isa, "map_batch": args.map_batch, "dt": args.dt, "flops_per_lane_step_potential": flops_potential,
+        "r": r_size, "potential_isa": isa, "map_batch": args.map_batch, "map_speeds": args.map_speeds, "dt": args.dt, "flops_per_lane_step_potential": flops_potential,
         "single_steps_per_s": single, "single_kernel": runs["single"][0]["kernel"],
         "batch_lane_steps_per_s": {k: {str(L): batch[k][L] for L in lanes} for k in kernels},
         "map16_2ranks_lane_steps_per_s_per_core": {k: mapr[k] / 2 for k in kernels},
@@ -193,12 +195,12 @@ def main():
         print("  one core, %2d lanes: %s" % (L, ", ".join(
             "%s %.0f%s" % (k, batch[k][L], " (x%.2f)" % summary["batch_gain_over_lane_kernel"][k][str(L)]
                            if "lane" in kernels else "") for k in kernels)) + " lane-steps/s")
-    print("  16-speed map on 2 ranks, lane-steps/s per core: %s" % ", ".join(
+    print("  %d-speed map on 2 ranks, lane-steps/s per core: %s" % (args.map_speeds, ", ".join(
         "%s %.0f%s" % (k, mapr[k] / 2, " (x%.2f)" % summary["map16_gain_over_lane_kernel"][k] if "lane" in kernels
-                       else "") for k in kernels))
+                       else "") for k in kernels)))
     if "sweep16_seconds_1_rank" in summary:
-        print("  16-speed sweep (potential): %.2f s on 1 rank, %.2f s on 2 ranks: efficiency %.1f %%" % (
-            summary["sweep16_seconds_1_rank"], summary["sweep16_seconds_2_ranks"],
+        print("  %d-speed sweep (potential): %.2f s on 1 rank, %.2f s on 2 ranks: efficiency %.1f %%" % (
+            args.map_speeds, summary["sweep16_seconds_1_rank"], summary["sweep16_seconds_2_ranks"],
             100 * summary["scaling_efficiency_2_ranks"]))
     stamp = datetime.datetime.utcnow().strftime("%Y-%m-%dT%H%M%SZ")
     name = os.path.splitext(os.path.basename(args.mesh))[0]
