@@ -78,7 +78,8 @@ stopped and resumed, and the stages can run at different times.
   windows  the nonlinear map on fine grids around its interactions (issue 28): `morse sweep` of
           the maps' model (built here if `maps` has not run) with geometric nonlinearity over each
           grid of --windows (lo:hi:step rad/s, from rest, --window-revs revolutions, step
-          --map-dt-nonlinear, the maps' sense and casing). Prints per speed the LE RMS, max |u_r|,
+          --map-dt-nonlinear, the maps' sense and casing, -sweep_retries --window-retries if given).
+          Prints per speed the LE RMS, max |u_r|,
           the dominant spectral line and its engine order, the largest total normal force, the
           energy at the end and the friction work over the second half; then the window's largest
           RMS and the crossing of its engine order with the free 1B. The two default windows (the
@@ -481,7 +482,8 @@ def windows_stage(st, args, mesh):
         path = st.file(name + ".h5")
         sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
                  "-sweep_omega_step", step, "-sim_revolutions", args.window_revs, "-sim_dt", args.map_dt_nonlinear,
-                 "-sweep_rotation", sense] + CASING
+                 "-sweep_rotation", sense] + CASING + \
+            ([] if args.window_retries is None else ["-sweep_retries", args.window_retries])
         st.rec.pop(name, None) if not os.path.exists(path) else None
         st.run(args.ranks, sargs, "%s (%s rad/s, %g revolutions)" % (name, rng, args.window_revs), path + ".done",
                name)
@@ -726,6 +728,8 @@ def main():
     ap.add_argument("--windows", default="1280:1440:10,1680:1840:10",
                     help="windows: fine grids lo:hi:step of the nonlinear map, comma separated")
     ap.add_argument("--window-revs", type=float, default=20.0, help="windows: revolutions per speed")
+    ap.add_argument("--window-retries", type=int, default=None,
+                    help="windows: -sweep_retries (default: morse's, 1; a retry at half the step costs twice the speed)")
     ap.add_argument("--cont-maps", default="linear", help="continuation: linear and/or nonlinear")
     ap.add_argument("--cont-range", default="750:1450:1", help="continuation: lo:hi:step rad/s")
     ap.add_argument("--cont-revs", type=float, default=50.0, help="continuation: revolutions per speed")
