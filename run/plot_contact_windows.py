@@ -5,8 +5,12 @@ axis, the engine order of each speed's dominant spectral line (f_dominant 2 pi /
 window's integer order drawn dotted.
 
 usage: /usr/bin/python3 run/plot_contact_windows.py OUT_DIR [--png docs/img/contact_windows_nonlinear.png]
+           [--files PATTERN] [--lines 2,6]
 
-Reads OUT_DIR/window_nonlinear_*.h5 (/sweep of `morse sweep`). Needs numpy, h5py, matplotlib (Agg).
+Reads OUT_DIR/window_nonlinear_*.h5 (or --files, a glob in OUT_DIR; /sweep of `morse sweep`). With
+--lines, a second row of panels gives the amplitude [mm] of the spectral lines of those engine
+orders (the largest of the three bins around k |Omega| / 2 pi), to tell a locked response from a
+static push that the RMS (which keeps the mean) does not. Needs numpy, h5py, matplotlib (Agg).
 Exits non-zero if no window file is found.
 """
 import argparse
@@ -33,22 +37,45 @@ def load(path):
         rms, status = s["rms"][:][o], s["status"][:][o]
         spec, freq = s["spectrum"][:][o], s["frequency"][:]
     w = w[o]
-    return w, 1e3 * rms, status, dominant_lines(spec, freq) * 2 * math.pi / w
+    return w, 1e3 * rms, status, dominant_lines(spec, freq) * 2 * math.pi / w, 1e3 * spec, freq
+
+
+def line_amplitude(w, spec, freq, order):
+    """Per speed, the largest spectrum value of the three bins around order |Omega| / 2 pi."""
+    out = np.zeros(w.size)
+    for k in range(w.size):
+        i = int(np.argmin(np.abs(freq - order * w[k] / (2 * math.pi))))
+        out[k] = spec[k, max(i - 1, 0):i + 2].max()
+    return out
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out")
     ap.add_argument("--png", default="contact_windows_nonlinear.png")
+    ap.add_argument("--files", default="window_nonlinear_*.h5", help="a glob in OUT_DIR")
+    ap.add_argument("--lines", default="", help="engine orders whose line amplitudes to draw, e.g. 2,6")
     a = ap.parse_args()
-    files = sorted(glob.glob(os.path.join(a.out, "window_nonlinear_*.h5")),
-                   key=lambda p: float(os.path.basename(p).split("_")[3]))
+    files = sorted(glob.glob(os.path.join(a.out, a.files)), key=lambda p: float(os.path.basename(p).split("_")[3]))
     if not files:
-        print("plot_contact_windows: no window_nonlinear_*.h5 in %s" % a.out, file=sys.stderr)
+        print("plot_contact_windows: no %s in %s" % (a.files, a.out), file=sys.stderr)
         return 1
-    fig, axes = plt.subplots(1, len(files), figsize=(5.5 * len(files), 4.0), squeeze=False)
-    for ax, path in zip(axes[0], files):
-        w, rms, status, order = load(path)
+    lines = [int(x) for x in a.lines.split(",") if x]
+    rows = 2 if lines else 1
+    fig, axes = plt.subplots(rows, len(files), figsize=(5.5 * len(files), 4.0 * rows), squeeze=False)
+    for col, path in enumerate(files):
+        ax = axes[0][col]
+        w, rms, status, order, spec, freq = load(path)
+        if lines:
+            ok = status == 0
+            for j, n in enumerate(lines):
+                axes[1][col].plot(w[ok], line_amplitude(w[ok], spec[ok], freq, n), "o-", ms=3, color="C%d" % (j + 2),
+                                  label="engine order %d" % n)
+            axes[1][col].set_xlabel("|Ω| [rad/s]")
+            axes[1][col].set_ylabel("line amplitude [mm]")
+            axes[1][col].set_ylim(bottom=0)
+            axes[1][col].grid(alpha=0.3)
+            axes[1][col].legend(fontsize=8)
         ok = status == 0
         ax.plot(w[ok], rms[ok], "o-", color="C0", ms=4, label="LE RMS, 2nd half")
         if (~ok).any():
