@@ -222,7 +222,7 @@ class Batch {
         potential_->set_isa(kernel_isa_or_best(s.isa));
         kind_ = SweepKernel::Potential;
         // A lone busy lane takes the single-speed kernel, which streams the coefficients once for
-        // one lane instead of a whole group of four (26 % faster at r = 79): it gives the lane the
+        // one lane instead of a whole group of four (x1.22 at r = 79, bench/README.md): it gives the lane the
         // bits of the fused builds (CubicKernelBatch), so only with them and double coefficients.
         if (!s.single && potential_->isa() != KernelIsa::Baseline && kernel_isa_supported(KernelIsa::Avx2))
           lone_kernel_ = std::move(k);
