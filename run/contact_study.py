@@ -483,7 +483,9 @@ def windows_stage(st, args, mesh):
         sargs = ["sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
                  "-sweep_omega_step", step, "-sim_revolutions", args.window_revs, "-sim_dt", args.map_dt_nonlinear,
                  "-sweep_rotation", sense] + CASING + \
-            ([] if args.window_retries is None else ["-sweep_retries", args.window_retries])
+            ([] if args.window_retries is None else ["-sweep_retries", args.window_retries]) + \
+            ([] if args.window_refine <= 0 else ["-sweep_refine_step", args.window_refine] +
+             (["-sweep_refine_orders", args.window_refine_orders] if args.window_refine_orders else []))
         st.rec.pop(name, None) if not os.path.exists(path) else None
         st.run(args.ranks, sargs, "%s (%s rad/s, %g revolutions)" % (name, rng, args.window_revs), path + ".done",
                name)
@@ -499,7 +501,9 @@ def windows_stage(st, args, mesh):
             spec, freq = f["/sweep/spectrum"][:][o], f["/sweep/frequency"][:]
             dt = f["/sweep/dt"][:][o]
             eb = f["/sweep/energy_balance"][:][o]
+            eo = f["/sweep/order_amplitude"][:][o] if "/sweep/order_amplitude" in f else None
         rows = []
+        shown = [int(x) for x in args.window_lines.split(",") if x] if eo is not None else []
         print("  %s: |Omega| [rad/s], LE RMS [mm], max |u_r| [mm], dominant line [Hz], its engine order, "
               "max total force [kN], energy at the end [J], friction work over the 2nd half [J], step [s]" % name, flush=True)
         lines = dominant_lines(spec, freq)
@@ -509,10 +513,15 @@ def windows_stage(st, args, mesh):
                    "max_mm": 1e3 * float(umax[k]), "line_hz": line, "order": line * 2 * math.pi / w[k],
                    "force_kn": 1e-3 * float(fmax[k]), "energy_end": float(eb[k, 5]),
                    "friction_2nd_half": float(eb[k, 8] - eb[k, 3]), "dt": float(dt[k])}
+            for n in shown:  # engine-order lines at their exact frequencies (/sweep/order_amplitude)
+                if n <= eo.shape[1]:
+                    row["eo%d_mm" % n] = 1e3 * float(eo[k, n - 1])
             rows.append(row)
-            print("    %7.1f  %6.3f  %6.2f  %7.1f  %5.2f  %8.1f  %7.1f  %8.1f  %.3g%s" %
+            print("    %7.1f  %6.3f  %6.2f  %7.1f  %5.2f  %8.1f  %7.1f  %8.1f  %.3g%s%s" %
                   (row["omega"], row["rms_mm"], row["max_mm"], line, row["order"], row["force_kn"],
-                   row["energy_end"], row["friction_2nd_half"], row["dt"], "" if status[k] == 0 else "  FAILED"),
+                   row["energy_end"], row["friction_2nd_half"], row["dt"],
+                   "".join("  eo%d %.3f mm" % (n, row["eo%d_mm" % n]) for n in shown if "eo%d_mm" % n in row),
+                   "" if status[k] == 0 else "  FAILED"),
                   flush=True)
         ok = [r for r in rows if r["status"] == 0]
         peak = max(ok, key=lambda r: r["rms_mm"]) if ok else None
@@ -730,6 +739,12 @@ def main():
     ap.add_argument("--window-revs", type=float, default=20.0, help="windows: revolutions per speed")
     ap.add_argument("--window-retries", type=int, default=None,
                     help="windows: -sweep_retries (default: morse's, 1; a retry at half the step costs twice the speed)")
+    ap.add_argument("--window-refine", type=float, default=0.0,
+                    help="windows: -sweep_refine_step (0: none; the window's step must be 2^k times it)")
+    ap.add_argument("--window-refine-orders", default="",
+                    help="windows: -sweep_refine_orders, e.g. 6 (refine on these engine-order lines)")
+    ap.add_argument("--window-lines", default="2,6,8",
+                    help="windows: engine orders whose line amplitudes are printed and recorded")
     ap.add_argument("--cont-maps", default="linear", help="continuation: linear and/or nonlinear")
     ap.add_argument("--cont-range", default="750:1450:1", help="continuation: lo:hi:step rad/s")
     ap.add_argument("--cont-revs", type=float, default=50.0, help="continuation: revolutions per speed")

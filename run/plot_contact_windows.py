@@ -36,12 +36,19 @@ def load(path):
         o = np.argsort(w)
         rms, status = s["rms"][:][o], s["status"][:][o]
         spec, freq = s["spectrum"][:][o], s["frequency"][:]
+        orders = 1e3 * s["order_amplitude"][:][o] if "order_amplitude" in s else None
     w = w[o]
-    return w, 1e3 * rms, status, dominant_lines(spec, freq) * 2 * math.pi / w, 1e3 * spec, freq
+    return w, 1e3 * rms, status, dominant_lines(spec, freq) * 2 * math.pi / w, 1e3 * spec, freq, orders
 
 
-def line_amplitude(w, spec, freq, order):
-    """Per speed, the largest spectrum value of the three bins around order |Omega| / 2 pi."""
+def line_amplitude(w, spec, freq, order, orders=None):
+    """Per speed, the amplitude of engine order `order`: /sweep/order_amplitude (at its exact
+    frequency) when the file has it, else the largest spectrum value of the three bins around
+    order |Omega| / 2 pi. Files written before the spectrum held each bin's peak lose a line that
+    falls farther than 2 / T from every bin frequency (docs/contact.md): there this is not the
+    line's amplitude."""
+    if orders is not None and orders.shape[1] >= order:
+        return orders[:, order - 1]
     out = np.zeros(w.size)
     for k in range(w.size):
         i = int(np.argmin(np.abs(freq - order * w[k] / (2 * math.pi))))
@@ -65,11 +72,11 @@ def main():
     fig, axes = plt.subplots(rows, len(files), figsize=(5.5 * len(files), 4.0 * rows), squeeze=False)
     for col, path in enumerate(files):
         ax = axes[0][col]
-        w, rms, status, order, spec, freq = load(path)
+        w, rms, status, order, spec, freq, orders = load(path)
         if lines:
             ok = status == 0
             for j, n in enumerate(lines):
-                axes[1][col].plot(w[ok], line_amplitude(w[ok], spec[ok], freq, n), "o-", ms=3, color="C%d" % (j + 2),
+                axes[1][col].plot(w[ok], line_amplitude(w[ok], spec[ok], freq, n, None if orders is None else orders[ok]), "o-", ms=3, color="C%d" % (j + 2),
                                   label="engine order %d" % n)
             axes[1][col].set_xlabel("|Ω| [rad/s]")
             axes[1][col].set_ylabel("line amplitude [mm]")

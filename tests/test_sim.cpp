@@ -839,6 +839,42 @@ TEST(Sim, AmplitudeSpectrumOfSinusoid) {
   EXPECT_LT(D[0], 0.05 * b);
 }
 
+// The sweep's spectrum over bins much wider than the window's resolution 1 / T (the seed's 200
+// revolutions on 20 Hz bins: T = 0.37 s at 1,700 rad/s, 1 / T = 2.7 Hz): a line anywhere between
+// two bin frequencies keeps its amplitude to within the Hann window's loss at 1 / (8 T), 1 %, and
+// is not smeared onto bins beyond its main lobe; the spectrum sampled at the bin frequencies alone
+// loses a line 10 Hz from them (the window's transform there is a sidelobe).
+TEST(Sim, BinnedSpectrumKeepsALineBetweenItsFrequencies) {
+  const double h = 2e-4, T = 0.37, a = 1e-4;
+  const long n = std::lround(T / h);
+  std::vector<double> f;
+  for (int b = 0; b <= 100; ++b) f.push_back(20.0 * b);  // 0 .. 2 kHz every 20 Hz
+  double worst = 1.0;
+  for (const double d : {0.0, 1.3, 2.5, 5.0, 7.5, 10.0, -4.1, -9.9}) {
+    const double f0 = 1620.0 + d;
+    std::vector<double> x(static_cast<std::size_t>(n));
+    for (long k = 0; k < n; ++k) x[static_cast<std::size_t>(k)] = 0.3 * a + a * std::sin(2 * M_PI * f0 * k * h + 0.7);
+    const auto B = sim::binned_spectrum(x, h, 1, f);
+    const auto P = sim::decimated_spectrum(x, h, 1, f);
+    const auto bin = static_cast<std::size_t>(std::lround(f0 / 20.0));
+    EXPECT_GE(B[bin], 0.99 * a) << "a line at " << f0 << " Hz";
+    EXPECT_LE(B[bin], 1.002 * a) << "a line at " << f0 << " Hz";
+    worst = std::min(worst, B[bin] / a);
+    for (std::size_t b = 0; b < f.size(); ++b)
+      if (b + 2 <= bin || b >= bin + 2) {
+        EXPECT_LT(B[b], 0.01 * a) << "bin " << f[b] << " Hz, line at " << f0;
+      }
+    EXPECT_GE(B[bin], P[bin] * (1 - 1e-12)) << "the bin's peak is at least its centre's value";
+    if (std::abs(d) >= 9.9) {
+      EXPECT_LT(P[bin], 0.03 * a) << "the centre's value alone loses the line";
+    }
+    if (d == 0.0) {
+      EXPECT_NEAR(B[bin], P[bin], 1e-3 * a);
+    }
+  }
+  print0(PETSC_COMM_WORLD, "  binned spectrum: worst line amplitude %.4f a over 8 offsets (Hann bound 0.990)\n", worst);
+}
+
 // A speed sweep of the clamped box rubbing its free face on the growing two-lobe casing. Each
 // speed's result is checked against a single run of sim::integrate (the unbatched scheme and
 // kernel) post-processed here, and the sweep on all ranks with 6 lanes per rank (dynamic load
@@ -870,6 +906,7 @@ void check_sweep(bool massless) {
   }
   s.spectrum_fmax = 2000.0;
   s.spectrum_bins = 40;
+  s.orders = 8;  // engine orders above 2 kHz are not measured (NaN)
   std::vector<sim::SpeedTask> tasks;
   for (int i = 0; i < 5; ++i) tasks.push_back({i, 900.0 + 250.0 * i});
   long mine = 0;  // speeds this rank ran in the last sweep
@@ -913,7 +950,10 @@ void check_sweep(bool massless) {
         same &= a.status == 0 && b.status == 0 && a.steps == b.steps && a.rms == b.rms && a.mean == b.mean &&
                 a.max_displacement == b.max_displacement && a.time_of_max == b.time_of_max &&
                 a.max_force == b.max_force && a.max_node_force == b.max_node_force && a.max_active == b.max_active &&
-                a.spectrum == b.spectrum && a.energy_half == b.energy_half && a.energy_end == b.energy_end &&
+                a.spectrum == b.spectrum && a.orders.size() == b.orders.size() &&
+                std::equal(a.orders.begin(), a.orders.end(), b.orders.begin(),
+                           [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); }) &&
+                a.energy_half == b.energy_half && a.energy_end == b.energy_end &&
                 a.work_end.normal == b.work_end.normal && a.work_end.friction == b.work_end.friction &&
                 a.work_end.damping == b.work_end.damping && a.work_half.friction == b.work_half.friction &&
                 a.tangent_dt_min == b.tangent_dt_min && a.tangent_checks == b.tangent_checks &&
@@ -965,6 +1005,7 @@ void check_sweep(bool massless) {
     si.t_final = s.revolutions * 2 * M_PI / tasks[i].omega;
     const long n_steps = static_cast<long>(std::ceil(si.t_final / si.dt - 1e-9)), half = (n_steps + 1) / 2;
     double sum2 = 0, umax = 0, fmax = 0, e_half = 0, e_end = 0;
+    std::vector<double> window;  // the analysed half, every step
     sim::EnergyWork w_half, w_end;
     long cnt = 0, steps = 0;
     int act = 0;
@@ -978,7 +1019,7 @@ void check_sweep(bool massless) {
       double u = 0;
       for (std::size_t j = 0; j < r; ++j) u += s.monitor[j] * x.q[j];
       umax = std::max(umax, std::abs(u));
-      if (x.step >= half) sum2 += u * u, ++cnt;
+      if (x.step >= half) sum2 += u * u, ++cnt, window.push_back(u);
       double tot = 0;
       for (std::size_t k = 0; k < nb; ++k) tot += x.contact_normal[k];
       fmax = std::max(fmax, tot);
@@ -998,6 +1039,40 @@ void check_sweep(bool massless) {
     EXPECT_NEAR(R.max_displacement, umax, 1e-9 * umax);
     EXPECT_NEAR(R.max_force, fmax, 1e-7 * fmax + 1e-12);
     EXPECT_EQ(R.max_active, act);
+    // The engine-order lines at their exact frequencies, against the spectrum of every step of the
+    // window (the sweep's is of block means of 1 / (2.5 fmax h) steps: the same line to within the
+    // windows' difference, O(block / window)).
+    {
+      ASSERT_EQ(R.orders.size(), 8u);
+      const double f1 = tasks[i].omega / (2 * M_PI);
+      std::vector<double> fk;
+      for (int k = 1; k * f1 <= s.spectrum_fmax; ++k) fk.push_back(k * f1);
+      // The same span as the sweep's whole blocks (its last partial block is not analysed).
+      const long block = std::max(1L, static_cast<long>(1.0 / (2.5 * s.spectrum_fmax * si.dt)));
+      window.resize(window.size() / static_cast<std::size_t>(block) * static_cast<std::size_t>(block));
+      const auto ref = sim::amplitude_spectrum(window, si.dt, fk);
+      std::vector<double> means;  // the sweep's block means, formed here from the run's steps
+      for (std::size_t j = 0; j < window.size(); j += static_cast<std::size_t>(block)) {
+        double m = 0;
+        for (long k = 0; k < block; ++k) m += window[j + static_cast<std::size_t>(k)];
+        means.push_back(m / static_cast<double>(block));
+      }
+      const auto dec = sim::decimated_spectrum(means, si.dt, block, fk);
+      const double big = *std::max_element(ref.begin(), ref.end());
+      double worst = 0;
+      for (std::size_t k = 0; k < 8; ++k) {
+        if (k < fk.size()) {
+          // The same samples: to round-off. Every step: to what the block means fold from above
+          // their Nyquist frequency, 1.25 fmax (contact content; measured up to 5 % of the largest line).
+          EXPECT_NEAR(R.orders[k], dec[k], 1e-9 * big) << "omega " << tasks[i].omega << ", order " << k + 1;
+          EXPECT_NEAR(R.orders[k], ref[k], 0.1 * big) << "omega " << tasks[i].omega << ", order " << k + 1;
+          worst = std::max(worst, std::abs(R.orders[k] - ref[k]) / big);
+        } else
+          EXPECT_TRUE(std::isnan(R.orders[k])) << "order " << k + 1 << " is above fmax";
+      }
+      print0(PETSC_COMM_WORLD,
+             "  sweep: omega %.0f rad/s, engine-order lines against every step: %.3f of the largest\n", R.omega, worst);
+    }
     // The tangent checks at the same states (none for the massless model).
     EXPECT_EQ(R.tangent_checks, static_cast<long>(ist.tangent.size()));
     EXPECT_EQ(R.tangent_negative_checks, ist.tangent_negative_checks);
@@ -1137,6 +1212,44 @@ TEST(SimRun, RefinementBisectsWhereNeighboursDiffer) {
   EXPECT_EQ(so.refine(done, freqs)[0].omega, -400.0);
   so.refine_step = 0;
   EXPECT_TRUE(so.refine(done, freqs).empty()) << "no refinement asked";
+
+  // On engine-order lines (-sweep_refine_orders): a flat RMS with a line that locks between two
+  // speeds, noise of an absent line below the floor, a line's peak between alike neighbours.
+  so.rotation = 1, so.refine_step = 25;
+  so.refine_orders = {6};
+  auto lined = [&](long index, double eo6, double eo8) {
+    auto R = result(index, 1.0, 5);
+    R.orders.assign(8, 1e-9);
+    R.orders[5] = eo6, R.orders[7] = eo8;
+    return R;
+  };
+  // eo6 locks between 8 and 16 (x10): refined there only; the RMS and dominant line are alike.
+  next = so.refine(
+      {lined(0, 1e-4, 1), lined(8, 1.2e-4, 1), lined(16, 1e-3, 1), lined(24, 1.05e-3, 1), lined(32, 1.1e-3, 1)}, freqs);
+  ASSERT_EQ(next.size(), 2u) << "the jump 8-16, and the peak at 32 (the grid's end) beside 24-32";
+  EXPECT_EQ(next[0].index, 12);
+  EXPECT_EQ(next[1].index, 28);
+  // An absent line's noise (below 0.1 of its largest) refines nothing, even with jumps of x10.
+  next = so.refine({lined(0, 1e-3, 1), lined(8, 1e-5, 1), lined(16, 1e-6, 1), lined(24, 1e-5, 1), lined(32, 1e-6, 1)},
+                   freqs);
+  ASSERT_EQ(next.size(), 1u) << "only beside the line's peak at 0";
+  EXPECT_EQ(next[0].index, 4);
+  // A peak of eo6 between alike neighbours: both sides; eo8 is not listed and refines nothing.
+  next = so.refine({lined(0, 1e-3, 1), lined(8, 1.3e-3, 5), lined(16, 1e-3, 1)}, freqs);
+  ASSERT_EQ(next.size(), 2u);
+  EXPECT_EQ(next[0].index, 4);
+  EXPECT_EQ(next[1].index, 12);
+  // A failure beside a finished speed refines; a line not measured there (NaN) is skipped.
+  auto bad = lined(8, 1e-3, 1);
+  bad.status = 1;
+  EXPECT_EQ(so.refine({lined(0, 1e-3, 1), bad}, freqs).size(), 1u);
+  auto unmeasured = lined(8, std::nan(""), 1);
+  EXPECT_EQ(so.refine({lined(0, 1e-3, 1), unmeasured, lined(16, 1e-3, 1)}, freqs).size(), 2u)
+      << "the speeds beside an unmeasured one are peaks of the line, as beside a failure";
+  so.refine_orders = {6, 8};  // eo8 listed: its jump 1 -> 5 at 0-8 now refines too
+  next = so.refine({lined(0, 1e-3, 1), lined(8, 1e-3, 5), lined(16, 1e-3, 5)}, freqs);
+  ASSERT_EQ(next.size(), 1u);
+  EXPECT_EQ(next[0].index, 4);
 }
 
 TEST(Sim, RefinedSweepFindsThePeakOfTheFineGrid) {
@@ -1980,7 +2093,7 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
                           "speeds; a sweep takes at most 1000000"),
             std::string::npos)
       << so.error;
-  EXPECT_NE(so.error.find(" GB, 4120 bytes per speed"), std::string::npos) << so.error;
+  EXPECT_NE(so.error.find(" GB, 4312 bytes per speed"), std::string::npos) << so.error;  // 500 bins, 24 orders
   test::expect_error_parts([&] { so.check(); }, {"1e+21 speeds"}, "check() raises the error");
   // Non-finite values are refused when read, naming the option and the text (the option wrappers).
   refused({{"-sweep_omega_min", "800"}, {"-sweep_omega_max", "inf"}, {"-sweep_omega_step", "100"}},
@@ -2052,6 +2165,46 @@ TEST(SimRun, SweepOptionsRefuseNonFiniteAndHugeGrids) {
     EXPECT_TRUE(given.error.empty()) << given.error;
   }
   EXPECT_LT(so.divergence_limit, 0.0) << "default: the tip radius";
+  // Refinement on engine-order lines: the orders measured, the thresholds' ranges, a refined sweep.
+  {
+    auto lines = read({{"-sweep_omega_min", "800"},
+                       {"-sweep_omega_max", "1600"},
+                       {"-sweep_omega_step", "100"},
+                       {"-sweep_refine_step", "25"},
+                       {"-sweep_refine_orders", "6,8"}});
+    EXPECT_TRUE(lines.error.empty()) << lines.error;
+    EXPECT_EQ(lines.refine_orders, (std::vector<int>{6, 8}));
+    EXPECT_EQ(lines.orders, 24);
+    EXPECT_EQ(lines.refine_order_jump, 0.5);
+    EXPECT_EQ(lines.refine_order_floor, 0.1);
+    struct Bad {
+      std::vector<std::pair<const char*, const char*>> extra;
+      const char* msg;
+    };
+    const Bad bads[] = {
+        {{{"-sweep_refine_step", "25"}, {"-sweep_refine_orders", "30"}},
+         "-sweep_refine_orders: engine order 30 is not among those measured, 1..-sweep_orders 24"},
+        {{{"-sweep_refine_step", "25"}, {"-sweep_refine_orders", "6"}, {"-sweep_orders", "4"}},
+         "engine order 6 is not among those measured, 1..-sweep_orders 4"},
+        {{{"-sweep_refine_step", "25"}, {"-sweep_refine_orders", "0"}}, "engine order 0 is not among"},
+        {{{"-sweep_refine_orders", "6"}}, "-sweep_refine_orders applies to a refined sweep: give -sweep_refine_step"},
+        {{{"-sweep_refine_step", "25"}, {"-sweep_refine_orders", "6"}, {"-sweep_refine_order_jump", "1"}},
+         "-sweep_refine_order_jump must be in (0, 1) (got 1"},
+        {{{"-sweep_refine_step", "25"}, {"-sweep_refine_orders", "6"}, {"-sweep_refine_order_floor", "-0.1"}},
+         "-sweep_refine_order_floor must be in [0, 1) (got -0.1"},
+        {{{"-sweep_orders", "-1"}}, "-sweep_orders must be in 0..1000 (got -1)"},
+    };
+    for (const auto& b : bads) {
+      std::vector<std::pair<const char*, const char*>> all = {
+          {"-sweep_omega_min", "800"}, {"-sweep_omega_max", "1600"}, {"-sweep_omega_step", "100"}};
+      all.insert(all.end(), b.extra.begin(), b.extra.end());
+      test::GivenOptions g;
+      for (const auto& [name, value] : all) PetscOptionsSetValue(nullptr, name, value), g.names.emplace_back(name);
+      sim::SweepOptions o;
+      MORSE_CALL(o.set_from_options(PETSC_COMM_WORLD));
+      EXPECT_NE(o.error.find(b.msg), std::string::npos) << o.error;
+    }
+  }
   for (const char* bad : {"-1", "21"}) {
     so = read({{"-sweep_omega_min", "800"},
                {"-sweep_omega_max", "900"},

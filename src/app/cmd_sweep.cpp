@@ -68,6 +68,7 @@ void run_sweep(MPI_Comm comm) {
   rec.rom = files::absolute_path(so.rom);  // valid from any directory
   rec.n_speeds = n_speeds;
   rec.frequencies = s.frequencies();
+  rec.orders = s.orders;
   for (double w2 : nlrom::free_eigenvalues(sm.model))  // a massless M is singular: its condensed model
     rec.eigenfrequencies_hz.push_back(hz(w2));
   const int rank = rank_of(comm);
@@ -100,7 +101,14 @@ void run_sweep(MPI_Comm comm) {
     print0(comm, "morse sweep: a speed that fails runs again at half its step, up to %d time(s) (-sweep_retries)\n",
            so.retries);
   }
-  if (so.refine_step > 0)
+  if (so.refine_step > 0 && !so.refine_orders.empty()) {
+    std::string ks;
+    for (int k : so.refine_orders) ks += cat(ks.empty() ? "" : ",", k);
+    print0(comm,
+           "morse sweep: then refined where the engine-order lines %s jump by %.3g or peak (above %.3g of their "
+           "largest) down to %.6g rad/s (a grid of %ld speeds)\n",
+           ks.c_str(), so.refine_order_jump, so.refine_order_floor, so.refine_step, n_speeds);
+  } else if (so.refine_step > 0)
     print0(comm,
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "
            "down to %.6g rad/s (a grid of %ld speeds)\n",

@@ -342,6 +342,30 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
   PetscCall(MorseOptionsReal("-sweep_refine_frequency",
                              "Refine between two speeds whose dominant frequencies differ by this fraction", "",
                              o->refine_frequency, &o->refine_frequency, nullptr));
+  {
+    PetscInt ks[64], nk = 64;
+    PetscBool given = PETSC_FALSE;
+    PetscCall(MorseOptionsIntArray("-sweep_refine_orders",
+                                   "Refine on these engine-order lines (their amplitudes' jumps and peaks) instead of "
+                                   "the RMS and the dominant frequency, e.g. 6,8",
+                                   "", ks, &nk, &given));
+    if (given) {
+      o->refine_orders.clear();
+      for (PetscInt k = 0; k < nk; ++k) o->refine_orders.push_back(static_cast<int>(ks[k]));
+      if (nk == 0) o->error = "-sweep_refine_orders: give one engine order or more, e.g. 6,8";
+    }
+  }
+  PetscCall(MorseOptionsReal("-sweep_refine_order_jump",
+                             "With -sweep_refine_orders: refine where a line's amplitudes differ by this fraction of "
+                             "the larger",
+                             "", o->refine_order_jump, &o->refine_order_jump, nullptr));
+  PetscCall(MorseOptionsReal("-sweep_refine_order_floor",
+                             "With -sweep_refine_orders: a line counts where it reaches this fraction of its largest "
+                             "amplitude over the finished speeds",
+                             "", o->refine_order_floor, &o->refine_order_floor, nullptr));
+  PetscCall(MorseOptionsInt("-sweep_orders",
+                            "Engine orders 1..K whose line amplitudes are written per speed (/sweep/order_amplitude)",
+                            "", o->orders, &o->orders, nullptr));
   const char* senses[] = {"negative", "positive", "Rotation", "", nullptr};
   PetscEnum sense = o->rotation > 0 ? static_cast<PetscEnum>(1) : static_cast<PetscEnum>(0);
   PetscCall(MorseOptionsEnum("-sweep_rotation",
@@ -383,6 +407,8 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
                                 {"-sweep_refine_step", o->refine_step},
                                 {"-sweep_refine_rms", o->refine_rms},
                                 {"-sweep_refine_frequency", o->refine_frequency},
+                                {"-sweep_refine_order_jump", o->refine_order_jump},
+                                {"-sweep_refine_order_floor", o->refine_order_floor},
                                 {"-sim_dt", o->dt},
                                 {"-sweep_divergence_limit", o->divergence_limit},
                                 {"-sweep_spectrum_fmax", o->fmax}})
@@ -412,6 +438,20 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
       bad(cat("-sweep_refine_rms and -sweep_refine_frequency must be > 0 (got ", o->refine_rms, ", ",
               o->refine_frequency, ")"));
   }
+  if (!(o->orders >= 0 && o->orders <= 1000)) bad(cat("-sweep_orders must be in 0..1000 (got ", o->orders, ")"));
+  if (o->error.empty() && !o->refine_orders.empty()) {
+    if (!(o->refine_step > 0)) bad("-sweep_refine_orders applies to a refined sweep: give -sweep_refine_step");
+    for (int k : o->refine_orders)
+      if (k < 1 || k > o->orders)
+        bad(cat("-sweep_refine_orders: engine order ", k, " is not among those measured, 1..-sweep_orders ",
+                o->orders));
+    if (!(o->refine_order_jump > 0 && o->refine_order_jump < 1))
+      bad(cat("-sweep_refine_order_jump must be in (0, 1) (got ", o->refine_order_jump,
+              "; a fraction of the larger amplitude)"));
+    if (!(o->refine_order_floor >= 0 && o->refine_order_floor < 1))
+      bad(cat("-sweep_refine_order_floor must be in [0, 1) (got ", o->refine_order_floor,
+              "; a fraction of the line's largest amplitude)"));
+  }
   if (o->error.empty() && o->continuation != 0) {
     if (o->refine_step != 0)
       bad(
@@ -431,7 +471,8 @@ PetscErrorCode SweepOptions::set_from_options(MPI_Comm comm) {
     const double n = (std::floor((o->omega_max - o->omega_min) / o->omega_step + 1e-9) * (o->omega_step / fine) + 1) *
                      o->directions();  // both ways: every speed twice
     if (n > static_cast<double>(kMaxSweepSpeeds)) {
-      const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1);
+      const double per_speed = 8.0 * (14 + static_cast<double>(std::max<PetscInt>(o->bins, 0)) + 1 +
+                                      static_cast<double>(std::max<PetscInt>(o->orders, 0)));
       char b[512];
       std::snprintf(b, sizeof b,
                     "-sweep_omega_min %.10g, -sweep_omega_max %.10g and -sweep_omega_step %.10g give %.10g speeds; a "
@@ -448,18 +489,28 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
   const std::size_t r = static_cast<std::size_t>(m.r);
   char b[2048];
   const auto& c = o.contact.casing;
-  std::snprintf(b, sizeof b,
-                "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
-                "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
-                "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nkernel=%s\nfloat=%d\n"
-                "spectrum_decimation=block_mean\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
-                "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\nretries=%d\ndivergence_limit=%.17g\n",
-                files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt,
-                s.base.linear ? 1 : 0, s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height,
-                c.lobes, c.width, c.alpha, o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel),
-                s.single ? 1 : 0, o.rotation, o.refine_step, o.refine_rms, o.refine_frequency,
-                nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0, o.retries, s.divergence_limit);
+  std::snprintf(
+      b, sizeof b,
+      "rom=%s\nr=%zu\nomega_min=%.17g\nomega_max=%.17g\nomega_step=%.17g\ndt=%.17g\nlinear=%d\n"
+      "revolutions=%.17g\ncontact_set=%s\nmu=%.17g\nclearance=%.17g\nbump_height=%.17g\nlobes=%d\n"
+      "width=%.17g\nalpha=%.17g\nmonitor=%s\nspectrum_fmax=%.17g\nspectrum_bins=%d\nkernel=%s\nfloat=%d\n"
+      "spectrum_decimation=block_mean\nspectrum_bin_value=peak\nrotation=%d\nrefine_step=%.17g\nrefine_rms=%.17g\n"
+      "refine_frequency=%.17g\nmodel=%s\nenergy_balance=%d\nretries=%d\ndivergence_limit=%.17g\n",
+      files::absolute_path(o.rom).c_str(), r, o.omega_min, o.omega_max, o.omega_step, s.base.dt, s.base.linear ? 1 : 0,
+      s.revolutions, o.contact.set.c_str(), o.contact.mu, c.clearance, c.bump_height, c.lobes, c.width, c.alpha,
+      o.monitor.c_str(), s.spectrum_fmax, s.spectrum_bins, kernel_name(s.kernel), s.single ? 1 : 0, o.rotation,
+      o.refine_step, o.refine_rms, o.refine_frequency, nlrom::fingerprint(m).c_str(), o.energy_balance ? 1 : 0,
+      o.retries, s.divergence_limit);
   std::string text = b;
+  text += cat("orders=", s.orders, "\n");
+  if (!o.refine_orders.empty()) {
+    std::string ks;
+    for (int k : o.refine_orders) ks += cat(ks.empty() ? "" : ",", k);
+    char c2[128];
+    std::snprintf(c2, sizeof c2, "refine_order_jump=%.17g\nrefine_order_floor=%.17g\n", o.refine_order_jump,
+                  o.refine_order_floor);
+    text += "refine_orders=" + ks + "\n" + c2;
+  }
   if (o.continuation != 0)  // only then: the files of sweeps without it stay resumable
     text += cat("continuation=",
                 o.continuation == 2  ? "both"
@@ -509,6 +560,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.revolutions = contact.revolutions > 0 ? contact.revolutions : 200.0;
   s.spectrum_fmax = fmax;
   s.spectrum_bins = static_cast<int>(bins);
+  s.orders = static_cast<int>(orders);
   s.batch = batch_given ? static_cast<int>(batch) : default_sweep_batch(isa);
   s.kernel = kernel;
   s.single = single;
@@ -808,10 +860,46 @@ std::vector<SpeedTask> SweepOptions::refine(const std::vector<SpeedResult>& done
     const bool right = k + 1 == n || by_index[k + 1]->status != 0 || by_index[k + 1]->rms < x.rms;
     return left && right && n > 1;
   };
+  // -sweep_refine_orders: each listed line's amplitude (NaN: not measured), its floor, its peaks.
+  std::vector<double> floor_of(refine_orders.size(), 0.0);
+  auto line = [&](std::size_t k, std::size_t j) {
+    const SpeedResult& x = *by_index[k];
+    const auto o = static_cast<std::size_t>(refine_orders[j] - 1);
+    return x.status == 0 && o < x.orders.size() && std::isfinite(x.orders[o]) ? x.orders[o] : std::nan("");
+  };
+  for (std::size_t j = 0; j < refine_orders.size(); ++j) {
+    for (std::size_t k = 0; k < n; ++k)
+      if (std::isfinite(line(k, j))) floor_of[j] = std::max(floor_of[j], line(k, j));
+    floor_of[j] *= refine_order_floor;
+  }
+  auto line_peak = [&](std::size_t k) {
+    for (std::size_t j = 0; j < refine_orders.size(); ++j) {
+      const double x = line(k, j);
+      if (!(x > 0 && x >= floor_of[j]) || n < 2) continue;
+      const bool left = k == 0 || !(line(k - 1, j) >= x);  // a failed or unmeasured neighbour is lower
+      const bool right = k + 1 == n || !(line(k + 1, j) >= x);
+      if (left && right) return true;
+    }
+    return false;
+  };
+  auto lines_differ = [&](std::size_t k) {
+    const SpeedResult &a = *by_index[k], &b = *by_index[k + 1];
+    if ((a.status != 0) != (b.status != 0)) return true;
+    for (std::size_t j = 0; j < refine_orders.size(); ++j) {
+      const double x = line(k, j), y = line(k + 1, j);
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      const double big = std::max(x, y);
+      if (big > 0 && big >= floor_of[j] && std::abs(x - y) > refine_order_jump * big) return true;
+    }
+    return false;
+  };
+  const bool by_lines = !refine_orders.empty();
   for (std::size_t k = 0; k + 1 < n; ++k) {
     const SpeedResult &a = *by_index[k], &b = *by_index[k + 1];
     if (b.index - a.index < 2) continue;
-    if (!peak(k) && !peak(k + 1) && !speeds_differ(a, b, freqs, refine_rms, refine_frequency)) continue;
+    if (by_lines ? !line_peak(k) && !line_peak(k + 1) && !lines_differ(k)
+                 : !peak(k) && !peak(k + 1) && !speeds_differ(a, b, freqs, refine_rms, refine_frequency))
+      continue;
     const long mid = (a.index + b.index) / 2;
     out.push_back({mid, rotation * (omega_min + static_cast<double>(mid) * refine_step)});
   }

@@ -80,6 +80,33 @@ std::vector<double> decimated_spectrum(std::vector<double> block_means, double h
   return a;
 }
 
+std::vector<double> binned_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f) {
+  const std::size_t nb = f.size();
+  std::vector<double> out(nb, 0.0);
+  if (nb == 0 || block_means.size() < 2) return out;
+  const double T = static_cast<double>(block_means.size()) * static_cast<double>(s) * h;
+  const double delta = 1.0 / (4.0 * T);
+  // Each bin: its centre and, on either side, points every w / m <= delta out to the bin's edge.
+  std::vector<double> g;
+  std::vector<std::size_t> first(nb + 1, 0);
+  for (std::size_t b = 0; b < nb; ++b) {
+    first[b] = g.size();
+    const double lo = b > 0 ? 0.5 * (f[b - 1] + f[b]) : (nb > 1 ? std::max(0.0, f[0] - 0.5 * (f[1] - f[0])) : f[0]);
+    const double hi = b + 1 < nb ? 0.5 * (f[b] + f[b + 1]) : (nb > 1 ? f[b] + 0.5 * (f[b] - f[b - 1]) : f[b]);
+    g.push_back(f[b]);
+    const double wl = f[b] - lo, wr = hi - f[b];
+    const long ml = wl > 0.5 * delta ? static_cast<long>(std::ceil(wl / delta)) : 0;
+    const long mr = wr > 0.5 * delta ? static_cast<long>(std::ceil(wr / delta)) : 0;
+    for (long k = 1; k <= ml; ++k) g.push_back(f[b] - wl * static_cast<double>(k) / static_cast<double>(ml));
+    for (long k = 1; k <= mr; ++k) g.push_back(f[b] + wr * static_cast<double>(k) / static_cast<double>(mr));
+  }
+  first[nb] = g.size();
+  const auto a = decimated_spectrum(std::move(block_means), h, s, g);
+  for (std::size_t b = 0; b < nb; ++b)
+    for (std::size_t k = first[b]; k < first[b + 1]; ++k) out[b] = std::max(out[b], a[k]);
+  return out;
+}
+
 namespace {
 
 constexpr std::size_t kGroup = 4;  // lanes per vector group
@@ -474,9 +501,19 @@ class Batch {
       R.mean = ln.sum / static_cast<double>(ln.count);
       R.rms = std::sqrt(ln.sum2 / static_cast<double>(ln.count));
     }
+    if (!freqs_.empty() && s_.orders > 0) {  // the engine-order lines at their exact frequencies
+      const double f1 = std::abs(R.omega) / (2.0 * M_PI);
+      std::vector<double> fk;
+      for (int k = 1; k <= s_.orders && k * f1 <= s_.spectrum_fmax; ++k) fk.push_back(k * f1);
+      R.orders.assign(static_cast<std::size_t>(s_.orders), std::nan(""));
+      if (!fail) {
+        const auto a = decimated_spectrum(ln.samples, s_.base.dt, ln.sample_every, fk);
+        std::copy(a.begin(), a.end(), R.orders.begin());
+      }
+    }
     if (!freqs_.empty())
       R.spectrum = fail ? std::vector<double>(freqs_.size(), 0.0)
-                        : decimated_spectrum(std::move(ln.samples), s_.base.dt, ln.sample_every, freqs_);
+                        : binned_spectrum(std::move(ln.samples), s_.base.dt, ln.sample_every, freqs_);
     R.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - ln.start).count();
   }
 
@@ -507,7 +544,7 @@ void pack(morse::detail::Packer* pk, const SpeedResult& R) {
   pk->put(R.max_force), pk->put(R.time_of_max_force), pk->put(R.max_node_force), pk->put(R.max_active);
   pk->put(R.tangent_dt_min), pk->put(R.tangent_dt_min_time), pk->put(R.tangent_checks);
   pk->put(R.tangent_negative_checks);
-  pk->put(R.seconds), pk->put_vec(R.spectrum);
+  pk->put(R.seconds), pk->put_vec(R.spectrum), pk->put_vec(R.orders);
   pk->put(R.energy_half), pk->put(R.energy_end);
   for (const auto* w : {&R.work_half, &R.work_end})
     pk->put(w->external), pk->put(w->normal), pk->put(w->friction), pk->put(w->damping);
@@ -524,7 +561,7 @@ SpeedResult unpack(morse::detail::Unpacker* up) {
   R.time_of_max_force = up->get<double>(), R.max_node_force = up->get<double>(), R.max_active = up->get<int>();
   R.tangent_dt_min = up->get<double>(), R.tangent_dt_min_time = up->get<double>();
   R.tangent_checks = up->get<long>(), R.tangent_negative_checks = up->get<long>();
-  R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>();
+  R.seconds = up->get<double>(), R.spectrum = up->get_vec<double>(), R.orders = up->get_vec<double>();
   R.energy_half = up->get<double>(), R.energy_end = up->get<double>();
   for (auto* w : {&R.work_half, &R.work_end}) {
     w->external = up->get<double>(), w->normal = up->get<double>();

@@ -93,7 +93,21 @@ void write_sweep(const std::string& path, SweepRecord rec) {
     spec.insert(spec.end(), r.spectrum.begin(), r.spectrum.end());
   }
   out.write("/sweep/spectrum", spec, {static_cast<hsize_t>(rs.size()), static_cast<hsize_t>(rec.frequencies.size())});
-  out.attribute("/sweep/spectrum", "description", "[speed][frequency] amplitude of the monitored displacement [m]");
+  out.attribute("/sweep/spectrum", "description",
+                "[speed][frequency] amplitude of the monitored displacement [m]: the largest over each frequency's "
+                "bin (half-way to its neighbours), sampled finer than a quarter of the resolution");
+  if (rec.orders > 0) {
+    std::vector<double> ord;
+    for (const auto& r : rs) {
+      MORSE_CHECK(r.orders.size() == static_cast<std::size_t>(rec.orders), "sweep: speed ", r.index, " has ",
+                  r.orders.size(), " engine-order amplitudes for ", rec.orders, " orders");
+      ord.insert(ord.end(), r.orders.begin(), r.orders.end());
+    }
+    out.write("/sweep/order_amplitude", ord, {static_cast<hsize_t>(rs.size()), static_cast<hsize_t>(rec.orders)});
+    out.attribute("/sweep/order_amplitude", "description",
+                  "[speed][k - 1] amplitude of engine order k = 1..orders of the monitored displacement at its exact "
+                  "frequency k |omega| / 2 pi [m] (NaN: above the spectrum's fmax, or a failed speed)");
+  }
   out.write("/sweep/energy_balance",
             table<10>(rs,
                       [](const SpeedResult& r) {
@@ -170,6 +184,8 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   if (ok && io::has_object(path, "/sweep/continuation")) ok = dbl("continuation", &cont);
   if (ok && io::has_object(path, "/sweep/tangent")) ok = dbl("tangent", &tan);
   if (ok && io::has_object(path, "/sweep/final_state")) ok = dbl("final_state", &fs);
+  std::vector<double> ord;
+  if (ok && io::has_object(path, "/sweep/order_amplitude")) ok = dbl("order_amplitude", &ord);
   if (!ok) {
     *error = cat(path, " is not a complete morse sweep file: ", *error);
     return false;
@@ -188,12 +204,13 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
   if (dims["frequency"].size() != 1 || nf == 0) return corrupt("/sweep/frequency is not a list of frequencies");
   for (const auto& [name, d] : dims) {
     if (name == "frequency" || name == "eigenfrequencies") continue;
-    const hsize_t cols = name == "spectrum"         ? nf
-                         : name == "energy_balance" ? 10
-                         : name == "continuation"   ? 3
-                         : name == "tangent"        ? 4
-                         : name == "final_state"    ? (d.size() == 2 && d[1] % 2 == 1 && d[1] >= 3 ? d[1] : 0)
-                                                    : 0;
+    const hsize_t cols = name == "spectrum"          ? nf
+                         : name == "energy_balance"  ? 10
+                         : name == "continuation"    ? 3
+                         : name == "tangent"         ? 4
+                         : name == "order_amplitude" ? (d.size() == 2 && d[1] >= 1 ? d[1] : 0)
+                         : name == "final_state"     ? (d.size() == 2 && d[1] % 2 == 1 && d[1] >= 3 ? d[1] : 0)
+                                                     : 0;
     const std::vector<hsize_t> want = cols ? std::vector<hsize_t>{n, cols} : std::vector<hsize_t>{n};
     if (d != want) {
       std::string shape;
@@ -228,6 +245,7 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     }
   }
   rec->n_speeds = static_cast<long>(n_speeds);
+  rec->orders = n > 0 && !ord.empty() ? static_cast<int>(ord.size() / n) : 0;
   rec->results.clear();
   for (std::size_t i = 0; i < n; ++i) {
     SpeedResult r;
@@ -238,6 +256,10 @@ bool read_sweep(const std::string& path, SweepRecord* rec, std::string* error) {
     r.max_active = static_cast<int>(act[i]), r.seconds = secs[i];
     r.spectrum.assign(spec.begin() + static_cast<std::ptrdiff_t>(i * nf),
                       spec.begin() + static_cast<std::ptrdiff_t>((i + 1) * nf));
+    if (rec->orders > 0) {
+      const auto k = static_cast<std::ptrdiff_t>(rec->orders), ii = static_cast<std::ptrdiff_t>(i);
+      r.orders.assign(ord.begin() + ii * k, ord.begin() + (ii + 1) * k);
+    }
     const double* e = &eb[10 * i];
     r.energy_half = e[0], r.work_half = {e[1], e[2], e[3], e[4]};
     r.energy_end = e[5], r.work_end = {e[6], e[7], e[8], e[9]};

@@ -100,6 +100,18 @@ struct SweepOptions {
   double refine_step = 0.0;
   double refine_rms = 0.2;         ///< -sweep_refine_rms: relative RMS jump that refines
   double refine_frequency = 0.05;  ///< -sweep_refine_frequency: relative change of the dominant frequency
+  /// -sweep_refine_orders k1,k2,...: refine on these engine-order lines instead of the RMS and the
+  /// dominant frequency (SpeedResult::orders; each k <= orders). Between two neighbours, a line
+  /// refines where its amplitudes A, B differ by |A - B| > refine_order_jump max(A, B), and a local
+  /// maximum of a line's amplitude is located to refine_step; a line counts only where max(A, B)
+  /// (or the maximum) reaches refine_order_floor times its largest amplitude over the finished
+  /// speeds, so that the noise of a line that is absent refines nothing. A failure beside a finished
+  /// speed still refines. The RMS of a rubbing blade holds the casing's static push and hides a
+  /// lock of one line, and its dominant line jumps between combination tones (docs/contact.md).
+  std::vector<int> refine_orders;
+  double refine_order_jump = 0.5, refine_order_floor = 0.1;
+  /// -sweep_orders K: the amplitudes of engine orders 1..K written per speed (/sweep/order_amplitude).
+  PetscInt orders = 24;
   /// -sweep_retries K: a speed that fails (a non-finite state, a contact or boundary solve that does
   /// not converge) runs again from rest at half its step, up to K times (dt / 2^K). Central
   /// differences with contact and a cubic force have no a-priori stable step: the stiffening under
@@ -157,8 +169,9 @@ struct SweepOptions {
   /// The next refinement round after the finished speeds `done` (all coarse speeds among them):
   /// for every two neighbouring finished speeds (by index) at least two grid points apart that
   /// differ (speeds_differ), or of which one is a local maximum of the RMS (an interaction, located
-  /// to refine_step), the speed midway. Empty: the refinement is over (or there is none). freqs: the
-  /// spectrum's frequencies.
+  /// to refine_step), the speed midway. With refine_orders, the jumps and peaks of those engine-order
+  /// lines instead of the RMS and the dominant frequency. Empty: the refinement is over (or there
+  /// is none). freqs: the spectrum's frequencies.
   std::vector<SpeedTask> refine(const std::vector<SpeedResult>& done, const std::vector<double>& freqs) const;
   /// The retries due among the finished speeds `done` (those of a resumed file included): every
   /// failed speed with fewer than `retries` halvings, at one more, in index order.

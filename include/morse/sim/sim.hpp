@@ -435,8 +435,12 @@ struct SpeedResult {
   /// states with negative tangent stiffness (infinity, 0, 0, 0 without checks).
   double tangent_dt_min = std::numeric_limits<double>::infinity(), tangent_dt_min_time = 0.0;
   long tangent_checks = 0, tangent_negative_checks = 0;
-  double seconds = 0.0;          ///< wall time on its rank (shared with the other lanes of its batch)
-  std::vector<double> spectrum;  ///< amplitude at SweepSettings::frequencies(), same window, mean removed
+  double seconds = 0.0;  ///< wall time on its rank (shared with the other lanes of its batch)
+  /// amplitude over each bin of SweepSettings::frequencies() (binned_spectrum), same window, mean removed
+  std::vector<double> spectrum;
+  /// SweepSettings::orders > 0: the amplitude of engine order k = 1..orders at its exact frequency
+  /// k |Omega| / 2 pi (decimated_spectrum), same window; NaN above spectrum_fmax and for a failed speed.
+  std::vector<double> orders;
   /// The energy balance (EnergyWork) from rest: the discrete energy and the works at the first
   /// state of the analysed window (t_final / 2) and at the end.
   double energy_half = 0.0, energy_end = 0.0;
@@ -461,6 +465,7 @@ struct SweepSettings {
   std::vector<double> monitor;  ///< r: the recorded displacement is monitor . q (e.g. e_r . u at LE)
   double spectrum_fmax = 0.0;   ///< [Hz]; 0: no spectrum
   int spectrum_bins = 0;        ///< frequencies k fmax / bins, k = 0..bins
+  int orders = 0;               ///< engine-order lines 1..orders measured at their frequencies (SpeedResult::orders)
   int batch = 8;                ///< speeds advanced together per rank (lanes)
   /// The cubic force of the lanes (-sweep_kernel), measured on the 2-core EPYC in bench/README.md
   /// ("Batched potential kernel"):
@@ -495,6 +500,17 @@ std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const s
 /// keeps its amplitude, while content at f' beyond it, which plain decimation folds onto
 /// |f' - k / (s h)| unchanged, is attenuated by the block mean (by about f / f' at low f).
 std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f);
+
+/// The sweep's spectrum: for every frequency f_b of the grid f (ascending, f_0 >= 0), the largest
+/// decimated_spectrum over its bin [(f_{b-1} + f_b) / 2, (f_b + f_{b+1}) / 2] (the first from
+/// max(0, f_0 - (f_1 - f_0) / 2), the last to f_B + (f_B - f_{B-1}) / 2), sampled every
+/// delta <= 1 / (4 T) or finer, T the window's length (block_means.size() s h). So a line anywhere
+/// keeps its amplitude to within 1 % (the Hann window's loss at delta / 2 <= 1 / (8 T): 0.99)
+/// however wide the bins are against the resolution 1 / T. decimated_spectrum at f alone loses a
+/// line that falls between two frequencies farther than 2 / T from it (a long window on a coarse
+/// grid). Costs (f_B / delta) block_means.size() complex products: 10 fmax^2 T^2 at the sweep's
+/// decimation (2.5 fmax samples per second).
+std::vector<double> binned_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f);
 
 /// Throughput counters of one rank's part of a sweep.
 struct SweepStats {
@@ -546,6 +562,7 @@ struct SweepRecord {
   std::vector<double> frequencies, eigenfrequencies_hz;
   std::vector<SpeedResult> results;
   long n_speeds = 0;  ///< size of the whole speed grid
+  int orders = 0;     ///< SweepSettings::orders: the columns of /sweep/order_amplitude (0: none written)
 };
 /// Writes the record atomically (temporary file renamed into place), results sorted by index.
 /// Serial: call on one rank. Throws naming the file if it cannot be written.
