@@ -25,6 +25,24 @@ n=$(/usr/bin/python3 -c "import h5py; print(len(h5py.File('$d/full.h5','r')['/sw
 test "$n" -gt 6 || { echo "case: FAIL: $n speeds, no refined speed"; exit 1; }
 echo "refined sweep: $n speeds of a grid of 41"
 
+# Refined on engine-order lines instead (-sweep_refine_orders): rounds run, and every speed has
+# its lines 1..24 at their exact frequencies, NaN above -sweep_spectrum_fmax (3 kHz).
+out=$(run "${sweep[@]}" -sweep_refine_orders 2,4 -out "$d/lines.h5")
+grep -q "refined where the engine-order lines 2,4 jump by 0.5" <<<"$out" || { echo "case: FAIL: no lines: $out"; exit 1; }
+/usr/bin/python3 - "$d/lines.h5" <<'PY'
+import sys, math, h5py, numpy as np
+s = h5py.File(sys.argv[1], "r")["/sweep"]
+w, eo = np.abs(s["omega"][()]), s["order_amplitude"][()]
+assert eo.shape == (len(w), 24), eo.shape
+assert len(w) > 6, "no refined speed"
+for k in range(len(w)):
+    for n in range(1, 25):
+        above = n * w[k] / (2 * math.pi) > 3000
+        assert np.isnan(eo[k, n - 1]) == above, (w[k], n, eo[k, n - 1])
+assert "refine_orders=2,4" in s["settings"][()].decode(), "settings lack the lines"
+print("lines: %d speeds, engine orders measured up to 3 kHz" % len(w))
+PY
+
 # Run again: everything is done, nothing runs.
 out=$(run "${sweep[@]}" -out "$d/full.h5")
 grep -q "($n already in $d/full.h5)" <<<"$out" || { echo "case: FAIL: not resumed whole: $out"; exit 1; }
@@ -52,8 +70,8 @@ import sys, h5py, numpy as np
 a, b = (h5py.File(p, "r")["/sweep"] for p in sys.argv[1:])
 ka, kb = np.argsort(a["index"][()]), np.argsort(b["index"][()])
 assert (a["index"][()][ka] == b["index"][()][kb]).all(), "the resumed sweep ran other speeds"
-for k in ("omega", "rms", "spectrum", "energy_balance"):
-    assert (a[k][()][ka] == b[k][()][kb]).all(), "resumed %s differs" % k
+for k in ("omega", "rms", "spectrum", "energy_balance", "order_amplitude"):
+    assert np.array_equal(a[k][()][ka], b[k][()][kb], equal_nan=True), "resumed %s differs" % k
 print("resumed: the same %d speeds, bitwise" % len(ka))
 PY
 
@@ -73,6 +91,8 @@ pattern="-sweep_omega_step 400 / -sweep_refine_step 30 = 13.3333 is not a power 
 refused -sweep_refine_step 30
 pattern="-sweep_refine_rms and -sweep_refine_frequency must be > 0"
 refused -sweep_refine_rms 0
+pattern="-sweep_refine_orders: engine order 30 is not among those measured, 1..-sweep_orders 24"
+refused -sweep_refine_orders 30
 # The model rebuilt at the same path with other damping: its file is not resumed, nothing changed.
 cp "$d/full.h5" "$d/before.h5"
 run nlrom "${model[@]}" -boundary x1 -nlrom_basis cb -nlrom_num_fixed_modes 3 -nlrom_forces none \
@@ -85,4 +105,4 @@ set -e
 test $rc -ne 0 || { echo "case: FAIL: a sweep of another model was resumed"; exit 1; }
 grep -q "holds a sweep with other settings (model: " <<<"$out" || { echo "case: FAIL: model not named: $out"; exit 1; }
 cmp -s "$d/full.h5" "$d/before.h5" || { echo "case: FAIL: the file was changed"; exit 1; }
-echo "case: ok: refined sweep, resumed whole and after a cut, bad options and another model refused"
+echo "case: ok: refined sweep (RMS and lines), resumed whole and after a cut, bad options and another model refused"
