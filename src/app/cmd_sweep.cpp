@@ -102,12 +102,10 @@ void run_sweep(MPI_Comm comm) {
            so.retries);
   }
   if (so.refine_step > 0 && !so.refine_orders.empty()) {
-    std::string ks;
-    for (int k : so.refine_orders) ks += cat(ks.empty() ? "" : ",", k);
     print0(comm,
            "morse sweep: then refined where the engine-order lines %s jump by %.3g or peak (above %.3g of their "
            "largest) down to %.6g rad/s (a grid of %ld speeds)\n",
-           ks.c_str(), so.refine_order_jump, so.refine_order_floor, so.refine_step, n_speeds);
+           so.refine_orders_text().c_str(), so.refine_order_jump, so.refine_order_floor, so.refine_step, n_speeds);
   } else if (so.refine_step > 0)
     print0(comm,
            "morse sweep: then refined where neighbouring speeds differ (RMS by %.3g, dominant frequency by %.3g) "

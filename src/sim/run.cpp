@@ -504,12 +504,10 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
   std::string text = b;
   text += cat("orders=", s.orders, "\n");
   if (!o.refine_orders.empty()) {
-    std::string ks;
-    for (int k : o.refine_orders) ks += cat(ks.empty() ? "" : ",", k);
     char c2[128];
     std::snprintf(c2, sizeof c2, "refine_order_jump=%.17g\nrefine_order_floor=%.17g\n", o.refine_order_jump,
                   o.refine_order_floor);
-    text += "refine_orders=" + ks + "\n" + c2;
+    text += "refine_orders=" + o.refine_orders_text() + "\n" + c2;
   }
   if (o.continuation != 0)  // only then: the files of sweeps without it stay resumable
     text += cat("continuation=",
@@ -573,6 +571,12 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
       s.divergence_limit = std::max(s.divergence_limit, std::hypot(n.x[0], n.x[1]));
   }
   return s;
+}
+
+std::string SweepOptions::refine_orders_text() const {
+  std::string ks;
+  for (int k : refine_orders) ks += cat(ks.empty() ? "" : ",", k);
+  return ks;
 }
 
 long SweepOptions::stride() const { return refine_step > 0 ? std::lround(omega_step / refine_step) : 1; }

@@ -110,6 +110,8 @@ struct SweepOptions {
   /// lock of one line, and its dominant line jumps between combination tones (docs/contact.md).
   std::vector<int> refine_orders;
   double refine_order_jump = 0.5, refine_order_floor = 0.1;
+  /// refine_orders as given, "6,8" (empty: none).
+  std::string refine_orders_text() const;
   /// -sweep_orders K: the amplitudes of engine orders 1..K written per speed (/sweep/order_amplitude).
   PetscInt orders = 24;
   /// -sweep_retries K: a speed that fails (a non-finite state, a contact or boundary solve that does
