@@ -3,6 +3,7 @@
 "Why the linear maps were not physical"):
 
     /usr/bin/python3 run/contact_sliding_modes.py [--rom out/contact_study/rom_r54.h5] [--mu 0.15]
+                                                  [--sim SIM.h5 [SIM.h5 ...]]
 
 For a set A of tip nodes held on the casing (n_k . u_k fixed) with friction forces -mu lambda_k
 sign(Omega) e_theta, the motions q = Z y (Z: null space of the rows n_k^T B_k) obey
@@ -12,10 +13,21 @@ each node held alone, with and without friction; the lowest 1B over the sets of 
 nodes; the sets of 1, 2, 3, 4 and 8 nodes with a flutter (an eigenvalue with a positive real
 part above 1/s), the worst with its frequency; and the ratio n.M^-1 d / n.M^-1 n of each node
 (the contact compliance with friction over the one without: near 0 would jam).
+
+With --sim (`morse simulate` files of the same model with -contact_set, output every step or
+nearly): for each run, the contact states over its second half (the analysed half of a sweep): the
+sets of nodes in contact (λ > 0) that hold 90 % of the time (at most 8), each with its share of the
+time and of the normal impulse and the 1B of the blade held there with the run's mu and sign of
+Omega and with mu = 0 (the empty set: the free 1B); the largest lines of the LE (first contact
+node) radial displacement (Hann window); and the time-weighted mean of the held 1B over the states,
+sum_i s_i f_i (s_i the share of state i, the states outside the 90 % counted at the free 1B), which
+a blade that advances through each state's phase at that state's own frequency would oscillate at.
 """
 import argparse
+import collections
 import itertools
 import os
+import sys
 
 import h5py
 import numpy as np
@@ -24,10 +36,56 @@ import scipy.linalg as sl
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def contact_states(path, bn, f_free, first_bending):
+    """Print the contact states of a simulate run over its second half (see the docstring)."""
+    with h5py.File(path, "r") as f:
+        if "sim/contact/normal" not in f:
+            sys.exit("contact_sliding_modes: %s: no /sim/contact (a `morse simulate` run with -contact_set)" % path)
+        g = f["sim/contact"]
+        lam, ids, ur = g["normal"][:], [int(x) for x in g["node_ids"][:]], g["radial_displacement"][:]
+        mu, omega = float(g.attrs["mu"]), float(g.attrs["omega"])
+        t = f["sim/time"][:]
+    if sorted(ids) != sorted(int(x) for x in bn):
+        sys.exit("contact_sliding_modes: %s: contact nodes %s are not the model's boundary nodes %s" % (path, ids, bn))
+    h = t.size // 2
+    L = lam[h:]
+    sgn = 1.0 if omega >= 0 else -1.0
+    states = collections.Counter(tuple(ids[i] for i in np.flatnonzero(row > 0)) for row in L)
+    n, imp = len(L), L.sum(0)
+    print("%s: Omega %g rad/s, mu %g, %d samples over the second half; contact states holding 90 %% of it:"
+          % (path, omega, mu, n))
+    covered, mean_f = 0.0, 0.0
+    for st, cnt in states.most_common(8):
+        share = cnt / n
+        nodes = list(st)
+        fm = first_bending(nodes, mu, sgn) if nodes else f_free
+        f0 = first_bending(nodes, 0.0, sgn) if nodes else f_free
+        rows = [k for k, row in enumerate(L) if tuple(ids[i] for i in np.flatnonzero(row > 0)) == st]
+        ishare = L[rows].sum() / max(imp.sum(), 1e-300)
+        print("  %-48s time %5.3f  impulse %5.3f  held 1B %7.1f Hz (mu = 0: %7.1f)" %
+              (str(nodes) if nodes else "none (free)", share, ishare, fm, f0))
+        covered += share
+        mean_f += share * fm
+        if covered >= 0.9:
+            break
+    mean_f += (1.0 - covered) * f_free
+    y = ur[h:, 0] - ur[h:, 0].mean()
+    win = np.hanning(y.size)
+    A = 2 * np.abs(np.fft.rfft(y * win)) / win.sum()
+    fr = np.fft.rfftfreq(y.size, t[1] - t[0])
+    peaks = [k for k in range(1, A.size - 1) if A[k] >= A[k - 1] and A[k] > A[k + 1]]
+    peaks = sorted(peaks, key=lambda k: -A[k])[:4]
+    print("  node %d u_r: RMS %.3f mm; largest lines %s" % (ids[0], 1e3 * np.sqrt(np.mean(ur[h:, 0] ** 2)),
+                                                         ", ".join("%.1f Hz %.3f mm" % (fr[k], 1e3 * A[k]) for k in peaks)))
+    print("  time-weighted mean of the held 1B over the states: %.1f Hz (free 1B %.1f Hz)" % (mean_f, f_free))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--rom", default=os.path.join(ROOT, "out", "contact_study", "rom_r54.h5"))
     ap.add_argument("--mu", type=float, default=0.15)
+    ap.add_argument("--sim", nargs="*", default=[], help="simulate files whose contact states to analyse")
+    ap.add_argument("--sim-only", action="store_true", help="with --sim: skip the tables of single nodes and sets")
     a = ap.parse_args()
     with h5py.File(a.rom, "r") as f:
         K, M, C = f["nlrom/K"][:], f["nlrom/M"][:], f["nlrom/C"][:]
@@ -67,7 +125,12 @@ def main():
         return ev[k].real, abs(ev[k].imag) / (2 * np.pi)
 
     w = np.sort(sl.eigh(K, M, eigvals_only=True))
-    print("%s: r = %d, free 1B %.1f Hz, mu = %g, tip nodes %s" % (a.rom, r, np.sqrt(w[0]) / (2 * np.pi), a.mu, bn))
+    f_free = np.sqrt(w[0]) / (2 * np.pi)
+    print("%s: r = %d, free 1B %.1f Hz, mu = %g, tip nodes %s" % (a.rom, r, f_free, a.mu, bn))
+    for path in a.sim:
+        contact_states(path, bn, f_free, first_bending)
+    if a.sim and a.sim_only:
+        return
     Mi = np.linalg.inv(M)
     for sgn in (1.0, -1.0):
         print("Omega %s 0:" % (">" if sgn > 0 else "<"))

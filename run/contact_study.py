@@ -321,26 +321,37 @@ def maps_stage(st, args, mesh):
 
 
 def dominant_lines(spec, freq):
-    """The frequency [Hz] of the largest line of each spectrum row (the mean, bin 0, left out)."""
+    """The frequency [Hz] of the largest line of each spectrum row (the mean, bin 0, left out). The
+    bins hold the largest amplitude over their width (sweeps of 2026-12-02 on), so this is the
+    dominant line to within half a bin wherever it falls."""
     return freq[1 + np.argmax(spec[:, 1:], axis=1)]
+
+
+def dominant_orders(f, sel, w):
+    """The dominant engine order of the speeds `sel` of an open sweep file: the largest of the lines
+    /sweep/order_amplitude holds at their exact frequencies k |Omega| / 2 pi (an integer), or, in a
+    file without them (before 2026-12-02), the largest spectrum bin's frequency in engine orders."""
+    if "/sweep/order_amplitude" in f:
+        eo = np.nan_to_num(f["/sweep/order_amplitude"][:][sel], nan=-1.0)
+        return 1.0 + np.argmax(eo, axis=1)
+    return dominant_lines(f["/sweep/spectrum"][:][sel], f["/sweep/frequency"][:]) * 2 * math.pi / w[sel]
 
 
 def map_interaction(sweep_file, f1b, window, order=8):
     """The main 1B/eo`order` interaction of a map: among the finished speeds in [w0, window w0]
     (w0 = 2 pi f1b / order, the exact crossing), the highest RMS (median over the speeds within
-    2 rad/s) of those whose largest spectral line is engine order `order` (to half an
+    2 rad/s) of those whose dominant engine order (`dominant_orders`) is `order` (to half an
     order), else the highest in the window. Returns a dict
     with the speed (|Omega|), its step, RMS, dominant order and whether the order matched."""
     with h5py.File(sweep_file, "r") as f:
         w = np.abs(f["/sweep/omega"][:])
         rms, status = f["/sweep/rms"][:], f["/sweep/status"][:]
         dt = f["/sweep/dt"][:]
-        spec, freq = f["/sweep/spectrum"][:], f["/sweep/frequency"][:]
-    w0 = 2 * math.pi * f1b / order
-    sel = np.flatnonzero((status == 0) & (w >= w0) & (w <= window * w0))
-    if sel.size == 0:
-        return None
-    dom = dominant_lines(spec[sel], freq) * 2 * math.pi / w[sel]
+        w0 = 2 * math.pi * f1b / order
+        sel = np.flatnonzero((status == 0) & (w >= w0) & (w <= window * w0))
+        if sel.size == 0:
+            return None
+        dom = dominant_orders(f, sel, w)
     match = sel[np.abs(dom - order) <= 0.5]
     pick = match if match.size else sel
     # Neighbouring speeds may land on different branches of coexisting solutions (docs/contact.md,

@@ -3,10 +3,10 @@
 ovalized casing).
 
 usage: /usr/bin/python3 run/plot_sweep.py SWEEP.h5 [SWEEP_LINEAR.h5] [--out-prefix PREFIX]
-                                          [--title T] [--max-eo N] [--fmax HZ]
+                                          [--title T] [--max-eo N] [--fmax HZ] [--orders 4,6,8]
 
 Reads /sweep of one or two sweep files (src/sim/sweep_file.cpp: omega, rms, status, spectrum,
-frequency, eigenfrequencies, settings). The first file is normally the nonlinear run, the second its
+frequency, eigenfrequencies, settings; order_amplitude if present). The first file is normally the nonlinear run, the second its
 linear twin; panels and curves are named from settings linear=0/1 (else from the file name).
 PREFIX defaults to the first file's path without .h5. Needs numpy, h5py, matplotlib (Agg).
 Writes
@@ -19,8 +19,13 @@ Writes
                   dotted verticals where engine order k (a multiple of lobes=, default 2, k <= --max-eo)
                   crosses one of the first 3 eigenfrequencies: omega = 2 pi f_mode / k (at most 12,
                   lowest modes first; lobes and eigenfrequencies from the first file).
+  PREFIX_orders.png  (files with /sweep/order_amplitude, sweeps of 2026-12-02 on) the amplitude [mm]
+                  of the engine-order lines of --orders (default 4,6,8) at their exact frequencies
+                  k |omega| / 2 pi against omega, one panel per order, log scale, one curve per file,
+                  dotted verticals at that order's crossings with the first 3 eigenfrequencies. This
+                  reads each line where it is, not from the 20 Hz bins of the map.
 and prints, per file, the speed of the highest RMS and the 3 largest interior local maxima of RMS
-(the critical speeds). Exits non-zero if a file is missing or is not a sweep file.
+(the critical speeds), and for each order of --orders the speed of its largest line. Exits non-zero if a file is missing or is not a sweep file.
 """
 import argparse
 import os
@@ -54,6 +59,7 @@ def load(path):
             if missing:
                 fail(f"{path} is not a morse sweep file (missing /sweep/{', /sweep/'.join(missing)})")
             d = {k: f[f"sweep/{k}"][()] for k in REQUIRED}
+            d["orders"] = f["sweep/order_amplitude"][()] if "sweep/order_amplitude" in f else None
     except OSError as e:
         fail(f"{path} is not an HDF5 file ({e})")
     s = d["settings"]
@@ -61,7 +67,7 @@ def load(path):
     d["settings"] = dict(line.split("=", 1) for line in s.splitlines() if "=" in line)
     n, nf = len(d["omega"]), len(d["frequency"])
     d["spectrum"] = np.asarray(d["spectrum"], float).reshape(n, nf)
-    if len(d["rms"]) != n or len(d["status"]) != n:
+    if len(d["rms"]) != n or len(d["status"]) != n or (d["orders"] is not None and len(d["orders"]) != n):
         fail(f"{path}: inconsistent /sweep datasets")
     # A sweep turning negatively (-sweep_rotation negative) stores -|omega|: plotted as the speed |omega|,
     # in ascending order, and named so.
@@ -72,6 +78,8 @@ def load(path):
             d[k] = np.asarray(d[k])[order]
         d["omega"] = np.abs(d["omega"])
         d["spectrum"] = d["spectrum"][order]
+        if d["orders"] is not None:
+            d["orders"] = d["orders"][order]
     lin = d["settings"].get("linear")
     d["name"] = {"0": "nonlinear", "1": "linear"}.get(lin, os.path.basename(path))
     if d["negative"]:
@@ -176,7 +184,41 @@ def plot_rms(runs, prefix, title, max_eo):
     print(f"wrote {prefix}_rms.png")
 
 
-def summary(r):
+def plot_orders(runs, prefix, title, orders):
+    """One panel per engine order: its line amplitude [mm] against the speed, from /sweep/order_amplitude."""
+    have = [r for r in runs if r["orders"] is not None]
+    for r in runs:
+        if r["orders"] is None:
+            print(f"{r['path']}: no /sweep/order_amplitude (a sweep file older than 2026-12-02), no order lines")
+    if not have or not orders:
+        return
+    fig, axes = plt.subplots(len(orders), 1, figsize=(8, 2.4 * len(orders)), sharex=True, squeeze=False,
+                             constrained_layout=True)
+    for ax, k in zip(axes[:, 0], orders):
+        for i, r in enumerate(have):
+            ok = r["status"] == 0
+            if k > r["orders"].shape[1]:
+                continue
+            y = 1e3 * r["orders"][ok, k - 1]
+            ax.semilogy(r["omega"][ok], np.where(y > 0, y, np.nan), ["-", "--"][i], lw=0.9, label=r["name"])
+        ws = np.concatenate([r["omega"] for r in have])
+        for m, f in enumerate(have[0]["eigenfrequencies"][:N_CROSS_MODES], 1):
+            w = 2 * np.pi * f / k
+            if ws.min() <= w <= ws.max():
+                ax.axvline(w, color="0.5", ls=":", lw=1)
+                ax.text(w, 0.97, f" mode {m} / eo {k}", transform=ax.get_xaxis_transform(), fontsize=7, va="top",
+                        color="0.3")
+        ax.set_ylabel(f"eo {k} [mm]")
+        ax.grid(alpha=0.3, which="both")
+    axes[0, 0].legend(loc="lower right", fontsize=8)
+    axes[-1, 0].set_xlabel(r"rotation speed $\Omega$ [rad/s]")
+    fig.suptitle(title or "engine-order lines at their exact frequencies (/sweep/order_amplitude)", fontsize=10)
+    fig.savefig(f"{prefix}_orders.png", dpi=130)
+    plt.close(fig)
+    print(f"wrote {prefix}_orders.png")
+
+
+def summary(r, orders=()):
     ok = r["status"] == 0
     w, y = r["omega"][ok], r["rms"][ok] * 1e3
     head = f"{r['name']} ({r['path']}): {len(r['omega'])} speed(s), {int((~ok).sum())} failed"
@@ -188,6 +230,13 @@ def summary(r):
     peaks = [j for j in range(1, len(y) - 1) if y[j] >= y[j - 1] and y[j] > y[j + 1]]
     peaks = sorted(peaks, key=lambda j: -y[j])[:3]
     print("  local maxima of RMS: " + ("; ".join(f"omega = {w[j]:.6g} rad/s, {y[j]:.4g} mm" for j in peaks) or "none"))
+    if r["orders"] is not None:
+        for k in orders:
+            if k <= r["orders"].shape[1]:
+                a = 1e3 * r["orders"][ok, k - 1]
+                if np.isfinite(a).any():
+                    j = int(np.nanargmax(a))
+                    print(f"  eo {k}: largest line {a[j]:.4g} mm at omega = {w[j]:.6g} rad/s")
 
 
 def main():
@@ -198,7 +247,14 @@ def main():
     p.add_argument("--title", help="figure title")
     p.add_argument("--max-eo", type=int, default=20, help="highest engine order drawn (default 20)")
     p.add_argument("--fmax", type=float, help="top of the frequency axis [Hz] (default: the top bin)")
+    p.add_argument("--orders", default="4,6,8", help="engine orders of PREFIX_orders.png (default 4,6,8)")
     a = p.parse_args()
+    try:
+        orders = [int(x) for x in a.orders.split(",") if x.strip()]
+    except ValueError:
+        p.error(f"--orders {a.orders}: a comma-separated list of positive integers")
+    if any(k < 1 for k in orders):
+        p.error(f"--orders {a.orders}: engine orders start at 1")
     if len(a.files) > 2:
         p.error("at most two sweep files")
     runs = [load(f) for f in a.files]
@@ -209,8 +265,9 @@ def main():
     fmax = a.fmax or max(r["frequency"].max() for r in runs)
     plot_map(runs, prefix, a.title, a.max_eo, fmax)
     plot_rms(runs, prefix, a.title, a.max_eo)
+    plot_orders(runs, prefix, a.title, orders)
     for r in runs:
-        summary(r)
+        summary(r, orders)
 
 
 if __name__ == "__main__":
