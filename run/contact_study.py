@@ -341,7 +341,8 @@ def map_interaction(sweep_file, f1b, window, order=8):
     """The main 1B/eo`order` interaction of a map: among the finished speeds in [w0, window w0]
     (w0 = 2 pi f1b / order, the exact crossing), the highest RMS (median over the speeds within
     2 rad/s) of those whose dominant engine order (`dominant_orders`) is `order` (to half an
-    order), else the highest in the window. Returns a dict
+    order), else the highest in the window; the median runs over the speeds of that choice only.
+    Returns a dict
     with the speed (|Omega|), its step, RMS, dominant order and whether the order matched."""
     with h5py.File(sweep_file, "r") as f:
         w = np.abs(f["/sweep/omega"][:])
@@ -359,7 +360,13 @@ def map_interaction(sweep_file, f1b, window, order=8):
     # chosen by the median RMS of the speeds within 2 rad/s of it (on a map refined to 1 rad/s, it
     # and two neighbours on each side), so that it lies inside a branch rather than on an isolated
     # spike.
-    smooth = np.array([np.median(rms[(np.abs(w - x) <= 2.0 + 1e-9) & (status == 0)]) for x in w])
+    # The median runs over the speeds of the pick (those of the order when some are): a speed of the
+    # order among neighbours on another branch (the friction-fed eo6 branch beside eo8 speeds of the
+    # low branch, docs/contact.md) is judged by its own branch.
+    same = np.zeros(w.size, bool)
+    same[pick] = True
+    smooth = np.array([np.median(rms[(np.abs(w - x) <= 2.0 + 1e-9) & same]) if same[k] else np.nan
+                       for k, x in enumerate(w)])
     i = pick[np.argmax(smooth[pick])]
     return {"omega": float(w[i]), "dt": float(dt[i]), "rms": float(rms[i]), "rms_median": float(smooth[i]),
             "crossing": w0,
