@@ -17,7 +17,7 @@ The deck is the seed's blade in NLstep's units (N, mm, t, s), 2.54 times larger;
     the distortion at 20 % of the run; mu = --mu;
   - speeds: the seed's map range times 312.1 / 905.8 (258-755 rad/s covers the seed's
     750-2,190 rad/s), a coarse grid refined to --refine rad/s where neighbours differ, --revs
-    revolutions per speed, step 0.5 of the critical step; the monitor is node 188, the tip end at
+    revolutions per speed, step 0.5 of the critical step (2 digits); the monitor is node 188, the tip end at
     z = 68.6 mm, theta = -0.047 rad (node 267 is the other end; which one is the leading edge is not
     stated by the deck, so both senses of rotation are run).
 For each sense it prints the RMS maxima with their dominant engine-order line (the largest of
@@ -109,7 +109,7 @@ def main():
         path = os.path.join(a.out, "map_%s_mu%g.h5" % (sense, a.mu))
         if not os.path.exists(path + ".done"):
             run([a.binary, "sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
-                 "-sweep_omega_step", step, "-sim_revolutions", a.revs, "-sim_dt", "%.4g" % (0.5 * hcrit),
+                 "-sweep_omega_step", step, "-sim_revolutions", a.revs, "-sim_dt", "%.2g" % (0.5 * hcrit),
                  "-sweep_rotation", sense, "-sim_linear", "-contact_set", "tip8", "-contact_mu", a.mu,
                  "-casing_clearance", 0.904, "-casing_bump_height", 1.808, "-casing_lobes", 2, "-sweep_monitor",
                  "le"] + (["-sweep_refine_step", a.refine] if a.refine > 0 else []),
