@@ -894,7 +894,8 @@ TEST(Sim, BinnedSpectrumKeepsALineBetweenItsFrequencies) {
   const double Tm = static_cast<double>(nm) * s * hs;
   double lo_ratio = 2.0, lo_side = 2.0, hi_ratio = 0.0;
   for (std::size_t b = 0; b < f.size(); ++b) {
-    const double lo = b > 0 ? 0.5 * (f[b - 1] + f[b]) : 0.0, hi = b + 1 < f.size() ? 0.5 * (f[b] + f[b + 1]) : f[b] + 10.0;
+    const double lo = b > 0 ? 0.5 * (f[b - 1] + f[b]) : 0.0,
+                 hi = b + 1 < f.size() ? 0.5 * (f[b] + f[b + 1]) : f[b] + 10.0;
     std::vector<double> fine;
     for (double x = lo; x <= hi + 1e-9; x += 1.0 / (16.0 * Tm)) fine.push_back(x);
     fine.push_back(hi);
@@ -909,8 +910,10 @@ TEST(Sim, BinnedSpectrumKeepsALineBetweenItsFrequencies) {
   // A sidelobe peak, |cos| wide 1 / T, loses up to 1 - cos(pi / 8) = 7.6 % at 1 / (8 T).
   EXPECT_GE(lo_side, 0.92) << "a bin of the sidelobes below the largest of the transform over it";
   EXPECT_LE(hi_ratio, 1.002) << "a bin above the largest of the transform over it";
-  print0(PETSC_COMM_WORLD, "  binned spectrum against a direct grid 16x finer: main-lobe bins %.4f, sidelobe bins %.4f, "
-         "all at most %.4f of the largest over the bin\n", lo_ratio, lo_side, hi_ratio);
+  print0(PETSC_COMM_WORLD,
+         "  binned spectrum against a direct grid 16x finer: main-lobe bins %.4f, sidelobe bins %.4f, "
+         "all at most %.4f of the largest over the bin\n",
+         lo_ratio, lo_side, hi_ratio);
 }
 
 // A speed sweep of the clamped box rubbing its free face on the growing two-lobe casing. Each
