@@ -88,10 +88,15 @@ morse_add_error_case(simulate_output_too_large
   simulate_output_too_large.h5
   ARGS simulate -rom ${MORSE_CASE_DIR}/case_rom.h5 -sim_dt 1e-9 -sim_tfinal 1e3 -sim_output_every 1)
 morse_add_error_case(sweep_spectrum_too_large
-  "morse: error: morse sweep: 1000 speeds of 1000000001 spectrum frequencies \\(-sweep_spectrum_bins 1000000000\\) needs [0-9.]+ TB for the spectra"
+  "morse: error: morse sweep: 1000 speeds of 1000000001 spectrum frequencies \\(-sweep_spectrum_bins 1000000000\\), windows of [0-9]+ samples \\(-sim_revolutions 200 at -sweep_omega_min 1\\) needs [0-9.]+ TB for the spectra"
   sweep_spectrum_too_large.h5
   ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 1e-7 -sweep_omega_min 1
        -sweep_omega_max 1000 -sweep_omega_step 1 -sweep_spectrum_bins 1000000000)
+morse_add_error_case(sweep_window_too_large
+  "morse: error: morse sweep: 10 speeds of 501 spectrum frequencies \\(-sweep_spectrum_bins 500\\), windows of [0-9]+ samples \\(-sim_revolutions 1e\\+08 at -sweep_omega_min 1\\) needs [0-9.]+ [TP]B for the spectra"
+  sweep_window_too_large.h5
+  ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -contact_set x1 -sim_dt 1e-7 -sweep_omega_min 1
+       -sweep_omega_max 10 -sweep_omega_step 1 -sim_revolutions 1e8)
 foreach(np 1 2)
   set_tests_properties(case_nlrom_tensor_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_box_large)
   set_tests_properties(case_simulate_output_too_large_np${np} PROPERTIES FIXTURES_REQUIRED morse_case_rom)

@@ -540,11 +540,21 @@ void SweepOptions::check_memory(MPI_Comm comm) const {
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
   const double speeds = static_cast<double>(n_speeds()), mine = rank == 0 ? speeds : std::ceil(speeds / size);
-  // The grid, a spectrum per speed held (+ its lane's and the checkpoint's copies), the task list.
-  const double bytes = 8.0 * static_cast<double>(bins + 1) * (mine + 3.0) + 64.0 * speeds;
+  // The grid, a spectrum per speed held (+ its lane's and the checkpoint's copies), the task list;
+  // the block means of the analysed second half in each lane of a rank (the slowest speed's run is
+  // the longest), and the spectrum's zero-padded FFT of one lane at a time (binned_spectrum: at
+  // most 8 n complex values and their twiddles, 192 n bytes).
+  const double revs = contact.revolutions > 0 ? contact.revolutions : 200.0;
+  const double every = std::max(1.0, std::floor(1.0 / (2.5 * fmax * dt)));
+  const double window = 0.5 * revs * 2.0 * M_PI / omega_min / (every * dt);
+  const double lanes = std::min(static_cast<double>(batch), std::max(1.0, mine));
+  const double bytes =
+      8.0 * static_cast<double>(bins + 1) * (mine + 3.0) + 64.0 * speeds + (8.0 * lanes + 192.0) * window;
   morse::check_memory(comm,
                       cat("morse sweep: ", static_cast<long long>(speeds), " speeds of ", bins + 1,
-                          " spectrum frequencies (-sweep_spectrum_bins ", bins, ")"),
+                          " spectrum frequencies (-sweep_spectrum_bins ", bins, "), windows of ",
+                          static_cast<long long>(window), " samples (-sim_revolutions ", revs,
+                          " at -sweep_omega_min ", omega_min, ")"),
                       bytes, "the spectra");
 }
 
