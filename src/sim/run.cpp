@@ -550,12 +550,12 @@ void SweepOptions::check_memory(MPI_Comm comm) const {
   const double lanes = std::min(static_cast<double>(batch), std::max(1.0, mine));
   const double bytes =
       8.0 * static_cast<double>(bins + 1) * (mine + 3.0) + 64.0 * speeds + (8.0 * lanes + 192.0) * window;
-  morse::check_memory(comm,
-                      cat("morse sweep: ", static_cast<long long>(speeds), " speeds of ", bins + 1,
-                          " spectrum frequencies (-sweep_spectrum_bins ", bins, "), windows of ",
-                          static_cast<long long>(window), " samples (-sim_revolutions ", revs,
-                          " at -sweep_omega_min ", omega_min, ")"),
-                      bytes, "the spectra");
+  morse::check_memory(
+      comm,
+      cat("morse sweep: ", static_cast<long long>(speeds), " speeds of ", bins + 1,
+          " spectrum frequencies (-sweep_spectrum_bins ", bins, "), windows of ", static_cast<long long>(window),
+          " samples (-sim_revolutions ", revs, " at -sweep_omega_min ", omega_min, ")"),
+      bytes, "the spectra");
 }
 
 SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
