@@ -54,7 +54,7 @@ def analyse(path, f1b):
     with h5py.File(path, "r") as f:
         w = np.abs(f["/sweep/omega"][:])
         o = np.argsort(w)
-        w, rms = w[o], 1e0 * f["/sweep/rms"][:][o]
+        w, rms = w[o], f["/sweep/rms"][:][o]  # the deck's unit, mm
         eo = f["/sweep/order_amplitude"][:][o]
         st = f["/sweep/status"][:][o]
     ok = st == 0

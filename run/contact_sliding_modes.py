@@ -50,7 +50,8 @@ def contact_states(path, bn, f_free, first_bending):
     h = t.size // 2
     L = lam[h:]
     sgn = 1.0 if omega >= 0 else -1.0
-    states = collections.Counter(tuple(ids[i] for i in np.flatnonzero(row > 0)) for row in L)
+    keys = [tuple(ids[i] for i in np.flatnonzero(row > 0)) for row in L]  # each sample's set in contact
+    states = collections.Counter(keys)
     n, imp = len(L), L.sum(0)
     print("%s: Omega %g rad/s, mu %g, %d samples over the second half; contact states holding 90 %% of it:"
           % (path, omega, mu, n))
@@ -60,7 +61,7 @@ def contact_states(path, bn, f_free, first_bending):
         nodes = list(st)
         fm = first_bending(nodes, mu, sgn) if nodes else f_free
         f0 = first_bending(nodes, 0.0, sgn) if nodes else f_free
-        rows = [k for k, row in enumerate(L) if tuple(ids[i] for i in np.flatnonzero(row > 0)) == st]
+        rows = [k for k, key in enumerate(keys) if key == st]
         ishare = L[rows].sum() / max(imp.sum(), 1e-300)
         print("  %-48s time %5.3f  impulse %5.3f  held 1B %7.1f Hz (mu = 0: %7.1f)" %
               (str(nodes) if nodes else "none (free)", share, ishare, fm, f0))

@@ -545,7 +545,7 @@ void SweepOptions::check_memory(MPI_Comm comm) const {
   // the longest), and the spectrum's zero-padded FFT of one lane at a time (binned_spectrum: at
   // most 8 n complex values and their twiddles, 192 n bytes).
   const double revs = contact.revolutions > 0 ? contact.revolutions : 200.0;
-  const double every = std::max(1.0, std::floor(1.0 / (2.5 * fmax * dt)));
+  const double every = static_cast<double>(spectrum_block(fmax, dt));
   const double window = 0.5 * revs * 2.0 * M_PI / omega_min / (every * dt);
   const double lanes = std::min(static_cast<double>(batch), std::max(1.0, mine));
   const double bytes =

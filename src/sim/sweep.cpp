@@ -123,22 +123,25 @@ std::vector<double> decimated_spectrum(std::vector<double> block_means, double h
   return a;
 }
 
+long spectrum_block(double fmax, double h) { return std::max(1L, static_cast<long>(1.0 / (2.5 * fmax * h))); }
+
 std::vector<double> binned_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f) {
   const std::size_t nb = f.size(), n = block_means.size();
   std::vector<double> out(nb, 0.0);
   if (nb == 0 || n < 2) return out;
   const double dts = static_cast<double>(s) * h;  // the block means' spacing
-  // Bin b spans [lo_b, hi_b]; its centre and both edges are evaluated directly.
+  // Bin b spans [lo_b, hi_b] (hi_b = lo_{b+1}); its centre and both edges are evaluated directly,
+  // each shared edge once: g = lo_0, f_0, hi_0, f_1, hi_1, ...
   std::vector<double> lo(nb), hi(nb), g;
   for (std::size_t b = 0; b < nb; ++b) {
-    lo[b] = b > 0 ? 0.5 * (f[b - 1] + f[b]) : (nb > 1 ? std::max(0.0, f[0] - 0.5 * (f[1] - f[0])) : f[0]);
+    lo[b] = b > 0 ? hi[b - 1] : (nb > 1 ? std::max(0.0, f[0] - 0.5 * (f[1] - f[0])) : f[0]);
     hi[b] = b + 1 < nb ? 0.5 * (f[b] + f[b + 1]) : (nb > 1 ? f[b] + 0.5 * (f[b] - f[b - 1]) : f[b]);
-    g.push_back(lo[b]);
+    if (b == 0) g.push_back(lo[0]);
     g.push_back(f[b]);
     g.push_back(hi[b]);
   }
   const auto direct = decimated_spectrum(block_means, h, s, g);
-  for (std::size_t b = 0; b < nb; ++b) out[b] = std::max({direct[3 * b], direct[3 * b + 1], direct[3 * b + 2]});
+  for (std::size_t b = 0; b < nb; ++b) out[b] = std::max({direct[2 * b], direct[2 * b + 1], direct[2 * b + 2]});
   // Between them, the transform on the grid j / (m dts), m >= 4 n a power of two: a spacing of
   // 1 / (4 T) or finer (T = n dts), by one zero-padded FFT (m log m instead of the (f_B / delta) n
   // products of evaluating every point directly). With the edges and centres, the points of a bin
@@ -362,7 +365,7 @@ class Batch {
     ln.res.t_final = s_.revolutions * 2.0 * M_PI / std::abs(task.omega);
     ln.n_steps = detail::step_count(ln.res.t_final, h);
     ln.half = (ln.n_steps + 1) / 2;
-    if (!freqs_.empty()) ln.sample_every = std::max(1L, static_cast<long>(1.0 / (2.5 * s_.spectrum_fmax * h)));
+    if (!freqs_.empty()) ln.sample_every = spectrum_block(s_.spectrum_fmax, h);
     const bool continued = !task.q0.empty();
     MORSE_CHECK(!continued || (task.q0.size() == r_ && task.qm0.size() == r_), "sweep: speed ", task.index,
                 " continues from a state of ", task.q0.size(), " and ", task.qm0.size(), " coordinates, not r = ", r_);

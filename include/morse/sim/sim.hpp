@@ -501,6 +501,10 @@ std::vector<double> amplitude_spectrum(std::vector<double> x, double dt, const s
 /// |f' - k / (s h)| unchanged, is attenuated by the block mean (by about f / f' at low f).
 std::vector<double> decimated_spectrum(std::vector<double> block_means, double h, long s, const std::vector<double>& f);
 
+/// The sweep's decimation: steps of h per block mean, max(1, floor(1 / (2.5 fmax h))), so that the
+/// block means come at least 2.5 fmax per second (the sweep's lanes and its memory check).
+long spectrum_block(double fmax, double h);
+
 /// The sweep's spectrum: for every frequency f_b of the grid f (ascending, f_0 >= 0), the largest
 /// decimated_spectrum over its bin [(f_{b-1} + f_b) / 2, (f_b + f_{b+1}) / 2] (the first from
 /// max(0, f_0 - (f_1 - f_0) / 2), the last to f_B + (f_B - f_{B-1}) / 2), sampled at its centre,
@@ -509,7 +513,7 @@ std::vector<double> decimated_spectrum(std::vector<double> block_means, double h
 /// (block_means.size() s h). So a line anywhere keeps its amplitude to within 1 % (the Hann
 /// window's loss at delta / 2 <= 1 / (8 T): 0.99) however wide the bins are against the resolution
 /// 1 / T. decimated_spectrum at f alone loses a line that falls between two frequencies farther
-/// than 2 / T from it (a long window on a coarse grid). Costs 3 (B + 1) block_means.size()
+/// than 2 / T from it (a long window on a coarse grid). Costs (2 B + 3) block_means.size()
 /// complex products and an FFT of m points (evaluating every point directly would cost
 /// 10 fmax^2 T^2 products at the sweep's decimation, 2.5 fmax samples per second: 45 s per speed
 /// at 200 revolutions of 258 rad/s).
