@@ -769,6 +769,10 @@ def main():
     ap.add_argument("--cont-label", default="", help="continuation: a name for this range (files "
                     "continuation_<map>_<label>_<up|down>.h5, record continuation_<map>_<label>)")
     ap.add_argument("--binary", default=None, help="a morse binary (default: a private copy of build/morse)")
+    ap.add_argument("--sliding", default="relative", choices=["relative", "rotation"],
+                    help="the friction law of every contact run (-contact_sliding): relative (the Coulomb law on "
+                    "the tip's velocity relative to the casing, the default) or rotation (the seed's: along "
+                    "sign(Omega) e_theta). A study directory holds one law")
     args = ap.parse_args()
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -778,6 +782,14 @@ def main():
         shutil.copy2(MORSE, binary + ".tmp")
         os.replace(binary + ".tmp", binary)
     st = Study(out, binary)
+    # Results of the other law must not be taken as done: a record from before --sliding was made
+    # with the rotation law.
+    held = st.rec.get("contact_sliding", "rotation" if st.rec else args.sliding)
+    if held != args.sliding:
+        sys.exit("contact_study: %s holds results of the %s friction law (--sliding %s); give --sliding %s or "
+                 "another --out" % (out, held, held, held))
+    st.rec["contact_sliding"] = args.sliding
+    CASING.extend(["-contact_sliding", args.sliding])
     st.rec.update({"mesh": os.path.abspath(args.mesh), "dt": DT, "omega_single": OMEGA, "revs": args.revs,
                    "sweep_revs": args.sweep_revs, "casing": CASING})
     stages = args.stages.split(",")

@@ -4,6 +4,7 @@ ovalized casing).
 
 usage: /usr/bin/python3 run/plot_sweep.py SWEEP.h5 [SWEEP_LINEAR.h5] [--out-prefix PREFIX]
                                           [--title T] [--max-eo N] [--fmax HZ] [--orders 4,6,8]
+                                          [--names A,B]
 
 Reads /sweep of one or two sweep files (src/sim/sweep_file.cpp: omega, rms, status, spectrum,
 frequency, eigenfrequencies, settings; order_amplitude if present). The first file is normally the nonlinear run, the second its
@@ -248,6 +249,8 @@ def main():
     p.add_argument("--max-eo", type=int, default=20, help="highest engine order drawn (default 20)")
     p.add_argument("--fmax", type=float, help="top of the frequency axis [Hz] (default: the top bin)")
     p.add_argument("--orders", default="4,6,8", help="engine orders of PREFIX_orders.png (default 4,6,8)")
+    p.add_argument("--names", help="comma-separated names of the files' panels and curves (default: from "
+                   "settings linear=, e.g. two linear maps of different friction laws)")
     a = p.parse_args()
     try:
         orders = [int(x) for x in a.orders.split(",") if x.strip()]
@@ -258,6 +261,12 @@ def main():
     if len(a.files) > 2:
         p.error("at most two sweep files")
     runs = [load(f) for f in a.files]
+    if a.names:
+        names = a.names.split(",")
+        if len(names) != len(runs):
+            p.error(f"--names {a.names}: one name per file ({len(runs)})")
+        for r, nm in zip(runs, names):
+            r["name"] = nm
     if len(runs) == 2 and runs[0]["name"] == runs[1]["name"]:
         for i, r in enumerate(runs):
             r["name"] += f" [{i + 1}]"

@@ -1172,6 +1172,7 @@ TEST(Sim, RigidTipFollowsTheRotatingCasing) {
     s.contact.obstacle = sim::Obstacle::Casing;
     s.contact.casing = {2e-4, 6e-4, 2, 0.3, 0.0, omega};
     s.contact.mu = mu;
+    s.contact.sliding = sim::Sliding::Rotation;  // the closed form is the seed's law
     sim::ContactNode node;
     node.x[0] = R * std::cos(theta0), node.x[1] = R * std::sin(theta0);
     s.contact.nodes.push_back(node);
@@ -1203,6 +1204,64 @@ TEST(Sim, RigidTipFollowsTheRotatingCasing) {
     EXPECT_NEAR(first, first_closed, 2e-3 * s.t_final) << "omega " << omega;
     EXPECT_GT(first_closed, 0.0);
   }
+}
+
+// The casing's two friction laws on a tip node pressed onto a round casing (no lobes) by a
+// constant radial force F, with an axial vibration (a point mass m on springs k, no damping). The
+// normal force is lambda = F - k c0. Friction along sign(Omega) e_theta (Sliding::Rotation, the
+// seed's) has no axial part: the axial energy stays. Against the relative sliding velocity
+// (Sliding::Relative), v = Omega R e_theta + u', the axial part of the force is
+// -mu lambda u'_z / |v| = -c u'_z to first order in u'/(Omega R), c = mu lambda / (|Omega| R): the
+// axial energy decays as exp(-c t / m) (closed form of the lightly damped oscillator, averaged
+// over its period), and the friction force keeps the magnitude mu lambda. Both senses.
+TEST(Sim, RelativeSlidingDampsTheTipsAxialVibration) {
+  const double k = 1e6, mass = 1.0, R = 0.25, mu = 0.15, c0 = 2e-4, lambda = 1e4, vz0 = 1.0;
+  const double F = lambda + k * c0;
+  nlrom::ReducedModel m;
+  m.r = 3;
+  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
+  for (int i = 0; i < 3; ++i) m.K[4 * i] = k, m.M[4 * i] = mass;
+  sim::ReducedLoad load;
+  load.p = {1.0, 0.0, 0.0}, load.amplitude = F;  // omega 0: constant
+  for (double omega : {1000.0, -1000.0})
+    for (auto sliding : {sim::Sliding::Rotation, sim::Sliding::Relative}) {
+      sim::Settings s;
+      s.linear = true;
+      s.dt = 1e-5;
+      s.t_final = 0.5;
+      s.contact.obstacle = sim::Obstacle::Casing;
+      s.contact.casing = {c0, 0.0, 2, 0.15, 0.0, omega};
+      s.contact.mu = mu;
+      s.contact.sliding = sliding;
+      sim::ContactNode node;
+      node.x[0] = R;  // e_r = x, e_theta = y
+      s.contact.nodes.push_back(node);
+      const double sgn = omega > 0 ? 1.0 : -1.0;
+      s.q0 = {c0, -sgn * mu * lambda / k, 0.0};  // on the casing, at the static friction offset
+      s.v0 = {0.0, 0.0, vz0};
+      const double c = mu * lambda / (std::abs(omega) * R);
+      double e0 = -1, e_end = 0, t_end = 0, lam_err = 0, fric_err = 0;
+      sim::integrate(m, {load}, s, [&](const sim::StepState& x) {
+        const double ez = 0.5 * mass * x.v[2] * x.v[2] + 0.5 * k * x.q[2] * x.q[2];
+        if (e0 < 0) e0 = ez;
+        e_end = ez, t_end = x.t;
+        if (x.t > 0.01) {
+          lam_err = std::max(lam_err, std::abs(x.contact_normal[0] - lambda) / lambda);
+          const double* f = x.contact_friction;
+          fric_err = std::max(
+              fric_err, std::abs(std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]) - mu * lambda) / (mu * lambda));
+        }
+      });
+      const double ratio = e_end / e0, expected = sliding == sim::Sliding::Relative ? std::exp(-c * t_end / mass) : 1.0;
+      print0(PETSC_COMM_WORLD,
+             "  tip on a round casing, Omega %+.0f, sliding %s: axial energy ratio %.6f at t = %.3f s (closed form "
+             "%.6f), |lambda - F + k c0| <= %.1e, |f_t| - mu lambda <= %.1e (relative)\n",
+             omega, sliding == sim::Sliding::Relative ? "relative" : "rotation", ratio, t_end, expected, lam_err,
+             fric_err);
+      EXPECT_NEAR(ratio / expected, 1.0, sliding == sim::Sliding::Relative ? 1e-2 : 1e-3) << omega;
+      EXPECT_LT(lam_err, 1e-6) << omega;
+      EXPECT_LT(fric_err, 1e-9) << omega;
+    }
 }
 
 // Adaptive refinement of a sweep: the rules (RMS jump, a change of the dominant frequency, a

@@ -64,6 +64,7 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
     MORSE_CHECK(node.dof + 3 <= r, "contact: node DOF ", node.dof, " is outside the reduced coordinates (r = ", r, ")");
   normal_ = contact_normals(c);
   slide_.assign(3 * n_, 0.0);
+  omega_rho_.assign(3 * n_, 0.0);
   theta0_.assign(n_, 0.0);
   if (c.obstacle == Obstacle::Casing) {
     const auto& cs = c.casing;
@@ -74,8 +75,9 @@ ContactSolver::ContactSolver(const ContactSettings& c, const std::vector<double>
     for (std::size_t k = 0; k < n_; ++k) {
       const double* x = c.nodes[k].x;
       const double rho = std::hypot(x[0], x[1]);
-      slide_[3 * k] = -sgn * x[1] / rho, slide_[3 * k + 1] = sgn * x[0] / rho;  // sign(omega) e_theta
-      theta0_[k] = std::atan2(x[1], x[0]) + cs.phase;                           // the lobes' angle at t = 0 folded in
+      slide_[3 * k] = -sgn * x[1] / rho, slide_[3 * k + 1] = sgn * x[0] / rho;        // sign(omega) e_theta
+      omega_rho_[3 * k] = -cs.omega * x[1], omega_rho_[3 * k + 1] = cs.omega * x[0];  // omega e_z x x_k
+      theta0_[k] = std::atan2(x[1], x[0]) + cs.phase;  // the lobes' angle at t = 0 folded in
     }
   }
   set_compliance(P);
@@ -127,10 +129,12 @@ void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
     const double* nv = &normal_[3 * k];
     gap_[k] = gap_of(k, qp, t);
     double tv[3] = {slide_[3 * k], slide_[3 * k + 1], slide_[3 * k + 2]};
-    if (c_.obstacle == Obstacle::Plane) {  // sliding direction: tangential predicted velocity
+    const bool relative = c_.obstacle == Obstacle::Plane || c_.sliding == Sliding::Relative;
+    if (relative) {  // sliding direction: the tangential predicted velocity relative to the obstacle
       double vn = 0.0;
       for (int d = 0; d < 3; ++d) {
         tv[d] = (qp[node.dof + d] - qm[node.dof + d]) / (2.0 * h);
+        if (c_.obstacle == Obstacle::Casing) tv[d] += omega_rho_[3 * k + d];  // + omega e_z x x_k
         vn += tv[d] * nv[d];
       }
       double tn = 0.0;

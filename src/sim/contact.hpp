@@ -139,6 +139,7 @@ class ContactSolver {
   std::size_t r_, n_;
   std::vector<double> Pc_;              // r x 3n: the columns of P at the contact DOFs
   std::vector<double> normal_, slide_;  // per node: unit normal (free side), casing: fixed sliding direction
+  std::vector<double> omega_rho_;       // casing: the node's rigid velocity omega e_z x x_k (Sliding::Relative)
   std::vector<double> theta0_;          // casing: reference angle of each node plus Casing::phase
   double alpha_ = 0.0;
   std::vector<double> lam_, fric_, gap_, dir_, W_, rhs_;

@@ -49,6 +49,14 @@ PetscErrorCode ContactOptions::set_from_options(MPI_Comm comm) {
   o->obstacle = static_cast<Obstacle>(ob);
   PetscCall(MorseOptionsReal("-contact_mu", "Coulomb friction coefficient", "", o->mu, &o->mu, nullptr));
   if (!(o->mu >= 0)) bad(cat("-contact_mu must be >= 0 (got ", o->mu, ")"));
+  const char* slidings[] = {"rotation", "relative", "Sliding", "", nullptr};  // the enum's order
+  PetscEnum sl = static_cast<PetscEnum>(o->sliding);
+  PetscCall(MorseOptionsEnum("-contact_sliding",
+                             "Casing: the sliding direction of friction: relative (the tip's velocity relative to the "
+                             "casing, omega e_z x x + u': the Coulomb law) or rotation (sign(omega) e_theta, the tip's "
+                             "vibration speed neglected beside omega rho: seed 003 §3.4)",
+                             "", slidings, sl, &sl, nullptr));
+  o->sliding = static_cast<Sliding>(sl);
   PetscInt n = 3;
   PetscCall(
       MorseOptionsRealArray("-contact_plane_point", "A point of the plane x,y,z [m]", "", o->plane.point, &n, &set));
@@ -234,7 +242,7 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
 
 void ContactOptions::apply(const nlrom::StoredModel& sm, ContactSettings* c) const {
   c->nodes = contact_nodes(sm, set);  // throws on every rank alike (same model)
-  c->obstacle = obstacle, c->plane = plane, c->casing = casing, c->mu = mu;
+  c->obstacle = obstacle, c->plane = plane, c->casing = casing, c->mu = mu, c->sliding = sliding;
 }
 
 void SimOptions::resolve(const nlrom::StoredModel& sm, double* v0_residual) {
@@ -503,6 +511,9 @@ std::string settings_text(const SweepOptions& o, const SweepSettings& s, const n
       o.retries, s.divergence_limit);
   std::string text = b;
   text += cat("orders=", s.orders, "\n");
+  // Always written: a file from before -contact_sliding (the rotation law) does not resume under the
+  // relative default.
+  text += cat("sliding=", o.contact.sliding == Sliding::Relative ? "relative" : "rotation", "\n");
   if (!o.refine_orders.empty()) {
     char c2[128];
     std::snprintf(c2, sizeof c2, "refine_order_jump=%.17g\nrefine_order_floor=%.17g\n", o.refine_order_jump,

@@ -101,6 +101,7 @@ void write_sim(io::H5Output& out, const SimRecord& rec, const Settings& s, const
     if (s.contact.obstacle == Obstacle::Casing) {
       const auto& cs = s.contact.casing;
       out.attribute("/sim/contact", "omega", cs.omega);
+      out.attribute("/sim/contact", "sliding", s.contact.sliding == Sliding::Relative ? "relative" : "rotation");
       out.attribute("/sim/contact", "clearance", cs.clearance);
       out.attribute("/sim/contact", "bump_height", cs.bump_height);
       out.attribute_int("/sim/contact", "lobes", cs.lobes);

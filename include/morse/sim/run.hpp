@@ -26,12 +26,14 @@ struct ContactOptions {
   Plane plane;
   Casing casing;
   double mu = 0.15;
-  double revolutions = 0.0;  ///< 0: not given
-  bool plane_given = false;  ///< -contact_plane_point or -contact_plane_normal given
-  bool omega_given = false;  ///< -sim_omega given
-  std::string error;         ///< a bad value, naming the option (raised by the command after -help)
+  Sliding sliding = Sliding::Relative;  ///< -contact_sliding relative|rotation
+  double revolutions = 0.0;             ///< 0: not given
+  bool plane_given = false;             ///< -contact_plane_point or -contact_plane_normal given
+  bool omega_given = false;             ///< -sim_omega given
+  std::string error;                    ///< a bad value, naming the option (raised by the command after -help)
 
-  /// Reads -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_plane_point
+  /// Reads -contact_set SET, -contact_obstacle casing|plane, -contact_mu, -contact_sliding
+  /// rotation|relative (the casing's friction direction, Sliding), -contact_plane_point
   /// x,y,z, -contact_plane_normal x,y,z (normalized here), -casing_clearance, -casing_bump_height
   /// (default 2 x clearance), -casing_lobes, -casing_width, -casing_alpha, -sim_omega and
   /// -sim_revolutions. A bad value (a non-finite one among them) is recorded in `error` (the first

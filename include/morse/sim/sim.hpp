@@ -60,7 +60,8 @@ struct Plane {
 /// the blade's frame: gap = c0 - (1 - exp(-alpha t)) f(theta_b(t)) - u_r with theta_b = theta_b0 +
 /// omega t, u_r the displacement along the node's radial direction e_r = (x, y, 0)/|(x, y)|, and
 /// f(theta) = h_b exp(-((theta mod (2 pi / lobes) - pi / lobes) / width)^2) (eq. 52 for 2 lobes).
-/// Friction opposes the sliding of the tip along the casing, i.e. acts along -sign(omega) e_theta.
+/// Friction opposes the sliding of the tip along the casing (Sliding: along -sign(omega) e_theta,
+/// the seed's assumption, or against the tip's velocity relative to the casing).
 struct Casing {
   double clearance = 0.356e-3;    ///< c0 [m]
   double bump_height = 0.712e-3;  ///< h_b [m]
@@ -77,12 +78,25 @@ struct Casing {
   bool grown = false;
 };
 enum class Obstacle { Plane, Casing };
+/// The sliding direction t_k of Coulomb friction on the casing (the force on node k is
+/// lambda_k (n_k - mu t_k); theory §10.1):
+///  - Rotation: t_k = sign(omega) e_theta, the tip's rigid sliding alone (seed 003 §3.4: "the
+///    tangential speed to rotation is significantly larger than the vibration speed").
+///  - Relative: t_k = v_t / |v_t| of the tip's velocity relative to the casing, v = omega e_z x
+///    x_k + u'_k (u' the central-difference velocity of the predictor, as for the plane), v_t its
+///    part in the casing's tangent plane. Exact Coulomb sliding for any vibration speed; friction
+///    then also damps the tip's axial and circumferential vibration by about mu lambda / (omega rho).
+/// The plane always uses the tangential predicted velocity. Relative is the default: the linear
+/// maps of docs/contact.md turned the seed's law into tip speeds up to 9 Omega rho, far outside its
+/// premise, and friction-fed responses of kJ; the exact law keeps them at the millimetre.
+enum class Sliding { Rotation, Relative };
 struct ContactSettings {
   std::vector<ContactNode> nodes;  ///< empty: no contact
   Obstacle obstacle = Obstacle::Plane;
   Plane plane;
   Casing casing;
   double mu = 0.15;  ///< Coulomb friction coefficient
+  Sliding sliding = Sliding::Relative;
 };
 
 /// The unit normal n_k of each contact node, pointing to the free side (3 values per node, global
