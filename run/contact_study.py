@@ -11,7 +11,10 @@ nonlinearity (docs/contact.md).
         [--pod-trainings contact,harmonic,contact_linear] [--pod-harmonic-amplitude 300] [--pod-harmonic-omega 2000]
 
 Every stage skips a result that is already on disk (delete it to recompute), so the study can be
-stopped and resumed, and the stages can run at different times.
+stopped and resumed, and the stages can run at different times. --sliding relative|rotation sets
+the friction law of every contact run (-contact_sliding; default relative, the Coulomb law on the
+tip's velocity relative to the casing; rotation is the seed's, docs/contact.md "The friction
+law"); a study directory holds one law, and one made before the option holds the rotation law.
 
   roms    CB + modal derivatives with exact tensors (the seed's choice, §5.2.1), 8 tip nodes kept
           physical (24 constraint modes): r79 = 24 + 15 + 40 (the seed's basis) and
