@@ -13,6 +13,11 @@ lobe, the contact of the nodes with the casing's interference i_k (seed eq. 52-5
 distortion) as a linear complementarity problem: u_r >= -i (no penetration), p >= 0 (the casing
 pushes), p (u_r + i) = 0, with u_r = -S^-1 p, solved by projected Gauss-Seidel. Prints the
 stiffness, then the total normal force over a revolution (mean and peak) and the time in contact.
+Then every contact node held together at the full interference h_b - c0 (a static solve of the
+whole reduced model, K~ q = sum_k lambda_k d_k with n_k . u_k = -(h_b - c0)), without friction and
+with --mu along each sense of sliding (d_k = n_k - mu sign(Omega) e_theta,k, the casing's sliding
+direction at rest): the total normal force and the largest tangential displacement of a node, the
+static size of what friction does to a linear blade pressed by the interference.
 
 For each --sim file (a `morse simulate` run of the same model; its casing options are read from
 /meta/options): the total normal force (mean and peak) after --from-revolution against the
@@ -47,6 +52,30 @@ def radial_stiffness(rom):
     A, B, C = R.T @ Kbb @ R, R.T @ Kbb @ T, T.T @ Kbb @ T
     S = A - B @ np.linalg.solve(C, B.T)
     return S, np.arctan2(xyz[:, 1], xyz[:, 0])
+
+
+def held_with_friction(rom, depth, mu, sgn):
+    """Every contact node held at u_r = -depth, friction mu along sgn e_theta: returns the total
+    normal force [N] and the largest tangential displacement of a node [m] (whole reduced model)."""
+    with h5py.File(rom, "r") as f:
+        K = f["/nlrom/K"][()]
+        bnodes = f["/nlrom/boundary_nodes"][()]
+        ids = f["/mesh/node_ids"][()]
+        X = f["/mesh/coordinates"][()]
+    where = {int(v): k for k, v in enumerate(ids)}
+    xyz = X[[where[int(b)] for b in bnodes]]
+    n, r = len(bnodes), K.shape[0]
+    rho = np.hypot(xyz[:, 0], xyz[:, 1])
+    er = np.stack([xyz[:, 0] / rho, xyz[:, 1] / rho, 0 * rho], 1)
+    et = np.stack([-xyz[:, 1] / rho, xyz[:, 0] / rho, 0 * rho], 1)
+    G, D = np.zeros((n, r)), np.zeros((r, n))
+    for a in range(n):
+        G[a, 3 * a:3 * a + 3] = er[a]
+        D[3 * a:3 * a + 3, a] = -er[a] - mu * sgn * et[a]  # the force on the node per unit lambda
+    sol = np.linalg.solve(np.block([[K, -D], [G, np.zeros((n, n))]]), np.concatenate([np.zeros(r), -depth * np.ones(n)]))
+    ub = sol[:3 * n].reshape(n, 3)
+    tang = ub - np.einsum("kd,kd->k", ub, er)[:, None] * er
+    return sol[r:].sum(), np.linalg.norm(tang, axis=1).max()
 
 
 def interference(theta, clearance, height, width, lobes):
@@ -102,6 +131,7 @@ def main():
     ap.add_argument("--width", type=float, default=0.15)
     ap.add_argument("--lobes", type=int, default=2)
     ap.add_argument("--from-revolution", type=float, default=100.0)
+    ap.add_argument("--mu", type=float, default=0.15, help="friction of the held case (default 0.15)")
     a = ap.parse_args()
     height = a.bump_height if a.bump_height is not None else 2 * a.clearance
 
@@ -116,6 +146,12 @@ def main():
         f"{a.width} rad: total normal force mean {qs.mean() / 1e3:.2f} kN, peak {qs.max() / 1e3:.2f} kN, in "
         f"contact {100 * (qs > 0).mean():.1f} % of a revolution"
     )
+    depth = height - a.clearance
+    for mu, sgn, label in [(0.0, 1.0, "no friction"), (a.mu, 1.0, f"mu = {a.mu:g}, Omega > 0"),
+                           (a.mu, -1.0, f"mu = {a.mu:g}, Omega < 0")]:
+        lam, ut = held_with_friction(a.rom, depth, mu, sgn)
+        print(f"  every node held {depth * 1e3:.3f} mm inside, {label}: total normal force {lam / 1e3:.1f} kN, "
+              f"largest tangential displacement of a node {ut * 1e3:.2f} mm")
     defaults = dict(clearance=a.clearance, height=None, width=a.width, lobes=a.lobes, omega=float("nan"), mu=float("nan"))
     for sim in a.sim:
         c = casing_of(sim, defaults)
