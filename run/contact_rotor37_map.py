@@ -5,7 +5,7 @@ friction soften the contact 1B of this blade as it does the embedded blade's?
 
     /usr/bin/python3 run/contact_rotor37_map.py [--deck ../shared/meshes/rotor37-nlstep/blade.inp]
         [--out out/rotor37_map] [--senses negative,positive] [--range 258:770:8] [--refine 1]
-        [--revs 200] [--mu 0.15] [--ranks 1]
+        [--revs 200] [--mu 0.15] [--ranks 1] [--sliding relative|rotation]
 
 The deck is the seed's blade in NLstep's units (N, mm, t, s), 2.54 times larger; its free 1B is
 312.1 Hz against the seed's 905.8 Hz. The study keeps the seed's set-up in the deck's scale:
@@ -86,6 +86,8 @@ def main():
     ap.add_argument("--mu", type=float, default=0.15)
     ap.add_argument("--ranks", type=int, default=1)
     ap.add_argument("--binary", default=os.path.join(ROOT, "build", "morse"))
+    ap.add_argument("--sliding", default="relative", choices=["relative", "rotation"],
+                    help="friction law (-contact_sliding): relative (Coulomb, the default) or rotation (the seed's)")
     a = ap.parse_args()
     if not os.path.exists(a.deck):
         print("contact_rotor37_map: NOTICE: %s is absent: skipped" % a.deck)
@@ -106,13 +108,13 @@ def main():
     print("rotor 37 deck, CB r = %d: free 1B %.1f Hz, critical step %.3g s" % (K.shape[0], f1b, hcrit))
     lo, hi, step = (float(x) for x in a.range.split(":"))
     for sense in a.senses.split(","):
-        path = os.path.join(a.out, "map_%s_mu%g.h5" % (sense, a.mu))
+        path = os.path.join(a.out, "map_%s_mu%g_%s.h5" % (sense, a.mu, a.sliding))
         if not os.path.exists(path + ".done"):
             run([a.binary, "sweep", "-rom", rom, "-out", path, "-sweep_omega_min", lo, "-sweep_omega_max", hi,
                  "-sweep_omega_step", step, "-sim_revolutions", a.revs, "-sim_dt", "%.2g" % (0.5 * hcrit),
                  "-sweep_rotation", sense, "-sim_linear", "-contact_set", "tip8", "-contact_mu", a.mu,
                  "-casing_clearance", 0.904, "-casing_bump_height", 1.808, "-casing_lobes", 2, "-sweep_monitor",
-                 "le"] + (["-sweep_refine_step", a.refine] if a.refine > 0 else []),
+                 "le", "-contact_sliding", a.sliding] + (["-sweep_refine_step", a.refine] if a.refine > 0 else []),
                 path + ".log", a.ranks)
             open(path + ".done", "w").close()
         print("Omega %s 0, mu = %g (%s):" % ("<" if sense == "negative" else ">", a.mu, path))
