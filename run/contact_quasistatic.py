@@ -32,16 +32,20 @@ import h5py
 import numpy as np
 
 
-def radial_stiffness(rom):
-    """S (n x n) and the node angles of the n contact nodes of a CB reduced model."""
+def model_nodes(rom):
+    """K~ of a reduced model and the reference positions (n x 3) of its n boundary (contact) nodes."""
     with h5py.File(rom, "r") as f:
         K = f["/nlrom/K"][()]
         bnodes = f["/nlrom/boundary_nodes"][()]
         ids = f["/mesh/node_ids"][()]
         X = f["/mesh/coordinates"][()]
     where = {int(v): k for k, v in enumerate(ids)}
-    xyz = X[[where[int(b)] for b in bnodes]]
-    n = len(bnodes)
+    return K, X[[where[int(b)] for b in bnodes]]
+
+
+def radial_stiffness(K, xyz):
+    """S (n x n) and the node angles of the n contact nodes of a CB reduced model."""
+    n = len(xyz)
     Kbb = K[: 3 * n, : 3 * n]
     r = np.hypot(xyz[:, 0], xyz[:, 1])
     R = np.zeros((3 * n, n))
@@ -54,17 +58,10 @@ def radial_stiffness(rom):
     return S, np.arctan2(xyz[:, 1], xyz[:, 0])
 
 
-def held_with_friction(rom, depth, mu, sgn):
+def held_with_friction(K, xyz, depth, mu, sgn):
     """Every contact node held at u_r = -depth, friction mu along sgn e_theta: returns the total
     normal force [N] and the largest tangential displacement of a node [m] (whole reduced model)."""
-    with h5py.File(rom, "r") as f:
-        K = f["/nlrom/K"][()]
-        bnodes = f["/nlrom/boundary_nodes"][()]
-        ids = f["/mesh/node_ids"][()]
-        X = f["/mesh/coordinates"][()]
-    where = {int(v): k for k, v in enumerate(ids)}
-    xyz = X[[where[int(b)] for b in bnodes]]
-    n, r = len(bnodes), K.shape[0]
+    n, r = len(xyz), K.shape[0]
     rho = np.hypot(xyz[:, 0], xyz[:, 1])
     er = np.stack([xyz[:, 0] / rho, xyz[:, 1] / rho, 0 * rho], 1)
     et = np.stack([-xyz[:, 1] / rho, xyz[:, 0] / rho, 0 * rho], 1)
@@ -135,7 +132,8 @@ def main():
     a = ap.parse_args()
     height = a.bump_height if a.bump_height is not None else 2 * a.clearance
 
-    S, theta = radial_stiffness(a.rom)
+    K, xyz = model_nodes(a.rom)
+    S, theta = radial_stiffness(K, xyz)
     one = np.ones(len(theta))
     print(f"{a.rom}: {len(theta)} contact nodes")
     print("  radial stiffness of each node, the others free [N/m]:", " ".join(f"{1 / v:.2e}" for v in np.diag(np.linalg.inv(S))))
@@ -149,7 +147,7 @@ def main():
     depth = height - a.clearance
     for mu, sgn, label in [(0.0, 1.0, "no friction"), (a.mu, 1.0, f"mu = {a.mu:g}, Omega > 0"),
                            (a.mu, -1.0, f"mu = {a.mu:g}, Omega < 0")]:
-        lam, ut = held_with_friction(a.rom, depth, mu, sgn)
+        lam, ut = held_with_friction(K, xyz, depth, mu, sgn)
         print(f"  every node held {depth * 1e3:.3f} mm inside, {label}: total normal force {lam / 1e3:.1f} kN, "
               f"largest tangential displacement of a node {ut * 1e3:.2f} mm")
     defaults = dict(clearance=a.clearance, height=None, width=a.width, lobes=a.lobes, omega=float("nan"), mu=float("nan"))
