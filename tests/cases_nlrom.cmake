@@ -26,6 +26,17 @@ morse_add_error_case(sweep_misspelled_contact
   "morse: error: unknown option\\(s\\): -contact_muu \\(did you mean -contact_mu\\?\\)"
   sweep_misspelled_contact.h5
   ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_revolutions 2 -contact_set x1 -contact_muu 0.1)
+# A friction law that does not exist is named with the two there are, before the model is opened.
+morse_add_error_case(simulate_bad_sliding
+  "morse: error: .*Unknown option coulomb for -contact_sliding. Available options: rotation relative"
+  simulate_bad_sliding.h5
+  ARGS simulate -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_tfinal 1e-4 -contact_set x1
+       -contact_sliding coulomb)
+morse_add_error_case(sweep_bad_sliding
+  "morse: error: .*Unknown option exact for -contact_sliding. Available options: rotation relative"
+  sweep_bad_sliding.h5
+  ARGS sweep -rom ${MORSE_CASE_DIR}/no_such_rom.h5 -sim_dt 1e-6 -sim_revolutions 2 -contact_set x1
+       -contact_sliding exact)
 # Values that cannot be run are refused at option time, naming the option: a speed grid beyond
 # the bound of a sweep (with the file size it would need) or not finite, non-finite initial states
 # and loads, a case given twice or escaping -out's directory, a bad -compare_tmax or training step.
