@@ -1264,6 +1264,56 @@ TEST(Sim, RelativeSlidingDampsTheTipsAxialVibration) {
     }
 }
 
+// A run that grows without bound stops at -sim_divergence_limit with the time reached: a point mass
+// held on a round casing (as above) with a negative damping -c_n on its axial motion, which outgrows
+// friction's dashpot c = mu lambda / (|Omega| R): the axial amplitude grows as exp(sigma t),
+// sigma = (c_n - c) / 2m, from v0 / omega_n, so it passes the limit L at
+// t_L = ln(L omega_n / v0) / sigma. Without a limit the same run ends at t_final.
+TEST(Sim, DivergenceLimitStopsAGrowingContactRun) {
+  const double k = 1e6, mass = 1.0, R = 0.25, mu = 0.15, c0 = 2e-4, lambda = 1e4, vz0 = 1.0, omega = 1000.0;
+  const double cn = 100.0, c = mu * lambda / (omega * R), sigma = (cn - c) / (2 * mass);
+  nlrom::ReducedModel m;
+  m.r = 3;
+  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
+  for (int i = 0; i < 3; ++i) m.K[4 * i] = k, m.M[4 * i] = mass;
+  m.C[8] = -cn;
+  sim::ReducedLoad load;
+  load.p = {1.0, 0.0, 0.0}, load.amplitude = lambda + k * c0;
+  sim::Settings s;
+  s.linear = true;
+  s.dt = 1e-5;
+  s.t_final = 0.25;
+  s.contact.obstacle = sim::Obstacle::Casing;
+  s.contact.casing = {c0, 0.0, 2, 0.15, 0.0, omega};
+  s.contact.mu = mu;
+  s.contact.sliding = sim::Sliding::Relative;
+  sim::ContactNode node;
+  node.x[0] = R;
+  s.contact.nodes.push_back(node);
+  s.q0 = {c0, -mu * lambda / k, 0.0};
+  s.v0 = {0.0, 0.0, vz0};
+  EXPECT_DOUBLE_EQ(sim::divergence_radius(s.contact), R);
+  const double L = 0.05, t_L = std::log(L * std::sqrt(k / mass) / vz0) / sigma;
+  double t_last = 0;
+  std::string what;
+  s.divergence_limit = L;
+  try {
+    sim::integrate(m, {load}, s, [&](const sim::StepState& x) { t_last = x.t; });
+  } catch (const std::exception& e) {
+    what = e.what();
+  }
+  print0(PETSC_COMM_WORLD, "  growing axial motion (sigma %.1f 1/s): stopped at t = %.4f s, closed form %.4f s: %s\n",
+         sigma, t_last, t_L, what.c_str());
+  EXPECT_NE(what.find("diverged at t = "), std::string::npos) << what;
+  EXPECT_NE(what.find("-sim_divergence_limit"), std::string::npos) << what;
+  EXPECT_NEAR(t_last / t_L, 1.0, 0.03);  // an envelope crossing: within a period (6 ms) of t_L
+  s.divergence_limit = 0.0;              // no limit: the run ends at t_final, far beyond L
+  double a_end = 0;
+  sim::integrate(m, {load}, s, [&](const sim::StepState& x) { t_last = x.t, a_end = std::abs(x.q[2]); });
+  EXPECT_NEAR(t_last, s.t_final, 2 * s.dt);
+  EXPECT_GT(a_end, 0.0);
+}
+
 // Adaptive refinement of a sweep: the rules (RMS jump, a change of the dominant frequency, a
 // failure on one side), then a refined sweep of the clamped box on the casing against the sweep of
 // the whole fine grid: every refined speed is the fine grid's result (bitwise), the largest RMS is

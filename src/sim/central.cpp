@@ -562,6 +562,18 @@ void central_loop(const nlrom::ReducedModel& m, const std::vector<ReducedLoad>& 
     if (!finite)
       throw Error(cat("simulate: NaN or infinite state at t = ", t + h, " (step ", n + 1, "); last finite time ", t,
                       divergence_note()));
+    if (s.divergence_limit > 0)  // a contact node's coordinates are its displacement (q[dof..dof+2])
+      for (const auto& node : s.contact.nodes) {
+        const double* u = &qp[node.dof];
+        const double a = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        if (a > s.divergence_limit)
+          throw Error(cat("simulate: diverged at t = ", t + h, " (step ", n + 1, "): the contact node at (", node.x[0],
+                          ", ", node.x[1], ", ", node.x[2], ") is displaced by ", a, ", above the limit ",
+                          s.divergence_limit,
+                          " (-sim_divergence_limit; default: the largest radius of the contact "
+                          "nodes)",
+                          kernel && !m.massless ? divergence_note() : std::string()));
+      }
     if (s.energy_balance) {
       // The contact forces of step n: the equilibrium's of state n (massless), or the correction's.
       const double* lam = !nc ? nullptr : corr.forces_of_state ? c_lam.data() : corr.normal();

@@ -218,3 +218,13 @@ void ContactSolver::correct(double* qp, const double* qm, double h, double t) {
 }
 
 }  // namespace morse::sim::detail
+
+namespace morse::sim {
+
+double divergence_radius(const ContactSettings& c) {
+  double r = 0.0;
+  for (const auto& n : c.nodes) r = std::max(r, std::hypot(n.x[0], n.x[1]));
+  return r;
+}
+
+}  // namespace morse::sim

@@ -183,6 +183,10 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
                             "and at this many evenly spaced states (0: none), printed and written to /sim/tangent",
                             "", checks, &checks, nullptr));
   o->s.tangent_checks = static_cast<long>(checks);
+  PetscCall(MorseOptionsReal("-sim_divergence_limit",
+                             "Contact runs: a contact node displaced by more than this [m] stops the run with the "
+                             "time reached (default: the largest radius of the contact nodes; 0: no limit)",
+                             "", o->divergence_limit, &o->divergence_limit, nullptr));
   PetscCall(MorseOptionsInt("-sim_output_every", "Write every K-th step", "", o->every, &o->every, nullptr));
   buf[0] = 0;
   PetscCall(MorseOptionsString("-sim_snapshots",
@@ -231,7 +235,8 @@ PetscErrorCode SimOptions::set_from_options(MPI_Comm comm) {
     if (!std::isfinite(x)) bad(cat("-sim_v0_uniform must be finite (got ", x, ")"));
   for (const auto& [name, v] : {std::pair<const char*, double>{"-sim_dt", o->s.dt},
                                 {"-sim_tfinal", o->s.t_final},
-                                {"-sim_newton_rtol", o->s.newton_rtol}})
+                                {"-sim_newton_rtol", o->s.newton_rtol},
+                                {"-sim_divergence_limit", o->divergence_limit}})
     if (!std::isfinite(v)) bad(cat(name, " must be finite (got ", v, ")"));
   if (o->out.empty()) bad("-out is empty: give the name of the output file");
   PetscCall(o->contact.set_from_options(comm));
@@ -248,6 +253,7 @@ void ContactOptions::apply(const nlrom::StoredModel& sm, ContactSettings* c) con
 void SimOptions::resolve(const nlrom::StoredModel& sm, double* v0_residual) {
   if (!contact.set.empty()) {
     contact.apply(sm, &s.contact);
+    s.divergence_limit = divergence_limit < 0 ? divergence_radius(s.contact) : divergence_limit;
     MORSE_CHECK(s.scheme == Scheme::Central,
                 "morse simulate: contact (-contact_set) needs -sim_scheme central "
                 "(forward-increment Lagrange "
@@ -586,11 +592,7 @@ SweepSettings SweepOptions::settings(const nlrom::StoredModel& sm) const {
   s.isa = isa;
   s.monitor = sm.radial_row(monitor, "-sweep_monitor");
   s.divergence_limit = divergence_limit;
-  if (divergence_limit < 0) {  // the tip radius: a displacement no blade survives
-    s.divergence_limit = 0.0;
-    for (const auto& n : s.base.contact.nodes)
-      s.divergence_limit = std::max(s.divergence_limit, std::hypot(n.x[0], n.x[1]));
-  }
+  if (divergence_limit < 0) s.divergence_limit = divergence_radius(s.base.contact);
   return s;
 }
 

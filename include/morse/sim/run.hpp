@@ -55,6 +55,8 @@ struct SimOptions {
   std::vector<std::string> monitor, cases;
   ContactOptions contact;
   std::vector<double> v0_uniform;  ///< 3 values, or empty
+  /// -sim_divergence_limit [m] (Settings::divergence_limit); negative: divergence_radius() of the contact
+  double divergence_limit = -1.0;
   bool tfinal_set = false;
   std::string error;  ///< a bad value, naming the option (raised by the command after -help)
 

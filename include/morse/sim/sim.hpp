@@ -145,6 +145,10 @@ struct Settings {
   /// the critical step of the stiffened model, and a divergence names it. One check costs about
   /// 3 n_cubic(r) r multiply-adds and an r x r eigen solve (~5 ms at r = 79). -sim_tangent_checks.
   long tangent_checks = 200;
+  /// Central differences: a contact node displaced by more than this (model units) stops the run
+  /// with the time reached, as a NaN does (0: no limit). -sim_divergence_limit; its default is
+  /// divergence_radius() of the contact.
+  double divergence_limit = 0.0;
   std::vector<double> q0, v0;  ///< initial state (empty: zero)
 };
 
@@ -262,6 +266,9 @@ TangentStep tangent_step(const nlrom::ReducedModel& m, const double* q);
 /// held (a sliding contact holds no other; nlrom::massless_critical_step), or with every static
 /// coordinate free without contact.
 double critical_step(const nlrom::ReducedModel& m, const ContactSettings* c);
+/// The largest distance of the contact nodes from the z axis (0 without contact nodes): a
+/// displacement no blade survives, the default divergence limit of simulate and sweep.
+double divergence_radius(const ContactSettings& c);
 
 /// The nonlinear term of one step: G(q) = P3 g~(q) with P3 = 2h^2 (2M + hC)^-1 (KernelLayout).
 class CubicKernel {
