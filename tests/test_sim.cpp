@@ -1206,6 +1206,36 @@ TEST(Sim, RigidTipFollowsTheRotatingCasing) {
   }
 }
 
+// A point mass on springs k (r = 3: u_x radial, u_y along e_theta, u_z axial) pressed onto a round
+// casing (no lobes) of clearance c0 at radius R by a constant radial load F = lambda + k c0, at the
+// static friction offset, with an axial velocity vz0: the set-up of the two tests below.
+struct TipOnCasing {
+  nlrom::ReducedModel m;
+  sim::ReducedLoad load;
+  sim::Settings s;
+};
+static TipOnCasing tip_on_casing(double k, double mass, double R, double mu, double c0, double lambda, double vz0,
+                                 double omega, sim::Sliding sliding) {
+  TipOnCasing x;
+  x.m.r = 3;
+  x.m.K.assign(9, 0.0), x.m.M.assign(9, 0.0), x.m.C.assign(9, 0.0);
+  for (int i = 0; i < 3; ++i) x.m.K[4 * i] = k, x.m.M[4 * i] = mass;
+  x.load.p = {1.0, 0.0, 0.0}, x.load.amplitude = lambda + k * c0;  // omega 0: constant
+  x.s.linear = true;
+  x.s.dt = 1e-5;
+  x.s.contact.obstacle = sim::Obstacle::Casing;
+  x.s.contact.casing = {c0, 0.0, 2, 0.15, 0.0, omega};
+  x.s.contact.mu = mu;
+  x.s.contact.sliding = sliding;
+  sim::ContactNode node;
+  node.x[0] = R;  // e_r = x, e_theta = y
+  x.s.contact.nodes.push_back(node);
+  const double sgn = omega > 0 ? 1.0 : -1.0;
+  x.s.q0 = {c0, -sgn * mu * lambda / k, 0.0};  // on the casing, at the static friction offset
+  x.s.v0 = {0.0, 0.0, vz0};
+  return x;
+}
+
 // The casing's two friction laws on a tip node pressed onto a round casing (no lobes) by a
 // constant radial force F, with an axial vibration (a point mass m on springs k, no damping). The
 // normal force is lambda = F - k c0. Friction along sign(Omega) e_theta (Sliding::Rotation, the
@@ -1216,29 +1246,10 @@ TEST(Sim, RigidTipFollowsTheRotatingCasing) {
 // over its period), and the friction force keeps the magnitude mu lambda. Both senses.
 TEST(Sim, RelativeSlidingDampsTheTipsAxialVibration) {
   const double k = 1e6, mass = 1.0, R = 0.25, mu = 0.15, c0 = 2e-4, lambda = 1e4, vz0 = 1.0;
-  const double F = lambda + k * c0;
-  nlrom::ReducedModel m;
-  m.r = 3;
-  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
-  for (int i = 0; i < 3; ++i) m.K[4 * i] = k, m.M[4 * i] = mass;
-  sim::ReducedLoad load;
-  load.p = {1.0, 0.0, 0.0}, load.amplitude = F;  // omega 0: constant
   for (double omega : {1000.0, -1000.0})
     for (auto sliding : {sim::Sliding::Rotation, sim::Sliding::Relative}) {
-      sim::Settings s;
-      s.linear = true;
-      s.dt = 1e-5;
+      auto [m, load, s] = tip_on_casing(k, mass, R, mu, c0, lambda, vz0, omega, sliding);
       s.t_final = 0.5;
-      s.contact.obstacle = sim::Obstacle::Casing;
-      s.contact.casing = {c0, 0.0, 2, 0.15, 0.0, omega};
-      s.contact.mu = mu;
-      s.contact.sliding = sliding;
-      sim::ContactNode node;
-      node.x[0] = R;  // e_r = x, e_theta = y
-      s.contact.nodes.push_back(node);
-      const double sgn = omega > 0 ? 1.0 : -1.0;
-      s.q0 = {c0, -sgn * mu * lambda / k, 0.0};  // on the casing, at the static friction offset
-      s.v0 = {0.0, 0.0, vz0};
       const double c = mu * lambda / (std::abs(omega) * R);
       double e0 = -1, e_end = 0, t_end = 0, lam_err = 0, fric_err = 0;
       sim::integrate(m, {load}, s, [&](const sim::StepState& x) {
@@ -1272,26 +1283,9 @@ TEST(Sim, RelativeSlidingDampsTheTipsAxialVibration) {
 TEST(Sim, DivergenceLimitStopsAGrowingContactRun) {
   const double k = 1e6, mass = 1.0, R = 0.25, mu = 0.15, c0 = 2e-4, lambda = 1e4, vz0 = 1.0, omega = 1000.0;
   const double cn = 100.0, c = mu * lambda / (omega * R), sigma = (cn - c) / (2 * mass);
-  nlrom::ReducedModel m;
-  m.r = 3;
-  m.K.assign(9, 0.0), m.M.assign(9, 0.0), m.C.assign(9, 0.0);
-  for (int i = 0; i < 3; ++i) m.K[4 * i] = k, m.M[4 * i] = mass;
+  auto [m, load, s] = tip_on_casing(k, mass, R, mu, c0, lambda, vz0, omega, sim::Sliding::Relative);
   m.C[8] = -cn;
-  sim::ReducedLoad load;
-  load.p = {1.0, 0.0, 0.0}, load.amplitude = lambda + k * c0;
-  sim::Settings s;
-  s.linear = true;
-  s.dt = 1e-5;
   s.t_final = 0.25;
-  s.contact.obstacle = sim::Obstacle::Casing;
-  s.contact.casing = {c0, 0.0, 2, 0.15, 0.0, omega};
-  s.contact.mu = mu;
-  s.contact.sliding = sim::Sliding::Relative;
-  sim::ContactNode node;
-  node.x[0] = R;
-  s.contact.nodes.push_back(node);
-  s.q0 = {c0, -mu * lambda / k, 0.0};
-  s.v0 = {0.0, 0.0, vz0};
   EXPECT_DOUBLE_EQ(sim::divergence_radius(s.contact), R);
   const double L = 0.05, t_L = std::log(L * std::sqrt(k / mass) / vz0) / sigma;
   double t_last = 0;
